@@ -1,0 +1,132 @@
+"""What every benchmark shares: device selection, timing, the table and the JSON.
+
+A benchmark module ``bench_<concern>.py`` defines ``run(devices, quick) -> list[Row]``;
+``benchmarks/run.py`` runs them all. Timings are the median of repeats after one
+warm-up call; peers are timed in the same run, so ratios compare like with like.
+Benchmarks never fail on time.
+"""
+
+import argparse
+import dataclasses
+import json
+import os
+import platform
+import statistics
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+import clsamp  # noqa: E402
+from clsamp import runtime  # noqa: E402
+
+
+@dataclasses.dataclass
+class Row:
+    """One line of the table: clsamp's time against its peer's on one case."""
+
+    case: str
+    size: str
+    device: str
+    seconds: float
+    peer: str = ""
+    peer_seconds: float | None = None
+    quality: str = ""          # e.g. "max err 3e-12", "N·E 0.1641", "MSE 8.5e-4"
+    extra: dict = dataclasses.field(default_factory=dict)
+
+    @property
+    def ratio(self):
+        """Peer seconds over clsamp seconds: > 1 means clsamp is faster."""
+        if self.peer_seconds is None or self.seconds <= 0:
+            return None
+        return self.peer_seconds / self.seconds
+
+    def as_dict(self):
+        d = dataclasses.asdict(self)
+        d["ratio"] = self.ratio
+        return d
+
+
+def timed(fn, repeats=5, warmup=1, min_time=0.0):
+    """Median seconds of ``fn()`` over ``repeats`` calls after ``warmup`` calls; and its last result."""
+    result = None
+    for _ in range(warmup):
+        result = fn()
+    times = []
+    start_all = time.perf_counter()
+    for i in range(repeats):
+        t0 = time.perf_counter()
+        result = fn()
+        times.append(time.perf_counter() - t0)
+        if min_time and i >= 1 and time.perf_counter() - start_all > min_time:
+            break
+    return statistics.median(times), result
+
+
+def select_devices(spec):
+    """``None`` -> the default device; ``"all"`` -> every device; else one index/name."""
+    if spec == "all":
+        return list(runtime.devices())
+    if spec is None:
+        return [runtime.current_device()]
+    return [runtime.use_device(spec)]
+
+
+def on_device(device):
+    """Make ``device`` current (benchmarks loop over devices)."""
+    return runtime.use_device(device.index)
+
+
+def short_name(device):
+    return f"{device.name[:28]} ({device.type})"
+
+
+def print_table(rows, file=sys.stdout):
+    headers = ("case", "size", "device", "clsamp s", "peer", "peer s", "ratio", "quality")
+    lines = []
+    for r in rows:
+        lines.append((r.case, r.size, r.device, f"{r.seconds:.4g}", r.peer or "-",
+                      "-" if r.peer_seconds is None else f"{r.peer_seconds:.4g}",
+                      "-" if r.ratio is None else f"{r.ratio:.2f}x", r.quality))
+    widths = [max(len(h), *(len(line[i]) for line in lines)) if lines else len(h)
+              for i, h in enumerate(headers)]
+    fmt = "  ".join(f"{{:<{w}}}" for w in widths)
+    print(fmt.format(*headers), file=file)
+    print(fmt.format(*("-" * w for w in widths)), file=file)
+    for line in lines:
+        print(fmt.format(*line), file=file)
+
+
+def machine():
+    """What the numbers were measured on."""
+    import numpy
+    import pyopencl
+    return {"python": platform.python_version(), "machine": platform.machine(),
+            "processor": platform.processor() or platform.machine(), "cpus": os.cpu_count(),
+            "numpy": numpy.__version__, "pyopencl": pyopencl.VERSION_TEXT,
+            "clsamp": clsamp.__version__,
+            "devices": [str(d) for d in runtime.devices()]}
+
+
+def write_json(path, rows):
+    from clsamp.io import write_text
+    write_text(path, json.dumps({"machine": machine(), "rows": [r.as_dict() for r in rows]},
+                                indent=2, default=str))
+
+
+def parser(description):
+    p = argparse.ArgumentParser(description=description)
+    p.add_argument("--device", default=None, help="'all', an index or a name substring")
+    p.add_argument("--quick", action="store_true", help="CI-sized problems")
+    p.add_argument("--out", default=None, help="write the rows as JSON here")
+    return p
+
+
+def main(run, description):
+    """Entry point shared by the bench_*.py scripts."""
+    args = parser(description).parse_args()
+    rows = run(select_devices(args.device), args.quick)
+    print_table(rows)
+    if args.out:
+        write_json(args.out, rows)
+    return rows

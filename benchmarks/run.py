@@ -1,0 +1,48 @@
+"""Run every capability's benchmark against its peer and print one table.
+
+    python benchmarks/run.py [--device all] [--quick] [--out results.json]
+
+Each ``bench_<concern>.py`` listed in ``MODULES`` defines ``run(devices, quick)``.
+A module that fails is reported and the others still run; the exit status is
+non-zero if any failed (benchmarks never fail on time).
+"""
+
+import importlib
+import os
+import sys
+import time
+import traceback
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from common import parser, print_table, select_devices, write_json  # noqa: E402
+
+MODULES = (
+    "bench_random",
+)
+
+
+def main():
+    args = parser(__doc__).parse_args()
+    devices = select_devices(args.device)
+    rows, failed = [], []
+    for name in MODULES:
+        t0 = time.perf_counter()
+        try:
+            module = importlib.import_module(name)
+            rows.extend(module.run(devices, args.quick))
+            print(f"[{name}: {time.perf_counter() - t0:.1f} s]", file=sys.stderr)
+        except Exception:
+            failed.append(name)
+            traceback.print_exc()
+    print_table(rows)
+    if args.out:
+        write_json(args.out, rows)
+    if failed:
+        print("failed: " + ", ".join(failed), file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,28 @@
+"""clsamp: sampling patterns for Monte Carlo rendering, generated and measured in OpenCL.
+
+Quick start::
+
+    import clsamp
+    pts = clsamp.make_sampler("jittered", d=2, seed=1).sample(256)
+
+See README.md for a tour and ``clsamp --help`` for the command line.
+"""
+
+from .errors import (
+                     BuildError,
+                     ClsampError,
+                     DeviceMemoryError,
+                     InvalidArgumentError,
+                     NoDeviceError,
+                     SamplingError,
+)
+from .runtime import current_device, devices, use_device
+from .samplers import Sampler, make_sampler, sampler_names
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "BuildError", "ClsampError", "DeviceMemoryError", "InvalidArgumentError", "NoDeviceError",
+    "SamplingError", "Sampler", "current_device", "devices", "make_sampler", "sampler_names",
+    "use_device",
+]

@@ -1,0 +1,120 @@
+"""The ``clsamp`` command line: one entry point, one subcommand per capability.
+
+Each subcommand is a pair of functions, ``_add_<name>(subparsers)`` that declares
+its arguments and ``_run_<name>(args)`` that does the work; ``_COMMANDS`` lists them
+in the order ``clsamp --help`` shows them.
+"""
+
+import argparse
+import sys
+
+from .errors import ClsampError
+
+
+def _parse_params(items):
+    """``--param key=value`` pairs, values parsed as int, float, bool or str."""
+    params = {}
+    for item in items or ():
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise ClsampError(f"'--param' must look like key=value, got {item!r}")
+        for convert in (int, float):
+            try:
+                params[key] = convert(value)
+                break
+            except ValueError:
+                continue
+        else:
+            params[key] = {"true": True, "false": False, "none": None}.get(value.lower(), value)
+    return params
+
+
+# -- devices -------------------------------------------------------------------
+def _add_devices(sub):
+    p = sub.add_parser("devices", help="list the OpenCL devices clsamp can use")
+    p.set_defaults(run=_run_devices)
+
+
+def _run_devices(args):
+    from . import runtime
+    current = runtime.current_device()
+    for device in runtime.devices():
+        mark = "*" if device.index == current.index else " "
+        print(f"{mark} {device}  {device.compute_units} CUs, "
+              f"{device.global_memory / 2**30:.1f} GiB")
+    return 0
+
+
+# -- sample --------------------------------------------------------------------
+def _add_sample(sub):
+    p = sub.add_parser("sample", help="generate a point set and write it as text or .npy")
+    p.add_argument("name", help="sampler name (see `clsamp sample --list`), e.g. jittered, sobol:owen",
+                   nargs="?")
+    p.add_argument("-n", type=int, help="points per set")
+    p.add_argument("-d", type=int, default=2, help="dimension (default 2)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--realizations", type=int, default=None, help="independent sets (default one)")
+    p.add_argument("--start", type=int, default=0, help="index of the first point (sequences)")
+    p.add_argument("--param", action="append", metavar="KEY=VALUE",
+                   help="sampler parameter, e.g. --param randomize=owen (repeatable)")
+    p.add_argument("--backend", default="opencl", choices=("opencl", "numpy"))
+    p.add_argument("--list", action="store_true", help="list the sampler names and exit")
+    p.add_argument("-o", "--output", help="output file: .npy, or text (one point a line) "
+                   "for any other suffix; default: text to standard output")
+    p.set_defaults(run=_run_sample)
+
+
+def _run_sample(args):
+    from . import io
+    from .samplers import make_sampler, sampler_names
+    if args.list or not args.name:
+        print("\n".join(sampler_names(aliases=True)))
+        return 0
+    sampler = make_sampler(args.name, d=args.d, seed=args.seed, backend=args.backend,
+                           **_parse_params(args.param))
+    points = sampler.sample(args.n, realizations=args.realizations, start=args.start)
+    if args.output:
+        io.save_points(args.output, points)
+        shape = "x".join(str(s) for s in points.shape)
+        print(f"wrote {shape} points of {args.name} to {args.output}", file=sys.stderr)
+    else:
+        sys.stdout.write(io.format_points(points))
+    return 0
+
+
+_COMMANDS = (
+    _add_devices,
+    _add_sample,
+)
+
+
+def build_parser():
+    parser = argparse.ArgumentParser(
+        prog="clsamp",
+        description="Sampling patterns for Monte Carlo rendering, generated and measured in OpenCL.")
+    parser.add_argument("--device", help="OpenCL device: index or name substring "
+                        "(default: $CLSAMP_DEVICE, else the first CPU device)")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for add in _COMMANDS:
+        add(sub)
+    return parser
+
+
+def main(argv=None):
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "run", None):
+        parser.print_help()
+        return 2
+    try:
+        if args.device is not None:
+            from . import runtime
+            runtime.use_device(args.device)
+        return args.run(args) or 0
+    except ClsampError as error:
+        print(f"clsamp {args.command}: error: {error}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,198 @@
+"""Reading and writing point sets and images.
+
+Points: text (one point a line, coordinates separated by spaces, as UTK and PSA
+read them; realizations separated by a line holding ``#``) and NumPy ``.npy``.
+Images: OpenEXR (float, with string attributes in the header) and PNG (tone-mapped,
+for looking at).
+
+Every writer writes to a temporary file in the target's folder and renames it into
+place (``os.replace``), so a crash leaves either the old file or the whole new one,
+never half a file.
+"""
+
+import contextlib
+import io as _io
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .errors import InvalidArgumentError
+from .validation import check_points
+
+
+@contextlib.contextmanager
+def atomic_path(path):
+    """Yield a temporary path beside ``path``; on success rename it to ``path``.
+
+    On any exception the temporary file is removed and ``path`` is untouched.
+    """
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    folder.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp" + path.suffix, dir=folder)
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise
+
+
+def write_bytes(path, data):
+    """Write ``data`` to ``path`` atomically."""
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+
+
+def write_text(path, text):
+    """Write ``text`` (UTF-8) to ``path`` atomically."""
+    write_bytes(path, text.encode("utf-8"))
+
+
+def format_points(points):
+    """Points as text: one point a line, ``%.17g`` (round-trips float64 exactly);
+    realizations of a batch separated by a line ``#``."""
+    batch, _ = check_points(points)
+    blocks = []
+    for block in batch:
+        buffer = _io.StringIO()
+        np.savetxt(buffer, block, fmt="%.17g", delimiter=" ")
+        blocks.append(buffer.getvalue())
+    return "#\n".join(blocks)
+
+
+def parse_points(text, name="text"):
+    """Inverse of :func:`format_points`: (n, d) for one set, (r, n, d) for several."""
+    blocks, current = [], []
+    for number, line in enumerate(text.splitlines(), 1):
+        stripped = line.strip()
+        if stripped.startswith("#"):
+            if current:
+                blocks.append(current)
+            current = []
+            continue
+        if not stripped:
+            continue
+        try:
+            current.append([float(v) for v in stripped.replace(",", " ").split()])
+        except ValueError:
+            raise InvalidArgumentError(
+                f"{name}: line {number} is not a list of numbers: {stripped[:60]!r}") from None
+    if current:
+        blocks.append(current)
+    if not blocks:
+        raise InvalidArgumentError(f"{name}: holds no points")
+    widths = {len(row) for block in blocks for row in block}
+    if len(widths) != 1:
+        raise InvalidArgumentError(f"{name}: points have different dimensions {sorted(widths)}")
+    sizes = {len(block) for block in blocks}
+    if len(sizes) != 1:
+        raise InvalidArgumentError(f"{name}: realizations have different sizes {sorted(sizes)}")
+    array = np.array(blocks, dtype=np.float64)
+    batch, _ = check_points(array, name=name)
+    return batch[0] if len(blocks) == 1 else batch
+
+
+def save_points(path, points):
+    """Write points to ``path``: ``.npy`` as NumPy's format, anything else as text."""
+    batch, single = check_points(points)
+    data = batch[0] if single else batch
+    path = Path(path)
+    if path.suffix == ".npy":
+        buffer = _io.BytesIO()
+        np.save(buffer, data)
+        write_bytes(path, buffer.getvalue())
+    else:
+        write_text(path, format_points(data))
+    return path
+
+
+def load_points(path):
+    """Read points written by :func:`save_points` (or by UTK/PSA as text), validated."""
+    path = Path(path)
+    if path.suffix == ".npy":
+        array = np.load(path, allow_pickle=False)
+        batch, single = check_points(array, name=str(path))
+        return batch[0] if single else batch
+    return parse_points(path.read_text(), name=str(path))
+
+
+# -- images ----------------------------------------------------------------------
+def _check_image(image, name="image"):
+    image = np.asarray(image)
+    if image.ndim == 2:
+        image = image[:, :, None]
+    if image.ndim != 3 or image.shape[2] not in (1, 3, 4):
+        raise InvalidArgumentError(
+            f"'{name}' must have shape (h, w), (h, w, 1), (h, w, 3) or (h, w, 4), got {image.shape}")
+    if not np.issubdtype(image.dtype, np.floating):
+        raise InvalidArgumentError(f"'{name}' must be a float array, got {image.dtype}")
+    return image
+
+
+def write_exr(path, image, header=None):
+    """Write a float image as OpenEXR (float32 channels; Y for one channel, RGB(A) else).
+
+    ``header`` entries are stored as string attributes (sampler, spp, seed, ...).
+    """
+    import OpenEXR
+    image = _check_image(image)
+    names = {1: ("Y",), 3: ("R", "G", "B"), 4: ("R", "G", "B", "A")}[image.shape[2]]
+    channels = {n: np.ascontiguousarray(image[:, :, i], dtype=np.float32) for i, n in enumerate(names)}
+    attributes = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    for key, value in (header or {}).items():
+        attributes[str(key)] = str(value)
+    with atomic_path(path) as tmp:
+        with OpenEXR.File(attributes, channels) as exr:
+            exr.write(str(tmp))
+    return Path(path)
+
+
+def read_exr(path, with_header=False):
+    """Read an OpenEXR image written by :func:`write_exr` as float32 (h, w) or (h, w, c)."""
+    import OpenEXR
+    with OpenEXR.File(str(path), separate_channels=True) as exr:
+        channels = exr.channels()
+        header = dict(exr.header())
+        order = [n for n in ("R", "G", "B", "A", "Y") if n in channels] or sorted(channels)
+        planes = [np.asarray(channels[n].pixels, dtype=np.float32) for n in order]
+    image = planes[0] if len(planes) == 1 else np.stack(planes, axis=-1)
+    return (image, header) if with_header else image
+
+
+def tone_map(image, exposure=1.0, gamma=2.2):
+    """Clamp and gamma-encode a linear image to 8-bit (the PNG preview's look)."""
+    image = np.clip(np.asarray(image, dtype=np.float64) * exposure, 0.0, 1.0)
+    return np.round(255.0 * image ** (1.0 / gamma)).astype(np.uint8)
+
+
+def write_png(path, image, tone=True, **tone_args):
+    """Write an image as PNG: tone-mapped from linear floats by default, or uint8 as is."""
+    import matplotlib.image as mpimg
+    image = np.asarray(image)
+    if tone:
+        image = tone_map(_check_image(image), **tone_args)
+    if image.ndim == 3 and image.shape[2] == 1:
+        image = image[:, :, 0]
+    buffer = _io.BytesIO()
+    cmap = "gray" if image.ndim == 2 else None
+    mpimg.imsave(buffer, image, format="png", cmap=cmap, vmin=0, vmax=255)
+    write_bytes(path, buffer.getvalue())
+    return Path(path)
+
+
+def save_figure(path, figure, dpi=110):
+    """Save a matplotlib figure (PNG) atomically and close it."""
+    import matplotlib.pyplot as plt
+    buffer = _io.BytesIO()
+    figure.savefig(buffer, format=Path(path).suffix.lstrip(".") or "png", dpi=dpi, bbox_inches="tight")
+    plt.close(figure)
+    write_bytes(path, buffer.getvalue())
+    return Path(path)

@@ -1,0 +1,129 @@
+"""Philox4x32-10 counter-based random numbers: the NumPy reference.
+
+Salmon, Moraes, Dror, Shaw, "Parallel random numbers: as easy as 1, 2, 3"
+(SC 2011). The OpenCL twin is ``kernels/philox.h``; both produce bit-identical
+words for the same key and counter, and tests hold them together with the
+Random123 known-answer vectors.
+
+clsamp's convention (DESIGN.md): the key is the 64-bit ``seed`` split into two
+32-bit words (low, high); the counter is ``(index, realization, block, stream)``
+where ``block`` numbers the groups of four 32-bit words (two doubles) drawn for
+one point. So point ``index`` of realization ``r`` gets the same numbers however
+many points or realizations were asked for, and different purposes inside one
+sampler (point coordinates, permutations, shifts) use different ``stream``s.
+"""
+
+import numpy as np
+
+M0 = np.uint64(0xD2511F53)
+M1 = np.uint64(0xCD9E8D57)
+W0 = np.uint32(0x9E3779B9)
+W1 = np.uint32(0xBB67AE85)
+_LOW32 = np.uint64(0xFFFFFFFF)
+_SHIFT32 = np.uint64(32)
+
+
+class Stream:
+    """Stream numbers: one per purpose, so purposes never share random words.
+
+    Kernels receive the stream as an argument; these names keep Python and the
+    NumPy references in agreement.
+    """
+
+    POINTS = 0          # coordinates of random, jittered, ... points
+    PERMUTATION = 1     # shuffles (LHS, MJ, CMJ, padding)
+    SCRAMBLE = 2        # Owen / xor / digit permutation seeds
+    SHIFT = 3           # Cranley-Patterson rotations and homogenization shifts
+    CANDIDATES = 4      # dart-throwing candidates
+    PIXEL = 5           # per-pixel decorrelation in the renderer
+    INIT = 6            # initial sites of optimizing samplers
+    EXPERIMENT = 7      # convergence experiments
+
+
+def seed_key(seed):
+    """The Philox key words (low, high) of a 64-bit seed."""
+    seed = int(seed)
+    return np.uint32(seed & 0xFFFFFFFF), np.uint32((seed >> 32) & 0xFFFFFFFF)
+
+
+def philox4x32(counter, key):
+    """Philox4x32 with 10 rounds.
+
+    Parameters
+    ----------
+    counter : array_like of uint32, shape (..., 4)
+    key : array_like of uint32, shape (..., 2)
+
+    Returns
+    -------
+    ndarray of uint32, shape (..., 4) (the broadcast of counter and key)
+    """
+    counter = np.asarray(counter, dtype=np.uint32)
+    key = np.asarray(key, dtype=np.uint32)
+    c0, c1, c2, c3 = (counter[..., i] for i in range(4))
+    k0, k1 = key[..., 0], key[..., 1]
+    with np.errstate(over="ignore"):
+        for round_ in range(10):
+            if round_:
+                k0 = k0 + W0
+                k1 = k1 + W1
+            p0 = M0 * c0.astype(np.uint64)
+            p1 = M1 * c2.astype(np.uint64)
+            hi0 = (p0 >> _SHIFT32).astype(np.uint32)
+            lo0 = (p0 & _LOW32).astype(np.uint32)
+            hi1 = (p1 >> _SHIFT32).astype(np.uint32)
+            lo1 = (p1 & _LOW32).astype(np.uint32)
+            c0, c1, c2, c3 = hi1 ^ c1 ^ k0, lo1, hi0 ^ c3 ^ k1, lo0
+    return np.stack(np.broadcast_arrays(c0, c1, c2, c3), axis=-1)
+
+
+def _counter(stream, realization, index, block):
+    parts = np.broadcast_arrays(
+        np.asarray(index, dtype=np.uint32),
+        np.asarray(realization, dtype=np.uint32),
+        np.asarray(block, dtype=np.uint32),
+        np.asarray(stream, dtype=np.uint32))
+    return np.stack(parts, axis=-1)
+
+
+def random_words(seed, stream, realization, index, word):
+    """32-bit random words: word ``w`` of (seed, stream, realization, index).
+
+    Arguments broadcast. Words 4b..4b+3 come from one Philox call with block b,
+    exactly as ``clsamp_bits`` in ``kernels/philox.h``.
+    """
+    word = np.asarray(word, dtype=np.uint32)
+    out = philox4x32(_counter(stream, realization, index, word >> np.uint32(2)),
+                     np.stack(seed_key(seed)))
+    return np.take_along_axis(out, (word & np.uint32(3)).astype(np.intp)[..., None]
+                              * np.ones(out.shape[:-1] + (1,), dtype=np.intp), axis=-1)[..., 0]
+
+
+def words_to_unit(hi, lo):
+    """A double in [0, 1) with 53 random bits from two 32-bit words (genrand_res53)."""
+    hi = np.asarray(hi, dtype=np.uint32) >> np.uint32(5)
+    lo = np.asarray(lo, dtype=np.uint32) >> np.uint32(6)
+    return (hi.astype(np.float64) * 67108864.0 + lo.astype(np.float64)) * (1.0 / 9007199254740992.0)
+
+
+def uniform(seed, stream, realization, index, dim):
+    """Uniform doubles in [0, 1): coordinate ``dim`` of point ``index``.
+
+    Dimension pair (2b, 2b+1) comes from Philox block b: words (0, 1) make the
+    even dimension and words (2, 3) the odd one. Arguments broadcast.
+    """
+    dim = np.asarray(dim, dtype=np.uint32)
+    out = philox4x32(_counter(stream, realization, index, dim >> np.uint32(1)),
+                     np.stack(seed_key(seed)))
+    odd = (dim & np.uint32(1)).astype(bool)
+    hi = np.where(odd, out[..., 2], out[..., 0])
+    lo = np.where(odd, out[..., 3], out[..., 1])
+    return words_to_unit(hi, lo)
+
+
+def uniform_block(seed, stream, realizations, n, d, start=0):
+    """Uniform points of shape (len(realizations), n, d): the reference of ``random``."""
+    r = np.asarray(realizations, dtype=np.uint32)[:, None, None]
+    i = (np.uint64(start) + np.arange(n, dtype=np.uint64)).astype(np.uint32)[None, :, None]
+    j = np.arange(d, dtype=np.uint32)[None, None, :]
+    return uniform(seed, stream, r, i, j)

@@ -1,0 +1,325 @@
+"""OpenCL runtime: devices, the current context and queue, and built programs.
+
+This module is the one owner of OpenCL state (DESIGN.md, "Kernels"): nothing
+else creates contexts or builds programs. Programs are cached by
+(device, kernel file, build options), so a kernel is compiled once per process
+(PoCL and pyopencl also keep binaries on disk between processes).
+
+The default device is the first CPU device (PoCL from ``pocl-binary-distribution``),
+so a fresh install works with no GPU. ``CLSAMP_DEVICE`` (an index into
+:func:`devices` or a substring of a device name) or :func:`use_device` choose another.
+"""
+
+import dataclasses
+import os
+import re
+import threading
+from importlib import resources
+
+import numpy as np
+
+from .errors import BuildError, InvalidArgumentError, NoDeviceError
+
+_INSTALL_HINT = (
+    "clsamp needs an OpenCL platform. On a machine without a GPU install PoCL, the CPU "
+    "driver: 'pip install pocl-binary-distribution' (a dependency of clsamp) or Debian's "
+    "'apt-get install pocl-opencl-icd'. For a GPU install its vendor's OpenCL driver.")
+
+
+@dataclasses.dataclass(frozen=True)
+class Device:
+    """One OpenCL device as clsamp sees it."""
+
+    index: int
+    name: str
+    platform: str
+    type: str            # 'cpu', 'gpu' or 'other'
+    fp64: bool
+    compute_units: int
+    max_work_group_size: int
+    global_memory: int   # bytes
+    max_allocation: int  # bytes, largest single buffer
+    local_memory: int    # bytes
+
+    def __str__(self):
+        fp64 = "yes" if self.fp64 else "no"
+        return f"[{self.index}] {self.name} ({self.type}, {self.platform}, fp64={fp64})"
+
+
+_lock = threading.RLock()
+_cl_devices = None      # list of pyopencl.Device, index-aligned with _records
+_records = None
+_current = None         # index into _records
+_contexts = {}          # device index -> (context, queue)
+_programs = {}          # (device index, file, options) -> pyopencl.Program
+_kernels = {}           # (program key, kernel name) -> pyopencl.Kernel
+_build_count = 0
+
+
+def _cl():
+    import pyopencl as cl  # imported lazily: `clsamp --help` should not need a driver
+    return cl
+
+
+def _type_name(cl, device):
+    if device.type & cl.device_type.GPU:
+        return "gpu"
+    if device.type & cl.device_type.CPU:
+        return "cpu"
+    return "other"
+
+
+def _discover():
+    global _cl_devices, _records
+    cl = _cl()
+    try:
+        platforms = cl.get_platforms()
+    except cl.Error as error:  # pyopencl raises when no ICD is installed
+        raise NoDeviceError(f"no OpenCL platform found ({error}). {_INSTALL_HINT}") from None
+    found = []
+    for platform in platforms:
+        try:
+            found.extend(platform.get_devices())
+        except cl.Error:
+            continue  # a platform with no devices
+    if not found:
+        raise NoDeviceError(f"no OpenCL device found. {_INSTALL_HINT}")
+    records = []
+    for index, device in enumerate(found):
+        records.append(Device(
+            index=index,
+            name=device.name.strip(),
+            platform=device.platform.name.strip(),
+            type=_type_name(cl, device),
+            fp64=bool(device.double_fp_config),
+            compute_units=device.max_compute_units,
+            max_work_group_size=device.max_work_group_size,
+            global_memory=device.global_mem_size,
+            max_allocation=device.max_mem_alloc_size,
+            local_memory=device.local_mem_size))
+    _cl_devices, _records = found, records
+
+
+def devices():
+    """All OpenCL devices found, as :class:`Device` records (index, name, platform, type, fp64, ...)."""
+    with _lock:
+        if _records is None:
+            _discover()
+        return list(_records)
+
+
+def _resolve(spec):
+    records = devices()
+    if isinstance(spec, Device):
+        spec = spec.index
+    if isinstance(spec, (int, np.integer)) and not isinstance(spec, bool):
+        if not 0 <= spec < len(records):
+            raise InvalidArgumentError(
+                f"'device' index must be in [0, {len(records) - 1}], got {spec}; devices: "
+                + "; ".join(str(r) for r in records))
+        return int(spec)
+    if isinstance(spec, str):
+        text = spec.strip()
+        if text.isdigit():
+            return _resolve(int(text))
+        if text.lower() in ("cpu", "gpu"):
+            for record in records:
+                if record.type == text.lower():
+                    return record.index
+        for record in records:
+            if text.lower() in record.name.lower() or text.lower() in record.platform.lower():
+                return record.index
+        raise NoDeviceError(
+            f"no OpenCL device matches 'device'={spec!r}; devices: " + "; ".join(str(r) for r in records))
+    raise InvalidArgumentError(
+        f"'device' must be an index, a name substring or a Device, got {spec!r}")
+
+
+def use_device(spec):
+    """Make ``spec`` the current device and return its :class:`Device` record.
+
+    ``spec`` is an index into :func:`devices`, a substring of a device or platform
+    name (case-insensitive), ``"cpu"``/``"gpu"``, or a :class:`Device`.
+    """
+    global _current
+    with _lock:
+        _current = _resolve(spec)
+        return _records[_current]
+
+
+def current_device():
+    """The :class:`Device` kernels run on now (chosen by :func:`use_device`,
+    ``CLSAMP_DEVICE``, or the first CPU device)."""
+    global _current
+    with _lock:
+        if _current is None:
+            env = os.environ.get("CLSAMP_DEVICE")
+            if env:
+                _current = _resolve(env)
+            else:
+                records = devices()
+                cpus = [r.index for r in records if r.type == "cpu"]
+                _current = cpus[0] if cpus else 0
+        return _records[_current]
+
+
+def _state(index):
+    cl = _cl()
+    with _lock:
+        if index not in _contexts:
+            context = cl.Context([_cl_devices[index]])
+            _contexts[index] = (context, cl.CommandQueue(context))
+        return _contexts[index]
+
+
+def context():
+    """The pyopencl Context of the current device."""
+    return _state(current_device().index)[0]
+
+
+def queue():
+    """The pyopencl CommandQueue of the current device (in-order)."""
+    return _state(current_device().index)[1]
+
+
+def kernel_folder():
+    """Where the kernel sources are: the installed package data ``clsamp/kernels``,
+    or ``kernels/`` beside the package in a source checkout."""
+    try:
+        folder = resources.files("clsamp.kernels")
+        if folder.joinpath("philox.h").is_file():
+            return folder
+    except ModuleNotFoundError:
+        pass
+    return resources.files("clsamp").joinpath("..", "kernels")
+
+
+def kernel_source(file):
+    """The text of ``kernels/<file>`` with its ``#include "x.h"`` lines inlined.
+
+    Headers are inlined here rather than found through ``-I`` so that the
+    source handed to the compiler is complete, and binary caches keyed by the
+    source (pyopencl's, PoCL's) see a header change.
+    """
+    folder = kernel_folder()
+    seen = set()
+
+    def expand(name):
+        if name in seen:
+            return ""
+        seen.add(name)
+        path = folder / name
+        if not path.is_file():
+            raise BuildError(f"kernel file {name!r} not found in {folder}")
+        text = path.read_text()
+        return re.sub(r'^\s*#include\s+"([^"]+)"\s*$', lambda m: expand(m.group(1)), text, flags=re.M)
+
+    return expand(file)
+
+
+def _options(defines, extra):
+    options = []
+    for key in sorted(defines or {}):
+        value = defines[key]
+        if value is True:
+            options.append(f"-D{key}=1")
+        elif value is False or value is None:
+            continue
+        else:
+            options.append(f"-D{key}={value}")
+    options.extend(extra or ())
+    return tuple(options)
+
+
+def program(file, defines=None, options=()):
+    """The built program of ``kernels/<file>`` for the current device.
+
+    Parameters
+    ----------
+    file : str
+        Kernel file name inside ``kernels/``.
+    defines : dict, optional
+        ``-D`` build options (``{"DIM": 3}`` becomes ``-DDIM=3``; ``True`` becomes 1;
+        ``False``/``None`` leave the name undefined). Code-changing parameters go
+        here so each variant compiles only what it needs.
+    options : sequence of str
+        Other compiler options (``-cl-mad-enable``: only where results need not be
+        bit-identical across devices).
+
+    Raises
+    ------
+    BuildError
+        With the file, the device and the compiler's log.
+    """
+    global _build_count
+    cl = _cl()
+    device = current_device()
+    key = (device.index, file, _options(defines, options))
+    with _lock:
+        built = _programs.get(key)
+        if built is not None:
+            return built
+        ctx = _state(device.index)[0]
+        source = kernel_source(file)
+        try:
+            built = cl.Program(ctx, source).build(options=list(key[2]))
+        except cl.RuntimeError as error:
+            raise BuildError(
+                f"OpenCL build of kernels/{file} failed on {device.name} "
+                f"({device.platform}) with options {' '.join(key[2]) or '(none)'}:\n{error}") from None
+        _build_count += 1
+        _programs[key] = built
+        return built
+
+
+def kernel(file, name, defines=None, options=()):
+    """A kernel object from :func:`program`, fetched once per program."""
+    prog = program(file, defines, options)
+    key = (id(prog), name)
+    with _lock:
+        k = _kernels.get(key)
+        if k is None:
+            k = getattr(prog, name)
+            _kernels[key] = k
+        return k
+
+
+def build_count():
+    """How many programs this process has built (a cache hit builds nothing)."""
+    return _build_count
+
+
+def require_fp64():
+    """Raise unless the current device does double precision (clsamp's kernels need it)."""
+    device = current_device()
+    if not device.fp64:
+        raise NoDeviceError(
+            f"device {device.name} has no double precision (cl_khr_fp64); clsamp's kernels "
+            "need it. Choose another with clsamp.use_device or CLSAMP_DEVICE.")
+    return device
+
+
+def chunk_ranges(total, bytes_per_item, fraction=0.25):
+    """Split ``total`` items into contiguous ranges that each fit in device memory.
+
+    Each range's buffer stays under ``fraction`` of the device's largest single
+    allocation, so work too large for the device is split, never refused or truncated.
+    """
+    device = current_device()
+    limit = max(1, int(device.max_allocation * fraction) // max(1, int(bytes_per_item)))
+    return [(lo, min(total, lo + limit)) for lo in range(0, total, limit)]
+
+
+def local_size(preferred=64):
+    """A work-group size no larger than the device allows (a power of two)."""
+    limit = current_device().max_work_group_size
+    size = 1
+    while size * 2 <= min(preferred, limit):
+        size *= 2
+    return size
+
+
+def key_args(seed):
+    """The seed as the two uint32 kernel arguments (key low, key high)."""
+    seed = int(seed)
+    return np.uint32(seed & 0xFFFFFFFF), np.uint32(seed >> 32)

@@ -1,0 +1,121 @@
+"""Argument checking at the public boundary.
+
+Public functions call these once; the code behind them trusts its inputs. Every
+failure is an :class:`~clsamp.errors.InvalidArgumentError` whose message names
+the argument and what was expected, e.g. ``'n' must be a positive integer, got -1``.
+"""
+
+import numbers
+
+import numpy as np
+
+from .errors import InvalidArgumentError
+
+MAX_UINT32 = 2**32 - 1
+
+
+def check_int(value, name, minimum=None, maximum=None):
+    """Return ``value`` as a Python int, or raise naming ``name``.
+
+    Booleans and floats are refused even when integral (``n=4.0`` is a bug in
+    the caller more often than a request for four points).
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
+        raise InvalidArgumentError(f"'{name}' must be an integer, got {value!r}")
+    value = int(value)
+    if minimum is not None and value < minimum:
+        raise InvalidArgumentError(f"'{name}' must be an integer >= {minimum}, got {value}")
+    if maximum is not None and value > maximum:
+        raise InvalidArgumentError(f"'{name}' must be an integer <= {maximum}, got {value}")
+    return value
+
+
+def check_positive_int(value, name, maximum=None):
+    """An integer >= 1."""
+    return check_int(value, name, minimum=1, maximum=maximum)
+
+
+def check_seed(seed):
+    """A seed is an integer in [0, 2^64): the two 32-bit words of the Philox key."""
+    return check_int(seed, "seed", minimum=0, maximum=2**64 - 1)
+
+
+def check_real(value, name, minimum=None, maximum=None, open_minimum=False, open_maximum=False):
+    """Return ``value`` as a finite float within the given bounds, or raise naming ``name``."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise InvalidArgumentError(f"'{name}' must be a real number, got {value!r}")
+    value = float(value)
+    if not np.isfinite(value):
+        raise InvalidArgumentError(f"'{name}' must be finite, got {value}")
+    if minimum is not None and (value <= minimum if open_minimum else value < minimum):
+        relation = ">" if open_minimum else ">="
+        raise InvalidArgumentError(f"'{name}' must be {relation} {minimum}, got {value}")
+    if maximum is not None and (value >= maximum if open_maximum else value > maximum):
+        relation = "<" if open_maximum else "<="
+        raise InvalidArgumentError(f"'{name}' must be {relation} {maximum}, got {value}")
+    return value
+
+
+def check_choice(value, name, choices):
+    """``value`` must be one of ``choices``; the message lists them."""
+    if value not in choices:
+        listed = ", ".join(repr(c) for c in choices)
+        raise InvalidArgumentError(f"'{name}' must be one of {listed}; got {value!r}")
+    return value
+
+
+def check_points(points, name="points", d=None, allow_batch=True):
+    """Validate a point set and return it as a float64 array of shape (r, n, d).
+
+    Parameters
+    ----------
+    points : array_like
+        Shape (n, d) for one set or (r, n, d) for r realizations, float64
+        (float32 is accepted and widened exactly), every coordinate in [0, 1).
+    name : str
+        The argument's name, used in error messages.
+    d : int or tuple of int, optional
+        The dimension(s) accepted.
+    allow_batch : bool
+        Whether the (r, n, d) form is accepted.
+
+    Returns
+    -------
+    batch : ndarray, shape (r, n, d), float64, C-contiguous
+    single : bool
+        True when the input was one (n, d) set.
+    """
+    if isinstance(points, (list, tuple)):
+        points = np.asarray(points)
+    if not isinstance(points, np.ndarray):
+        raise InvalidArgumentError(
+            f"'{name}' must be a NumPy array of shape (n, d) or (r, n, d), "
+            f"got {type(points).__name__}")
+    if points.dtype not in (np.float64, np.float32):
+        raise InvalidArgumentError(
+            f"'{name}' must have dtype float64 (or float32), got {points.dtype}")
+    shapes = "(n, d) or (r, n, d)" if allow_batch else "(n, d)"
+    if points.ndim == 2:
+        single = True
+        batch = points[None]
+    elif points.ndim == 3 and allow_batch:
+        single = False
+        batch = points
+    else:
+        raise InvalidArgumentError(f"'{name}' must have shape {shapes}, got {points.shape}")
+    if batch.shape[1] < 1 or batch.shape[2] < 1 or batch.shape[0] < 1:
+        raise InvalidArgumentError(f"'{name}' must hold at least one point, got shape {points.shape}")
+    if d is not None:
+        allowed = (d,) if isinstance(d, int) else tuple(d)
+        if batch.shape[2] not in allowed:
+            want = " or ".join(str(a) for a in allowed)
+            raise InvalidArgumentError(
+                f"'{name}' must have {want} dimensions (last axis), got {batch.shape[2]}")
+    batch = np.ascontiguousarray(batch, dtype=np.float64)
+    if not np.all(np.isfinite(batch)):
+        raise InvalidArgumentError(f"'{name}' contains NaN or infinite values")
+    if batch.min() < 0.0 or batch.max() >= 1.0:
+        raise InvalidArgumentError(
+            f"'{name}' must lie in [0, 1) in every coordinate, got values in "
+            f"[{batch.min()!r}, {batch.max()!r}]")
+    return batch, single

@@ -1,0 +1,68 @@
+/* Philox4x32-10 counter-based random numbers: the OpenCL twin of clsamp/philox.py.
+ *
+ * Salmon et al., "Parallel random numbers: as easy as 1, 2, 3" (SC 2011).
+ * Key = the 64-bit seed as (low, high); counter = (index, realization, block, stream).
+ * Integer-only arithmetic, so every device gives the same words; the conversion to
+ * double is exact (53 bits, scaled by a power of two).
+ */
+#ifndef CLSAMP_PHILOX_H
+#define CLSAMP_PHILOX_H
+
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+
+#define CLSAMP_PHILOX_M0 0xD2511F53u
+#define CLSAMP_PHILOX_M1 0xCD9E8D57u
+#define CLSAMP_PHILOX_W0 0x9E3779B9u
+#define CLSAMP_PHILOX_W1 0xBB67AE85u
+
+inline uint4 philox4x32_10(uint4 ctr, uint2 key)
+{
+    for (int round = 0; round < 10; ++round) {
+        if (round) {
+            key.x += CLSAMP_PHILOX_W0;
+            key.y += CLSAMP_PHILOX_W1;
+        }
+        const uint hi0 = mul_hi(CLSAMP_PHILOX_M0, ctr.x);
+        const uint lo0 = CLSAMP_PHILOX_M0 * ctr.x;
+        const uint hi1 = mul_hi(CLSAMP_PHILOX_M1, ctr.z);
+        const uint lo1 = CLSAMP_PHILOX_M1 * ctr.z;
+        ctr = (uint4)(hi1 ^ ctr.y ^ key.x, lo1, hi0 ^ ctr.w ^ key.y, lo0);
+    }
+    return ctr;
+}
+
+/* Four random words of (key, stream, realization, index, block). */
+inline uint4 clsamp_block(uint2 key, uint stream, uint realization, uint index, uint block)
+{
+    return philox4x32_10((uint4)(index, realization, block, stream), key);
+}
+
+/* Word w of (key, stream, realization, index): block w/4, lane w%4. */
+inline uint clsamp_bits(uint2 key, uint stream, uint realization, uint index, uint word)
+{
+    const uint4 b = clsamp_block(key, stream, realization, index, word >> 2);
+    const uint lane = word & 3u;
+    return lane == 0u ? b.x : lane == 1u ? b.y : lane == 2u ? b.z : b.w;
+}
+
+/* A double in [0, 1) with 53 random bits (genrand_res53). */
+inline double clsamp_unit(uint hi, uint lo)
+{
+    return ((double)(hi >> 5) * 67108864.0 + (double)(lo >> 6)) * (1.0 / 9007199254740992.0);
+}
+
+/* Both coordinates of dimension pair b: (2b, 2b+1). */
+inline double2 clsamp_uniform2(uint2 key, uint stream, uint realization, uint index, uint pair)
+{
+    const uint4 b = clsamp_block(key, stream, realization, index, pair);
+    return (double2)(clsamp_unit(b.x, b.y), clsamp_unit(b.z, b.w));
+}
+
+/* Coordinate `dim` of point `index`: the same number as clsamp.philox.uniform. */
+inline double clsamp_uniform(uint2 key, uint stream, uint realization, uint index, uint dim)
+{
+    const double2 u = clsamp_uniform2(key, stream, realization, index, dim >> 1);
+    return (dim & 1u) ? u.y : u.x;
+}
+
+#endif
