@@ -8,7 +8,7 @@ in the order ``clsamp --help`` shows them.
 import argparse
 import sys
 
-from .errors import ClsampError
+from .errors import ClsampError, InvalidArgumentError
 
 
 def _parse_params(items):
@@ -17,7 +17,7 @@ def _parse_params(items):
     for item in items or ():
         key, sep, value = item.partition("=")
         if not sep or not key:
-            raise ClsampError(f"'--param' must look like key=value, got {item!r}")
+            raise InvalidArgumentError(f"'--param' must look like key=value, got {item!r}")
         for convert in (int, float):
             try:
                 params[key] = convert(value)

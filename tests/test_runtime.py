@@ -1,0 +1,102 @@
+"""The OpenCL runtime: devices, device choice, the built-program cache, build errors."""
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+import clsamp
+from clsamp import runtime
+from clsamp.errors import BuildError, ClsampError, InvalidArgumentError, NoDeviceError
+
+
+def test_devices_lists_a_cpu_device_with_fp64():
+    records = clsamp.devices()
+    assert records, "no OpenCL device"
+    assert any(r.type == "cpu" for r in records)
+    default = clsamp.current_device()
+    assert default.fp64
+    assert str(default).startswith(f"[{default.index}]")
+
+
+def test_default_is_first_cpu_device():
+    if os.environ.get("CLSAMP_DEVICE"):
+        pytest.skip("CLSAMP_DEVICE chooses the device")
+    first_cpu = next(r for r in clsamp.devices() if r.type == "cpu")
+    assert clsamp.current_device() == first_cpu
+
+
+def test_use_device_by_index_name_and_type():
+    record = clsamp.current_device()
+    assert clsamp.use_device(record.index) == record
+    assert clsamp.use_device(record.name[:6]) == record
+    assert clsamp.use_device(record.type) == record
+    assert clsamp.use_device(str(record.index)) == record
+
+
+def test_use_device_errors_name_the_argument():
+    with pytest.raises(InvalidArgumentError, match="'device' index"):
+        clsamp.use_device(99)
+    with pytest.raises(NoDeviceError, match="no OpenCL device matches"):
+        clsamp.use_device("no-such-device-xyz")
+    with pytest.raises(InvalidArgumentError):
+        clsamp.use_device(1.5)
+
+
+def test_env_variable_chooses_device():
+    code = "import clsamp; print(clsamp.current_device().index)"
+    env = dict(os.environ, CLSAMP_DEVICE=clsamp.current_device().name[:5])
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                         check=True, cwd=os.path.dirname(os.path.dirname(__file__)))
+    assert int(out.stdout) == clsamp.current_device().index
+
+
+def test_second_sampler_call_builds_nothing():
+    sampler = clsamp.make_sampler("random", d=2, seed=3)
+    sampler.sample(16)
+    before = runtime.build_count()
+    sampler.sample(32, realizations=3)
+    clsamp.make_sampler("random", d=5, seed=4).sample(8)
+    assert runtime.build_count() == before
+
+
+def test_defines_make_distinct_cached_variants():
+    before = runtime.build_count()
+    a = runtime.program("philox_probe.cl", defines={"CLSAMP_TEST_VARIANT": 1})
+    b = runtime.program("philox_probe.cl", defines={"CLSAMP_TEST_VARIANT": 2})
+    assert a is not b
+    assert runtime.program("philox_probe.cl", defines={"CLSAMP_TEST_VARIANT": 1}) is a
+    assert runtime.build_count() == before + 2
+
+
+def test_build_failure_names_file_device_and_log(tmp_path, monkeypatch):
+    (tmp_path / "broken.cl").write_text("__kernel void f(__global float *x) { x[0] = undefined_name; }\n")
+    monkeypatch.setattr(runtime, "kernel_folder", lambda: tmp_path)
+    with pytest.raises(BuildError) as info:
+        runtime.program("broken.cl")
+    message = str(info.value)
+    assert "kernels/broken.cl" in message
+    assert clsamp.current_device().name in message
+    assert "undefined_name" in message
+    assert isinstance(info.value, ClsampError) and isinstance(info.value, RuntimeError)
+
+
+def test_headers_are_inlined():
+    source = runtime.kernel_source("random.cl")
+    assert "#include" not in source
+    assert "philox4x32_10" in source
+
+
+def test_chunk_ranges_cover_everything_without_overlap():
+    total = 1000
+    item = clsamp.current_device().max_allocation // 40  # forces several chunks
+    parts = runtime.chunk_ranges(total, item)
+    assert len(parts) > 1
+    assert parts[0][0] == 0 and parts[-1][1] == total
+    assert all(a[1] == b[0] for a, b in zip(parts, parts[1:], strict=False))
+
+
+def test_local_size_is_a_power_of_two_within_limits():
+    size = runtime.local_size(100)
+    assert size & (size - 1) == 0 and size <= min(100, clsamp.current_device().max_work_group_size)
