@@ -82,9 +82,26 @@ def _run_sample(args):
     return 0
 
 
+# -- tour ----------------------------------------------------------------------
+def _add_tour(sub):
+    p = sub.add_parser("tour", help="the whole story in one report: DIR/index.html")
+    p.add_argument("--out", default="tour", help="output folder (default: tour)")
+    p.add_argument("--quick", action="store_true", help="smaller sizes (CI; under two minutes)")
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    p.set_defaults(run=_run_tour)
+
+
+def _run_tour(args):
+    from .tour import run_tour
+    index = run_tour(args.out, quick=args.quick, progress=not args.no_progress)
+    print(f"wrote {index}")
+    return 0
+
+
 _COMMANDS = (
     _add_devices,
     _add_sample,
+    _add_tour,
 )
 
 
@@ -92,11 +109,12 @@ def build_parser():
     parser = argparse.ArgumentParser(
         prog="clsamp",
         description="Sampling patterns for Monte Carlo rendering, generated and measured in OpenCL.")
-    parser.add_argument("--device", help="OpenCL device: index or name substring "
-                        "(default: $CLSAMP_DEVICE, else the first CPU device)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for add in _COMMANDS:
         add(sub)
+    for command in sub.choices.values():
+        command.add_argument("--device", help="OpenCL device: index or name substring "
+                             "(default: $CLSAMP_DEVICE, else the first CPU device)")
     return parser
 
 
