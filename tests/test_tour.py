@@ -1,0 +1,44 @@
+"""`clsamp tour --quick`: the main job runs end to end and its page is whole."""
+
+import json
+import os
+import re
+import subprocess
+import sys
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+@pytest.fixture(scope="module")
+def tour(tmp_path_factory):
+    out = tmp_path_factory.mktemp("tour")
+    env = dict(os.environ, PYTHONPATH=ROOT + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    done = subprocess.run([sys.executable, "-m", "clsamp", "tour", "--quick", "--no-progress",
+                           "--out", str(out)], capture_output=True, text=True, env=env, timeout=600)
+    assert done.returncode == 0, done.stderr
+    return out
+
+
+def test_every_section_is_present_and_none_failed(tour):
+    from clsamp.tour import SECTIONS
+    page = (tour / "index.html").read_text()
+    for key, title, _ in SECTIONS:
+        assert f"id='{key}'" in page, title
+    assert "This section failed" not in page, page[page.find("This section failed"):][:3000]
+
+
+def test_every_linked_file_exists(tour):
+    page = (tour / "index.html").read_text()
+    links = re.findall(r'(?:src|href)="([^"#]+)"', page) + re.findall(r"(?:src|href)='([^'#]+)'", page)
+    assert any(link.endswith(".png") for link in links)
+    for link in links:
+        assert (tour / link).exists(), link
+
+
+def test_json_parses_and_holds_every_section(tour):
+    from clsamp.tour import SECTIONS
+    data = json.loads((tour / "tour.json").read_text())
+    assert set(data["sections"]) == {key for key, _, _ in SECTIONS}
+    assert all(s["error"] is None for s in data["sections"].values())
