@@ -17,15 +17,20 @@
 
 inline uint4 philox4x32_10(uint4 ctr, uint2 key)
 {
+    /* A 64-bit product instead of mul_hi, and the rounds unrolled: on PoCL (LLVM 14)
+     * this ran ~3.5x faster than mul_hi in a rolled loop, with identical words. */
+#pragma unroll
     for (int round = 0; round < 10; ++round) {
         if (round) {
             key.x += CLSAMP_PHILOX_W0;
             key.y += CLSAMP_PHILOX_W1;
         }
-        const uint hi0 = mul_hi(CLSAMP_PHILOX_M0, ctr.x);
-        const uint lo0 = CLSAMP_PHILOX_M0 * ctr.x;
-        const uint hi1 = mul_hi(CLSAMP_PHILOX_M1, ctr.z);
-        const uint lo1 = CLSAMP_PHILOX_M1 * ctr.z;
+        const ulong p0 = (ulong)CLSAMP_PHILOX_M0 * ctr.x;
+        const ulong p1 = (ulong)CLSAMP_PHILOX_M1 * ctr.z;
+        const uint hi0 = (uint)(p0 >> 32);
+        const uint lo0 = (uint)p0;
+        const uint hi1 = (uint)(p1 >> 32);
+        const uint lo1 = (uint)p1;
         ctr = (uint4)(hi1 ^ ctr.y ^ key.x, lo1, hi0 ^ ctr.w ^ key.y, lo0);
     }
     return ctr;
