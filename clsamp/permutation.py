@@ -107,6 +107,11 @@ def permute(i, length, p):
     [0, length). A final rotation by ``p`` modulo ``length`` removes the fixed point
     at zero. It approximates a random permutation; it is not exactly uniform.
 
+    One deliberate difference from the listing: its final ``(i + p) % l`` is computed
+    in 32 bits and is not a bijection when ``i + p`` wraps past 2^32 (for l = 3 and
+    p = 0xffffffff it maps 0 and 1 both to 0); here the rotation is by ``p % l``,
+    which equals the listing wherever the listing's sum does not wrap.
+
     References
     ----------
     .. [1] A. Kensler, "Correlated Multi-Jittered Sampling", Pixar Technical Memo 13-01, 2013.
@@ -145,7 +150,8 @@ def permute(i, length, p):
             x ^= x >> np.uint64(5)
             i[todo] = x
             todo[todo] = x >= ln
-    return (((i + p) & _MASK32) % ln).astype(np.uint32)
+    # Kensler's (i + p) % l wraps in 32 bits and is then no bijection; rotate by p % l.
+    return ((i + p % ln) % ln).astype(np.uint32)
 
 
 def _as_range(value, name):

@@ -55,7 +55,11 @@ inline uint clsamp_permute(uint i, const uint l, const uint p)
         i &= w;
         i ^= i >> 5;
     } while (i >= l);
-    return (i + p) % l;
+    /* Kensler's listing returns (i + p) % l in 32-bit arithmetic, which stops being a
+     * bijection when i + p wraps past 2^32 (e.g. l = 3, p = 0xffffffff); rotating by
+     * p % l gives the same values whenever the listing's sum does not wrap. */
+    const uint rot = p % l;
+    return i >= l - rot ? i - (l - rot) : i + rot;
 }
 
 /* Philox counters of permutation `perm`: the first draw of step t is lane t%4 of
