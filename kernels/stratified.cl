@@ -1,0 +1,120 @@
+/* The stratified family: regular, jittered, uncorrelated jitter, Latin hypercube,
+ * multi-jittered (Chiu-Shirley-Wang 1994) and correlated multi-jittered (Kensler 2013).
+ * NumPy references: clsamp/samplers/stratified.py (same function names).
+ *
+ * Integer arithmetic and exactly rounded double operations only, so every device
+ * gives the same bits. Build options: PERMUTED (cells come from a permutation
+ * buffer) and CENTERED (cell centres instead of jitter) for stratified_points. */
+#pragma OPENCL FP_CONTRACT OFF
+#include "permutation.h"
+
+#ifndef PERMUTED
+#define PERMUTED 0
+#endif
+#ifndef CENTERED
+#define CENTERED 0
+#endif
+
+/* (k + u) / count, nudged by ulps so that floor(x * count) == k in double arithmetic:
+ * the rounding of k + u and of the division may otherwise carry a point across the
+ * stratum's edge (and the last stratum's point to 1.0). */
+inline double stratum_point(const uint k, const double u, const uint count)
+{
+    const double c = (double)count;
+    const double kd = (double)k;
+    double x = (kd + u) / c;
+    while (floor(x * c) > kd)
+        x = nextafter(x, 0.0);
+    while (floor(x * c) < kd)
+        x = nextafter(x, 1.0);
+    return x;
+}
+
+/* Grid (n padded, realizations); out has shape (realizations, n, d).
+ * Dimension j is split into radix[j] strata and belongs to group group[j] (groups are
+ * contiguous runs of dimensions). Point i of a group takes cell c = perms[r, g, i]
+ * (PERMUTED) or c = i, whose mixed-radix digits (first dimension fastest) are its
+ * strata in the group's dimensions. perms has shape (realizations, groups, n). */
+__kernel void stratified_points(__global double *out, const uint n, const uint d,
+                                const uint start, const uint realization0,
+                                const uint key_lo, const uint key_hi, const uint stream,
+                                __global const uint *radix, __global const uint *group,
+                                __global const uint *perms, const uint groups)
+{
+    const uint i = get_global_id(0);
+    const uint r = get_global_id(1);
+    if (i >= n)
+        return;
+    const uint2 key = (uint2)(key_lo, key_hi);
+    __global double *p = out + ((size_t)r * n + i) * d;
+    uint current = 0xFFFFFFFFu;
+    uint cell = 0;
+    double2 u = (double2)(0.5, 0.5);
+    for (uint j = 0; j < d; ++j) {
+        if (group[j] != current) {
+            current = group[j];
+#if PERMUTED
+            cell = perms[((size_t)r * groups + current) * n + i];
+#else
+            cell = i;
+#endif
+        }
+        const uint strata = radix[j];
+        const uint digit = cell % strata;
+        cell /= strata;
+#if !CENTERED
+        if ((j & 1u) == 0u)
+            u = clsamp_uniform2(key, stream, realization0 + r, start + i, j >> 1);
+#endif
+        p[j] = stratum_point(digit, (j & 1u) ? u.y : u.x, strata);
+    }
+}
+
+/* Chiu, Shirley, Wang (1994): grid (n padded, realizations), n = mx * my points, point
+ * p = row * mx + col. Its x lies in column col and in substratum col * my + colperm[col][row]
+ * of the n x-slabs; its y in row row and substratum row * mx + rowperm[row][col].
+ * colperm: (realizations, mx, my), rowperm: (realizations, my, mx). */
+__kernel void multijittered_points(__global double *out, const uint mx, const uint my,
+                                   const uint start, const uint realization0,
+                                   const uint key_lo, const uint key_hi, const uint stream,
+                                   __global const uint *colperm, __global const uint *rowperm)
+{
+    const uint i = get_global_id(0);
+    const uint r = get_global_id(1);
+    const uint n = mx * my;
+    if (i >= n)
+        return;
+    const uint col = i % mx;
+    const uint row = i / mx;
+    const double2 u = clsamp_uniform2((uint2)(key_lo, key_hi), stream, realization0 + r, start + i, 0);
+    const uint sx = colperm[((size_t)r * mx + col) * my + row];
+    const uint sy = rowperm[((size_t)r * my + row) * mx + col];
+    __global double *p = out + ((size_t)r * n + i) * 2;
+    p[0] = stratum_point(col * my + sx, u.x, n);
+    p[1] = stratum_point(row * mx + sy, u.y, n);
+}
+
+/* Kensler (2013), final "cmj" listing with aspect 1: grid (n padded, realizations);
+ * m = floor(sqrt(n)) columns, rows = ceil(n / m). The pattern p of a realization is
+ * Philox word 0 of (perm_stream, realization, index 0); jitter comes from Philox
+ * (point_stream, index start + i) instead of Kensler's 32-bit hash. */
+__kernel void correlated_multijittered_points(__global double *out, const uint n, const uint m,
+                                              const uint rows, const uint start,
+                                              const uint realization0, const uint key_lo,
+                                              const uint key_hi, const uint point_stream,
+                                              const uint perm_stream)
+{
+    const uint i = get_global_id(0);
+    const uint r = get_global_id(1);
+    if (i >= n)
+        return;
+    const uint2 key = (uint2)(key_lo, key_hi);
+    const uint p = clsamp_bits(key, perm_stream, realization0 + r, 0u, 0u);
+    const uint s = clsamp_permute(i, n, p * 0x51633e2du);
+    const uint sx = clsamp_permute(s % m, m, p * 0x68bc21ebu);
+    const uint sy = clsamp_permute(s / m, rows, p * 0x02e5be93u);
+    const double2 u = clsamp_uniform2(key, point_stream, realization0 + r, start + i, 0);
+    __global double *q = out + ((size_t)r * n + i) * 2;
+    q[0] = stratum_point(sx * rows + sy, u.x, m * rows);
+    q[1] = stratum_point(s, u.y, n);
+}
