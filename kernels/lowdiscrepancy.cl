@@ -25,9 +25,53 @@
 #define LD_BLOCK 32
 #endif
 
+/* Vector types of width LD_WIDTH (2, 4 or 8): Sobol works on LD_WIDTH dimensions at once,
+ * which PoCL turns into SIMD instructions (it does not vectorize across work-items when a
+ * kernel has an inner loop, POCL_NOTES.md). */
+#ifndef LD_WIDTH
+#define LD_WIDTH 8
+#endif
+#define LD_CAT(a, b) a##b
+#define LD_XCAT(a, b) LD_CAT(a, b)
+#define uintW LD_XCAT(uint, LD_WIDTH)
+#define doubleW LD_XCAT(double, LD_WIDTH)
+#define longW LD_XCAT(long, LD_WIDTH)
+#define vloadW LD_XCAT(vload, LD_WIDTH)
+#define vstoreW LD_XCAT(vstore, LD_WIDTH)
+#define intW LD_XCAT(int, LD_WIDTH)
+#define as_intW LD_XCAT(as_int, LD_WIDTH)
+#define convert_doubleW LD_XCAT(convert_double, LD_WIDTH)
+
+/* x * 2^-32 exactly. Through a signed conversion, which has a SIMD instruction where the
+ * unsigned one has none (AVX2): x = (x - 2^31) + 2^31, each step exact. */
+inline doubleW unit32W(uintW x)
+{
+    return (convert_doubleW(as_intW(x ^ 0x80000000u)) + 2147483648.0) * 0x1p-32;
+}
+
+inline uintW reverse_bits32W(uintW x)
+{
+    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
+    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+    x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
+    x = ((x >> 8) & 0x00FF00FFu) | ((x & 0x00FF00FFu) << 8);
+    return (x >> 16) | (x << 16);
+}
+
+inline uintW lk_hashW(uintW x, uintW seed)
+{
+    x ^= x * 0x3D20ADEAu;
+    x += seed;
+    x *= (seed >> 16) | 1u;
+    x ^= x * 0x05526C56u;
+    x ^= x * 0x53A22864u;
+    return x;
+}
+
 /* Sobol points in Gray-code order (as scipy): x_i = xor of V[c] over the set bits c of
- * i ^ (i >> 1), and x_(i+1) = x_i ^ V[ctz(i + 1)]. For Owen scrambling V arrives
- * bit-reversed, so the state is already in the reversed order the LK hash works on. */
+ * i ^ (i >> 1), and x_(i+1) = x_i ^ V[ctz(i + 1)]. matrices is (32, padded d): row c holds
+ * V[c] of every dimension, zero past d. For Owen scrambling V arrives bit-reversed, so the
+ * state is already in the reversed order the LK hash works on. */
 __kernel void sobol_points(__global double *out, __global const uint *matrices,
                            const uint n, const uint d, const uint start, const uint realization0,
                            const uint key_lo, const uint key_hi, const uint scramble_stream,
@@ -41,37 +85,54 @@ __kernel void sobol_points(__global double *out, __global const uint *matrices,
     const uint i0 = g * LD_BLOCK;
     const uint count = min((uint)LD_BLOCK, n - i0);
     const uint first = start + i0;
+    const uint stride = (d + LD_WIDTH - 1) / LD_WIDTH * LD_WIDTH;
     const uint2 key = (uint2)(key_lo, key_hi);
     const uint realization = realization0 + r;
     __global double *row = out + ((size_t)r * n + i0) * d;
-    for (uint j = 0; j < d; ++j) {
-        __global const uint *v = matrices + (size_t)j * 32;
+    for (uint j = 0; j < d; j += LD_WIDTH) {
+        __global const uint *v = matrices + j;
         uint gray = first ^ (first >> 1);
-        uint x = 0;
+        uintW x = (uintW)(0u);
         while (gray) {
-            x ^= v[ld_ctz(gray)];
+            x ^= vloadW(0, v + (size_t)ld_ctz(gray) * stride);
             gray &= gray - 1u;
         }
 #if RANDOMIZE == LD_SHIFT
-        const double u = clsamp_uniform(key, shift_stream, realization, 0, j);
+        double lanes[LD_WIDTH];
+        for (uint l = 0; l < LD_WIDTH; ++l)
+            lanes[l] = j + l < d ? clsamp_uniform(key, shift_stream, realization, 0, j + l) : 0.0;
+        const doubleW u = vloadW(0, lanes);
 #elif RANDOMIZE == LD_XOR || RANDOMIZE == LD_OWEN
-        const uint seed = clsamp_block(key, scramble_stream, realization, j, 0).x;
+        uint lanes[LD_WIDTH];
+        for (uint l = 0; l < LD_WIDTH; ++l)
+            lanes[l] = j + l < d ? clsamp_block(key, scramble_stream, realization, j + l, 0).x : 0u;
+        const uintW seed = vloadW(0, lanes);
 #endif
+        const uint width = min((uint)LD_WIDTH, d - j);
         __global double *p = row + j;
         uint index = first;
         for (uint t = 0; t < count; ++t) {
-#if RANDOMIZE == LD_NONE
-            p[(size_t)t * d] = (double)x * 0x1p-32;
-#elif RANDOMIZE == LD_SHIFT
-            p[(size_t)t * d] = ld_shift((double)x * 0x1p-32, u);
+#if RANDOMIZE == LD_SHIFT
+            doubleW y = unit32W(x) + u;
+            y = select(y, y - 1.0, y >= 1.0);
 #elif RANDOMIZE == LD_XOR
-            p[(size_t)t * d] = (double)(x ^ seed) * 0x1p-32;
+            const doubleW y = unit32W(x ^ seed);
 #elif RANDOMIZE == LD_OWEN
-            p[(size_t)t * d] = (double)reverse_bits32(lk_hash(x, seed)) * 0x1p-32;
+            const doubleW y = unit32W(reverse_bits32W(lk_hashW(x, seed)));
+#else       /* LD_NONE (LD_PERMUTE is not offered for Sobol) */
+            const doubleW y = unit32W(x);
 #endif
+            if (width == LD_WIDTH) {
+                vstoreW(y, 0, p + (size_t)t * d);
+            } else {
+                double tail[LD_WIDTH];
+                vstoreW(y, 0, tail);
+                for (uint l = 0; l < width; ++l)
+                    p[(size_t)t * d + l] = tail[l];
+            }
             if (t + 1 < count) {
                 ++index;
-                x ^= v[ld_ctz(index)];
+                x ^= vloadW(0, v + (size_t)ld_ctz(index) * stride);
             }
         }
     }

@@ -259,3 +259,11 @@ def test_make_sampler_variants():
     assert not clsamp.make_sampler("halton").randomized
     for name in SAMPLERS:
         assert name in clsamp.sampler_names()
+
+
+@pytest.mark.parametrize("name,randomize", [("sobol", "owen"), ("sobol", None), ("halton", "xor"),
+                                            ("hammersley", "owen")])
+def test_sample_device_matches_sample(name, randomize):
+    # sample() writes into host memory on a CPU device; sample_device() keeps a device array
+    s = make(name, randomize, d=11)
+    np.testing.assert_array_equal(s.sample_device(257, realizations=2).get(), s.sample(257, realizations=2))

@@ -16,6 +16,7 @@ depend on how many realizations were asked for, and the OpenCL kernels
 """
 
 import numpy as np
+import pyopencl as cl
 import pyopencl.array as cla
 
 from .. import number_theory as nt
@@ -78,11 +79,28 @@ class _LowDiscrepancy(Sampler):
             self._buffers[key] = buf
         return buf
 
-    def _launch(self, kernel_name, table, n, realizations, start, defines):
+    def sample(self, n=None, realizations=None, start=0):
+        # On a CPU device the kernel writes straight into the NumPy array the caller gets
+        # (a buffer over host memory): no second copy of every point through .get().
+        if self.backend != "opencl" or runtime.current_device().type != "cpu":
+            return super().sample(n, realizations, start)
+        n, r, start = self._check_call(n, realizations, start)
+        out = np.empty((r, n, self.d), dtype=np.float64)
+        for lo, hi in runtime.chunk_ranges(r, 8 * n * self.d):
+            self._device(n, range(lo, hi), start, into=out[lo:hi])
+        return out[0] if realizations is None else out
+
+    def _launch(self, kernel_name, table, n, realizations, start, defines, into=None):
+        """Run a kernel into a new device array, or into the host array ``into`` (returned)."""
         runtime.require_fp64()
         r = len(realizations)
         queue = runtime.queue()
-        out = cla.empty(queue, (r, n, self.d), np.float64)
+        if into is None:
+            out = cla.empty(queue, (r, n, self.d), np.float64)
+            target = out.data
+        else:
+            target = cl.Buffer(runtime.context(), cl.mem_flags.WRITE_ONLY | cl.mem_flags.USE_HOST_PTR,
+                               hostbuf=into)
         # A work-item makes `block` consecutive points by cheap increments; on a GPU fewer
         # per item keep more items in flight. The bits do not depend on it.
         block = 64 if runtime.current_device().type == "cpu" else 4
@@ -91,11 +109,17 @@ class _LowDiscrepancy(Sampler):
         kernel = runtime.kernel("lowdiscrepancy.cl", kernel_name,
                                 defines={"RANDOMIZE": _CODES[self.randomize], "LD_BLOCK": block,
                                          **defines})
-        kernel(queue, (-(-items // local) * local, r), (local, 1), out.data, table.data,
+        kernel(queue, (-(-items // local) * local, r), (local, 1), target, table.data,
                np.uint32(n), np.uint32(self.d), np.uint32(start), np.uint32(realizations.start),
                *runtime.key_args(self.seed), np.uint32(philox.Stream.SCRAMBLE),
                np.uint32(philox.Stream.SHIFT))
-        return out
+        if into is None:
+            return out
+        # mapping makes the kernel's writes visible in host memory (a no-op copy on PoCL)
+        mapped, _ = cl.enqueue_map_buffer(queue, target, cl.map_flags.READ, 0, into.shape, into.dtype,
+                                          is_blocking=True)
+        mapped.base.release(queue)
+        return into
 
 
 @register("sobol")
@@ -175,13 +199,25 @@ class SobolSampler(_LowDiscrepancy):
                     out[k] = nt.owen_scramble_base2(x, seeds[k][None, :]) * _SCALE32
         return out
 
-    def _device(self, n, realizations, start):
+    def _width(self):
+        """Dimensions the kernel makes at once (its SIMD width): 2, 4 or 8."""
+        return 2 if self.d <= 2 else 4 if self.d <= 4 else 8
+
+    def _kernel_matrices(self):
+        # (32, d padded to the width): row c holds direction number c of every dimension,
+        # so the kernel loads a vector of dimensions at once; bit-reversed for Owen.
+        width = self._width()
+        table = np.zeros((nt.SOBOL_BITS, -(-self.d // width) * width), dtype=np.uint32)
+        matrices = nt.sobol_matrices(self.d)
         if self.randomize == "owen":
-            table = self._table("sobol-reversed",
-                                lambda: nt.reverse_bits32(nt.sobol_matrices(self.d)))
-        else:
-            table = self._table("sobol", lambda: nt.sobol_matrices(self.d))
-        return self._launch("sobol_points", table, n, realizations, start, {})
+            matrices = nt.reverse_bits32(matrices)
+        table[:, :self.d] = matrices.T
+        return table
+
+    def _device(self, n, realizations, start, into=None):
+        table = self._table("sobol", self._kernel_matrices)
+        return self._launch("sobol_points", table, n, realizations, start, {"LD_WIDTH": self._width()},
+                            into)
 
 
 class _RadicalInverse(_LowDiscrepancy):
@@ -222,10 +258,10 @@ class _RadicalInverse(_LowDiscrepancy):
             out = toroidal_shift(out, shift_vectors(self.seed, rs, self.d)[:, None, :])
         return out
 
-    def _device(self, n, realizations, start):
+    def _device(self, n, realizations, start, into=None):
         table = self._table("bases", lambda: np.maximum(self.bases(), 2))
         return self._launch("radical_points", table, n, realizations, start,
-                            {"HAMMERSLEY": self.hammersley})
+                            {"HAMMERSLEY": self.hammersley}, into)
 
 
 @register("van_der_corput")
