@@ -1,6 +1,11 @@
 """Samplers: one module per family, all reachable through :func:`make_sampler`."""
 
-from . import random, stratified  # noqa: F401  (importing a module registers its samplers)
+# Importing a module registers its samplers.
+from . import (  # noqa: F401
+    lowdiscrepancy,  # van_der_corput, halton, hammersley, sobol
+    random,  # random
+    stratified,  # regular, jittered, uncorrelated_jitter, latin_hypercube, (correlated_)multijittered
+)
 from .base import Sampler, make_sampler, register, sampler_names
 
 __all__ = ["Sampler", "make_sampler", "register", "sampler_names"]

@@ -1,0 +1,371 @@
+"""Number theory of the low-discrepancy samplers, as small pure NumPy functions.
+
+Primes, radical inverses computed from integer digits, Sobol generator matrices, and the
+randomizations (random digit shift / xor, random digit permutations, nested uniform
+"Owen" scrambling) with the hashes they use. These are the NumPy references of
+``kernels/lowdiscrepancy.cl``, which computes the same integers with the same formulas,
+so both give bit-identical points; :mod:`clsamp.samplers.lowdiscrepancy` composes them.
+
+Exactness. A point index is a 32-bit integer. In base b every index has at most
+``m = digit_count(b)`` digits (the smallest m with b^m >= 2^32), so a radical inverse,
+plain or scrambled, is an integer numerator v < b^m over b^m. Both fit in 53 bits for
+b <= 2^20, so the float64 result ``v / b^m`` is the correctly rounded value of the exact
+rational (one IEEE division). Sobol points are 32-bit integers times 2^-32 (exact).
+
+Integer arithmetic wraps modulo 2^32 (``uint32``) or 2^64 (``uint64``) exactly as C's
+unsigned types do in the kernel.
+
+References
+----------
+.. [1] M. Pharr, W. Jakob, G. Humphreys, *Physically Based Rendering*, 4th ed. (2023),
+   ch. 8.6-8.7 (radical inverse, digit permutations, Owen scrambling, Sobol matrices).
+.. [2] S. Joe, F. Y. Kuo, "Constructing Sobol sequences with better two-dimensional
+   projections", SIAM J. Sci. Comput. 30 (2008).
+.. [3] A. B. Owen, "Randomly permuted (t,m,s)-nets and (t,s)-sequences", Monte Carlo and
+   Quasi-Monte Carlo Methods in Scientific Computing (1995).
+.. [4] S. Laine, T. Karras, "Stratified sampling for stochastic transparency", EGSR 2011.
+.. [5] B. Burley, "Practical hash-based Owen scrambling", JCGT 9(4) (2020).
+.. [6] N. Vegdahl, "Building a better LK hash" (2021),
+   https://psychopath.io/post/2021_01_30_building_a_better_lk_hash
+.. [7] A. Kensler, "Correlated multi-jittered sampling", Pixar Technical Memo 13-01 (2013).
+"""
+
+import functools
+from importlib import resources
+
+import numpy as np
+
+from .errors import InvalidArgumentError
+
+MAX_BASE = 2**20          # keeps b^m (and the Owen node numbers 2 b^m) within 53 bits
+INDEX_BITS = 32
+SOBOL_BITS = 32
+SOBOL_TABLE = "sobol_joe_kuo_6_21201.npz"
+
+_U32 = np.uint32
+_U64 = np.uint64
+
+
+# -- primes --------------------------------------------------------------------------
+@functools.lru_cache(maxsize=8)
+def _sieve(limit):
+    is_prime = np.ones(limit + 1, dtype=bool)
+    is_prime[:2] = False
+    for p in range(2, int(limit**0.5) + 1):
+        if is_prime[p]:
+            is_prime[p * p::p] = False
+    return np.flatnonzero(is_prime)
+
+
+def first_primes(count):
+    """The first ``count`` primes (2, 3, 5, ...) as uint32: the Halton bases.
+
+    Examples
+    --------
+    >>> first_primes(5).tolist()
+    [2, 3, 5, 7, 11]
+    """
+    if count <= 0:
+        return np.zeros(0, dtype=_U32)
+    limit = 16
+    # p_k < k (ln k + ln ln k) for k >= 6 (Rosser's theorem)
+    if count >= 6:
+        limit = int(count * (np.log(count) + np.log(np.log(count)))) + 1
+    return _sieve(limit)[:count].astype(_U32)
+
+
+# -- radical inverse -----------------------------------------------------------------
+def digit_count(base):
+    """m, the number of base-``base`` digits of every 32-bit index: the least m with b^m >= 2^32."""
+    m, power = 0, 1
+    while power < 2**INDEX_BITS:
+        power *= int(base)
+        m += 1
+    return m
+
+
+def index_digits(index, base, m=None):
+    """Base-``base`` digits of ``index``, least significant first: array (..., m) of uint64."""
+    m = digit_count(base) if m is None else m
+    a = np.asarray(index, dtype=_U64)
+    b = _U64(base)
+    digits = np.empty(a.shape + (m,), dtype=_U64)
+    for k in range(m):
+        digits[..., k] = a % b
+        a = a // b
+    return digits
+
+
+def radical_inverse_numerator(index, base):
+    """v such that the radical inverse of ``index`` in ``base`` is v / b^m exactly.
+
+    Φ_b(i) = Σ_k d_k b^-(k+1) for i = Σ_k d_k b^k, so Φ_b(i) = v / b^m with
+    v = Σ_{k<m} d_k b^(m-1-k) (the digits of i reversed), m = :func:`digit_count`.
+    """
+    m = digit_count(base)
+    digits = index_digits(index, base, m)
+    v = np.zeros(digits.shape[:-1], dtype=_U64)
+    for k in range(m):
+        v = v * _U64(base) + digits[..., k]
+    return v
+
+
+def radical_inverse(index, base):
+    """The radical inverse Φ_b(i) as float64, correctly rounded from the exact rational.
+
+    Parameters
+    ----------
+    index : int or array_like of int in [0, 2^32)
+    base : int in [2, 2^20]
+
+    Examples
+    --------
+    >>> radical_inverse([0, 1, 2, 3], 2).tolist()
+    [0.0, 0.5, 0.25, 0.75]
+    >>> float(radical_inverse(3**20, 3)) == 3.0**-21
+    True
+    """
+    m = digit_count(base)
+    return radical_inverse_numerator(index, base).astype(np.float64) / float(int(base) ** m)
+
+
+# -- hashes and permutations ---------------------------------------------------------
+def mix64(v):
+    """A 64-bit bijective finalizer (pbrt-v4's MixBits; Stafford's variant 13 constants)."""
+    v = np.asarray(v, dtype=_U64)
+    with np.errstate(over="ignore"):
+        v = v ^ (v >> _U64(31))
+        v = v * _U64(0x7FB5D329728EA185)
+        v = v ^ (v >> _U64(27))
+        v = v * _U64(0x81DADEF4BC2DD44D)
+        v = v ^ (v >> _U64(33))
+    return v
+
+
+def digit_hash(seed64, key):
+    """32 random bits for one digit: the high word of ``mix64(seed64 ^ key)``.
+
+    ``key`` is the digit position k for the random digit shift and permutation
+    (the same for every point) and the tree node b^k + (i mod b^k) for Owen
+    scrambling (a different permutation for each prefix of digits).
+    """
+    mixed = mix64(np.asarray(seed64, dtype=_U64) ^ np.asarray(key, dtype=_U64))
+    return (mixed >> _U64(32)).astype(_U32)
+
+
+def digit_shift(h, base):
+    """A digit in [0, base) from 32 random bits: floor(h · base / 2^32) (bias below base/2^32)."""
+    return ((np.asarray(h, dtype=_U64) * _U64(base)) >> _U64(32)).astype(_U32)
+
+
+def permutation_element(i, length, p):
+    """Element ``i`` of the pseudo-random permutation of [0, length) chosen by ``p``.
+
+    Kensler's hash-and-cycle-walk permutation [7]_ (pbrt's PermutationElement):
+    a bijection on the next power of two, walked until it lands in [0, length).
+    All arguments broadcast; arithmetic wraps modulo 2^32.
+    """
+    i, length, p = np.broadcast_arrays(np.asarray(i, dtype=_U32), np.asarray(length, dtype=_U32),
+                                       np.asarray(p, dtype=_U32))
+    i, length, p = i.copy(), length.copy(), p.copy()
+    w = length - _U32(1)
+    for s in (1, 2, 4, 8, 16):
+        w |= w >> _U32(s)
+    out = np.empty_like(i)
+    todo = np.ones(i.shape, dtype=bool)
+    x = i
+    with np.errstate(over="ignore"):
+        while todo.any():
+            xs, ps, ws, ls = x[todo], p[todo], w[todo], length[todo]
+            xs = xs ^ ps
+            xs = xs * _U32(0xE170893D)
+            xs = xs ^ (ps >> _U32(16))
+            xs = xs ^ ((xs & ws) >> _U32(4))
+            xs = xs ^ (ps >> _U32(8))
+            xs = xs * _U32(0x0929EB3F)
+            xs = xs ^ (ps >> _U32(23))
+            xs = xs ^ ((xs & ws) >> _U32(1))
+            xs = xs * (_U32(1) | (ps >> _U32(27)))
+            xs = xs * _U32(0x6935FA69)
+            xs = xs ^ ((xs & ws) >> _U32(11))
+            xs = xs * _U32(0x74DCB303)
+            xs = xs ^ ((xs & ws) >> _U32(2))
+            xs = xs * _U32(0x9E501CC3)
+            xs = xs ^ ((xs & ws) >> _U32(2))
+            xs = xs * _U32(0xC860A3DF)
+            xs = xs & ws
+            xs = xs ^ (xs >> _U32(5))
+            x[todo] = xs
+            done = xs < ls
+            idx = np.flatnonzero(todo)
+            finished = idx[done]
+            out.flat[finished] = ((xs[done] + ps[done]) % ls[done]).astype(_U32)
+            todo.flat[finished] = False
+    return out
+
+
+def reverse_bits32(x):
+    """The 32 bits of ``x`` in reverse order (bit k goes to bit 31 - k)."""
+    x = np.asarray(x, dtype=_U32)
+    x = ((x >> _U32(1)) & _U32(0x55555555)) | ((x & _U32(0x55555555)) << _U32(1))
+    x = ((x >> _U32(2)) & _U32(0x33333333)) | ((x & _U32(0x33333333)) << _U32(2))
+    x = ((x >> _U32(4)) & _U32(0x0F0F0F0F)) | ((x & _U32(0x0F0F0F0F)) << _U32(4))
+    x = ((x >> _U32(8)) & _U32(0x00FF00FF)) | ((x & _U32(0x00FF00FF)) << _U32(8))
+    return (x >> _U32(16)) | (x << _U32(16))
+
+
+def lk_hash(x, seed):
+    """Vegdahl's Laine-Karras-style hash [6]_ on bit-reversed input.
+
+    Every step (``x ^= x * even``, ``x += seed``, ``x *= odd``) changes bit k only by a
+    function of bits below k, so on reversed bits each binary digit is flipped by a
+    function of all digits above it: a nested (Owen) scramble [4]_ [5]_. Vegdahl's
+    constants fix the original hash's poor low bits (empty buckets, XeGTAO issue 7).
+    """
+    x = np.asarray(x, dtype=_U32)
+    seed = np.asarray(seed, dtype=_U32)
+    with np.errstate(over="ignore"):
+        x = x ^ (x * _U32(0x3D20ADEA))
+        x = x + seed
+        x = x * ((seed >> _U32(16)) | _U32(1))
+        x = x ^ (x * _U32(0x05526C56))
+        x = x ^ (x * _U32(0x53A22864))
+    return x
+
+
+def owen_scramble_base2(x, seed):
+    """Nested uniform scramble of the 32 binary digits of the fraction x · 2^-32.
+
+    ``reverse(lk_hash(reverse(x), seed))``: digit k (from the top) is flipped by a hash
+    of the seed and the digits above it [5]_.
+    """
+    return reverse_bits32(lk_hash(reverse_bits32(x), seed))
+
+
+def scrambled_radical_inverse_numerator(index, base, randomize, seed64):
+    """Numerator v of a randomized radical inverse v / b^m (m = :func:`digit_count`).
+
+    Parameters
+    ----------
+    index : array_like of int in [0, 2^32)
+    base : int in [2, 2^20]
+    randomize : {None, "shift", "xor", "permute", "owen"}
+        ``None`` and ``"shift"`` give the plain digits (a shift is applied to the
+        float afterwards); ``"xor"`` adds a random digit s_k mod b at each position k
+        (the base-b random digit shift, an xor in base 2); ``"permute"`` applies a
+        random permutation π_k to digit k (pbrt's PermuteDigits); ``"owen"`` applies a
+        permutation chosen by the digit's position and all digits above it (nested
+        uniform scrambling [3]_). In base 2, ``"owen"`` is :func:`owen_scramble_base2`.
+    seed64 : int
+        The randomization's 64-bit seed (one per realization and dimension).
+        In base 2 ``"owen"`` uses its low 32 bits.
+
+    Notes
+    -----
+    All m digits are scrambled, the index's leading zeros included, so v is uniform
+    on [0, b^m) over seeds.
+    """
+    base = int(base)
+    m = digit_count(base)
+    index = np.asarray(index, dtype=_U64)
+    if randomize in (None, "shift"):
+        return radical_inverse_numerator(index, base)
+    seed64 = _U64(seed64)
+    if randomize == "owen" and base == 2:
+        return reverse_bits32(lk_hash(index.astype(_U32), _U32(int(seed64) & 0xFFFFFFFF))).astype(_U64)
+    digits = index_digits(index, base, m)
+    v = np.zeros(index.shape, dtype=_U64)
+    prefix = np.zeros(index.shape, dtype=_U64)    # i mod b^k
+    power = 1                                      # b^k
+    for k in range(m):
+        d = digits[..., k]
+        if randomize == "xor":
+            e = (d + digit_shift(digit_hash(seed64, k), base)) % _U64(base)
+        elif randomize == "permute":
+            e = permutation_element(d.astype(_U32), base, digit_hash(seed64, k)).astype(_U64)
+        elif randomize == "owen":
+            e = permutation_element(d.astype(_U32), base,
+                                    digit_hash(seed64, prefix + _U64(power))).astype(_U64)
+        else:
+            raise InvalidArgumentError(
+                f"'randomize' must be None, 'shift', 'xor', 'permute' or 'owen', got {randomize!r}")
+        v = v * _U64(base) + e
+        prefix = prefix + d * _U64(power)
+        power *= base
+    return v
+
+
+# -- Sobol ---------------------------------------------------------------------------
+@functools.lru_cache(maxsize=1)
+def sobol_table():
+    """(poly, vinit, source) of the shipped Joe-Kuo direction numbers (see clsamp/data)."""
+    with resources.files("clsamp.data").joinpath(SOBOL_TABLE).open("rb") as f:
+        table = np.load(f)
+        return table["poly"].astype(np.int64), table["vinit"].astype(np.int64), str(table["source"])
+
+
+def sobol_max_dimension():
+    """How many dimensions the shipped direction numbers cover (21201)."""
+    return len(sobol_table()[0])
+
+
+@functools.lru_cache(maxsize=1)
+def _all_sobol_matrices():
+    poly, vinit, _ = sobol_table()
+    dims = len(poly)
+    degree = np.array([int(p).bit_length() - 1 for p in poly])
+    v = np.zeros((dims, SOBOL_BITS), dtype=np.int64)
+    v[0, :] = 1
+    for j in range(1, dims):
+        v[j, :degree[j]] = vinit[j, :degree[j]]
+    rows_all = np.arange(1, dims)
+    # Bratley-Fox / Joe-Kuo recurrence, vectorized over dimensions:
+    # m_c = 2 a_1 m_(c-1) ^ 4 a_2 m_(c-2) ^ ... ^ 2^s m_(c-s) ^ m_(c-s)
+    for col in range(SOBOL_BITS):
+        rows = rows_all[degree[1:] <= col]
+        if rows.size == 0:
+            continue
+        s = degree[rows]
+        p = poly[rows]
+        new = v[rows, col - s]
+        for k in range(int(s.max())):
+            active = k < s
+            bit = (p >> np.where(active, s - 1 - k, 0)) & 1
+            use = active & (bit == 1)
+            term = v[rows, np.maximum(col - k - 1, 0)] << (k + 1)
+            new = new ^ np.where(use, term, 0)
+        v[rows, col] = new
+    matrices = v << (SOBOL_BITS - 1 - np.arange(SOBOL_BITS))[None, :]
+    return matrices.astype(_U32)
+
+
+def sobol_matrices(d):
+    """Generator matrices of the first ``d`` Sobol dimensions: uint32 array (d, 32).
+
+    Column c of dimension j is the direction number V_(j,c) = m_(j,c) 2^(31-c), the
+    image of index bit c [2]_. Point i of dimension j is the xor of V_(j,c) over the set
+    bits c of the Gray code i ^ (i >> 1), times 2^-32 (scipy's order).
+    """
+    if not 1 <= d <= sobol_max_dimension():
+        raise InvalidArgumentError(
+            f"'d' must be in [1, {sobol_max_dimension()}] for Sobol (Joe-Kuo table), got {d}")
+    return _all_sobol_matrices()[:d].copy()
+
+
+def gray_code(index):
+    """The reflected binary Gray code i ^ (i >> 1) of 32-bit indices."""
+    index = np.asarray(index, dtype=_U32)
+    return index ^ (index >> _U32(1))
+
+
+def sobol_integers(index, matrices):
+    """Sobol points as 32-bit integers: array (len(index), d) of uint32.
+
+    ``index`` are 32-bit point indices; ``matrices`` is (d, 32) from :func:`sobol_matrices`.
+    """
+    g = gray_code(np.asarray(index, dtype=_U32).ravel())
+    out = np.zeros((g.size, matrices.shape[0]), dtype=_U32)
+    for c in range(SOBOL_BITS):
+        bit = ((g >> _U32(c)) & _U32(1)).astype(bool)
+        out[bit] ^= matrices[:, c][None, :]
+    return out

@@ -1,0 +1,406 @@
+"""Low-discrepancy samplers: ``van_der_corput``, ``halton``, ``hammersley`` and ``sobol``.
+
+Each takes ``randomize=`` one of ``None`` (the textbook points; the first point of each
+sequence is the origin, as in scipy.stats.qmc), ``"shift"`` (Cranley-Patterson
+rotation), ``"xor"`` (random digit scramble: an xor in base 2, a random digit shift
+mod b in base b), ``"owen"`` (nested uniform scrambling), and for the radical-inverse
+samplers ``"permute"`` (random digit permutations, pbrt's PermuteDigits).
+
+Realization k's randomization (shift vector, scramble seeds) is drawn from Philox with
+counter realization k: for dimension j the words of
+``(seed, Stream.SCRAMBLE, realization k, index j, block 0)`` seed the scrambles and
+``philox.uniform(seed, Stream.SHIFT, k, 0, j)`` is the shift. So realization k does not
+depend on how many realizations were asked for, and the OpenCL kernels
+(``kernels/lowdiscrepancy.cl``) and the NumPy references below (on
+:mod:`clsamp.number_theory`) give bit-identical points.
+"""
+
+import numpy as np
+import pyopencl as cl
+import pyopencl.array as cla
+
+from .. import number_theory as nt
+from .. import philox, runtime
+from ..errors import InvalidArgumentError
+from ..validation import check_choice, check_int
+from .base import Sampler, register
+
+_CODES = {None: 0, "shift": 1, "xor": 2, "owen": 3, "permute": 4}   # RANDOMIZE in the kernel
+_SCALE32 = 2.0**-32
+MAX_HALTON_DIMENSION = 21201
+
+
+def scramble_words(seed, realizations, d):
+    """The four Philox words seeding dimension j's scramble in each realization: (r, d, 4) uint32."""
+    r = np.asarray(realizations, dtype=np.uint32)[:, None, None]
+    j = np.arange(d, dtype=np.uint32)[None, :, None]
+    w = np.arange(4, dtype=np.uint32)[None, None, :]
+    return philox.random_words(seed, philox.Stream.SCRAMBLE, r, j, w)
+
+
+def shift_vectors(seed, realizations, d):
+    """Cranley-Patterson shifts: (r, d) uniform doubles, one vector per realization."""
+    r = np.asarray(realizations, dtype=np.uint32)[:, None]
+    return philox.uniform(seed, philox.Stream.SHIFT, r, 0, np.arange(d, dtype=np.uint32)[None, :])
+
+
+def toroidal_shift(x, u):
+    """(x + u) mod 1 with a single rounding, as ``ld_shift`` in the kernel."""
+    y = x + u
+    return np.where(y >= 1.0, y - 1.0, y)
+
+
+class _LowDiscrepancy(Sampler):
+    """What the four samplers share: ``randomize=``, the launch and the Philox draws."""
+
+    sequence = True
+    randomizations = (None, "shift", "xor", "owen")
+
+    def __init__(self, d=2, seed=0, backend="opencl", randomize=None):
+        super().__init__(d=d, seed=seed, backend=backend)
+        self.randomize = check_choice(randomize, "randomize", self.randomizations)
+        self.randomized = randomize is not None
+        self._buffers = {}
+
+    def __repr__(self):
+        return (f"{type(self).__name__}(name={self.name!r}, d={self.d}, seed={self.seed}, "
+                f"randomize={self.randomize!r})")
+
+    def _seed64(self, realizations):
+        words = scramble_words(self.seed, np.arange(realizations.start, realizations.stop), self.d)
+        return words[..., 0].astype(np.uint64) | (words[..., 1].astype(np.uint64) << np.uint64(32))
+
+    def _table(self, name, build):
+        """A small read-only device buffer, uploaded once per device."""
+        key = (runtime.current_device().index, name)
+        buf = self._buffers.get(key)
+        if buf is None:
+            buf = cla.to_device(runtime.queue(), np.ascontiguousarray(build(), dtype=np.uint32))
+            self._buffers[key] = buf
+        return buf
+
+    def sample(self, n=None, realizations=None, start=0):
+        # On a CPU device the kernel writes straight into the NumPy array the caller gets
+        # (a buffer over host memory): no second copy of every point through .get().
+        if self.backend != "opencl" or runtime.current_device().type != "cpu":
+            return super().sample(n, realizations, start)
+        n, r, start = self._check_call(n, realizations, start)
+        out = np.empty((r, n, self.d), dtype=np.float64)
+        for lo, hi in runtime.chunk_ranges(r, 8 * n * self.d):
+            self._device(n, range(lo, hi), start, into=out[lo:hi])
+        return out[0] if realizations is None else out
+
+    def _launch(self, kernel_name, table, n, realizations, start, defines, into=None):
+        """Run a kernel into a new device array, or into the host array ``into`` (returned)."""
+        runtime.require_fp64()
+        r = len(realizations)
+        queue = runtime.queue()
+        if into is None:
+            out = cla.empty(queue, (r, n, self.d), np.float64)
+            target = out.data
+        else:
+            target = cl.Buffer(runtime.context(), cl.mem_flags.WRITE_ONLY | cl.mem_flags.USE_HOST_PTR,
+                               hostbuf=into)
+        # A work-item makes `block` consecutive points by cheap increments; on a GPU fewer
+        # per item keep more items in flight. The bits do not depend on it.
+        block = 64 if runtime.current_device().type == "cpu" else 4
+        local = runtime.local_size()
+        items = -(-n // block)
+        kernel = runtime.kernel("lowdiscrepancy.cl", kernel_name,
+                                defines={"RANDOMIZE": _CODES[self.randomize], "LD_BLOCK": block,
+                                         **defines})
+        kernel(queue, (-(-items // local) * local, r), (local, 1), target, table.data,
+               np.uint32(n), np.uint32(self.d), np.uint32(start), np.uint32(realizations.start),
+               *runtime.key_args(self.seed), np.uint32(philox.Stream.SCRAMBLE),
+               np.uint32(philox.Stream.SHIFT))
+        if into is None:
+            return out
+        # mapping makes the kernel's writes visible in host memory (a no-op copy on PoCL)
+        mapped, _ = cl.enqueue_map_buffer(queue, target, cl.map_flags.READ, 0, into.shape, into.dtype,
+                                          is_blocking=True)
+        mapped.base.release(queue)
+        return into
+
+
+@register("sobol")
+class SobolSampler(_LowDiscrepancy):
+    """Sobol' sequence with Joe-Kuo direction numbers, 32-bit, up to 21201 dimensions.
+
+    Point i, dimension j is x_ij = 2^-32 ⊕_c g_c(i) V_jc, where g(i) = i ⊕ (i >> 1) is
+    the Gray code of i and V_jc = m_jc 2^(31-c) are the direction numbers
+    (:func:`clsamp.number_theory.sobol_matrices`). Gray-code order is scipy's, so with
+    ``randomize=None`` the points equal ``scipy.stats.qmc.Sobol(d, scramble=False)``
+    bit for bit (for the 2^30 indices scipy's 30 bits cover). The first n = 2^m points
+    form a (t, m, d)-net in base 2; dimensions 0 and 1 form a (0, m, 2)-net: every
+    elementary interval of area 2^-m holds exactly one point.
+
+    Parameters
+    ----------
+    d : int
+        Dimension, 1 to 21201.
+    seed : int
+        Seed of the randomization.
+    randomize : {None, "shift", "xor", "owen"}
+        ``"shift"``: x + u mod 1 with u uniform per realization and dimension
+        (Cranley-Patterson); breaks the net property. ``"xor"``: x ⊕ s (random
+        binary digit scramble, keeps the nets). ``"owen"``: nested uniform scrambling,
+        each binary digit flipped by a hash of the digits above it and a per-dimension
+        seed (Laine-Karras with Vegdahl's hash, as Burley 2020); keeps the nets, and
+        each point is uniform over realizations.
+    backend : {"opencl", "numpy"}
+
+    Notes
+    -----
+    Points are integers times 2^-32 (32 bits of resolution after scrambling too).
+    ``sample(n, start=k)`` continues ``sample(k)``.
+
+    References
+    ----------
+    .. [1] I. M. Sobol', "On the distribution of points in a cube and the approximate
+       evaluation of integrals", USSR Comput. Math. Math. Phys. 7 (1967).
+    .. [2] S. Joe, F. Y. Kuo, "Constructing Sobol sequences with better two-dimensional
+       projections", SIAM J. Sci. Comput. 30 (2008).
+    .. [3] B. Burley, "Practical hash-based Owen scrambling", JCGT 9(4) (2020).
+    .. [4] A. B. Owen, "Randomly permuted (t,m,s)-nets and (t,s)-sequences" (1995).
+
+    Examples
+    --------
+    >>> import clsamp
+    >>> clsamp.make_sampler("sobol", d=2).sample(4).tolist()
+    [[0.0, 0.0], [0.5, 0.5], [0.75, 0.25], [0.25, 0.75]]
+    >>> clsamp.make_sampler("sobol:owen", d=3, seed=1).sample(256, realizations=8).shape
+    (8, 256, 3)
+    """
+
+    def __init__(self, d=2, seed=0, backend="opencl", randomize=None):
+        limit = nt.sobol_max_dimension()
+        check_int(d, "d", minimum=1)
+        if d > limit:
+            raise InvalidArgumentError(
+                f"'d' must be at most {limit} for sobol (the Joe-Kuo direction-number table), got {d}")
+        super().__init__(d=d, seed=seed, backend=backend, randomize=randomize)
+
+    def _reference(self, n, realizations, start):
+        index = (np.uint64(start) + np.arange(n, dtype=np.uint64)).astype(np.uint32)
+        x = nt.sobol_integers(index, nt.sobol_matrices(self.d))         # (n, d) uint32
+        out = np.empty((len(realizations), n, self.d))
+        if self.randomize is None:
+            out[:] = x * _SCALE32
+        elif self.randomize == "shift":
+            u = shift_vectors(self.seed, np.arange(realizations.start, realizations.stop), self.d)
+            out[:] = toroidal_shift(x[None] * _SCALE32, u[:, None, :])
+        else:
+            seeds = scramble_words(self.seed, np.arange(realizations.start, realizations.stop),
+                                   self.d)[..., 0]
+            for k in range(len(realizations)):
+                if self.randomize == "xor":
+                    out[k] = (x ^ seeds[k][None, :]) * _SCALE32
+                else:
+                    out[k] = nt.owen_scramble_base2(x, seeds[k][None, :]) * _SCALE32
+        return out
+
+    def _width(self):
+        """Dimensions the kernel makes at once (its SIMD width): 2, 4 or 8."""
+        return 2 if self.d <= 2 else 4 if self.d <= 4 else 8
+
+    def _kernel_matrices(self):
+        # (32, d padded to the width): row c holds direction number c of every dimension,
+        # so the kernel loads a vector of dimensions at once; bit-reversed for Owen.
+        width = self._width()
+        table = np.zeros((nt.SOBOL_BITS, -(-self.d // width) * width), dtype=np.uint32)
+        matrices = nt.sobol_matrices(self.d)
+        if self.randomize == "owen":
+            matrices = nt.reverse_bits32(matrices)
+        table[:, :self.d] = matrices.T
+        return table
+
+    def _device(self, n, realizations, start, into=None):
+        table = self._table("sobol", self._kernel_matrices)
+        return self._launch("sobol_points", table, n, realizations, start, {"LD_WIDTH": self._width()},
+                            into)
+
+
+class _RadicalInverse(_LowDiscrepancy):
+    """Samplers whose coordinates are radical inverses in per-dimension bases."""
+
+    randomizations = (None, "shift", "xor", "owen", "permute")
+    hammersley = False
+
+    def bases(self):
+        """The base of each dimension (dimension 0 of Hammersley, i/n, has none: 0)."""
+        raise NotImplementedError
+
+    def _reference(self, n, realizations, start):
+        rs = np.arange(realizations.start, realizations.stop)
+        index = np.uint64(start) + np.arange(n, dtype=np.uint64)
+        out = np.empty((len(rs), n, self.d))
+        seed64 = self._seed64(realizations) if self.randomize not in (None, "shift") else None
+        for j, base in enumerate(self.bases()):
+            if self.hammersley and j == 0:
+                if self.randomize in (None, "shift"):
+                    out[:, :, 0] = index.astype(np.float64) / float(n)
+                else:
+                    fixed = ((index << np.uint64(32)) // np.uint64(n)).astype(np.uint32)
+                    for k in range(len(rs)):
+                        s = np.uint32(int(seed64[k, 0]) & 0xFFFFFFFF)
+                        scrambled = nt.owen_scramble_base2(fixed, s) if self.randomize == "owen" \
+                            else fixed ^ s
+                        out[k, :, 0] = scrambled * _SCALE32
+                continue
+            denominator = float(int(base) ** nt.digit_count(base))
+            if self.randomize in (None, "shift"):
+                out[:, :, j] = nt.radical_inverse_numerator(index, base).astype(np.float64) / denominator
+            else:
+                for k in range(len(rs)):
+                    v = nt.scrambled_radical_inverse_numerator(index, base, self.randomize, seed64[k, j])
+                    out[k, :, j] = v.astype(np.float64) / denominator
+        if self.randomize == "shift":
+            out = toroidal_shift(out, shift_vectors(self.seed, rs, self.d)[:, None, :])
+        return out
+
+    def _device(self, n, realizations, start, into=None):
+        table = self._table("bases", lambda: np.maximum(self.bases(), 2))
+        return self._launch("radical_points", table, n, realizations, start,
+                            {"HAMMERSLEY": self.hammersley}, into)
+
+
+@register("van_der_corput")
+class VanDerCorputSampler(_RadicalInverse):
+    """Van der Corput sequence in any base b: x_i = Φ_b(i) = Σ_k d_k b^-(k+1) for i = Σ_k d_k b^k.
+
+    Computed from the integer digits of the 32-bit index, x_i = v / b^m (v the digits
+    reversed, m the digit count of 32-bit indices): one correctly rounded division, so
+    every x_i is the double nearest the exact rational (index 2^32 - 1 included).
+
+    Parameters
+    ----------
+    d : int
+        Must be 1.
+    base : int
+        Base b in [2, 2^20] (default 2).
+    seed : int
+    randomize : {None, "shift", "xor", "owen", "permute"}
+        ``"xor"``: each digit shifted by a random s_k mod b (an xor in base 2);
+        ``"permute"``: each digit position k permuted by its own random permutation;
+        ``"owen"``: each digit permuted by a permutation chosen by all digits above it
+        (nested uniform scrambling; in base 2 the Laine-Karras/Vegdahl hash). All m
+        digit positions are randomized, the leading zeros of small indices included.
+    backend : {"opencl", "numpy"}
+
+    References
+    ----------
+    .. [1] J. G. van der Corput, "Verteilungsfunktionen", Proc. Akad. Amsterdam 38 (1935).
+    .. [2] M. Pharr, W. Jakob, G. Humphreys, *Physically Based Rendering*, 4th ed., 8.6.
+
+    Examples
+    --------
+    >>> import clsamp
+    >>> clsamp.make_sampler("van_der_corput", d=1, base=3).sample(4)[:, 0].tolist()
+    [0.0, 0.3333333333333333, 0.6666666666666666, 0.1111111111111111]
+    """
+
+    dimensions = (1,)
+
+    def __init__(self, d=1, seed=0, backend="opencl", randomize=None, base=2):
+        self.base = check_int(base, "base", minimum=2, maximum=nt.MAX_BASE)
+        super().__init__(d=d, seed=seed, backend=backend, randomize=randomize)
+
+    def bases(self):
+        return np.array([self.base], dtype=np.uint32)
+
+
+@register("halton")
+class HaltonSampler(_RadicalInverse):
+    """Halton sequence: dimension j is the radical inverse in the j-th prime (2, 3, 5, ...).
+
+    x_ij = Φ_(p_j)(i), each exact to the last bit (see :class:`VanDerCorputSampler`).
+    With ``randomize=None`` the points equal ``scipy.stats.qmc.Halton(d, scramble=False)``
+    up to scipy's own rounding (scipy sums digit terms in floating point; clsamp divides
+    exact integers, so it differs from scipy by at most an ulp where scipy rounds twice).
+
+    Parameters
+    ----------
+    d : int
+        Dimension, 1 to 21201.
+    seed : int
+    randomize : {None, "shift", "xor", "owen", "permute"}
+        See :class:`VanDerCorputSampler`; ``"permute"`` is pbrt's PermuteDigits
+        (Kensler's hash permutations), ``"owen"`` pbrt's OwenScrambledRadicalInverse with
+        every digit's permutation chosen by a hash of the digits above it. All keep the
+        stratification of dimension j in base p_j; ``"shift"`` does not.
+    backend : {"opencl", "numpy"}
+
+    References
+    ----------
+    .. [1] J. H. Halton, "On the efficiency of certain quasi-random sequences of points
+       in evaluating multi-dimensional integrals", Numer. Math. 2 (1960).
+    .. [2] A. B. Owen, "A randomized Halton algorithm in R" (2017), arXiv:1706.02808.
+    .. [3] M. Pharr, W. Jakob, G. Humphreys, *Physically Based Rendering*, 4th ed., 8.6.
+
+    Examples
+    --------
+    >>> import clsamp
+    >>> clsamp.make_sampler("halton", d=2).sample(3).tolist()
+    [[0.0, 0.0], [0.5, 0.3333333333333333], [0.25, 0.6666666666666666]]
+    """
+
+    def __init__(self, d=2, seed=0, backend="opencl", randomize=None):
+        check_int(d, "d", minimum=1)
+        if d > MAX_HALTON_DIMENSION:
+            raise InvalidArgumentError(
+                f"'d' must be at most {MAX_HALTON_DIMENSION} for halton, got {d}")
+        super().__init__(d=d, seed=seed, backend=backend, randomize=randomize)
+
+    def bases(self):
+        return nt.first_primes(self.d)
+
+
+@register("hammersley")
+class HammersleySampler(_RadicalInverse):
+    """Hammersley set: point i of n is (i/n, Φ_2(i), Φ_3(i), ..., Φ_(p_(d-1))(i)).
+
+    n is fixed in advance, so ``start`` must be 0. With n = 2^m the first two
+    dimensions form a (0, m, 2)-net in base 2 (one point in every elementary interval
+    of area 2^-m), kept by ``"xor"`` and ``"owen"``, which act on the 32-bit binary
+    digits of i/n (floor(i 2^32 / n)) and on the digits of the radical inverses.
+
+    Parameters
+    ----------
+    d : int
+        Dimension, 1 to 21201 (d = 1 gives the regular grid i/n).
+    seed : int
+    randomize : {None, "shift", "xor", "owen"}
+    backend : {"opencl", "numpy"}
+
+    References
+    ----------
+    .. [1] J. M. Hammersley, "Monte Carlo methods for solving multivariable problems",
+       Ann. New York Acad. Sci. 86 (1960).
+
+    Examples
+    --------
+    >>> import clsamp
+    >>> clsamp.make_sampler("hammersley", d=2).sample(4).tolist()
+    [[0.0, 0.0], [0.25, 0.5], [0.5, 0.25], [0.75, 0.75]]
+    """
+
+    sequence = False
+    hammersley = True
+    randomizations = (None, "shift", "xor", "owen")
+
+    def __init__(self, d=2, seed=0, backend="opencl", randomize=None):
+        check_int(d, "d", minimum=1)
+        if d > MAX_HALTON_DIMENSION:
+            raise InvalidArgumentError(
+                f"'d' must be at most {MAX_HALTON_DIMENSION} for hammersley, got {d}")
+        super().__init__(d=d, seed=seed, backend=backend, randomize=randomize)
+
+    def bases(self):
+        return np.concatenate([[0], nt.first_primes(self.d - 1)]).astype(np.uint32)
+
+    def _check_call(self, n, realizations, start):
+        n, r, start = super()._check_call(n, realizations, start)
+        if start != 0:
+            raise InvalidArgumentError(
+                f"'start' must be 0 for hammersley (a set of n points, not a sequence), got {start}")
+        return n, r, start

@@ -1,0 +1,276 @@
+/* Low-discrepancy samplers: Sobol, and the radical-inverse family (van der Corput, Halton,
+ * Hammersley), each unrandomized or with a per-realization randomization.
+ * NumPy reference: clsamp/samplers/lowdiscrepancy.py on clsamp/number_theory.py.
+ *
+ * Build options:
+ *   RANDOMIZE   LD_NONE, LD_SHIFT, LD_XOR, LD_OWEN or LD_PERMUTE (lowdiscrepancy.h)
+ *   LD_BLOCK    consecutive points per work-item: the first is computed from its index,
+ *               the others by an increment (Gray code step, digit carry), which is what
+ *               makes the kernels fast; any value gives the same bits
+ *   HAMMERSLEY  (radical_points) dimension 0 is i / n instead of a radical inverse
+ *
+ * Grid: (work-items padded to the local size, realizations); out is (realizations, n, d).
+ * Realization r's randomization comes from Philox with counter realization0 + r, so it does
+ * not depend on how many realizations one launch makes. Integer arithmetic and exactly
+ * rounded double operations only: every device gives the same bits.
+ */
+#pragma OPENCL FP_CONTRACT OFF
+#include "philox.h"
+#include "lowdiscrepancy.h"
+
+#ifndef RANDOMIZE
+#define RANDOMIZE LD_NONE
+#endif
+#ifndef LD_BLOCK
+#define LD_BLOCK 32
+#endif
+
+/* Vector types of width LD_WIDTH (2, 4 or 8): Sobol works on LD_WIDTH dimensions at once,
+ * which PoCL turns into SIMD instructions (it does not vectorize across work-items when a
+ * kernel has an inner loop, POCL_NOTES.md). */
+#ifndef LD_WIDTH
+#define LD_WIDTH 8
+#endif
+#define LD_CAT(a, b) a##b
+#define LD_XCAT(a, b) LD_CAT(a, b)
+#define uintW LD_XCAT(uint, LD_WIDTH)
+#define doubleW LD_XCAT(double, LD_WIDTH)
+#define longW LD_XCAT(long, LD_WIDTH)
+#define vloadW LD_XCAT(vload, LD_WIDTH)
+#define vstoreW LD_XCAT(vstore, LD_WIDTH)
+#define intW LD_XCAT(int, LD_WIDTH)
+#define as_intW LD_XCAT(as_int, LD_WIDTH)
+#define convert_doubleW LD_XCAT(convert_double, LD_WIDTH)
+
+/* x * 2^-32 exactly. Through a signed conversion, which has a SIMD instruction where the
+ * unsigned one has none (AVX2): x = (x - 2^31) + 2^31, each step exact. */
+inline doubleW unit32W(uintW x)
+{
+    return (convert_doubleW(as_intW(x ^ 0x80000000u)) + 2147483648.0) * 0x1p-32;
+}
+
+inline uintW reverse_bits32W(uintW x)
+{
+    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
+    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+    x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
+    x = ((x >> 8) & 0x00FF00FFu) | ((x & 0x00FF00FFu) << 8);
+    return (x >> 16) | (x << 16);
+}
+
+inline uintW lk_hashW(uintW x, uintW seed)
+{
+    x ^= x * 0x3D20ADEAu;
+    x += seed;
+    x *= (seed >> 16) | 1u;
+    x ^= x * 0x05526C56u;
+    x ^= x * 0x53A22864u;
+    return x;
+}
+
+/* Sobol points in Gray-code order (as scipy): x_i = xor of V[c] over the set bits c of
+ * i ^ (i >> 1), and x_(i+1) = x_i ^ V[ctz(i + 1)]. matrices is (32, padded d): row c holds
+ * V[c] of every dimension, zero past d. For Owen scrambling V arrives bit-reversed, so the
+ * state is already in the reversed order the LK hash works on. */
+__kernel void sobol_points(__global double *out, __global const uint *matrices,
+                           const uint n, const uint d, const uint start, const uint realization0,
+                           const uint key_lo, const uint key_hi, const uint scramble_stream,
+                           const uint shift_stream)
+{
+    const uint g = get_global_id(0);
+    const uint r = get_global_id(1);
+    const uint blocks = (n + LD_BLOCK - 1) / LD_BLOCK;
+    if (g >= blocks)
+        return;
+    const uint i0 = g * LD_BLOCK;
+    const uint count = min((uint)LD_BLOCK, n - i0);
+    const uint first = start + i0;
+    const uint stride = (d + LD_WIDTH - 1) / LD_WIDTH * LD_WIDTH;
+    const uint2 key = (uint2)(key_lo, key_hi);
+    const uint realization = realization0 + r;
+    __global double *row = out + ((size_t)r * n + i0) * d;
+    for (uint j = 0; j < d; j += LD_WIDTH) {
+        __global const uint *v = matrices + j;
+        uint gray = first ^ (first >> 1);
+        uintW x = (uintW)(0u);
+        while (gray) {
+            x ^= vloadW(0, v + (size_t)ld_ctz(gray) * stride);
+            gray &= gray - 1u;
+        }
+#if RANDOMIZE == LD_SHIFT
+        double lanes[LD_WIDTH];
+        for (uint l = 0; l < LD_WIDTH; ++l)
+            lanes[l] = j + l < d ? clsamp_uniform(key, shift_stream, realization, 0, j + l) : 0.0;
+        const doubleW u = vloadW(0, lanes);
+#elif RANDOMIZE == LD_XOR || RANDOMIZE == LD_OWEN
+        uint lanes[LD_WIDTH];
+        for (uint l = 0; l < LD_WIDTH; ++l)
+            lanes[l] = j + l < d ? clsamp_block(key, scramble_stream, realization, j + l, 0).x : 0u;
+        const uintW seed = vloadW(0, lanes);
+#endif
+        const uint width = min((uint)LD_WIDTH, d - j);
+        __global double *p = row + j;
+        uint index = first;
+        for (uint t = 0; t < count; ++t) {
+#if RANDOMIZE == LD_SHIFT
+            doubleW y = unit32W(x) + u;
+            y = select(y, y - 1.0, y >= 1.0);
+#elif RANDOMIZE == LD_XOR
+            const doubleW y = unit32W(x ^ seed);
+#elif RANDOMIZE == LD_OWEN
+            const doubleW y = unit32W(reverse_bits32W(lk_hashW(x, seed)));
+#else       /* LD_NONE (LD_PERMUTE is not offered for Sobol) */
+            const doubleW y = unit32W(x);
+#endif
+            if (width == LD_WIDTH) {
+                vstoreW(y, 0, p + (size_t)t * d);
+            } else {
+                double tail[LD_WIDTH];
+                vstoreW(y, 0, tail);
+                for (uint l = 0; l < width; ++l)
+                    p[(size_t)t * d + l] = tail[l];
+            }
+            if (t + 1 < count) {
+                ++index;
+                x ^= vloadW(0, v + (size_t)ld_ctz(index) * stride);
+            }
+        }
+    }
+}
+
+/* The value of digit a at position k under the digit-wise randomizations. */
+#if RANDOMIZE == LD_XOR
+#define LD_DIGIT(a, k) ((a) + shift[k] >= base ? (a) + shift[k] - base : (a) + shift[k])
+#elif RANDOMIZE == LD_PERMUTE
+#define LD_DIGIT(a, k) permutation_element((a), base, hash[k])
+#else
+#define LD_DIGIT(a, k) (a)
+#endif
+
+/* Radical inverses: coordinate j of point i is v / b^m, v the (randomized) digits of i in
+ * base bases[j] reversed, m the digit count of 32-bit indices (number_theory.digit_count).
+ * Plain, shifted, xor and permuted digits are updated incrementally: adding one to the
+ * index changes digit 0 and, on a carry, the next ones. Owen scrambling depends on every
+ * digit below, so it recomputes all m digits' permutations for each point. */
+__kernel void radical_points(__global double *out, __global const uint *bases,
+                             const uint n, const uint d, const uint start, const uint realization0,
+                             const uint key_lo, const uint key_hi, const uint scramble_stream,
+                             const uint shift_stream)
+{
+    const uint g = get_global_id(0);
+    const uint r = get_global_id(1);
+    const uint blocks = (n + LD_BLOCK - 1) / LD_BLOCK;
+    if (g >= blocks)
+        return;
+    const uint i0 = g * LD_BLOCK;
+    const uint count = min((uint)LD_BLOCK, n - i0);
+    const uint first = start + i0;
+    const uint2 key = (uint2)(key_lo, key_hi);
+    const uint realization = realization0 + r;
+    __global double *row = out + ((size_t)r * n + i0) * d;
+    for (uint j = 0; j < d; ++j) {
+        __global double *p = row + j;
+#if RANDOMIZE == LD_SHIFT
+        const double u = clsamp_uniform(key, shift_stream, realization, 0, j);
+#elif RANDOMIZE != LD_NONE
+        const uint4 words = clsamp_block(key, scramble_stream, realization, j, 0);
+        const ulong seed64 = (ulong)words.x | ((ulong)words.y << 32);
+#endif
+#ifdef HAMMERSLEY
+        if (j == 0) {
+            /* i / n; the binary randomizations act on its 32-bit fixed-point digits. */
+            for (uint t = 0; t < count; ++t) {
+                const uint index = first + t;
+#if RANDOMIZE == LD_NONE
+                p[(size_t)t * d] = (double)index / (double)n;
+#elif RANDOMIZE == LD_SHIFT
+                p[(size_t)t * d] = ld_shift((double)index / (double)n, u);
+#else
+                const uint fixed = (uint)(((ulong)index << 32) / n);
+#if RANDOMIZE == LD_OWEN
+                p[(size_t)t * d] = (double)owen_scramble_base2(fixed, words.x) * 0x1p-32;
+#else
+                p[(size_t)t * d] = (double)(fixed ^ words.x) * 0x1p-32;
+#endif
+#endif
+            }
+            continue;
+        }
+#endif
+        const uint base = bases[j];
+        uint m = 0;
+        ulong bm = 1;
+        while (bm < 0x100000000UL) {
+            bm *= base;
+            ++m;
+        }
+        const double denominator = (double)bm;
+#if RANDOMIZE == LD_OWEN
+        if (base == 2u) {
+            for (uint t = 0; t < count; ++t)
+                p[(size_t)t * d] = (double)reverse_bits32(lk_hash(first + t, words.x)) * 0x1p-32;
+            continue;
+        }
+#endif
+        uint digit[32];
+        {
+            uint a = first;
+            for (uint k = 0; k < m; ++k) {
+                digit[k] = a % base;
+                a /= base;
+            }
+        }
+#if RANDOMIZE == LD_OWEN
+        for (uint t = 0; t < count; ++t) {
+            ulong v = 0, prefix = 0, power = 1;
+            for (uint k = 0; k < m; ++k) {
+                const uint e = permutation_element(digit[k], base, digit_hash(seed64, prefix + power));
+                v = v * base + e;
+                prefix += (ulong)digit[k] * power;
+                power *= base;
+            }
+            p[(size_t)t * d] = (double)v / denominator;
+            for (uint k = 0; k < m; ++k) {
+                if (++digit[k] < base)
+                    break;
+                digit[k] = 0;
+            }
+        }
+#else
+#if RANDOMIZE == LD_XOR
+        uint shift[32];
+        for (uint k = 0; k < m; ++k)
+            shift[k] = digit_shift(digit_hash(seed64, k), base);
+#elif RANDOMIZE == LD_PERMUTE
+        uint hash[32];
+        for (uint k = 0; k < m; ++k)
+            hash[k] = digit_hash(seed64, k);
+#endif
+        ulong weight[32];   /* b^(m-1-k): the place of digit k in the numerator */
+        weight[m - 1] = 1;
+        for (uint k = m - 1; k > 0; --k)
+            weight[k - 1] = weight[k] * base;
+        ulong v = 0;
+        for (uint k = 0; k < m; ++k)
+            v += (ulong)LD_DIGIT(digit[k], k) * weight[k];
+        for (uint t = 0; t < count; ++t) {
+#if RANDOMIZE == LD_SHIFT
+            p[(size_t)t * d] = ld_shift((double)v / denominator, u);
+#else
+            p[(size_t)t * d] = (double)v / denominator;
+#endif
+            if (t + 1 == count)
+                break;
+            for (uint k = 0; k < m; ++k) {
+                const uint a = digit[k];
+                const uint b = a + 1u == base ? 0u : a + 1u;
+                digit[k] = b;
+                /* unsigned wrap-around cancels: v stays the exact new numerator */
+                v += ((ulong)LD_DIGIT(b, k) - (ulong)LD_DIGIT(a, k)) * weight[k];
+                if (b != 0u)
+                    break;
+            }
+        }
+#endif
+    }
+}

@@ -1,0 +1,107 @@
+/* Number theory of the low-discrepancy samplers: the OpenCL twin of clsamp/number_theory.py.
+ *
+ * Same names, same integer formulas, unsigned arithmetic wrapping as in the NumPy reference,
+ * so the kernels and the reference give the same bits. See number_theory.py for the maths
+ * and the references (Kensler 2013; Laine-Karras 2011; Burley 2020; Vegdahl 2021; pbrt-v4).
+ */
+#ifndef CLSAMP_LOWDISCREPANCY_H
+#define CLSAMP_LOWDISCREPANCY_H
+
+/* Randomizations: the values of -DRANDOMIZE. */
+#define LD_NONE 0
+#define LD_SHIFT 1
+#define LD_XOR 2
+#define LD_OWEN 3
+#define LD_PERMUTE 4
+
+/* Counts trailing zeros of x != 0 (ctz is OpenCL 2.0 only). */
+inline uint ld_ctz(uint x)
+{
+    return 31u - clz(x & (0u - x));
+}
+
+inline uint reverse_bits32(uint x)
+{
+    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
+    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+    x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
+    x = ((x >> 8) & 0x00FF00FFu) | ((x & 0x00FF00FFu) << 8);
+    return (x >> 16) | (x << 16);
+}
+
+/* Vegdahl's LK hash on reversed bits: a nested scramble of the binary digits. */
+inline uint lk_hash(uint x, uint seed)
+{
+    x ^= x * 0x3D20ADEAu;
+    x += seed;
+    x *= (seed >> 16) | 1u;
+    x ^= x * 0x05526C56u;
+    x ^= x * 0x53A22864u;
+    return x;
+}
+
+inline uint owen_scramble_base2(uint x, uint seed)
+{
+    return reverse_bits32(lk_hash(reverse_bits32(x), seed));
+}
+
+inline ulong mix64(ulong v)
+{
+    v ^= v >> 31;
+    v *= 0x7FB5D329728EA185UL;
+    v ^= v >> 27;
+    v *= 0x81DADEF4BC2DD44DUL;
+    v ^= v >> 33;
+    return v;
+}
+
+inline uint digit_hash(ulong seed64, ulong key)
+{
+    return (uint)(mix64(seed64 ^ key) >> 32);
+}
+
+inline uint digit_shift(uint h, uint base)
+{
+    return (uint)(((ulong)h * base) >> 32);
+}
+
+/* Kensler's permutation element: i-th element of the permutation of [0, l) chosen by p. */
+inline uint permutation_element(uint i, uint l, uint p)
+{
+    uint w = l - 1u;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    do {
+        i ^= p;
+        i *= 0xE170893Du;
+        i ^= p >> 16;
+        i ^= (i & w) >> 4;
+        i ^= p >> 8;
+        i *= 0x0929EB3Fu;
+        i ^= p >> 23;
+        i ^= (i & w) >> 1;
+        i *= 1u | (p >> 27);
+        i *= 0x6935FA69u;
+        i ^= (i & w) >> 11;
+        i *= 0x74DCB303u;
+        i ^= (i & w) >> 2;
+        i *= 0x9E501CC3u;
+        i ^= (i & w) >> 2;
+        i *= 0xC860A3DFu;
+        i &= w;
+        i ^= i >> 5;
+    } while (i >= l);
+    return (i + p) % l;
+}
+
+/* Cranley-Patterson rotation on the torus: (x + u) mod 1 with one rounding. */
+inline double ld_shift(double x, double u)
+{
+    const double y = x + u;
+    return y >= 1.0 ? y - 1.0 : y;
+}
+
+#endif
