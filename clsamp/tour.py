@@ -253,11 +253,11 @@ def section_samplers(report, quick):
     ax.legend(fontsize=8, ncol=2)
     ax.set_title(f"radial means of expected spectra (n = {n}, {realizations} realizations)")
     overlay = report.figure("radial_means", fig)
-    body = ("<p>Each sampler makes {r} sets of n = {n} points (seed 1); the spectrum is the mean "
+    body = (f"<p>Each sampler makes {realizations} sets of n = {n} points (seed 1); the spectrum is the mean "
             "periodogram over the sets (exact, <code>method='direct'</code>), DC at the centre. "
             "&rho; is the relative radius (minimum toroidal distance over the hexagonal packing's, "
             "Lagae &amp; Dutr&eacute; 2008); the low-frequency power is the radial mean below "
-            "2&nu;/&radic;N = 1 (white noise: 1; blue noise: near 0).</p>").format(r=realizations, n=n)
+            "2&nu;/&radic;N = 1 (white noise: 1; blue noise: near 0).</p>")
     body += _table(("sampler", "n", "sets", "seconds", "ρ (mean)", "anisotropy dB (mean)",
                     "low-freq. power"), rows)
     body += _img(overlay, "radial means of all samplers", 700)
