@@ -69,6 +69,7 @@ class Report:
         (self.out / "img").mkdir(parents=True, exist_ok=True)
         (self.out / "data").mkdir(parents=True, exist_ok=True)
         self.sections = []
+        self.results = {}   # objects a later section reuses (convergence results, renders)
 
     def figure(self, name, fig):
         """Save a matplotlib figure as img/<name>.png; return its relative path."""
@@ -265,6 +266,355 @@ def section_samplers(report, quick):
     return body, data
 
 
+# -- 2. convergence ---------------------------------------------------------------------------
+def tour_convergence_plan(quick):
+    """(samplers, integrands, ns, realizations) of section 2."""
+    if quick:
+        return (("random", "jittered", "sobol:owen", "poisson_disk"), ("gaussian", "disk"),
+                [16, 64, 256, 1024], 128)
+    return (("random", "jittered", "latin_hypercube", "sobol:owen", "halton:owen", "poisson_disk",
+             "ccvt"), ("gaussian", "disk"), [16, 64, 256, 1024, 4096, 16384], 512)
+
+
+def _sampler_for_convergence(name, quick):
+    """Expensive optimizers get a cheaper configuration in the sweep (named in the report)."""
+    from .samplers import make_sampler
+    base, _, variant = name.partition(":")
+    params = {"randomize": variant} if variant else {}
+    if base == "ccvt":
+        params["points_per_site"] = 64 if quick else 128
+    return make_sampler(base, d=2, seed=2, **params), params
+
+
+def section_convergence(report, quick):
+    """MSE against N for a smooth and a discontinuous integrand, rates against theory."""
+    from . import theory
+    from .convergence import convergence, convergence_plot
+    samplers, integrands, ns, realizations = tour_convergence_plan(quick)
+    results, rows, data = [], [], {}
+    for integrand in integrands:
+        for name in samplers:
+            label = f"{name} / {integrand}"
+            try:
+                sampler, params = _sampler_for_convergence(name, quick)
+                sweep = ns if name not in ("ccvt", "poisson_disk") else ns[:-1] if not quick else ns
+                result = convergence(sampler, integrand, sweep, realizations=realizations, seed=3,
+                                     progress=False)
+                result.sampler = name
+                results.append(result)
+                verdict = theory.compare(result)
+                rows.append((name, integrand, verdict["case"], f"{verdict['slope']:.2f} "
+                             f"± {verdict['stderr']:.2f}", verdict["expected_text"] or "-",
+                             verdict["verdict"], float(result.mse[-1]), float(np.sum(result.seconds))))
+                data[label] = {"params": params, "comparison": verdict, **result.to_dict()}
+            except Exception as error:
+                rows.append((name, integrand, "-", "-", "-", f"failed: {error}", "-", "-"))
+                data[label] = {"error": traceback.format_exc()}
+    report.results["convergence"] = results
+    picture = convergence_plot(results, report.out / "img" / "convergence.png")
+    body = (f"<p>Each point: {realizations} realizations, each shifted by its own random toroidal "
+            "vector (homogenization: the estimator is unbiased); MSE of the estimate of the "
+            "integral of a wrapped Gaussian (smooth: the best case) and of a disk (discontinuous: "
+            "the worst case). The slope is a weighted log-log fit over the larger half of the "
+            "sweep, &plusmn; its standard error; it <span class='matches'>matches</span> the "
+            "published rate (Pilleboue et al. 2015; Owen 1997 for scrambled nets) when within "
+            "three standard errors plus 0.15 for pre-asymptotic curvature.</p>")
+    verdicts = "".join(
+        f"<tr><td>{html.escape(str(r[0]))}</td><td>{html.escape(str(r[1]))}</td>"
+        f"<td>{html.escape(str(r[2]))}</td><td>{html.escape(str(r[3]))}</td>"
+        f"<td>{html.escape(str(r[4]))}</td><td class='{html.escape(str(r[5]).split()[0])}'>"
+        f"{html.escape(str(r[5]))}</td><td>{html.escape(_fmt(r[6]))}</td>"
+        f"<td>{html.escape(_fmt(r[7]))}</td></tr>" for r in rows)
+    body += ("<table><thead><tr><th>sampler</th><th>integrand</th><th>case</th><th>fitted slope</th>"
+             "<th>theory</th><th>verdict</th><th>MSE at largest N</th><th>seconds</th></tr></thead>"
+             f"<tbody>{verdicts}</tbody></table>")
+    body += _img(Path(picture).relative_to(report.out).as_posix(), "MSE against N", 1000)
+    return body, data
+
+
+# -- 3. rendering ------------------------------------------------------------------------------
+TOUR_RENDER_SAMPLERS = (
+    ("random", {}),
+    ("jittered", {"strata": (12, 8)}),
+    ("poisson_disk", {}),
+    ("ccvt", {}),
+    ("sobol:owen", {}),
+)
+
+
+def section_render(report, quick):
+    """AO at 96 rays per pixel with several samplers, MSE against a reference render."""
+    from . import render as rendering
+    from .scene import Scene
+    resolution = 48 if quick else 192
+    scene = Scene.from_file("ao")
+    spp = scene.default_spp
+    ref = rendering.reference(scene, resolution=resolution, spp=2048 if quick else 8192,
+                              progress=False)
+    report.exr("render_reference", ref, {"scene": scene.name, "sampler": "random (reference)"})
+    rows, data, cells, timings = [], {}, [], []
+    cells.append(("reference", report.png("render_reference", ref)))
+    for name, params in TOUR_RENDER_SAMPLERS:
+        try:
+            t0 = time.perf_counter()
+            image = rendering.render(scene, name, spp=spp, resolution=resolution, seed=4,
+                                     sampler_params=params or None, progress=False)
+            seconds = time.perf_counter() - t0
+            metrics = rendering.compare(image, ref)
+            safe = name.replace(":", "_")
+            report.exr(f"render_{safe}", image, {"scene": scene.name, "sampler": name, "spp": spp,
+                                                 "seed": 4})
+            cells.append((f"{name}: MSE {metrics['mse']:.3g}", report.png(f"render_{safe}", image)))
+            rows.append((name, spp, metrics["mse"], metrics["psnr"], metrics["ssim"], seconds))
+            data[name] = {"spp": spp, "seconds": seconds, "params": params, **metrics}
+            timings.append((name, seconds, metrics["mse"]))
+        except Exception as error:
+            rows.append((name, spp, f"failed: {error}", "-", "-", "-"))
+            data[name] = {"error": traceback.format_exc()}
+    report.results["render"] = {"scene": scene, "resolution": resolution, "reference": ref,
+                                "timings": timings}
+    body = (f"<p>The scene <code>{html.escape(scene.name)}</code> ({html.escape(scene.description)}) "
+            f"at {resolution}&times;{resolution}, {spp} samples per pixel, seed 4, against a "
+            "reference rendered with the random sampler at many more samples. 2-D samplers are "
+            "padded pairwise with random permutations, as pbrt pads; expensive samplers reuse a "
+            "pool of realizations with a per-pixel random toroidal shift.</p>")
+    body += _table(("sampler", "spp", "MSE", "PSNR dB", "SSIM", "seconds"), rows)
+    body += "<div class='grid'>" + "".join(
+        f"<div class='cell'>{_img(src, label, 220)}<br>{html.escape(label)}</div>" for label, src in cells)
+    body += "</div>"
+    return body, data
+
+
+# -- 4. accuracy against time ------------------------------------------------------------------
+def _spectrum_cost(report, quick):
+    """Fast (NUFFT) against direct spectra: max error relative to N, and seconds."""
+    from . import spectrum
+    from .samplers import make_sampler
+    r, n, resolution = (8, 1024, 128) if quick else (64, 4096, 256)
+    points = make_sampler("random", seed=5).sample(n, realizations=r)
+    spectrum.power_spectrum(points[:1], resolution=resolution, method="direct", progress=False)
+    t0 = time.perf_counter()
+    exact = spectrum.power_spectrum(points, resolution=resolution, method="direct", progress=False)
+    direct_seconds = time.perf_counter() - t0
+    rows = [("direct", "-", direct_seconds, "exact (fp64)")]
+    curve = []
+    for tol in (1e-2, 1e-3, 1e-6, 1e-10, 1e-12):
+        spectrum.power_spectrum(points[:1], resolution=resolution, method="fast", tol=tol, progress=False)
+        t0 = time.perf_counter()
+        fast = spectrum.power_spectrum(points, resolution=resolution, method="fast", tol=tol,
+                                       progress=False)
+        seconds = time.perf_counter() - t0
+        error = float(np.max(np.abs(fast - exact)) / n)
+        rows.append(("fast", tol, seconds, error))
+        curve.append((tol, seconds, error))
+    return {"realizations": r, "n": n, "resolution": resolution, "direct_seconds": direct_seconds,
+            "fast": [{"tol": t, "seconds": s, "max_error_over_n": e} for t, s, e in curve]}, rows
+
+
+def section_cost(report, quick):
+    """What accuracy costs in time: spectra, sampler MSE, rendered images."""
+    plt = _pyplot()
+    data, body, failures = {}, "", []
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    # spectra
+    try:
+        spec, rows = _spectrum_cost(report, quick)
+        data["spectrum"] = spec
+        body += (f"<h3>Spectra</h3><p>Expected spectrum of {spec['realizations']} &times; "
+                 f"{spec['n']} random points at {spec['resolution']}&sup2; frequencies: the NUFFT "
+                 "path at each tolerance against the exact sum (error = max |P<sub>fast</sub> &minus; "
+                 "P<sub>direct</sub>| / N).</p>")
+        body += _table(("method", "tol", "seconds", "max error / N"), rows)
+        ax = axes[0]
+        ax.loglog([c["seconds"] for c in spec["fast"]], [max(c["max_error_over_n"], 1e-17)
+                                                         for c in spec["fast"]], "o-", label="fast (NUFFT)")
+        ax.axvline(spec["direct_seconds"], color="k", linestyle="--", label="direct (exact)")
+        ax.set_xlabel("seconds")
+        ax.set_ylabel("max error / N")
+        ax.set_title("spectrum: error against time")
+        ax.legend()
+    except Exception:
+        failures.append(("spectra", traceback.format_exc()))
+    # samplers
+    try:
+        from .convergence import pareto_front, time_to_mse
+        results = report.results.get("convergence")
+        if not results:
+            raise RuntimeError("section 2 produced no convergence results")
+        ax = axes[1]
+        target_rows, sampler_data = [], {}
+        for integrand in sorted({r.integrand for r in results}):
+            group = [r for r in results if r.integrand == integrand]
+            target = float(np.median([r.mse[len(r.mse) // 2] for r in group]))
+            for r in group:
+                reach = time_to_mse(r, target)
+                target_rows.append((r.sampler, integrand, target,
+                                    "not reached" if reach is None else reach["n"],
+                                    "not reached" if reach is None else reach["seconds"]))
+                if integrand == "disk":
+                    ax.loglog(r.seconds_per_estimate, r.mse, "o-", label=r.sampler, markersize=3)
+            sampler_data[integrand] = {"target_mse": target, "pareto_front": pareto_front(group)}
+        ax.set_xlabel("seconds per estimate (generation included)")
+        ax.set_ylabel("MSE")
+        ax.set_title("samplers (disk integrand): MSE against time")
+        ax.legend(fontsize=7)
+        data["samplers"] = sampler_data
+        body += ("<h3>Samplers</h3><p>From section 2: the seconds one estimate takes, point "
+                 "generation included, to reach a target MSE (the median MSE at the middle of the "
+                 "sweep), and the N that reaches it. A sampler that converges faster per point can "
+                 "still lose on time when its points are expensive.</p>")
+        body += _table(("sampler", "integrand", "target MSE", "N needed", "seconds per estimate"),
+                       target_rows)
+        front = sampler_data.get("disk", {}).get("pareto_front", [])
+        front_text = ", ".join(f"{p['sampler']} N={p['n']} ({_fmt(p['seconds'])} s, MSE {_fmt(p['mse'])})"
+                               for p in front)
+        body += f"<p>Pareto front (disk): {front_text}</p>"
+    except Exception:
+        failures.append(("samplers", traceback.format_exc()))
+    # renders
+    try:
+        from . import render as rendering
+        state = report.results.get("render")
+        if not state:
+            raise RuntimeError("section 3 produced no renders")
+        scene, resolution, ref = state["scene"], state["resolution"], state["reference"]
+        spps = (4, 16, 64) if quick else (4, 16, 64, 256)
+        ax = axes[2]
+        render_rows, render_data = [], {}
+        for name, params in (("random", {}), ("jittered", None), ("sobol:owen", {})):
+            seconds, errors = [], []
+            for spp in spps:
+                extra = params
+                if params is None:
+                    k = int(round(np.sqrt(spp)))
+                    extra = {"strata": (k, k)}
+                rendering.render(scene, name, spp=spp, resolution=8, seed=6, sampler_params=extra or None,
+                                 progress=False)  # builds the kernels before timing
+                t0 = time.perf_counter()
+                image = rendering.render(scene, name, spp=spp, resolution=resolution, seed=6,
+                                         sampler_params=extra or None, progress=False)
+                seconds.append(time.perf_counter() - t0)
+                errors.append(rendering.mse(image, ref))
+                render_rows.append((name, spp, seconds[-1], errors[-1]))
+            ax.loglog(seconds, errors, "o-", label=name, markersize=3)
+            render_data[name] = {"spp": list(spps), "seconds": seconds, "mse": errors}
+        ax.set_xlabel("seconds per image")
+        ax.set_ylabel("MSE against reference")
+        ax.set_title(f"AO renders {resolution}² : MSE against time")
+        ax.legend(fontsize=7)
+        data["render"] = render_data
+        body += ("<h3>Rendered images</h3><p>The AO scene rendered at increasing samples per pixel: "
+                 "MSE against seconds, sampling and rendering included.</p>")
+        body += _table(("sampler", "spp", "seconds", "MSE"), render_rows)
+    except Exception:
+        failures.append(("renders", traceback.format_exc()))
+    fig.tight_layout()
+    body = _img(report.figure("accuracy_time", fig), "accuracy against time", 1100) + body
+    for part, trace in failures:
+        body += f"<div class='error'>The {part} part failed:\n{html.escape(trace)}</div>"
+        data[f"{part}_error"] = trace
+    if failures and len(failures) == 3:
+        raise RuntimeError("every part of the accuracy-against-time section failed")
+    return body, data
+
+
+# -- 5. stability --------------------------------------------------------------------------------
+def _stability_cases(quick):
+    """Each hard case: (name, what is measured, value reached, bound, passed)."""
+    from fractions import Fraction
+
+    from . import philox, spectrum
+    from .samplers import make_sampler
+    cases = []
+
+    def case(name, measure, fn, bound):
+        try:
+            value = float(fn())
+            cases.append((name, measure, value, bound, bool(value <= bound)))
+        except Exception as error:
+            cases.append((name, measure, f"failed: {error}", bound, False))
+
+    def grid_spectrum():
+        k = 64 if quick else 256
+        g = (np.stack(np.meshgrid(np.arange(k), np.arange(k), indexing="ij"), -1).reshape(-1, 2) + 0.5) / k
+        P = spectrum.power_spectrum(g, resolution=k, method="direct", progress=False)
+        f = np.arange(-(k // 2), k // 2)
+        aliased = (f[:, None] % k == 0) & (f[None, :] % k == 0)
+        return np.max(P[~aliased]) / len(g)
+    case("regular grid spectrum", "max power off the aliases / N", grid_spectrum, 1e-12)
+
+    def edge_points():
+        x = np.array([[1 - 2.0**-53, 1 - 2.0**-53], [0.0, 0.0], [0.5, 0.5], [0.5, 0.5]])
+        P = spectrum.power_spectrum(x, resolution=32, method="direct", progress=False)
+        Q = spectrum.direct_reference(x[None], 32)
+        return np.max(np.abs(P - Q)) / len(x)
+    case("points at 1 - 2^-53 and duplicates", "kernel vs reference, max |ΔP| / N", edge_points, 1e-12)
+
+    def vdc_end():
+        s = make_sampler("van_der_corput", d=1)
+        got = s.sample(2, start=2**32 - 2)[:, 0]
+        exact = [Fraction(int(f"{i:032b}"[::-1], 2), 2**32) for i in (2**32 - 2, 2**32 - 1)]
+        return max(abs(Fraction(g) - e) for g, e in zip(got, exact, strict=True))
+    case("Van der Corput at 2^32 - 1", "|error| against exact rationals", vdc_end, 0.0)
+
+    def halton_power():
+        s = make_sampler("halton", d=2)
+        i = 3**20
+        got = s.sample(1, start=i)[0, 1]
+        digits, value, scale = i, Fraction(0), Fraction(1, 3)
+        while digits:
+            digits, digit = divmod(digits, 3)
+            value += digit * scale
+            scale /= 3
+        return abs(Fraction(got) - value) / Fraction(2**-53)
+    case("Halton base 3 at 3^20", "|error| in units of 2^-53", halton_power, 1.0)
+
+    def philox_identity():
+        n = 200_000
+        a = make_sampler("random", d=4, seed=2**63 + 5).sample(n)
+        r = philox.uniform_block(2**63 + 5, philox.Stream.POINTS, np.arange(1), n, 4)[0]
+        return np.count_nonzero(a != r)
+    case("Philox kernel vs NumPy (800k doubles)", "mismatching values", philox_identity, 0.0)
+
+    def owen_mse():
+        from .convergence import convergence
+        n = 2**12 if quick else 2**16
+        res = convergence("sobol:owen", "gaussian", [n], realizations=64, seed=7, progress=False)
+        from math import fsum
+        exact = fsum(Fraction(e) ** 2 for e in res.errors[0]) / len(res.errors[0])
+        return abs(Fraction(float(res.mse[0])) - exact) / exact
+    case("Owen-Sobol MSE, Gaussian (tiny MSE)", "relative error of the MSE vs exact rationals",
+         owen_mse, 1e-12)
+
+    def ccvt_capacities():
+        s = make_sampler("ccvt", seed=3, points_per_site=32)
+        s.sample(64)
+        caps = np.asarray(s.capacities)
+        energy = np.asarray(s.energy_history, dtype=np.float64)
+        rises = np.max(np.diff(energy)) if len(energy) > 1 else 0.0
+        return max(float(caps.max() - caps.min()), max(0.0, rises))
+    case("CCVT capacities and energy", "capacity spread + largest energy rise", ccvt_capacities, 0.0)
+
+    def poisson_radius():
+        from .point_metrics import relative_radius
+        pts = make_sampler("poisson_disk", rho=0.75, seed=2).sample(512, realizations=4)
+        return 0.75 - float(np.min(relative_radius(pts)))
+    case("Poisson disk ρ >= 0.75", "0.75 - smallest ρ", poisson_radius, 0.0)
+    return cases
+
+
+def section_stability(report, quick):
+    """The hard cases, each with the error it reached."""
+    cases = _stability_cases(quick)
+    rows = [(name, measure, value, bound, "ok" if passed else "FAILED")
+            for name, measure, value, bound, passed in cases]
+    body = ("<p>Cases where a careless implementation loses precision or breaks an invariant, "
+            "each with the error this run reached and the bound the tests hold it to.</p>")
+    body += _table(("case", "measure", "reached", "bound", ""), rows)
+    data = {name: {"measure": m, "value": v, "bound": b, "passed": p} for name, m, v, b, p in cases}
+    return body, data
+
+
 def section_device(report, quick, timings):
     device = runtime.current_device()
     rows = [(k, v) for k, v in dataclasses.asdict(device).items()]
@@ -278,6 +628,10 @@ def section_device(report, quick, timings):
 
 SECTIONS = (
     ("samplers", "1. Samplers, their spectra and radial means", section_samplers),
+    ("convergence", "2. Convergence against theory", section_convergence),
+    ("render", "3. Ambient occlusion at 96 rays: samplers in images", section_render),
+    ("cost", "4. What accuracy costs in time", section_cost),
+    ("stability", "5. Stability: the hard cases", section_stability),
     ("device", "6. Device, versions and timings", section_device),
 )
 
