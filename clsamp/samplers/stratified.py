@@ -27,8 +27,10 @@ from ..errors import InvalidArgumentError
 from ..validation import check_int, check_real
 from .base import Sampler, register
 
-
 # -- small pure functions, shared by the references and the parameter checks ----------
+STRATUM_STEPS = 4   # ulp steps of stratum_point each way (CLSAMP_STRATUM_STEPS in the kernel)
+
+
 def stratum_point(k, u, count):
     """The coordinate at relative offset ``u`` in stratum ``k`` of ``count`` (the kernel's twin).
 
@@ -44,24 +46,20 @@ def stratum_point(k, u, count):
     Returns
     -------
     ndarray of float64
-        ``x = (k + u) / count`` rounded to nearest, then moved by whole ulps until
+        ``x = (k + u) / count`` rounded to nearest, then moved by whole ulps (at most
+        four each way, which the rounding error bound makes enough) until
         ``floor(x * count) == k`` in double arithmetic; hence ``0 <= x < 1``.
     """
     c = np.asarray(count, dtype=np.float64)
     kd = np.asarray(k, dtype=np.float64)
     x = (kd + np.asarray(u, dtype=np.float64)) / c
-    x, c, kd = np.broadcast_arrays(x, c, kd)
-    x = x.copy()
-    while True:
-        high = np.floor(x * c) > kd
-        if not high.any():
-            break
-        x[high] = np.nextafter(x[high], 0.0)
-    while True:
-        low = np.floor(x * c) < kd
-        if not low.any():
-            break
-        x[low] = np.nextafter(x[low], 1.0)
+    x, c, kd = (np.array(a) for a in np.broadcast_arrays(x, c, kd))
+    # The quotient is within two ulps (four if the ulp halves) of an admissible double:
+    # the kernel's four fixed steps each way, moving one ulp by the integer view.
+    for _ in range(STRATUM_STEPS):
+        x.view(np.int64)[x * c >= kd + 1.0] -= 1
+    for _ in range(STRATUM_STEPS):
+        x.view(np.int64)[x * c < kd] += 1
     return x
 
 
