@@ -18,6 +18,7 @@ offsets the jitter counters only (these are sets, not sequences).
 """
 
 import math
+import re
 
 import numpy as np
 import pyopencl.array as cla
@@ -92,7 +93,22 @@ def balanced_factors(n):
     return m, n // m
 
 
+def _int_tuple(value, name):
+    """A tuple given as a sequence or, from the command line, as text like "3x4" or "2,2,1"."""
+    if isinstance(value, str):
+        parts = [p for p in re.split(r"[x,\s]+", value.strip()) if p]
+        try:
+            return tuple(int(p) for p in parts)
+        except ValueError:
+            raise InvalidArgumentError(
+                f"'{name}' must be integers like '3x4' or '2,2,1', got {value!r}") from None
+    if isinstance(value, int) and not isinstance(value, bool):
+        return (value,)
+    return value
+
+
 def _check_strata(strata, d, name="strata"):
+    strata = _int_tuple(strata, name)
     if not isinstance(strata, (tuple, list)) or len(strata) != d:
         raise InvalidArgumentError(
             f"'{name}' must be a tuple of {d} positive integers (one per dimension), got {strata!r}")
@@ -258,8 +274,9 @@ class JitteredSampler(_Grid):
     seed : int
         Seed in [0, 2^64).
     strata : tuple of int, optional
-        Cells per axis ``(k_1, ..., k_d)``; then n must be their product (and may be
-        left out). Default: n must be k^d, and another n raises naming the nearest k^d.
+        Cells per axis ``(k_1, ..., k_d)`` (or text such as ``"3x4"``, as the command
+        line passes it); then n must be their product (and may be left out). Default:
+        n must be k^d, and another n raises naming the nearest k^d.
 
     Notes
     -----
@@ -328,8 +345,7 @@ class UncorrelatedJitterSampler(_Stratified):
 
     def __init__(self, d=2, seed=0, groups=None, backend="opencl"):
         super().__init__(d=d, seed=seed, backend=backend)
-        if groups is None:
-            groups = _default_groups(self.d)
+        groups = _default_groups(self.d) if groups is None else _int_tuple(groups, "groups")
         if not isinstance(groups, (tuple, list)) or not groups:
             raise InvalidArgumentError(
                 f"'groups' must be a tuple of positive group sizes adding up to d={self.d}, "
