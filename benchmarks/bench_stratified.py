@@ -62,9 +62,9 @@ def run(devices, quick):
                 rate = f"{r * n / t_cl / 1e6:.1f} Mpts/s"
                 rows.append(Row(name, size, dev, t_cl, "numpy reference", t_ref,
                                 f"{same}, {strat}, {rate}"))
-                if name == "latin_hypercube":
-                    rows.append(Row(name, size, dev, t_cl, "scipy LatinHypercube", peers[(n, r)],
-                                    rate))
+                # scipy has no jittered or multi-jittered sampler: its LatinHypercube is
+                # the stratified peer of them all (the like-for-like one for latin_hypercube)
+                rows.append(Row(name, size, dev, t_cl, "scipy LatinHypercube", peers[(n, r)], rate))
             t_p, p = timed(lambda: permutation.random_permutations_device(
                 1, Stream.PERMUTATION, r, n, 2).get(), repeats=5)
             ok = np.array_equal(np.sort(p, axis=-1), np.broadcast_to(np.arange(n), p.shape))
