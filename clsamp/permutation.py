@@ -12,7 +12,9 @@ Two kinds, with different guarantees:
     ``range(c)``); ``perms`` numbers must be below 2^22. Every one of the
     ``length!`` permutations has the same probability (up to Philox being a
     good generator, and a retry cap whose failure probability is below 2^-500).
-    Used by ``latin_hypercube``, ``multijittered`` and ``uncorrelated_jitter``.
+    Used by ``latin_hypercube``, ``multijittered`` and ``uncorrelated_jitter``; for
+    pbrt-style padding, pass pixel numbers as ``realizations`` and dimension pairs as
+    ``perms`` (with a stream of its own, e.g. ``Stream.PIXEL``).
 
 ``random_permutations_device(seed, stream, realizations, length, perms)``
     The same permutations, bit for bit, made by the OpenCL kernel
@@ -30,6 +32,15 @@ Two kinds, with different guarantees:
     **approximation** of a random permutation, not an exactly uniform one: only
     2^32 patterns exist (far fewer than ``length!``) and the hash is a heuristic
     mixer. Used by ``correlated_multijittered``.
+
+``permute_device(i, length, p)``
+    :func:`permute` evaluated on the device by ``clsamp_permute`` (for checks;
+    kernels call ``clsamp_permute`` directly).
+
+``bounded_integers(seed, stream, realization, step, perm, range_)`` and ``bounded_integers_device``
+    Exactly uniform integers in ``[0, range_)`` (Lemire's rejection) from the Philox
+    words of (realization, step, perm): Fisher–Yates step ``t`` uses ``range_ = t + 1``.
+    ``fisher_yates_draws`` returns all the draws of a batch at once.
 
 OpenCL (``#include "permutation.h"``, which includes ``philox.h``)::
 

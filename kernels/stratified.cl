@@ -17,16 +17,25 @@
 
 /* (k + u) / count, nudged by ulps so that floor(x * count) == k in double arithmetic:
  * the rounding of k + u and of the division may otherwise carry a point across the
- * stratum's edge (and the last stratum's point to 1.0). */
+ * stratum's edge (and the last stratum's point to 1.0). The rounded quotient is less
+ * than two ulps from the nearest admissible double (four if the ulp halves on the
+ * way), so four steps each way suffice. floor(y) > k is written y >= k + 1 and
+ * floor(y) < k as y < k (exact for integer k < 2^32): PoCL's double floor() is a slow
+ * library call; fixed steps with selects and integer ulp moves (x > 0 here) behind
+ * one rarely taken test keep the kernel vectorizable. */
+#define CLSAMP_STRATUM_STEPS 4
+
 inline double stratum_point(const uint k, const double u, const uint count)
 {
     const double c = (double)count;
     const double kd = (double)k;
     double x = (kd + u) / c;
-    while (floor(x * c) > kd)
-        x = nextafter(x, 0.0);
-    while (floor(x * c) < kd)
-        x = nextafter(x, 1.0);
+    if (x * c >= kd + 1.0 || x * c < kd) {
+        for (int step = 0; step < CLSAMP_STRATUM_STEPS; ++step)
+            x = x * c >= kd + 1.0 ? as_double(as_long(x) - 1) : x;
+        for (int step = 0; step < CLSAMP_STRATUM_STEPS; ++step)
+            x = x * c < kd ? as_double(as_long(x) + 1) : x;
+    }
     return x;
 }
 

@@ -252,3 +252,12 @@ def test_alias_and_names():
                  "multijittered", "correlated_multijittered"):
         assert name in names
     assert type(clsamp.make_sampler("n_rooks")) is type(clsamp.make_sampler("latin_hypercube"))
+
+
+def test_strata_and_groups_as_command_line_text():
+    a = clsamp.make_sampler("jittered", d=2, seed=1, strata="3x4").sample()
+    b = clsamp.make_sampler("jittered", d=2, seed=1, strata=(3, 4)).sample()
+    assert np.array_equal(a, b)
+    assert clsamp.make_sampler("uncorrelated_jitter", d=3, groups="1,2").groups == (1, 2)
+    with pytest.raises(InvalidArgumentError, match="strata"):
+        clsamp.make_sampler("jittered", d=2, strata="3xfour")

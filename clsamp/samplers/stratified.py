@@ -18,6 +18,7 @@ offsets the jitter counters only (these are sets, not sequences).
 """
 
 import math
+import re
 
 import numpy as np
 import pyopencl.array as cla
@@ -27,8 +28,10 @@ from ..errors import InvalidArgumentError
 from ..validation import check_int, check_real
 from .base import Sampler, register
 
-
 # -- small pure functions, shared by the references and the parameter checks ----------
+STRATUM_STEPS = 4   # ulp steps of stratum_point each way (CLSAMP_STRATUM_STEPS in the kernel)
+
+
 def stratum_point(k, u, count):
     """The coordinate at relative offset ``u`` in stratum ``k`` of ``count`` (the kernel's twin).
 
@@ -44,24 +47,20 @@ def stratum_point(k, u, count):
     Returns
     -------
     ndarray of float64
-        ``x = (k + u) / count`` rounded to nearest, then moved by whole ulps until
+        ``x = (k + u) / count`` rounded to nearest, then moved by whole ulps (at most
+        four each way, which the rounding error bound makes enough) until
         ``floor(x * count) == k`` in double arithmetic; hence ``0 <= x < 1``.
     """
     c = np.asarray(count, dtype=np.float64)
     kd = np.asarray(k, dtype=np.float64)
     x = (kd + np.asarray(u, dtype=np.float64)) / c
-    x, c, kd = np.broadcast_arrays(x, c, kd)
-    x = x.copy()
-    while True:
-        high = np.floor(x * c) > kd
-        if not high.any():
-            break
-        x[high] = np.nextafter(x[high], 0.0)
-    while True:
-        low = np.floor(x * c) < kd
-        if not low.any():
-            break
-        x[low] = np.nextafter(x[low], 1.0)
+    x, c, kd = (np.array(a) for a in np.broadcast_arrays(x, c, kd))
+    # The quotient is within two ulps (four if the ulp halves) of an admissible double:
+    # the kernel's four fixed steps each way, moving one ulp by the integer view.
+    for _ in range(STRATUM_STEPS):
+        x.view(np.int64)[x * c >= kd + 1.0] -= 1
+    for _ in range(STRATUM_STEPS):
+        x.view(np.int64)[x * c < kd] += 1
     return x
 
 
@@ -94,7 +93,22 @@ def balanced_factors(n):
     return m, n // m
 
 
+def _int_tuple(value, name):
+    """A tuple given as a sequence or, from the command line, as text like "3x4" or "2,2,1"."""
+    if isinstance(value, str):
+        parts = [p for p in re.split(r"[x,\s]+", value.strip()) if p]
+        try:
+            return tuple(int(p) for p in parts)
+        except ValueError:
+            raise InvalidArgumentError(
+                f"'{name}' must be integers like '3x4' or '2,2,1', got {value!r}") from None
+    if isinstance(value, int) and not isinstance(value, bool):
+        return (value,)
+    return value
+
+
 def _check_strata(strata, d, name="strata"):
+    strata = _int_tuple(strata, name)
     if not isinstance(strata, (tuple, list)) or len(strata) != d:
         raise InvalidArgumentError(
             f"'{name}' must be a tuple of {d} positive integers (one per dimension), got {strata!r}")
@@ -260,8 +274,9 @@ class JitteredSampler(_Grid):
     seed : int
         Seed in [0, 2^64).
     strata : tuple of int, optional
-        Cells per axis ``(k_1, ..., k_d)``; then n must be their product (and may be
-        left out). Default: n must be k^d, and another n raises naming the nearest k^d.
+        Cells per axis ``(k_1, ..., k_d)`` (or text such as ``"3x4"``, as the command
+        line passes it); then n must be their product (and may be left out). Default:
+        n must be k^d, and another n raises naming the nearest k^d.
 
     Notes
     -----
@@ -330,8 +345,7 @@ class UncorrelatedJitterSampler(_Stratified):
 
     def __init__(self, d=2, seed=0, groups=None, backend="opencl"):
         super().__init__(d=d, seed=seed, backend=backend)
-        if groups is None:
-            groups = _default_groups(self.d)
+        groups = _default_groups(self.d) if groups is None else _int_tuple(groups, "groups")
         if not isinstance(groups, (tuple, list)) or not groups:
             raise InvalidArgumentError(
                 f"'groups' must be a tuple of positive group sizes adding up to d={self.d}, "
