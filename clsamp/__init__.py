@@ -18,11 +18,12 @@ from .errors import (
 )
 from .runtime import current_device, devices, use_device
 from .samplers import Sampler, make_sampler, sampler_names
+from .spectrum import anisotropy, power_spectrum, radial_mean
 
 __version__ = "0.1.0"
 
 __all__ = [
     "BuildError", "ClsampError", "DeviceMemoryError", "InvalidArgumentError", "NoDeviceError",
-    "SamplingError", "Sampler", "current_device", "devices", "make_sampler", "sampler_names",
-    "use_device",
+    "SamplingError", "Sampler", "anisotropy", "current_device", "devices", "make_sampler",
+    "power_spectrum", "radial_mean", "sampler_names", "use_device",
 ]

@@ -98,9 +98,73 @@ def _run_tour(args):
     return 0
 
 
+# -- spectrum ------------------------------------------------------------------
+def _add_spectrum(sub):
+    p = sub.add_parser("spectrum", help="power spectrum of a sampler's points or of a point file",
+                       description="Expected power spectrum (mean periodogram) of a sampler's "
+                       "realizations or of points read from a file (text or .npy).")
+    p.add_argument("source", help="sampler name (e.g. jittered, sobol:owen) or a point file")
+    p.add_argument("-n", type=int, help="points per set (sampler only)")
+    p.add_argument("-d", type=int, default=2, help="dimension, 1 or 2 (sampler only; default 2)")
+    p.add_argument("--realizations", type=int, default=None,
+                   help="independent sets to average (sampler only; default one)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--param", action="append", metavar="KEY=VALUE",
+                   help="sampler parameter, e.g. --param randomize=owen (repeatable)")
+    p.add_argument("--resolution", type=int, default=256, help="R: frequencies [-R/2, R/2) (even)")
+    p.add_argument("--method", default="auto", choices=("auto", "direct", "fast"))
+    p.add_argument("--tol", type=float, default=None, help="error bound of the fast method (x N)")
+    p.add_argument("--backend", default="opencl", choices=("opencl", "numpy"))
+    p.add_argument("--scale", default="linear", choices=("linear", "log"), help="PNG tone mapping")
+    p.add_argument("-o", "--output", required=True,
+                   help="output: .png (picture), .exr (raw float values) or .npy (raw float64)")
+    p.add_argument("--plots", help="also write a PNG with the spectrum, radial mean and anisotropy")
+    p.set_defaults(run=_run_spectrum)
+
+
+def _run_spectrum(args):
+    from pathlib import Path
+
+    import numpy as np
+
+    from . import io, spectrum
+    from .samplers import make_sampler, sampler_names
+    source = Path(args.source)
+    if source.is_file() and args.source.split(":")[0] not in sampler_names(aliases=True):
+        points = io.load_points(source)
+        label = source.name
+    else:
+        if args.n is None:
+            raise ClsampError("'-n' is required when the source is a sampler name")
+        sampler = make_sampler(args.source, d=args.d, seed=args.seed, **_parse_params(args.param))
+        points = sampler.sample(args.n, realizations=args.realizations)
+        label = args.source
+    P = spectrum.power_spectrum(points, resolution=args.resolution, method=args.method, tol=args.tol,
+                                backend=args.backend)
+    output = Path(args.output)
+    if output.suffix == ".exr":
+        spectrum.save_spectrum_exr(output, P, header={"source": label})
+    elif output.suffix == ".npy":
+        import io as _io
+        buffer = _io.BytesIO()
+        np.save(buffer, P)
+        io.write_bytes(output, buffer.getvalue())
+    else:
+        spectrum.save_spectrum_png(output, P, scale=args.scale)
+    n = points.shape[-2]
+    r = points.shape[0] if points.ndim == 3 else 1
+    if args.plots:
+        spectrum.save_spectrum_plots(args.plots, P, n=n, realizations=r, label=label, scale=args.scale)
+    freqs, mean = spectrum.radial_mean(P)
+    print(f"wrote the {'x'.join(map(str, P.shape))} spectrum of {r} x {n} points of {label} to "
+          f"{output}; radial mean over all annuli {np.nanmean(mean):.4g}", file=sys.stderr)
+    return 0
+
+
 _COMMANDS = (
     _add_devices,
     _add_sample,
+    _add_spectrum,
     _add_tour,
 )
 

@@ -1,0 +1,74 @@
+"""Power spectra: the expected spectrum of r realizations of N points at R², clsamp's exact
+(direct) and NUFFT (fast) paths against finufft (nufft2d1, isign=-1, same tolerance) and the
+NumPy separable GEMM (``clsamp.spectrum.direct_reference``), in one run.
+
+Max error is max_ω |P̃(ω) - P(ω)| / N against clsamp's direct result (itself checked
+against the NumPy reference in the same run). The direct rows also report the kernel's rate
+in GFLOP/s of complex products it actually executes (8 flops per complex multiply-add; it
+computes the half u <= 0 of the spectrum) next to the NumPy GEMM's rate (all of it).
+"""
+
+import numpy as np
+from common import Row, main, on_device, short_name, timed
+
+from clsamp import philox
+from clsamp.spectrum import direct_reference, nufft_parameters, power_spectrum
+
+
+def _points(r, n):
+    return philox.uniform_block(1, philox.Stream.POINTS, np.arange(r), n, 2, 0)
+
+
+def _finufft(points, resolution, tol):
+    import finufft
+    total = np.zeros((resolution, resolution))
+    c = np.ones(points.shape[1], dtype=np.complex128)
+    for block in points:
+        f = finufft.nufft2d1(2 * np.pi * block[:, 0], 2 * np.pi * block[:, 1], c,
+                             (resolution, resolution), eps=tol, isign=-1)
+        total += f.real**2 + f.imag**2
+    return total / (points.shape[0] * points.shape[1])
+
+
+def run(devices, quick):
+    rows = []
+    r, n, R = (8, 1024, 64) if quick else (64, 4096, 256)
+    size = f"{r}x{n} at {R}^2"
+    pts = _points(r, n)
+    try:
+        import finufft  # noqa: F401
+        have_finufft = True
+    except ImportError:
+        have_finufft = False
+    for device in devices:
+        on_device(device)
+        dev = short_name(device)
+        t_direct, exact = timed(lambda: power_spectrum(pts, R, method="direct", progress=False),
+                                repeats=1 if not quick else 3)
+        t_gemm, ref = timed(lambda: direct_reference(pts, R), repeats=1 if not quick else 3, warmup=0)
+        half_rows = (R // 2 + 1 + 3) // 4 * 4
+        cols = (R + 1 + 3) // 4 * 4
+        rate = 8.0 * r * n * half_rows * cols / t_direct / 1e9
+        rate_np = 8.0 * r * n * R * R / t_gemm / 1e9
+        err = np.abs(exact - ref).max() / n
+        rows.append(Row("spectrum direct", size, dev, t_direct, "numpy separable GEMM", t_gemm,
+                        f"max err {err:.1e}; {rate:.1f} vs numpy {rate_np:.1f} GFLOP/s "
+                        f"({rate / rate_np:.0%})"))
+        for tol in (1e-3, 1e-6, 1e-10):
+            sigma, width, _ = nufft_parameters(tol)
+            t_fast, fast = timed(lambda: power_spectrum(pts, R, method="fast", tol=tol, progress=False),
+                                 repeats=3)
+            err = np.abs(fast - exact).max() / n
+            quality = f"max err {err:.1e} (sigma {sigma}, w {width})"
+            if have_finufft:
+                t_fi, fi = timed(lambda: _finufft(pts, R, tol), repeats=3)
+                quality += f"; finufft err {np.abs(fi - exact).max() / n:.1e}"
+                rows.append(Row(f"spectrum fast tol={tol:g}", size, dev, t_fast, "finufft nufft2d1",
+                                t_fi, quality))
+            else:
+                rows.append(Row(f"spectrum fast tol={tol:g}", size, dev, t_fast, quality=quality))
+    return rows
+
+
+if __name__ == "__main__":
+    main(run, __doc__)

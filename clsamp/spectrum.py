@@ -1,0 +1,791 @@
+"""Fourier power spectra of point sets, their radial mean and anisotropy, and pictures of them.
+
+The periodogram of N points x_1..x_N in [0, 1)^d at an integer frequency ω is
+
+    P(ω) = |Σ_k exp(-2πi ω·x_k)|² / N,
+
+so P(0) = N and white noise has E[P(ω)] = 1 at every ω ≠ 0. For r realizations the
+expected spectrum is estimated by the mean of the r periodograms (Ulichney 1987; Lagae &
+Dutré 2008; Heck, Schlömer & Deussen 2013).
+
+Layout (DESIGN.md): a resolution R (even) gives frequencies ω in [-R/2, R/2)^d and
+P[i, j] is frequency (i - R/2) along x and (j - R/2) along y, DC at [R/2, R/2]. One
+dimensional points give a spectrum of length R, DC at [R/2].
+
+Two ways to compute it, one knob between them:
+
+- ``method="direct"``: the exact sum, as the separable product S = A Bᵀ of per-point twiddle
+  panels A[k, u] = e^{-2πiux_k}, B[k, v] = e^{-2πivy_k} (a complex GEMM, blocked in an
+  OpenCL kernel). Phases are reduced exactly in 64-bit fixed point. Cost ~ 4·r·N·R²
+  flops in 2-D (P(ω) = P(-ω) for real points, so only half the rows are computed).
+- ``method="fast"``: a type-1 non-uniform FFT (Dutt & Rokhlin 1993; Barnett, Magland &
+  af Klinteberg 2019): spread each point onto an oversampled grid with the "exponential of
+  semicircle" kernel (OpenCL), FFT the grid (scipy.fft, else numpy.fft, on the host),
+  divide by the kernel's Fourier transform. Cost ~ r·(N·w^d + (σR)^d log R).
+
+Kernels are in ``kernels/spectrum.cl``; every one has a NumPy reference here
+(:func:`twiddles_reference`, :func:`direct_reference`, :func:`spread_reference`), and
+``backend="numpy"`` runs the whole computation on them.
+"""
+
+import functools
+import math
+import os
+
+import numpy as np
+
+from . import runtime
+from .errors import InvalidArgumentError
+from .validation import check_choice, check_int, check_points, check_real
+
+__all__ = [
+    "power_spectrum", "radial_mean", "anisotropy", "normalized_frequency", "frequencies",
+    "direct_reference", "spread_reference", "twiddles_reference", "nufft_parameters",
+    "spectrum_image", "save_spectrum_png", "save_spectrum_exr", "plot_spectrum",
+    "plot_radial_mean", "plot_anisotropy", "save_spectrum_plots",
+]
+
+METHODS = ("auto", "direct", "fast")
+BACKENDS = ("opencl", "numpy")
+MIN_TOL = 5e-13          # the fast path's floor in 2-D (w = 16, σ = 2: 1.7e-13 worst case)
+DEFAULT_FAST_TOL = 1e-12
+_MAD = ("-cl-mad-enable",)
+_PHASE = 2.0 * np.pi * 2.0**-64     # radians per unit of 64-bit fixed-point phase (exact scaling)
+_FINE = 16                          # twiddles per exact sincos, as FINE in spectrum.cl
+_TILE = 4                           # TILE_U = TILE_V in spectrum.cl
+_SUPER = 4
+_BUDGET = 256 * 2**20               # device bytes a chunk of work may hold
+
+
+# -- frequencies -------------------------------------------------------------------
+def frequencies(resolution):
+    """The integer frequencies of each axis of a spectrum: ``arange(-R/2, R/2)``."""
+    resolution = _check_resolution(resolution)
+    return np.arange(-(resolution // 2), resolution // 2)
+
+
+def normalized_frequency(freqs, n, convention="psa"):
+    """Frequencies expressed as the point-set tools do, for plots that compare N.
+
+    Parameters
+    ----------
+    freqs : array_like
+        Integer frequencies ν (e.g. the first value :func:`radial_mean` returns).
+    n : int
+        Points per set.
+    convention : {"psa", "utk"}
+        ``"psa"`` (Heck et al. 2013): 2ν/√N, so 1 is the Nyquist frequency √N/2 of a
+        regular grid of N points. ``"utk"``: ν/√N.
+
+    Examples
+    --------
+    >>> normalized_frequency([32, 64], 4096)
+    array([1., 2.])
+    >>> normalized_frequency([32, 64], 4096, "utk")
+    array([0.5, 1. ])
+    """
+    n = check_int(n, "n", minimum=1)
+    check_choice(convention, "convention", ("psa", "utk"))
+    scale = 2.0 if convention == "psa" else 1.0
+    return scale * np.asarray(freqs, dtype=np.float64) / math.sqrt(n)
+
+
+# -- argument checks ------------------------------------------------------------------
+def _check_resolution(resolution):
+    resolution = check_int(resolution, "resolution", minimum=2)
+    if resolution % 2:
+        raise InvalidArgumentError(
+            f"'resolution' must be even (frequencies [-R/2, R/2) put DC at R/2), got {resolution}")
+    return resolution
+
+
+def _check_spectrum(P, name="P"):
+    if not isinstance(P, np.ndarray) or P.ndim not in (1, 2):
+        shape = getattr(P, "shape", type(P).__name__)
+        raise InvalidArgumentError(f"'{name}' must be a 1-D or 2-D spectrum array, got {shape}")
+    if P.ndim == 2 and P.shape[0] != P.shape[1]:
+        raise InvalidArgumentError(f"'{name}' must be square (R, R), got {P.shape}")
+    if P.shape[0] < 2 or P.shape[0] % 2:
+        raise InvalidArgumentError(f"'{name}' must have an even side >= 2, got {P.shape}")
+    P = np.asarray(P, dtype=np.float64)
+    if not np.all(np.isfinite(P)):
+        raise InvalidArgumentError(f"'{name}' contains NaN or infinite values")
+    return P
+
+
+# -- the public entry point -------------------------------------------------------------
+def power_spectrum(points, resolution=256, method="auto", tol=None, backend="opencl", progress=True):
+    """Periodogram of a point set, or the expected spectrum of a batch of realizations.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, d) or (r, n, d)
+        Points in [0, 1)^d, d = 1 or 2. A batch gives the mean of the r periodograms
+        (never the transform of the union of the sets).
+    resolution : int
+        R, even, >= 2: frequencies [-R/2, R/2) along each axis.
+    method : {"auto", "direct", "fast"}
+        ``"direct"`` is exact to fp64 rounding; ``"fast"`` is a NUFFT whose error is below
+        ``tol``; ``"auto"`` picks the cheaper one that meets ``tol`` (direct when ``tol``
+        is None and the exact sum is cheap, else fast).
+    tol : float, optional
+        For ``"fast"``: the largest error allowed, relative to the DC value N, i.e.
+        max_ω |P̃(ω) - P(ω)| <= tol·N. In [5e-13, 0.1]; default 1e-12.
+    backend : {"opencl", "numpy"}
+        ``"numpy"`` runs the NumPy references of the kernels instead.
+    progress : bool
+        Show a progress bar when the work is long (several chunks).
+
+    Returns
+    -------
+    P : ndarray, shape (R,) or (R, R), float64
+        P[i, j] is frequency (i - R/2) along x and (j - R/2) along y; P[R/2, R/2] = N.
+
+    Notes
+    -----
+    *Direct.* With a_k(u) = e^{-2πiux_k} and b_k(v) = e^{-2πivy_k}, the 2-D sum is
+    S(u, v) = Σ_k a_k(u) b_k(v): a complex matrix product of two R × N twiddle panels.
+    Each coordinate becomes a 64-bit fixed-point fraction X = ⌊x·2^64⌋ (exact steps), so
+    u·X wraps modulo 2^64 exactly: the phase is reduced modulo 1 without rounding, for any
+    frequency. Twiddles are e((u0 + 16q)X)·e(sX), two exactly reduced sincos factors, so
+    each is within a few ulps; a sum of N of them carries an error <= ~N·2^-50 and
+    |ΔP| <= 2|S|·|ΔS|/N <= ~4N·2^-50 ≈ 4e-15·N, in practice ~1e-16·N (sums of
+    random-sign rounding errors). Since P(-ω) = P(ω), only u <= 0 is computed.
+
+    *Fast.* Spreading the points onto a grid of M = σR nodes per axis with the kernel
+    φ(z) = exp(β(√(1-z²) - 1)), |z| <= 1, w nodes wide, then an FFT, gives
+    G(ω) = S(ω)·ψ̂(ω) + aliasing, where ψ̂ is the kernel's Fourier transform (computed by
+    Gauss–Legendre quadrature); dividing by ψ̂ leaves an error of about e^{-πw√(1-1/σ)}
+    relative to N (Barnett et al. 2019). clsamp takes σ = 1.25 (a grid 2.56× smaller
+    than finufft's σ = 2 in 2-D, and the FFT is the larger cost here) and w, β from
+    ``tol`` (:func:`nufft_parameters`). The FFT is of real data (rfft2), P(ω) = P(-ω)
+    gives the other half, and Σ_r |G_r|² is divided by ψ̂² once.
+
+    Measured (64 realizations × 4096 points, R = 256, 2-D, PoCL on 2 cores, shared
+    machine; ``python benchmarks/bench_spectrum.py``):
+
+    ========  ==  =========  ==========  =========================
+    tol       w   seconds    max error   finufft seconds (σ = 2)
+    ========  ==  =========  ==========  =========================
+    1e-3      5   see the    benchmark   table; filled in below
+    ========  ==  =========  ==========  =========================
+
+    References
+    ----------
+    .. [1] A. Lagae, P. Dutré, "A comparison of methods for generating Poisson disk
+       distributions", Computer Graphics Forum 27(1), 2008.
+    .. [2] D. Heck, T. Schlömer, O. Deussen, "Blue noise sampling with controlled
+       aliasing", ACM TOG 32(3), 2013.
+    .. [3] A. H. Barnett, J. Magland, L. af Klinteberg, "A parallel nonuniform fast
+       Fourier transform library based on an 'exponential of semicircle' kernel",
+       SIAM J. Sci. Comput. 41(5), 2019.
+
+    Examples
+    --------
+    >>> import clsamp
+    >>> pts = clsamp.make_sampler("random", seed=1).sample(256, realizations=4)
+    >>> P = clsamp.power_spectrum(pts, resolution=32)
+    >>> P.shape, float(P[16, 16])
+    ((32, 32), 256.0)
+    """
+    batch, _ = check_points(points, "points", d=(1, 2))
+    resolution = _check_resolution(resolution)
+    check_choice(method, "method", METHODS)
+    check_choice(backend, "backend", BACKENDS)
+    if tol is not None:
+        tol = check_real(tol, "tol", minimum=0.0, maximum=0.1, open_minimum=True)
+        if tol < MIN_TOL and method == "fast":
+            raise InvalidArgumentError(
+                f"'tol' must be >= {MIN_TOL:g} for method='fast' (the fp64 floor of the NUFFT); "
+                f"got {tol:g}; method='direct' is exact")
+    if method == "auto":
+        method = _choose_method(batch.shape, resolution, tol)
+    if method == "fast":
+        return _fast(batch, resolution, DEFAULT_FAST_TOL if tol is None else max(tol, MIN_TOL),
+                     backend, progress)
+    return _direct(batch, resolution, backend, progress)
+
+
+def _direct_seconds(r, n, resolution, d):
+    """Rough cost of the exact sum here (the kernel ran at ~35 GFLOP/s on 2 Zen 3 cores)."""
+    flops = 8.0 * r * n * resolution * (resolution / 2 + 1) if d == 2 else 8.0 * r * n * resolution
+    return flops / 35e9 + r * n * resolution * d * 2e-9
+
+
+def _fast_seconds(r, n, resolution, d, tol):
+    sigma, width, _ = nufft_parameters(tol, d)
+    grid = _grid_size(resolution, sigma, width) ** d
+    return r * (n * width**d * 2e-9 + grid * math.log2(grid) * 1e-9)
+
+
+def _choose_method(shape, resolution, tol):
+    r, n, d = shape
+    direct = _direct_seconds(r, n, resolution, d)
+    if tol is None:
+        return "direct" if direct < 0.5 else "fast"
+    return "direct" if direct <= _fast_seconds(r, n, resolution, d, max(tol, MIN_TOL)) else "fast"
+
+
+def _progress(total, enabled, seconds, desc):
+    if enabled and total > 1 and seconds > 2.0:
+        from tqdm import tqdm
+        return tqdm(total=total, desc=desc, unit="chunk")
+    return None
+
+
+# -- direct: NumPy reference ------------------------------------------------------------
+def fixed_point(x):
+    """x in [0, 1) as the 64-bit fixed-point fraction ⌊x·2^64⌋ (uint64), by exact steps."""
+    x = np.asarray(x, dtype=np.float64)
+    s = x * 2.0**32
+    h = np.floor(s)
+    low = ((s - h) * 2.0**32).astype(np.uint64)
+    return (h.astype(np.uint64) << np.uint64(32)) | low
+
+
+def twiddles_reference(x, freqs):
+    """e^{-2πi f x} for every coordinate x (shape (..., n)) and frequency f: (..., n, F).
+
+    The NumPy reference of ``spectrum_twiddles``: phases reduced exactly in fixed point
+    (f·X mod 2^64), and each twiddle the product of two exactly reduced factors
+    e((f0 + 16q)X)·e(sX), as in the kernel.
+    """
+    freqs = np.asarray(freqs, dtype=np.int64)
+    X = fixed_point(x)[..., None]
+    count = freqs.size
+    f0 = int(freqs[0])
+    if not np.array_equal(freqs, np.arange(f0, f0 + count)):
+        raise InvalidArgumentError("'freqs' must be consecutive integers")
+    coarse = f0 + _FINE * np.arange(-(-count // _FINE), dtype=np.int64)
+    fine = np.arange(_FINE, dtype=np.int64)
+
+    def exact(f):
+        theta = X * f.astype(np.uint64)        # wraps modulo 2^64: the exact phase reduction
+        angle = theta.view(np.int64).astype(np.float64) * _PHASE
+        return np.cos(angle) - 1j * np.sin(angle)
+
+    tw = exact(coarse)[..., :, None] * exact(fine)[..., None, :]
+    return tw.reshape(*tw.shape[:-2], -1)[..., :count]
+
+
+def direct_reference(points, resolution):
+    """The exact expected periodogram by the separable product in NumPy (complex128 GEMM).
+
+    NumPy reference of the ``direct`` method: S_r = A_rᵀ B_r with the twiddle panels of
+    :func:`twiddles_reference`, P = Σ_r |S_r|² / (r N); all R frequencies of every axis
+    (no symmetry shortcut), one realization at a time.
+    """
+    batch, _ = check_points(points, "points", d=(1, 2))
+    resolution = _check_resolution(resolution)
+    r, n, d = batch.shape
+    freqs = frequencies(resolution)
+    P = np.zeros((resolution,) * d)
+    for k in range(r):
+        A = twiddles_reference(batch[k, :, 0], freqs)
+        if d == 1:
+            S = A.sum(axis=0)
+        else:
+            S = A.T @ twiddles_reference(batch[k, :, 1], freqs)
+        P += S.real**2 + S.imag**2
+    return P / (r * n)
+
+
+# -- direct: OpenCL ----------------------------------------------------------------------
+def _pad(count, multiple):
+    return -(-count // multiple) * multiple
+
+
+def _direct(batch, resolution, backend, progress):
+    if backend == "numpy":
+        return direct_reference(batch, resolution)
+    import pyopencl.array as cla
+    runtime.require_fp64()
+    queue = runtime.queue()
+    r, n, d = batch.shape
+    half = resolution // 2
+    # u <= 0 only (P(-ω) = P(ω)); v over [-R/2, R/2] so that every mirrored (u, v) exists
+    count_u = _pad(half + 1 if d == 2 else resolution, _TILE)
+    count_v = _pad(resolution + 1, _TILE) if d == 2 else 0
+    plane = count_u * max(count_v, 1)
+    per_point = (count_u + count_v) * 16 + d * 8
+    points_per_chunk = max(1, min(n, _BUDGET // per_point))
+    reals_per_chunk = max(1, min(r, _BUDGET // (per_point * points_per_chunk + plane * 16)))
+    defines = {"SUPER": _SUPER, "KBLOCK": 128, "FINE": _FINE}
+    twiddles = runtime.kernel("spectrum.cl", "spectrum_twiddles", defines, _MAD)
+    product = runtime.kernel("spectrum.cl", "spectrum_direct2" if d == 2 else "spectrum_direct1",
+                             defines, _MAD)
+    power_kernel = runtime.kernel("spectrum.cl", "spectrum_power", defines, _MAD)
+    cpu = runtime.current_device().type == "cpu"
+    power = cla.zeros(queue, plane, np.float64)
+    chunks = [(a, min(r, a + reals_per_chunk)) for a in range(0, r, reals_per_chunk)]
+    point_chunks = [(a, min(n, a + points_per_chunk)) for a in range(0, n, points_per_chunk)]
+    bar = _progress(len(chunks) * len(point_chunks), progress, _direct_seconds(r, n, resolution, d),
+                    "spectrum (direct)")
+    local = runtime.local_size(64)
+    for r0, r1 in chunks:
+        rc = r1 - r0
+        S = cla.zeros(queue, rc * 2 * plane, np.float64)
+        for k0, k1 in point_chunks:
+            nc = k1 - k0
+            pts = cla.to_device(queue, np.ascontiguousarray(batch[r0:r1, k0:k1]))
+            A = cla.empty(queue, rc * count_u * nc * 2, np.float64)
+            glob = (_pad(nc, local), rc)
+            twiddles(queue, glob, (local, 1), pts.data, A.data, np.uint32(nc), np.uint32(d),
+                     np.uint32(0), np.int64(-half), np.uint32(count_u), np.uint32(_TILE))
+            if d == 1:
+                tiles = count_u // _TILE
+                product(queue, (_pad(tiles, local), rc), (local, 1), A.data, S.data, np.uint32(nc),
+                        np.uint32(tiles))
+            else:
+                B = cla.empty(queue, rc * count_v * nc * 2, np.float64)
+                twiddles(queue, glob, (local, 1), pts.data, B.data, np.uint32(nc), np.uint32(d),
+                         np.uint32(1), np.int64(-half), np.uint32(count_v), np.uint32(_TILE))
+                tiles_u, tiles_v = count_u // _TILE, count_v // _TILE
+                grid = (-(-tiles_v // _SUPER), -(-tiles_u // _SUPER))
+                # PoCL's implicit vectorization across work-items fought the explicit double4
+                # code (2x slower); one work-item per group on the CPU, a row of them elsewhere
+                group = (1, 1) if cpu else (min(16, local), 1)
+                product(queue, (_pad(grid[0], group[0]), grid[1]), group, A.data, B.data, S.data,
+                        np.uint32(nc), np.uint32(tiles_u), np.uint32(tiles_v), np.uint32(rc))
+            if bar is not None:
+                queue.finish()
+                bar.update(1)
+        power_kernel(queue, (_pad(plane, local),), (local,), S.data, power.data, np.uint32(plane),
+                     np.uint32(rc), np.float64(1.0 / (r * n)))
+    if bar is not None:
+        bar.close()
+    H = power.get()
+    if d == 1:
+        return H[:resolution]
+    H = H.reshape(count_u, count_v)
+    P = np.empty((resolution, resolution))
+    P[:half + 1] = H[:half + 1, :resolution]
+    P[half + 1:] = H[half - 1:0:-1, resolution:0:-1]
+    return P
+
+
+# -- fast: parameters, kernel transform ---------------------------------------------------
+SIGMAS = (1.25, 1.5, 2.0)     # oversampling factors the fast path chooses from
+MAX_WIDTH = 16                # nufft.cl evaluates a point's weights as one double16
+
+
+@functools.cache
+def kernel_error(sigma, width):
+    """Worst relative error of one point's Fourier sum after spreading, FFT and deconvolution.
+
+    Measured, not modelled: single points at 64 offsets across a grid cell are spread
+    (:func:`spread_reference`), transformed and deconvolved on a grid of M = 128σ nodes,
+    and max |S̃(k)/S(k) - 1| is taken over |k| <= M/(2σ). A set of N points has
+    |S̃ - S| <= N times this, so |P̃ - P| <= (2e + e²)·N. The error depends on M/R
+    (which is >= σ in use) and not on R itself.
+    """
+    beta = _beta(sigma, width)
+    M = int(round(128 * sigma))
+    half = int(M / (2 * sigma))
+    x = (np.arange(64) + 0.5) / (64 * M) + 0.37
+    grids = spread_reference(x[:, None, None], M, width, beta)
+    k = np.arange(-half, half + 1)
+    F = np.fft.fft(grids, axis=-1)[:, k % M] / kernel_transform(k, M, width, beta)
+    return float(np.abs(F * np.exp(2j * np.pi * np.outer(x, k)) - 1.0).max())
+
+
+def _beta(sigma, width):
+    # finufft's shape parameter: 2.30 w for σ = 2, 0.97 π w (1 - 1/(2σ)) otherwise
+    return 2.30 * width if sigma == 2.0 else 0.97 * math.pi * width * (1.0 - 0.5 / sigma)
+
+
+def nufft_parameters(tol, d=2, sigma=None):
+    """(σ, w, β) of the spreading for a ``d``-dimensional spectrum with error below ``tol·N``.
+
+    For each σ in ``SIGMAS`` (or the one given) the smallest w <= 16 whose measured
+    :func:`kernel_error` e bounds the error in the worst case, N coincident points:
+    |S̃| <= (1 + e)^d |S|, so |P̃ - P| <= ((1 + e)^{2d} - 1)·N, required <= tol/1.2 (a
+    margin for offsets between the measured ones). Among those, the σ with the lowest
+    modelled cost (spreading ~ w^d per point against the FFT ~ (σR)^d per realization, in
+    the proportions of the benchmark case, 4096 points at R = 256).
+    """
+    best = None
+    for s in (SIGMAS if sigma is None else (sigma,)):
+        for width in range(2, MAX_WIDTH + 1):
+            e = kernel_error(s, width)
+            if (1.0 + e) ** (2 * d) - 1.0 <= tol / 1.2:
+                cost = 4096 * width**d * 3e-9 + (s * 256) ** d * 6e-9
+                if best is None or cost < best[0]:
+                    best = (cost, s, width)
+                break
+    if best is None:
+        raise InvalidArgumentError(
+            f"'tol' {tol:g} is below what the fast path reaches in {d}-D (about {MIN_TOL:g}); "
+            "use method='direct'")
+    _, s, width = best
+    return s, width, _beta(s, width)
+
+
+def _smooth(m):
+    """The smallest even 2^a 3^b 5^c >= m (sizes pocketfft transforms fastest)."""
+    m = max(2, int(m))
+    while True:
+        k = m
+        for p in (2, 3, 5):
+            while k % p == 0:
+                k //= p
+        if k == 1 and m % 2 == 0:
+            return m
+        m += 1
+
+
+def _grid_size(resolution, sigma, width):
+    return _smooth(max(math.ceil(sigma * resolution), 2 * width))
+
+
+def es_kernel(z, beta):
+    """φ(z) = exp(β(√(1 - z²) - 1)) on |z| <= 1, zero outside (Barnett et al. 2019)."""
+    z = np.asarray(z, dtype=np.float64)
+    inside = np.abs(z) <= 1.0
+    return np.where(inside, np.exp(beta * (np.sqrt(np.where(inside, 1.0 - z * z, 0.0)) - 1.0)), 0.0)
+
+
+def kernel_transform(freqs, grid, width, beta):
+    """ψ̂(k) = (w/2)∫_{-1}^{1} φ(z) cos(πkwz/M) dz: what spreading multiplies S(k) by."""
+    z, weight = np.polynomial.legendre.leggauss(4 * width + 60)
+    freqs = np.asarray(freqs, dtype=np.float64)
+    phase = np.cos(np.pi * width / grid * np.outer(freqs, z))
+    return 0.5 * width * (phase @ (weight * es_kernel(z, beta)))
+
+
+# -- fast: spreading, NumPy reference ------------------------------------------------------
+def spread_reference(points, grid, width, beta):
+    """Spread a batch (r, n, d) onto r periodic grids of ``grid`` nodes per axis.
+
+    NumPy reference of ``spectrum_spread``: node j of an axis gets φ((j - xM)·2/w) from
+    every point within w/2 nodes, and a 2-D node the product of its axes' weights.
+    Returns (r, M) or (r, M, M) float64.
+    """
+    batch = np.asarray(points, dtype=np.float64)
+    r, n, d = batch.shape
+    M = int(grid)
+    offsets = np.arange(width)
+    out = np.zeros((r,) + (M,) * d)
+    for k in range(r):
+        t = batch[k] * M
+        first = np.ceil(t - 0.5 * width).astype(np.int64)          # (n, d)
+        nodes = first[:, :, None] + offsets                        # (n, d, w)
+        weights = es_kernel((nodes - t[:, :, None]) * (2.0 / width), beta)
+        nodes %= M
+        if d == 1:
+            out[k] = np.bincount(nodes[:, 0].ravel(), weights[:, 0].ravel(), minlength=M)
+        else:
+            flat = nodes[:, 0, :, None] * M + nodes[:, 1, None, :]
+            w2 = weights[:, 0, :, None] * weights[:, 1, None, :]
+            out[k] = np.bincount(flat.ravel(), w2.ravel(), minlength=M * M).reshape(M, M)
+    return out
+
+
+def _fft_module():
+    try:
+        import scipy.fft as fft
+        return fft, {"workers": os.cpu_count() or 1}
+    except ImportError:  # numpy's pocketfft: same results, one thread
+        return np.fft, {}
+
+
+def _accumulate_power(grids, resolution, total):
+    """Add Σ_r |FFT(grid_r)|² at the frequencies [-R/2, R/2] (last axis >= 0) to ``total``."""
+    fft, options = _fft_module()
+    half = resolution // 2
+    M = grids.shape[-1]
+    if grids.ndim == 2:
+        F = fft.rfft(grids, axis=-1, **options)[:, :half + 1]
+        total += np.sum(F.real**2 + F.imag**2, axis=0)
+        return
+    F = fft.rfft2(grids, axes=(-2, -1), **options)[:, :, :half + 1]
+    rows = np.r_[M - half:M, 0:half + 1]                       # kx = -R/2 .. R/2
+    F = F[:, rows]
+    total += np.sum(F.real**2 + F.imag**2, axis=0)
+
+
+def _fast(batch, resolution, tol, backend, progress):
+    r, n, d = batch.shape
+    sigma, width, beta = nufft_parameters(tol, d)
+    M = _grid_size(resolution, sigma, width)
+    half = resolution // 2
+    # Σ_r |G_r|² for kx in [-R/2, R/2] (2-D) and ky in [0, R/2]
+    total = np.zeros((resolution + 1, half + 1) if d == 2 else half + 1)
+    size = M**d
+    if backend == "opencl":
+        import pyopencl.array as cla
+        runtime.require_fp64()
+        queue = runtime.queue()
+        device = runtime.current_device()
+        defines = {"DIM": d, "WIDTH": width}
+        spread = runtime.kernel("nufft.cl", "spectrum_spread", defines, _MAD)
+        sum_copies = runtime.kernel("nufft.cl", "spectrum_sum_copies", defines, _MAD)
+        local = runtime.local_size(64)
+        # a work-item spreads a block of points onto its own grid copy: enough of them to
+        # keep every compute unit busy, never blocks of fewer than 1024 points
+        blocks = max(1, min(-(-4 * device.compute_units // r), n // 1024))
+        while blocks > 1 and (blocks + 1) * size * 8 > _BUDGET:
+            blocks //= 2
+        per_real = 8 * size * (blocks + 1 if blocks > 1 else 1) + 8 * n * d
+    else:
+        per_real = 8 * size + 8 * n * d
+    reals_per_chunk = max(1, min(r, _BUDGET // per_real))
+    chunks = [(a, min(r, a + reals_per_chunk)) for a in range(0, r, reals_per_chunk)]
+    bar = _progress(len(chunks), progress, _fast_seconds(r, n, resolution, d, tol), "spectrum (fast)")
+    for r0, r1 in chunks:
+        rc = r1 - r0
+        if backend == "numpy":
+            grids = spread_reference(batch[r0:r1], M, width, beta)
+        else:
+            pts = cla.to_device(queue, np.ascontiguousarray(batch[r0:r1]))
+            copies = cla.empty(queue, rc * blocks * size, np.float64)
+            spread(queue, (blocks, rc), (1, 1), pts.data, copies.data, np.uint32(n), np.uint32(M),
+                   np.uint32(blocks), np.float64(beta))
+            if blocks > 1:
+                out = cla.empty(queue, rc * size, np.float64)
+                sum_copies(queue, (_pad(size, local), rc), (local, 1), copies.data, out.data,
+                           np.uint32(size), np.uint32(blocks))
+                copies = out
+            grids = copies.get().reshape((rc,) + (M,) * d)
+        _accumulate_power(grids, resolution, total)
+        if bar is not None:
+            bar.update(1)
+    if bar is not None:
+        bar.close()
+    correction = kernel_transform(np.arange(-half, half + 1), M, width, beta) ** -2
+    if d == 1:
+        Q = total * correction[half:]                      # k = 0 .. R/2
+        P = np.concatenate([Q[half:0:-1], Q[:half]])       # k = -R/2 .. R/2 - 1
+        return P / (r * n)
+    Q = total * correction[:, None] * correction[None, half:]   # kx = -R/2..R/2, ky = 0..R/2
+    P = np.empty((resolution, resolution))
+    P[:, half:] = Q[:resolution, :half]                     # ky >= 0
+    # ky < 0: P(kx, ky) = Q(-kx, -ky); row of -kx in Q is R - i, column of -ky is half - (j - half)
+    P[:, :half] = Q[resolution:0:-1, half:0:-1]
+    return P / (r * n)
+
+
+# -- radial mean and anisotropy ------------------------------------------------------------
+def _annuli(P, bin_width):
+    """Annulus index of every frequency, and the number of complete annuli."""
+    bin_width = check_real(bin_width, "bin_width", minimum=0.0, open_minimum=True)
+    R = P.shape[0]
+    f = np.arange(-(R // 2), R // 2, dtype=np.float64)
+    rho = np.abs(f) if P.ndim == 1 else np.hypot(f[:, None], f[None, :])
+    index = np.floor(rho / bin_width + 0.5).astype(np.int64)
+    count = int(math.floor((R // 2) / bin_width - 0.5))
+    if count < 1:
+        raise InvalidArgumentError(
+            f"'bin_width' {bin_width:g} leaves no complete annulus in a spectrum of side {R}")
+    index[rho == 0] = 0                     # DC is never averaged
+    index[index > count] = 0                # annuli cut by the square's edge are left out
+    return index, count
+
+
+def radial_mean(P, bin_width=1.0):
+    """Radially averaged power spectrum: the mean of P over annuli around DC.
+
+    Parameters
+    ----------
+    P : ndarray, shape (R,) or (R, R)
+        A spectrum from :func:`power_spectrum` (DC at index R/2).
+    bin_width : float
+        Width Δ of the annuli in integer frequencies (default 1).
+
+    Returns
+    -------
+    freqs : ndarray
+        Centres bΔ of the annuli, b = 1, 2, ..., up to the last annulus that lies whole
+        inside the square (bΔ + Δ/2 <= R/2).
+    values : ndarray
+        Mean of P(ω) over bΔ - Δ/2 <= |ω| < bΔ + Δ/2. DC (b = 0) is excluded.
+
+    Notes
+    -----
+    As in Lagae & Dutré 2008 and PSA (Heck et al. 2013); white noise gives 1 at every
+    frequency. :func:`normalized_frequency` rescales ``freqs`` for comparing N.
+
+    Examples
+    --------
+    >>> import clsamp
+    >>> pts = clsamp.make_sampler("random", seed=3).sample(1024, realizations=8)
+    >>> f, m = clsamp.radial_mean(clsamp.power_spectrum(pts, resolution=64))
+    >>> f[:3], bool(abs(m.mean() - 1) < 0.05)
+    (array([1., 2., 3.]), True)
+    """
+    P = _check_spectrum(P)
+    index, count = _annuli(P, bin_width)
+    sums = np.bincount(index.ravel(), P.ravel(), minlength=count + 1)
+    counts = np.bincount(index.ravel(), minlength=count + 1)
+    b = np.arange(1, count + 1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return b * float(bin_width), sums[1:] / counts[1:]
+
+
+def anisotropy(P, bin_width=1.0):
+    """Anisotropy of a 2-D spectrum per annulus, in dB: 10·log10(s² / m²).
+
+    s² is the variance of P over the annulus (unbiased, divided by count - 1) and m its
+    mean (:func:`radial_mean`): 0 dB is as anisotropic as one white-noise periodogram,
+    and the expected spectrum of r white-noise realizations gives about -10·log10(r) dB.
+
+    Returns
+    -------
+    freqs, values : ndarray
+        Annulus centres as in :func:`radial_mean`; anisotropy in dB (-inf where P is
+        constant on the annulus, NaN where its mean is 0).
+
+    References
+    ----------
+    Lagae & Dutré 2008; Heck, Schlömer & Deussen 2013 (see :func:`power_spectrum`).
+
+    Examples
+    --------
+    >>> import clsamp
+    >>> pts = clsamp.make_sampler("random", seed=3).sample(1024, realizations=10)
+    >>> f, a = clsamp.anisotropy(clsamp.power_spectrum(pts, resolution=64))
+    >>> bool(abs(a[10:].mean() + 10) < 1.5)
+    True
+    """
+    P = _check_spectrum(P)
+    if P.ndim != 2:
+        raise InvalidArgumentError(f"'P' must be a 2-D spectrum for anisotropy, got shape {P.shape}")
+    index, count = _annuli(P, bin_width)
+    flat = index.ravel()
+    counts = np.bincount(flat, minlength=count + 1)
+    mean = np.bincount(flat, P.ravel(), minlength=count + 1) / np.maximum(counts, 1)
+    # two passes: the variance of nearly equal values (regular grids) without cancellation
+    squares = np.bincount(flat, (P.ravel() - mean[flat]) ** 2, minlength=count + 1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        variance = squares[1:] / (counts[1:] - 1)
+        values = 10.0 * np.log10(variance / mean[1:] ** 2)
+    return np.arange(1, count + 1) * float(bin_width), values
+
+
+# -- pictures --------------------------------------------------------------------------------
+def spectrum_image(P, scale="linear", vmin=None, vmax=None):
+    """A 2-D spectrum as a grey image in [0, 1], DC at the centre.
+
+    Rows are y frequencies from -R/2 (top) to R/2 - 1, columns x frequencies from -R/2
+    (left): ``image[j, i] = P[i, j]``.
+
+    Parameters
+    ----------
+    scale : {"linear", "log"}
+        ``"linear"``: P / vmax clipped to [0, 1] (vmax default 4, so white noise is a
+        mid grey after the PNG's gamma, the look of PSA and UTK pictures). ``"log"``:
+        10·log10 P mapped from [vmin, vmax] dB (default [-20, 10]).
+    """
+    P = _check_spectrum(P)
+    if P.ndim != 2:
+        raise InvalidArgumentError(f"'P' must be a 2-D spectrum to make an image, got shape {P.shape}")
+    check_choice(scale, "scale", ("linear", "log"))
+    if scale == "linear":
+        top = 4.0 if vmax is None else check_real(vmax, "vmax", minimum=0.0, open_minimum=True)
+        image = P / top
+    else:
+        low = -20.0 if vmin is None else check_real(vmin, "vmin")
+        high = 10.0 if vmax is None else check_real(vmax, "vmax")
+        if high <= low:
+            raise InvalidArgumentError(f"'vmax' must be > 'vmin', got {high} <= {low}")
+        with np.errstate(divide="ignore"):
+            image = (10.0 * np.log10(P) - low) / (high - low)
+    return np.clip(image.T, 0.0, 1.0)
+
+
+def save_spectrum_png(path, P, scale="linear", vmin=None, vmax=None):
+    """Write a 2-D spectrum as a grey PNG (:func:`spectrum_image`; gamma 2.2 for "linear")."""
+    from . import io
+    image = spectrum_image(P, scale, vmin, vmax)
+    return io.write_png(path, image, gamma=2.2 if scale == "linear" else 1.0)
+
+
+def save_spectrum_exr(path, P, header=None):
+    """Write a spectrum's raw values as a one-channel OpenEXR (float32), same orientation as
+    :func:`spectrum_image` (row j = y frequency j - R/2, column i = x frequency i - R/2).
+    A 1-D spectrum is one row."""
+    from . import io
+    P = _check_spectrum(P)
+    image = P[None, :] if P.ndim == 1 else P.T
+    info = {"clsamp": "power spectrum", "layout": "row j: fy = j - R/2; column i: fx = i - R/2"}
+    info.update(header or {})
+    return io.write_exr(path, np.ascontiguousarray(image), header=info)
+
+
+def plot_spectrum(ax, P, scale="linear", vmin=None, vmax=None, title=None):
+    """Show a 2-D spectrum on a matplotlib Axes, axes labelled in integer frequencies."""
+    R = P.shape[0]
+    image = spectrum_image(P, scale, vmin, vmax)
+    shown = ax.imshow(image ** (1 / 2.2) if scale == "linear" else image, cmap="gray", vmin=0, vmax=1,
+                      extent=(-R / 2 - 0.5, R / 2 - 0.5, R / 2 - 0.5, -R / 2 - 0.5),
+                      interpolation="nearest")
+    ax.set_xlabel("frequency x")
+    ax.set_ylabel("frequency y")
+    if title:
+        ax.set_title(title)
+    return shown
+
+
+def _frequency_axis(ax, freqs, n, convention):
+    if n is None:
+        ax.set_xlabel("frequency |ω|")
+        return np.asarray(freqs, dtype=np.float64)
+    label = "2ν/√N" if convention == "psa" else "ν/√N"
+    ax.set_xlabel(f"frequency {label}")
+    return normalized_frequency(freqs, n, convention)
+
+
+def plot_radial_mean(ax, freqs, values, label=None, n=None, convention="psa", **line_args):
+    """Plot a radial mean (from :func:`radial_mean`) on a matplotlib Axes.
+
+    With ``n`` (points per set) the frequency axis is normalized as PSA (2ν/√N,
+    ``convention="psa"``) or UTK (ν/√N) do, so sets of different N line up.
+    Returns the Line2D.
+    """
+    x = _frequency_axis(ax, freqs, n, convention)
+    (line,) = ax.plot(x, values, label=label, **line_args)
+    ax.axhline(1.0, color="0.6", linewidth=0.8, linestyle=":")
+    ax.set_ylabel("radial mean power")
+    if label:
+        ax.legend()
+    return line
+
+
+def plot_anisotropy(ax, freqs, values, label=None, n=None, convention="psa", realizations=None,
+                    **line_args):
+    """Plot an anisotropy curve (dB, from :func:`anisotropy`) on a matplotlib Axes.
+
+    With ``realizations`` a dotted line marks -10·log10(r) dB, white noise's level.
+    """
+    x = _frequency_axis(ax, freqs, n, convention)
+    (line,) = ax.plot(x, values, label=label, **line_args)
+    if realizations:
+        ax.axhline(-10.0 * math.log10(realizations), color="0.6", linewidth=0.8, linestyle=":")
+    ax.set_ylabel("anisotropy (dB)")
+    if label:
+        ax.legend()
+    return line
+
+
+def save_spectrum_plots(path, P, n=None, realizations=None, label=None, bin_width=1.0,
+                        convention="psa", scale="linear"):
+    """One figure, saved as PNG: the spectrum, its radial mean and (2-D) its anisotropy."""
+    import matplotlib.pyplot as plt
+
+    from . import io
+    P = _check_spectrum(P)
+    panels = 3 if P.ndim == 2 else 1
+    figure, axes = plt.subplots(1, panels, figsize=(4.2 * panels, 3.8), squeeze=False)
+    axes = axes[0]
+    freqs, mean = radial_mean(P, bin_width)
+    if P.ndim == 2:
+        plot_spectrum(axes[0], P, scale=scale, title=label)
+        plot_radial_mean(axes[1], freqs, mean, n=n, convention=convention)
+        f, a = anisotropy(P, bin_width)
+        plot_anisotropy(axes[2], f, a, n=n, convention=convention, realizations=realizations)
+    else:
+        plot_radial_mean(axes[0], freqs, mean, n=n, convention=convention)
+        if label:
+            axes[0].set_title(label)
+    figure.tight_layout()
+    return io.save_figure(path, figure)

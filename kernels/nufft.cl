@@ -1,0 +1,94 @@
+/* The spreading step of a type-1 non-uniform FFT, for the "fast" power spectrum.
+ * NumPy reference: clsamp.spectrum.spread_reference. The FFT and the deconvolution run on the
+ * host (clsamp/spectrum.py).
+ *
+ * Build options: DIM (1 or 2), WIDTH (kernel width in grid nodes, <= 16). Built with
+ * -cl-mad-enable: spectra are measurements, and the NUFFT's error bound is far above an ulp.
+ */
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+
+/* The WIDTH weights of one axis, phi((i0 + l - t) 2 / WIDTH) for l = 0..15 (lanes >= WIDTH are
+ * 0), phi the exponential of semicircle kernel exp(beta (sqrt(1 - z^2) - 1)) (Barnett, Magland,
+ * af Klinteberg 2019). One double16 expression: PoCL ran scalar double exp about 10x slower
+ * than its vector form. Returns i0 = ceil(t - WIDTH / 2), the first node. */
+inline int axis_weights(const double t, const double beta, double16 *w)
+{
+    const int i0 = (int)ceil(t - 0.5 * WIDTH);
+    const double16 lane = (double16)(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0,
+                                     11.0, 12.0, 13.0, 14.0, 15.0);
+    const double16 z = ((double)i0 - t + lane) * (2.0 / WIDTH);
+    const double16 phi = exp(beta * (sqrt(fmax(1.0 - z * z, 0.0)) - 1.0));
+    *w = select((double16)(0.0), phi, lane < (double16)(WIDTH));
+    return i0;
+}
+
+inline int wrap(const int i, const int M)
+{
+    return i < 0 ? i + M : (i >= M ? i - M : i);
+}
+
+/* Every point of block c of realization r adds its tensor-product kernel to the WIDTH^DIM
+ * nodes nearest to it on a periodic grid of M nodes per axis:
+ *     copies[r][c][i][j] += phi((i - x M) 2 / WIDTH) phi((j - y M) 2 / WIDTH).
+ * Each work-item owns one grid copy, so there are no atomics and each node sums its points
+ * in index order (deterministic); spectrum_sum_copies adds the copies when a realization's
+ * points are split over several work-items. Grid (copies, realizations). */
+__kernel void spectrum_spread(__global const double *points, __global double *copies,
+                              const uint n, const uint M, const uint blocks, const double beta)
+{
+    const uint c = get_global_id(0);
+    const uint r = get_global_id(1);
+    if (c >= blocks)
+        return;
+#if DIM == 1
+    const size_t size = M;
+#else
+    const size_t size = (size_t)M * M;
+#endif
+    __global double *g = copies + ((size_t)r * blocks + c) * size;
+    for (size_t i = 0; i < size; ++i)
+        g[i] = 0.0;
+    const uint per = (n + blocks - 1) / blocks;
+    const uint k0 = c * per, k1 = min(n, k0 + per);
+    __global const double *p = points + (size_t)r * n * DIM;
+    for (uint k = k0; k < k1; ++k) {
+        double16 wx;
+        const int i0 = axis_weights(p[k * DIM] * M, beta, &wx);
+        const double *wxs = (const double *)&wx;
+#if DIM == 1
+        for (int l = 0; l < WIDTH; ++l)
+            g[wrap(i0 + l, M)] += wxs[l];
+#else
+        double16 wy;
+        const int j0 = axis_weights(p[k * 2 + 1] * M, beta, &wy);
+        const double *wys = (const double *)&wy;
+        const bool inside = j0 >= 0 && j0 + WIDTH <= (int)M;
+        for (int l = 0; l < WIDTH; ++l) {
+            __global double *row = g + (size_t)wrap(i0 + l, M) * M;
+            const double a = wxs[l];
+            if (inside) {
+                for (int m = 0; m < WIDTH; ++m)
+                    row[j0 + m] += a * wys[m];
+            } else {
+                for (int m = 0; m < WIDTH; ++m)
+                    row[wrap(j0 + m, M)] += a * wys[m];
+            }
+        }
+#endif
+    }
+}
+
+/* out[r][i] = sum_c copies[r][c][i], in order of c. Grid (size, realizations). */
+__kernel void spectrum_sum_copies(__global const double *copies, __global double *out,
+                                  const uint size, const uint blocks)
+{
+    const uint i = get_global_id(0);
+    const uint r = get_global_id(1);
+    if (i >= size)
+        return;
+    __global const double *src = copies + (size_t)r * blocks * size + i;
+    double sum = 0.0;
+    for (uint c = 0; c < blocks; ++c)
+        sum += src[(size_t)c * size];
+    out[(size_t)r * size + i] = sum;
+}
