@@ -261,3 +261,23 @@ def test_strata_and_groups_as_command_line_text():
     assert clsamp.make_sampler("uncorrelated_jitter", d=3, groups="1,2").groups == (1, 2)
     with pytest.raises(InvalidArgumentError, match="strata"):
         clsamp.make_sampler("jittered", d=2, strata="3xfour")
+
+
+@pytest.mark.parametrize("name,d", [("jittered", 2), ("uncorrelated_jitter", 3), ("latin_hypercube", 3),
+                                    ("multijittered", 2), ("correlated_multijittered", 2)])
+def test_a_chunk_of_realizations_equals_the_same_rows_of_the_whole(name, d):
+    # The base splits large requests into ranges of realizations; a range that does not
+    # start at 0 must give the same rows, on the device and in the reference.
+    s = clsamp.make_sampler(name, d=d, seed=21)
+    whole = s.sample(16, realizations=5, start=2)
+    assert np.array_equal(s._device(16, range(3, 5), 2).get(), whole[3:5])
+    assert np.array_equal(s._reference(16, range(3, 5), 2), whole[3:5])
+
+
+def test_latin_hypercube_pairs_slabs_uniformly():
+    # Over many realizations the pair (x-slab, y-slab) of point 0 is uniform on n x n:
+    # the dimensions' permutations are independent.
+    n = 5
+    pts = sample("latin_hypercube", n, realizations=2000, seed=4)
+    pair = cells(pts[:, 0, 0:1], (n,)) * n + cells(pts[:, 0, 1:2], (n,))
+    assert stats.chisquare(np.bincount(pair, minlength=n * n)).pvalue > 1e-4
