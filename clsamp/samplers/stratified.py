@@ -21,6 +21,7 @@ import math
 import re
 
 import numpy as np
+import pyopencl as cl
 import pyopencl.array as cla
 
 from .. import permutation, philox, runtime
@@ -142,7 +143,45 @@ def _layout_reference(sampler, n, realizations, start, radix, group, perms):
     return out
 
 
-class _Stratified(Sampler):
+class _HostOutput(Sampler):
+    """``sample()`` without the second copy on CPU devices.
+
+    On a CPU device the kernel writes straight into the NumPy array the caller gets (a
+    buffer over host memory, mapped once at the end); elsewhere the base's device array
+    and ``.get()``. Subclasses write ``_device(n, realizations, start, into=None)`` and
+    get their output buffer from :meth:`_output`.
+    """
+
+    def sample(self, n=None, realizations=None, start=0):
+        if self.backend != "opencl" or runtime.current_device().type != "cpu":
+            return super().sample(n, realizations, start)
+        n, r, start = self._check_call(n, realizations, start)
+        out = np.empty((r, n, self.d), dtype=np.float64)
+        for lo, hi in runtime.chunk_ranges(r, 8 * n * self.d):
+            self._device(n, range(lo, hi), start, into=out[lo:hi])
+        return out[0] if realizations is None else out
+
+    @staticmethod
+    def _output(shape, into):
+        """(result, buffer): a new device array, or a buffer over the host array ``into``."""
+        if into is None:
+            out = cla.empty(runtime.queue(), shape, np.float64)
+            return out, out.data
+        buffer = cl.Buffer(runtime.context(), cl.mem_flags.WRITE_ONLY | cl.mem_flags.USE_HOST_PTR,
+                           hostbuf=into)
+        return into, buffer
+
+    @staticmethod
+    def _finish(result, buffer, into):
+        if into is not None:
+            # mapping makes the kernel's writes visible in host memory (no copy on PoCL)
+            mapped, _ = cl.enqueue_map_buffer(runtime.queue(), buffer, cl.map_flags.READ, 0,
+                                              into.shape, into.dtype, is_blocking=True)
+            mapped.base.release(runtime.queue())
+        return result
+
+
+class _Stratified(_HostOutput):
     """Samplers made by ``stratified_points``: each group of dimensions is a grid of
     cells; point i of a group takes cell i, or cell perm[i] when ``permuted``."""
 
@@ -164,12 +203,12 @@ class _Stratified(Sampler):
         perms = self._perms_reference(n, realizations, groups)
         return _layout_reference(self, n, realizations, start, radix, group, perms)
 
-    def _device(self, n, realizations, start):
+    def _device(self, n, realizations, start, into=None):
         runtime.require_fp64()
         queue = runtime.queue()
         radix, group, groups = self._layout(n)
         r = len(realizations)
-        out = cla.empty(queue, (r, n, self.d), np.float64)
+        result, target = self._output((r, n, self.d), into)
         if self.permuted:
             perms = permutation.random_permutations_device(
                 self.seed, philox.Stream.PERMUTATION, realizations, n, groups)
@@ -181,11 +220,11 @@ class _Stratified(Sampler):
                                 defines={"PERMUTED": int(self.permuted),
                                          "CENTERED": int(self.centered)})
         local = runtime.local_size()
-        kernel(queue, (-(-n // local) * local, r), (local, 1), out.data, np.uint32(n),
+        kernel(queue, (-(-n // local) * local, r), (local, 1), target, np.uint32(n),
                np.uint32(self.d), np.uint32(start), np.uint32(realizations.start),
                *runtime.key_args(self.seed), np.uint32(philox.Stream.POINTS),
                radix_d.data, group_d.data, perms.data, np.uint32(groups))
-        return out
+        return self._finish(result, target, into)
 
 
 class _Grid(_Stratified):
@@ -421,7 +460,7 @@ class LatinHypercubeSampler(_Stratified):
 
 
 @register("multijittered")
-class MultiJitteredSampler(Sampler):
+class MultiJitteredSampler(_HostOutput):
     """Multi-jittered sampling (Chiu, Shirley, Wang 1994): jittered and N-rooks at once.
 
     With n = mx * my, the unit square is an mx x my grid of cells (mx columns) and
@@ -528,7 +567,7 @@ class MultiJitteredSampler(Sampler):
         out[..., 1] = stratum_point(row * mx + sy, u[..., 1], n)
         return out
 
-    def _device(self, n, realizations, start):
+    def _device(self, n, realizations, start, into=None):
         runtime.require_fp64()
         queue = runtime.queue()
         mx, my = self.factors(n)
@@ -537,17 +576,17 @@ class MultiJitteredSampler(Sampler):
             self.seed, philox.Stream.PERMUTATION, realizations, my, range(0, mx))
         rowperm = permutation.random_permutations_device(
             self.seed, philox.Stream.PERMUTATION, realizations, mx, range(mx, mx + my))
-        out = cla.empty(queue, (r, n, 2), np.float64)
+        result, target = self._output((r, n, 2), into)
         local = runtime.local_size()
         runtime.kernel("stratified.cl", "multijittered_points")(
-            queue, (-(-n // local) * local, r), (local, 1), out.data, np.uint32(mx), np.uint32(my),
+            queue, (-(-n // local) * local, r), (local, 1), target, np.uint32(mx), np.uint32(my),
             np.uint32(start), np.uint32(realizations.start), *runtime.key_args(self.seed),
             np.uint32(philox.Stream.POINTS), colperm.data, rowperm.data)
-        return out
+        return self._finish(result, target, into)
 
 
 @register("correlated_multijittered")
-class CorrelatedMultiJitteredSampler(Sampler):
+class CorrelatedMultiJitteredSampler(_HostOutput):
     """Correlated multi-jittered sampling (Kensler 2013): multi-jittering, any n, point by point.
 
     With m = floor(sqrt(n)) columns and k = ceil(n / m) rows, point i of pattern p is
@@ -618,16 +657,16 @@ class CorrelatedMultiJitteredSampler(Sampler):
         out[..., 1] = stratum_point(s, u[..., 1], n)
         return out
 
-    def _device(self, n, realizations, start):
+    def _device(self, n, realizations, start, into=None):
         runtime.require_fp64()
         queue = runtime.queue()
         m, k = self.factors(n)
         r = len(realizations)
-        out = cla.empty(queue, (r, n, 2), np.float64)
+        result, target = self._output((r, n, 2), into)
         local = runtime.local_size()
         runtime.kernel("stratified.cl", "correlated_multijittered_points")(
-            queue, (-(-n // local) * local, r), (local, 1), out.data, np.uint32(n), np.uint32(m),
+            queue, (-(-n // local) * local, r), (local, 1), target, np.uint32(n), np.uint32(m),
             np.uint32(k), np.uint32(start), np.uint32(realizations.start),
             *runtime.key_args(self.seed), np.uint32(philox.Stream.POINTS),
             np.uint32(philox.Stream.PERMUTATION))
-        return out
+        return self._finish(result, target, into)
