@@ -76,3 +76,16 @@ __kernel void bounded_integers(__global uint *out, __global const uint *step,
         return;
     out[w] = clsamp_bounded((uint2)(key_lo, key_hi), stream, realization, step[w], perm, range[w]);
 }
+
+/* clsamp_fisher_yates in one work-item per row (what a kernel that needs a short
+ * permutation does inline); the same rows as fisher_yates_draws + fisher_yates_apply. */
+__kernel void fisher_yates_inline(__global uint *out, const uint length, const uint count,
+                                  const uint perms, const uint perm0, const uint realization0,
+                                  const uint key_lo, const uint key_hi, const uint stream)
+{
+    const size_t w = get_global_id(0);
+    if (w >= (size_t)count * perms)
+        return;
+    clsamp_fisher_yates(out + w * length, length, (uint2)(key_lo, key_hi), stream,
+                        realization0 + (uint)(w / perms), perm0 + (uint)(w % perms));
+}

@@ -6,15 +6,20 @@
  *     permutation of [0, length) chosen by the 32-bit pattern p, computed alone
  *     (no table). A fast approximation of a random permutation, NOT an exactly
  *     uniform one: only 2^32 patterns exist and the hash is not a perfect mixer.
+ *     (The final rotation is by p % length, so it stays a bijection where the
+ *     listing's 32-bit (i + p) % length wraps; elsewhere the values are the listing's.)
  *
  * clsamp_bounded(key, stream, realization, step, perm, range)
  *     An exactly uniform integer in [0, range) (Lemire's multiply with rejection)
- *     from the Philox words reserved for (perm, step).
+ *     from the Philox words reserved for (perm, step). clsamp_bounded_from(x, ...)
+ *     is the same with the first word x already drawn (four steps share a Philox call).
  *
  * clsamp_fisher_yates(a, length, key, stream, realization, perm)
  *     Fills a[0 .. length) with an exactly uniform random permutation of [0, length):
  *     Fisher-Yates driven by Philox. Permutation `perm` of (seed, stream, realization)
  *     is the same on every device and in clsamp.permutation.random_permutations.
+ *     Sequential in one work-item: for short permutations inside another kernel; the
+ *     batch kernels in permutation.cl draw in parallel and only swap sequentially.
  *
  * Integer arithmetic only, so every device gives the same permutations.
  */

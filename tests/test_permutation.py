@@ -154,3 +154,18 @@ def test_bad_arguments():
         permutation.permute([0], 0, 1)
     with pytest.raises(InvalidArgumentError, match="'i'"):
         permutation.permute_device([5], 5, 1)
+
+
+def test_inline_fisher_yates_equals_the_batch():
+    # clsamp_fisher_yates (one work-item, for use inside other kernels) makes the same
+    # permutations as the parallel draws + sequential swaps of random_permutations_device.
+    import pyopencl.array as cla
+
+    from clsamp import runtime
+    length, reals, perms = 37, range(2, 5), range(1, 4)
+    out = cla.empty(runtime.queue(), (3, 3, length), np.uint32)
+    runtime.kernel("permutation.cl", "fisher_yates_inline")(
+        runtime.queue(), (9,), None, out.data, np.uint32(length), np.uint32(3), np.uint32(3),
+        np.uint32(1), np.uint32(2), *runtime.key_args(8), np.uint32(Stream.PERMUTATION))
+    want = permutation.random_permutations(8, Stream.PERMUTATION, reals, length, perms)
+    assert np.array_equal(out.get(), want)
