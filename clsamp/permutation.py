@@ -244,7 +244,10 @@ def fisher_yates_draws(seed, stream, realizations, length, perms):
     return draws
 
 
-def random_permutations(seed, stream, realizations, length, perms):
+SLOW_SWAPS = 2**21      # about 2 s of Python swaps: show a progress bar beyond this
+
+
+def random_permutations(seed, stream, realizations, length, perms, progress=True):
     """Exactly uniform random permutations of [0, length) (NumPy reference).
 
     Parameters
@@ -259,6 +262,9 @@ def random_permutations(seed, stream, realizations, length, perms):
         Length of each permutation.
     perms : range or int
         Permutation numbers within a realization (an int ``c`` means ``range(c)``).
+    progress : bool
+        Show a progress bar when the swaps are many (they run as a Python loop,
+        about a microsecond each).
 
     Returns
     -------
@@ -273,15 +279,23 @@ def random_permutations(seed, stream, realizations, length, perms):
     """
     draws = fisher_yates_draws(seed, stream, realizations, length, perms)
     out = np.empty(draws.shape, dtype=np.uint32)
-    length = draws.shape[-1]
-    for k in range(draws.shape[0]):
-        for q in range(draws.shape[1]):
+    rows, perms_per_row, length = draws.shape
+    bar = None
+    if progress and rows * perms_per_row * length > SLOW_SWAPS:
+        from tqdm import tqdm
+        bar = tqdm(total=rows * perms_per_row, desc="permutations (NumPy)", unit="perm")
+    for k in range(rows):
+        for q in range(perms_per_row):
             a = list(range(length))
             j = draws[k, q].tolist()
             for t in range(length - 1, 0, -1):
                 s = j[t]
                 a[t], a[s] = a[s], a[t]
             out[k, q] = a
+            if bar is not None:
+                bar.update()
+    if bar is not None:
+        bar.close()
     return out
 
 

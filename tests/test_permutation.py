@@ -169,3 +169,15 @@ def test_inline_fisher_yates_equals_the_batch():
         np.uint32(1), np.uint32(2), *runtime.key_args(8), np.uint32(Stream.PERMUTATION))
     want = permutation.random_permutations(8, Stream.PERMUTATION, reals, length, perms)
     assert np.array_equal(out.get(), want)
+
+
+def test_long_numpy_shuffles_show_a_bar_that_progress_false_hides(monkeypatch, capsys):
+    monkeypatch.setattr(permutation, "SLOW_SWAPS", 10)
+    a = permutation.random_permutations(1, Stream.PERMUTATION, 2, 20, 1)
+    assert "permutations (NumPy)" in capsys.readouterr().err
+    b = permutation.random_permutations(1, Stream.PERMUTATION, 2, 20, 1, progress=False)
+    assert "permutations" not in capsys.readouterr().err
+    assert np.array_equal(a, b)
+    clsamp_lhs = __import__("clsamp").make_sampler("latin_hypercube", backend="numpy", progress=False)
+    clsamp_lhs.sample(20)
+    assert "permutations" not in capsys.readouterr().err

@@ -192,11 +192,13 @@ class _Stratified(_HostOutput):
         """(radix per dimension, group per dimension, number of groups)."""
         raise NotImplementedError
 
+    progress = True     # the NumPy reference's shuffles show a bar when long
+
     def _perms_reference(self, n, realizations, groups):
         if not self.permuted:
             return None
         return permutation.random_permutations(self.seed, philox.Stream.PERMUTATION,
-                                               realizations, n, groups)
+                                               realizations, n, groups, progress=self.progress)
 
     def _reference(self, n, realizations, start):
         radix, group, groups = self._layout(n)
@@ -360,6 +362,9 @@ class UncorrelatedJitterSampler(_Stratified):
     groups : tuple of int, optional
         Sizes of the groups, in order; they must add up to d. Every group size s
         requires n to be an s-th power, so n must be k^L with L the lcm of the sizes.
+    progress : bool
+        Whether the NumPy reference (``backend="numpy"``) shows a progress bar when its
+        Python Fisher–Yates loop is long (millions of swaps).
 
     Notes
     -----
@@ -382,8 +387,9 @@ class UncorrelatedJitterSampler(_Stratified):
 
     permuted = True
 
-    def __init__(self, d=2, seed=0, groups=None, backend="opencl"):
+    def __init__(self, d=2, seed=0, groups=None, backend="opencl", progress=True):
         super().__init__(d=d, seed=seed, backend=backend)
+        self.progress = bool(progress)
         groups = _default_groups(self.d) if groups is None else _int_tuple(groups, "groups")
         if not isinstance(groups, (tuple, list)) or not groups:
             raise InvalidArgumentError(
@@ -429,6 +435,9 @@ class LatinHypercubeSampler(_Stratified):
         Dimension.
     seed : int
         Seed in [0, 2^64).
+    progress : bool
+        Whether the NumPy reference (``backend="numpy"``) shows a progress bar when its
+        Python Fisher–Yates loop is long (millions of swaps).
 
     Notes
     -----
@@ -454,6 +463,10 @@ class LatinHypercubeSampler(_Stratified):
     """
 
     permuted = True
+
+    def __init__(self, d=2, seed=0, backend="opencl", progress=True):
+        super().__init__(d=d, seed=seed, backend=backend)
+        self.progress = bool(progress)
 
     def _layout(self, n):
         return (n,) * self.d, tuple(range(self.d)), self.d
@@ -481,6 +494,9 @@ class MultiJitteredSampler(_HostOutput):
         Largest accepted ``my / mx`` (>= 1). By default any n works (a prime n gives a
         1 x n grid); with ``max_aspect`` an n whose most square factorization
         ``mx <= my`` is more elongated raises, naming the nearest valid n.
+    progress : bool
+        Whether the NumPy reference (``backend="numpy"``) shows a progress bar when its
+        Python Fisher–Yates loop is long (millions of swaps).
 
     Notes
     -----
@@ -500,8 +516,9 @@ class MultiJitteredSampler(_HostOutput):
 
     dimensions = (2,)
 
-    def __init__(self, d=2, seed=0, strata=None, max_aspect=None, backend="opencl"):
+    def __init__(self, d=2, seed=0, strata=None, max_aspect=None, backend="opencl", progress=True):
         super().__init__(d=d, seed=seed, backend=backend)
+        self.progress = bool(progress)
         self.strata = None if strata is None else _check_strata(strata, 2)
         self.max_aspect = (None if max_aspect is None
                            else check_real(max_aspect, "max_aspect", minimum=1.0))
@@ -554,9 +571,9 @@ class MultiJitteredSampler(_HostOutput):
         mx, my = self.factors(n)
         reals = np.arange(realizations.start, realizations.stop)
         colperm = permutation.random_permutations(self.seed, philox.Stream.PERMUTATION,
-                                                  realizations, my, range(0, mx))
+                                                  realizations, my, range(0, mx), self.progress)
         rowperm = permutation.random_permutations(self.seed, philox.Stream.PERMUTATION,
-                                                  realizations, mx, range(mx, mx + my))
+                                                  realizations, mx, range(mx, mx + my), self.progress)
         u = philox.uniform_block(self.seed, philox.Stream.POINTS, reals, n, 2, start)
         i = np.arange(n)
         col, row = i % mx, i // mx
