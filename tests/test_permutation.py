@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
+import clsamp
 from clsamp import permutation
 from clsamp.errors import InvalidArgumentError
 from clsamp.philox import Stream
@@ -178,6 +179,5 @@ def test_long_numpy_shuffles_show_a_bar_that_progress_false_hides(monkeypatch, c
     b = permutation.random_permutations(1, Stream.PERMUTATION, 2, 20, 1, progress=False)
     assert "permutations" not in capsys.readouterr().err
     assert np.array_equal(a, b)
-    clsamp_lhs = __import__("clsamp").make_sampler("latin_hypercube", backend="numpy", progress=False)
-    clsamp_lhs.sample(20)
+    clsamp.make_sampler("latin_hypercube", backend="numpy", progress=False).sample(20)
     assert "permutations" not in capsys.readouterr().err
