@@ -200,6 +200,18 @@ class _Stratified(_HostOutput):
         return permutation.random_permutations(self.seed, philox.Stream.PERMUTATION,
                                                realizations, n, groups, progress=self.progress)
 
+    def _tables(self, n, radix, group):
+        """The radix and group arrays on the current device, uploaded once per (device, n)."""
+        cache = self.__dict__.setdefault("_table_cache", {})
+        key = (runtime.current_device().index, n)
+        if key not in cache:
+            queue = runtime.queue()
+            cache.clear()   # one n at a time is the common use; keep the cache small
+            cache[key] = (cla.to_device(queue, np.asarray(radix, dtype=np.uint32)),
+                          cla.to_device(queue, np.asarray(group, dtype=np.uint32)),
+                          cla.zeros(queue, (1,), np.uint32))
+        return cache[key]
+
     def _reference(self, n, realizations, start):
         radix, group, groups = self._layout(n)
         perms = self._perms_reference(n, realizations, groups)
@@ -211,13 +223,12 @@ class _Stratified(_HostOutput):
         radix, group, groups = self._layout(n)
         r = len(realizations)
         result, target = self._output((r, n, self.d), into)
+        radix_d, group_d, unused = self._tables(n, radix, group)
         if self.permuted:
             perms = permutation.random_permutations_device(
                 self.seed, philox.Stream.PERMUTATION, realizations, n, groups)
         else:
-            perms = cla.zeros(queue, (1,), np.uint32)   # unused; the kernel reads cell = i
-        radix_d = cla.to_device(queue, np.asarray(radix, dtype=np.uint32))
-        group_d = cla.to_device(queue, np.asarray(group, dtype=np.uint32))
+            perms = unused      # the kernel reads cell = i
         kernel = runtime.kernel("stratified.cl", "stratified_points",
                                 defines={"PERMUTED": int(self.permuted),
                                          "CENTERED": int(self.centered)})
