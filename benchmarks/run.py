@@ -20,6 +20,7 @@ from common import parser, print_table, select_devices, write_json  # noqa: E402
 MODULES = (
     "bench_random",
     "bench_stratified",
+    "bench_lowdiscrepancy",
     "bench_spectrum",
 )
 
