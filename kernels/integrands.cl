@@ -52,16 +52,19 @@ inline vec wrapped(vec x, double c)
 }
 
 /* f at four points; x[j] holds coordinate j of the four. Parameters (see kernel_params):
- * GAUSSIAN p = (-1/(2 sigma^2), centre), DISK p = (r^2, centre), HEAVISIDE p = (offset, normal). */
+ * GAUSSIAN p = (s = -1/(2 sigma^2), centre, exp(2 s)), DISK p = (r^2, centre), HEAVISIDE p = (offset, normal). */
 inline vec integrand(const vec *x, __global const double *p)
 {
 #if INTEGRAND == GAUSSIAN
-    const double s = p[0];
+    /* images at |w|, 1 - |w|, 1 + |w|: E0 (1 + B + exp(2s) / B), two exps a dimension */
+    const double s = p[0], e2s = p[1 + DIM];
     vec f = (vec)(1.0);
     for (int j = 0; j < DIM; ++j) {
         const vec w = wrapped(x[j], p[1 + j]);
-        const vec a = w - 1.0, b = w + 1.0;
-        f = f * ((exp(s * (a * a)) + exp(s * (w * w))) + exp(s * (b * b)));
+        const vec e0 = exp(s * (w * w));
+        const vec b = exp(s * (1.0 - 2.0 * fabs(w)));
+        const vec far = select((vec)(0.0), e2s / b, b > 0.0);   /* b underflows only if far does */
+        f = f * (e0 * ((1.0 + b) + far));
     }
     return f;
 #elif INTEGRAND == DISK
