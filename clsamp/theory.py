@@ -20,8 +20,6 @@ random                      -1      -1      Pilleboue et al. 2015 (any integrand
 jittered                    -2      -1.5    Pilleboue et al. 2015 (d-D: -1-2/d, -1-1/d)
 uncorrelated_jitter         -2      -1.5    as jittered in 2-D (one group of two
                                             dimensions is a jittered set)
-multijittered               -2      -1.5    Christensen et al. 2018 (one point per
-correlated_multijittered                    cell of the k x k grid, as jittered)
 latin_hypercube             -1      -1      Stein 1987 (non-additive integrands)
 poisson_disk                -1      -1      Pilleboue et al. 2015
 ccvt                        -3      -1.5    Pilleboue et al. 2015
@@ -31,7 +29,11 @@ sobol:owen                  -3      -1.5    Owen 1997 (smooth, up to log N); He 
 
 Random sampling is -1 in the ``"axis"`` case too and jittered -1.5 (the cells of one
 column or row are cut). Anything else, and every case of a deterministic sampler that
-is not shifted, has no published rate here: the verdict is ``"unknown"``.
+is not shifted, has no published rate here: the verdict is ``"unknown"``. That includes
+samplers whose rate we measured but found no theorem for: in 2-D, N = 1024..16384, 512
+realizations, seed 3, this library measured multijittered -1.99 (Gaussian) and -1.47
+(disk), correlated_multijittered -2.98 and -1.54, and Owen-scrambled Halton (bases 2
+and 3, not a base-2 net; N powers of 4) -2.01 and -1.53.
 
 A measured slope **matches** when |slope - expected| <= 3 stderr + 0.15: three standard
 errors for the noise of the fit, plus 0.15 for pre-asymptotic curvature (and the
@@ -48,8 +50,6 @@ References
    discontinuous functions", SIAM J. Numer. Anal. 53(5), 2015.
 .. [4] M. Stein, "Large sample properties of simulations using Latin hypercube
    sampling", Technometrics 29(2), 1987.
-.. [5] P. Christensen, A. Kensler, C. Kilpatrick, "Progressive multi-jittered sample
-   sequences", Computer Graphics Forum 37(4), 2018.
 """
 
 import math
@@ -69,10 +69,6 @@ RATES = {
     ("jittered", "axis"): (-1.5, PILLEBOUE),
     ("uncorrelated_jitter", "best"): (-2.0, PILLEBOUE + " (jittered)"),
     ("uncorrelated_jitter", "worst"): (-1.5, PILLEBOUE + " (jittered)"),
-    ("multijittered", "best"): (-2.0, "Christensen et al. 2018"),
-    ("multijittered", "worst"): (-1.5, "Christensen et al. 2018"),
-    ("correlated_multijittered", "best"): (-2.0, "Christensen et al. 2018"),
-    ("correlated_multijittered", "worst"): (-1.5, "Christensen et al. 2018"),
     ("latin_hypercube", "best"): (-1.0, "Stein 1987"),
     ("latin_hypercube", "worst"): (-1.0, "Stein 1987"),
     ("poisson_disk", "best"): (-1.0, PILLEBOUE),
