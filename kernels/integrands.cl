@@ -7,9 +7,12 @@
  * the homogenization of Pilleboue et al. 2015).
  *
  * Work-group g of realization r sums f(x_i) - integral over its slice of points with
- * per-lane TwoSum (Knuth) error terms, then a tree of double-double additions in local
- * memory: the slice's sum of errors comes out as an unevaluated (hi, lo) pair, exact to
- * ~2^-100 relative of the sum of |terms|, so an MSE of 1e-30 has no rounding floor.
+ * per-lane TwoSum (Knuth) error terms (Ogita, Rump and Oishi's Sum2, SIAM J. Sci. Comput.
+ * 2005), then a tree of double-double additions in local memory: the slice's sum comes
+ * out as an unevaluated (hi, lo) pair whose error is about n 2^-106 of the sum of
+ * |terms|, so the error of an estimate keeps its relative accuracy however small it is
+ * (no rounding floor on the MSE). Subtracting the integral from every term, not from
+ * the total, is what keeps a 1e-8 error from cancelling against a 0.1 integral.
  * The order of every addition depends on (n, slice, local size) only, never on timing.
  */
 #include "philox.h"

@@ -175,6 +175,11 @@ def test_chunks_give_the_same_errors(monkeypatch):
     parts_np = run("jittered", "disk", [64], 10, seed=9, backend="numpy")
     np.testing.assert_array_equal(whole.errors[0], parts.errors[0])
     np.testing.assert_array_equal(whole_np.errors[0], parts_np.errors[0])
+    # a sampler with the NumPy backend feeds the kernel path too, whole and in chunks
+    numpy_sampler = clsamp.make_sampler("jittered", seed=9, backend="numpy")
+    np.testing.assert_array_equal(run(numpy_sampler, "disk", [64], 10, seed=9).errors[0], parts.errors[0])
+    monkeypatch.undo()
+    np.testing.assert_array_equal(run(numpy_sampler, "disk", [64], 10, seed=9).errors[0], parts.errors[0])
 
 
 def test_shift_is_the_experiment_stream():
