@@ -8,6 +8,8 @@ Quick start::
 See README.md for a tour and ``clsamp --help`` for the command line.
 """
 
+from . import integrands, theory
+from .convergence import convergence  # the function; `from clsamp.convergence import x` reads the module
 from .errors import (
                      BuildError,
                      ClsampError,
@@ -24,6 +26,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "BuildError", "ClsampError", "DeviceMemoryError", "InvalidArgumentError", "NoDeviceError",
-    "SamplingError", "Sampler", "anisotropy", "current_device", "devices", "make_sampler",
+    "SamplingError", "Sampler", "anisotropy", "convergence", "current_device", "devices",
+    "integrands", "make_sampler", "theory",
     "power_spectrum", "radial_mean", "sampler_names", "use_device",
 ]

@@ -1,0 +1,450 @@
+"""Test integrands with exact integrals, for variance and convergence experiments.
+
+Two families:
+
+* On the unit torus (periodic, so a random toroidal shift -- homogenization -- creates
+  no new edge): :class:`Gaussian` (wrapped; smooth, the best case of Pilleboue et al.
+  2015) and :class:`Disk` (wrapping; discontinuous along a curve, the worst case).
+* On the unit square (not periodic): :class:`Heaviside` (a straight edge) and the set
+  used by Christensen, Kensler and Kilpatrick (2018) to compare progressive
+  multi-jittered sequences with other samplers (:func:`pmj_set`): a quarter disk
+  x^2 + y^2 < 2/pi, the Gaussian exp(-x^2 - y^2), the bilinear xy, the step x < 1/pi
+  and the triangle y > x. A toroidal shift keeps their estimators unbiased but makes
+  the square's sides edges of the shifted integrand; use ``homogenize=False`` in
+  :func:`clsamp.convergence.convergence` to compare with that paper.
+
+Each integrand is a callable on points of shape (n, d) or (r, n, d) (NumPy, the
+reference), has its exact ``.integral`` over [0, 1)^d, and an OpenCL evaluation in
+``kernels/integrands.cl`` selected by ``.kernel_code`` with its parameters in
+``.kernel_params()``. ``.smooth``, ``.periodic`` and ``.edges`` classify it for
+:mod:`clsamp.theory`.
+
+References
+----------
+.. [1] A. Pilleboue, G. Singh, D. Coeurjolly, M. Kazhdan, V. Ostromoukhov, "Variance
+   analysis for Monte Carlo integration", ACM TOG 34(4), 2015.
+.. [2] P. Christensen, A. Kensler, C. Kilpatrick, "Progressive multi-jittered sample
+   sequences", Computer Graphics Forum 37(4), 2018.
+"""
+
+import difflib
+import itertools
+import math
+from fractions import Fraction
+
+import numpy as np
+
+from .errors import InvalidArgumentError
+from .validation import check_real
+
+# Kernel codes (INTEGRAND in kernels/integrands.cl).
+GAUSSIAN, DISK, HEAVISIDE, PMJ_DISK, PMJ_GAUSSIAN, PMJ_BILINEAR, PMJ_STEP, PMJ_TRIANGLE = range(8)
+
+
+
+def _vector(value, name, d=None):
+    try:
+        array = np.asarray(value, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        raise InvalidArgumentError(f"'{name}' must be a sequence of real numbers, got {value!r}") from None
+    if array.size == 0 or (d is not None and array.size != d):
+        want = f"{d} numbers" if d is not None else "at least one number"
+        raise InvalidArgumentError(f"'{name}' must hold {want}, got {value!r}")
+    if not np.all(np.isfinite(array)):
+        raise InvalidArgumentError(f"'{name}' must be finite, got {value!r}")
+    return array
+
+
+def _points(points, d):
+    """Points as a float64 array (..., n, d), checked for shape only (the hot path)."""
+    x = np.asarray(points, dtype=np.float64)
+    if x.ndim not in (2, 3) or x.shape[-1] != d:
+        raise InvalidArgumentError(
+            f"'points' must have shape (n, {d}) or (r, n, {d}), got {np.shape(points)}")
+    return x
+
+
+class Integrand:
+    """Base: a function on [0, 1)^d with an exact integral and an OpenCL evaluation.
+
+    Attributes
+    ----------
+    name : str
+        Short name (``"gaussian"``, ``"disk"``, ``"pmj_step"``, ...).
+    d : int
+        Dimension.
+    integral : float
+        The exact integral over [0, 1)^d (correctly rounded where the closed form
+        allows, see each class).
+    smooth : bool
+        Whether it is infinitely differentiable on its domain (the torus if
+        ``periodic``, else the open square).
+    periodic : bool
+        Whether it is a function on the torus (a toroidal shift creates no edge).
+    edges : str
+        ``"none"``, ``"curved"``, ``"straight"`` (some not parallel to an axis) or
+        ``"axis"`` (all parallel to the axes): the discontinuities, as theory needs.
+    """
+
+    name = None
+    kernel_code = None
+    smooth = False
+    periodic = False
+    edges = "none"
+
+    def __init__(self, d):
+        self.d = d
+
+    def __call__(self, points):
+        """Evaluate at points of shape (n, d) or (r, n, d): float64 of shape (n,) or (r, n)."""
+        return self._evaluate(_points(points, self.d))
+
+    def _evaluate(self, x):
+        raise NotImplementedError
+
+    def kernel_params(self):
+        """The float64 parameters the kernel reads (layout per ``kernel_code``)."""
+        return np.zeros(1)
+
+    def edges_when_shifted(self):
+        """The discontinuities of x -> f((x + u) mod 1): the square's sides join the
+        integrand's own edges unless it is periodic."""
+        if self.periodic:
+            return self.edges
+        if self.edges in ("curved", "straight"):
+            return self.edges
+        return "axis"
+
+    def __repr__(self):
+        return f"{type(self).__name__}({self._describe()})"
+
+    def _describe(self):
+        return f"d={self.d}"
+
+    def describe(self):
+        """A one-line description with the parameters (for reports)."""
+        return f"{self.name}: {self._describe()}, integral {self.integral!r}"
+
+
+class Gaussian(Integrand):
+    """The wrapped Gaussian on the torus: smooth and periodic, the best case.
+
+    f(x) = prod_j g(x_j - c_j), g(t) = sum_{k in {-1, 0, 1}} exp(-(w(t) + k)^2 / (2 sigma^2)),
+    with w(t) = t - round(t) the wrapped difference in [-1/2, 1/2].
+
+    Parameters
+    ----------
+    center : sequence of float, optional
+        The centre c in [0, 1)^d; its length sets d. Default (0.4142, 0.7320), away from
+        every dyadic and triadic grid line (about sqrt(2) - 1 and sqrt(3) - 1).
+    sigma : float, optional
+        Standard deviation, in (0, 0.15]; default 0.15 (wide enough that the wrap matters:
+        the copy half a period away adds exp(-1/(8 sigma^2)) ~ 4e-3 of the peak).
+
+    Notes
+    -----
+    Three images per axis are kept, at distances |w|, 1 - |w| and 1 + |w|, evaluated as
+    exp(s w^2) (1 + B + exp(2s) / B) with s = -1/(2 sigma^2) and B = exp(s (1 - 2|w|))
+    (two exponentials instead of three). The terms left out are at least 1.5 away,
+    below exp(-1.125 / sigma^2) < 2e-22 of the peak, so f is smooth and periodic far
+    beyond double precision. The exact integral of the function evaluated is
+    (sigma sqrt(2 pi) erf(1.5 / (sigma sqrt 2)))^d. Its MSE under homogenized sampling
+    does not depend on the centre (the shift is uniform).
+    """
+
+    name = "gaussian"
+    kernel_code = GAUSSIAN
+    smooth = True
+    periodic = True
+    edges = "none"
+    MAX_SIGMA = 0.15
+
+    def __init__(self, center=(0.4142, 0.7320), sigma=0.15):
+        c = _vector(center, "center")
+        if np.any(c < 0) or np.any(c >= 1):
+            raise InvalidArgumentError(f"'center' must lie in [0, 1)^d, got {center!r}")
+        super().__init__(c.size)
+        self.center = c
+        self.sigma = check_real(sigma, "sigma", minimum=0.0, maximum=self.MAX_SIGMA, open_minimum=True)
+        one = self.sigma * math.sqrt(2 * math.pi) * math.erf(1.5 / (self.sigma * math.sqrt(2)))
+        self.integral = one ** self.d
+
+    def _describe(self):
+        return f"center={self.center.tolist()}, sigma={self.sigma}"
+
+    def kernel_params(self):
+        s = -0.5 / self.sigma**2
+        return np.array([s, *self.center, math.exp(2 * s)])
+
+    def _evaluate(self, x):
+        # the images at |w|, 1 - |w| and 1 + |w| as E0 (1 + B + exp(2s) / B), two exps
+        # per coordinate instead of three (the kernel's formula, term for term)
+        s = -0.5 / self.sigma**2
+        w = x - self.center
+        w = w - np.round(w)
+        e0 = np.exp(s * (w * w))
+        b = np.exp(s * (1.0 - 2.0 * np.abs(w)))
+        with np.errstate(divide="ignore"):
+            far = np.where(b > 0, math.exp(2 * s) / b, 0.0)
+        g = e0 * ((1.0 + b) + far)
+        out = g[..., 0]
+        for j in range(1, self.d):
+            out = out * g[..., j]
+        return out
+
+
+def ball_volume(d, radius):
+    """Volume of the d-ball of ``radius``: pi^(d/2) r^d / Gamma(d/2 + 1)."""
+    return math.pi ** (d / 2) * radius**d / math.gamma(d / 2 + 1)
+
+
+class Disk(Integrand):
+    """The indicator of a disk (ball in d-D) on the torus: it wraps across the sides.
+
+    f(x) = 1 if |w(x - c)| < r else 0, with w the wrapped difference in [-1/2, 1/2]^d.
+
+    Parameters
+    ----------
+    center : sequence of float, optional
+        Default (0.7311, 0.2243): the disk of the default radius crosses both seams of
+        the torus, and the centre is on no dyadic or triadic grid line.
+    radius : float, optional
+        In (0, 1/2), so the ball does not overlap itself; default 0.3389 (area 0.3608).
+
+    Notes
+    -----
+    Discontinuous along a curve: the worst case of Pilleboue et al. (2015). The exact
+    integral is the ball's volume, pi r^2 in 2-D.
+    """
+
+    name = "disk"
+    kernel_code = DISK
+    smooth = False
+    periodic = True
+    edges = "curved"
+
+    def __init__(self, center=(0.7311, 0.2243), radius=0.3389):
+        c = _vector(center, "center")
+        if np.any(c < 0) or np.any(c >= 1):
+            raise InvalidArgumentError(f"'center' must lie in [0, 1)^d, got {center!r}")
+        super().__init__(c.size)
+        self.center = c
+        self.radius = check_real(radius, "radius", minimum=0.0, maximum=0.5,
+                                 open_minimum=True, open_maximum=True)
+        self.integral = ball_volume(self.d, self.radius)
+
+    def _describe(self):
+        return f"center={self.center.tolist()}, radius={self.radius}"
+
+    def kernel_params(self):
+        return np.array([self.radius**2, *self.center])
+
+    def _evaluate(self, x):
+        w = x - self.center
+        w = w - np.round(w)
+        return (np.sum(w * w, axis=-1) < self.radius**2).astype(np.float64)
+
+
+def halfspace_volume(normal, offset):
+    """Exact volume of {x in [0, 1]^d : normal . x < offset}, from the float inputs.
+
+    The inclusion-exclusion over the cube's vertices, in rational arithmetic:
+    V = sum_v (-1)^|v| max(0, offset - n.v)^m / (m! prod n_j) over the m non-zero
+    components (the others contribute a factor 1), after flipping negative components.
+    """
+    n = [Fraction(float(v)) for v in normal]
+    b = Fraction(float(offset))
+    for j, v in enumerate(n):        # x_j -> 1 - x_j makes every component non-negative
+        if v < 0:
+            n[j] = -v
+            b -= v
+    active = [v for v in n if v != 0]
+    m = len(active)
+    if m == 0:
+        return 1.0 if b > 0 else 0.0
+    total = Fraction(0)
+    for corner in itertools.product((0, 1), repeat=m):
+        t = b - sum(v for v, c in zip(active, corner, strict=True) if c)
+        if t > 0:
+            total += (-1) ** sum(corner) * t**m
+    denominator = math.factorial(m) * math.prod(active)
+    return float(total / denominator)
+
+
+class Heaviside(Integrand):
+    """A straight edge: f(x) = 1 if normal . x < offset else 0, on the unit square (cube).
+
+    Parameters
+    ----------
+    normal : sequence of float, optional
+        The edge's normal; its length sets d. Default (cos 0.3, sin 0.3) rounded to
+        (0.9553, 0.2955): the edge is far from every axis direction and from the diagonal.
+    offset : float, optional
+        Default 0.6 (the edge crosses the square, cutting off 0.5306 of it).
+
+    Notes
+    -----
+    Not periodic: under a toroidal shift the square's sides are edges too (axis-parallel).
+    The exact integral is the polytope's volume by inclusion-exclusion in rational
+    arithmetic on the float parameters (:func:`halfspace_volume`), correctly rounded.
+    """
+
+    name = "heaviside"
+    kernel_code = HEAVISIDE
+    smooth = False
+    periodic = False
+
+    def __init__(self, normal=(0.9553, 0.2955), offset=0.6):
+        nrm = _vector(normal, "normal")
+        if not np.any(nrm != 0):
+            raise InvalidArgumentError(f"'normal' must not be zero, got {normal!r}")
+        super().__init__(nrm.size)
+        self.normal = nrm
+        self.offset = check_real(offset, "offset")
+        self.integral = halfspace_volume(self.normal, self.offset)
+        self.edges = "axis" if np.count_nonzero(nrm) == 1 else "straight"
+
+    def _describe(self):
+        return f"normal={self.normal.tolist()}, offset={self.offset}"
+
+    def kernel_params(self):
+        return np.array([self.offset, *self.normal])
+
+    def _evaluate(self, x):
+        # accumulate in the kernel's order so both round alike
+        s = x[..., 0] * self.normal[0]
+        for j in range(1, self.d):
+            s = s + x[..., j] * self.normal[j]
+        return (s < self.offset).astype(np.float64)
+
+
+class _PMJ(Integrand):
+    """One of the 2-D test integrands of Christensen et al. (2018), on the unit square."""
+
+    periodic = False
+
+    def __init__(self):
+        super().__init__(2)
+
+
+class PMJDisk(_PMJ):
+    """Quarter disk: f = 1 if x^2 + y^2 < 2/pi; integral exactly 1/2."""
+
+    name = "pmj_disk"
+    kernel_code = PMJ_DISK
+    edges = "curved"
+    integral = 0.5
+
+    def _evaluate(self, x):
+        return (x[..., 0] * x[..., 0] + x[..., 1] * x[..., 1] < 2.0 / math.pi).astype(np.float64)
+
+
+class PMJGaussian(_PMJ):
+    """f = exp(-x^2 - y^2); integral (sqrt(pi)/2 erf(1))^2 = 0.557746285351034..."""
+
+    name = "pmj_gaussian"
+    kernel_code = PMJ_GAUSSIAN
+    smooth = True
+    integral = (math.sqrt(math.pi) / 2 * math.erf(1.0)) ** 2
+
+    def _evaluate(self, x):
+        return np.exp(-(x[..., 0] * x[..., 0]) - x[..., 1] * x[..., 1])
+
+
+class PMJBilinear(_PMJ):
+    """f = x y; integral exactly 1/4."""
+
+    name = "pmj_bilinear"
+    kernel_code = PMJ_BILINEAR
+    smooth = True
+    integral = 0.25
+
+    def _evaluate(self, x):
+        return x[..., 0] * x[..., 1]
+
+
+class PMJStep(_PMJ):
+    """f = 1 if x < 1/pi; integral 1/pi (the float 1/pi: the edge is at that float)."""
+
+    name = "pmj_step"
+    kernel_code = PMJ_STEP
+    edges = "axis"
+    integral = 1.0 / math.pi
+
+    def _evaluate(self, x):
+        return (x[..., 0] < 1.0 / math.pi).astype(np.float64)
+
+
+class PMJTriangle(_PMJ):
+    """f = 1 if y > x; integral exactly 1/2."""
+
+    name = "pmj_triangle"
+    kernel_code = PMJ_TRIANGLE
+    edges = "straight"
+    integral = 0.5
+
+    def _evaluate(self, x):
+        return (x[..., 1] > x[..., 0]).astype(np.float64)
+
+
+_FACTORIES = {
+    "gaussian": Gaussian,
+    "disk": Disk,
+    "heaviside": Heaviside,
+    "pmj_disk": PMJDisk,
+    "pmj_gaussian": PMJGaussian,
+    "pmj_bilinear": PMJBilinear,
+    "pmj_step": PMJStep,
+    "pmj_triangle": PMJTriangle,
+}
+
+
+def integrand_names():
+    """The names :func:`make_integrand` knows."""
+    return list(_FACTORIES)
+
+
+def pmj_set():
+    """The five integrands of Christensen et al. (2018), in their order."""
+    return [PMJDisk(), PMJGaussian(), PMJBilinear(), PMJStep(), PMJTriangle()]
+
+
+def make_integrand(spec, d=None):
+    """An :class:`Integrand` from a name (default parameters) or an integrand itself.
+
+    Parameters
+    ----------
+    spec : str or Integrand
+        One of :func:`integrand_names`.
+    d : int, optional
+        For ``"gaussian"``, ``"disk"`` and ``"heaviside"`` by name: the dimension (the
+        default centre or normal is repeated/cut to d; 2 when None).
+
+    Examples
+    --------
+    >>> from clsamp.integrands import make_integrand
+    >>> f = make_integrand("pmj_bilinear")
+    >>> f.integral, float(f([[0.5, 0.5]])[0])
+    (0.25, 0.25)
+    """
+    if isinstance(spec, Integrand):
+        return spec
+    if not isinstance(spec, str):
+        raise InvalidArgumentError(
+            f"'integrand' must be an Integrand or one of {', '.join(_FACTORIES)}; got {spec!r}")
+    factory = _FACTORIES.get(spec.strip().lower())
+    if factory is None:
+        close = difflib.get_close_matches(spec, list(_FACTORIES), n=1)
+        hint = f" Did you mean {close[0]!r}?" if close else ""
+        raise InvalidArgumentError(
+            f"unknown 'integrand' {spec!r}.{hint} Known integrands: {', '.join(_FACTORIES)}")
+    if d is None or d == 2 or issubclass(factory, _PMJ):
+        made = factory()
+        if d is not None and made.d != d:
+            raise InvalidArgumentError(f"integrand {spec!r} is {made.d}-dimensional, got 'd'={d}")
+        return made
+    default = {"gaussian": (0.4142, 0.7320), "disk": (0.7311, 0.2243),
+               "heaviside": (0.9553, 0.2955)}[factory.name]
+    first = "center" if factory is not Heaviside else "normal"
+    values = [default[j % 2] * (1 + 0.01 * (j // 2)) for j in range(d)]
+    return factory(**{first: values})

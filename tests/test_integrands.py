@@ -1,0 +1,145 @@
+"""Integrands: exact integrals against quadrature, periodicity, the kernel against the
+NumPy functions, and argument errors."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy import integrate
+
+import clsamp
+from clsamp import integrands as I  # noqa: N812
+from clsamp.errors import InvalidArgumentError
+
+
+def grid(m, d=2):
+    """The midpoints of an m^d grid, (m^d, d)."""
+    axes = [(np.arange(m) + 0.5) / m] * d
+    return np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, d)
+
+
+def grid_mean(f, m):
+    """Midpoint rule over m^2 cells, in row chunks (memory)."""
+    x = (np.arange(m) + 0.5) / m
+    total = 0.0
+    for row in np.array_split(x, max(1, m // 256)):
+        pts = np.stack(np.meshgrid(row, x, indexing="ij"), -1).reshape(-1, 2)
+        total += math.fsum(f(pts))
+    return total / m**2
+
+
+# -- exact integrals against quadrature ------------------------------------------------
+def test_wrapped_gaussian_integral_against_quad_and_the_periodic_midpoint_rule():
+    f = I.Gaussian(center=(0.1, 0.93), sigma=0.15)
+
+    def g(t, c):     # one axis of the function, straight from the definition
+        return sum(math.exp(-((t - c - round(t - c)) + k) ** 2 / (2 * 0.15**2)) for k in (-1, 0, 1))
+
+    one = [integrate.quad(g, 0, 1, args=(c,), epsabs=0, epsrel=1e-13, limit=200)[0] for c in f.center]
+    assert f.integral == pytest.approx(one[0] * one[1], rel=1e-13)
+    # the midpoint rule is spectrally accurate for a smooth periodic function
+    assert grid_mean(f, 128) == pytest.approx(f.integral, rel=1e-13)
+
+
+def test_disk_integral_against_a_fine_grid():
+    f = I.Disk()               # the default disk crosses both seams of the torus
+    assert np.any(f(np.array([[0.99, 0.2], [0.7, 0.99]])) == 1.0)
+    # lattice-point error of a disk of radius R = 0.34 * 2048 cells: ~R^(2/3) / m^2 ~ 2e-5
+    assert grid_mean(f, 2048) == pytest.approx(math.pi * 0.3389**2, abs=1e-4)
+    assert f.integral == math.pi * 0.3389**2
+
+
+@pytest.mark.parametrize("normal,offset", [((0.9553, 0.2955), 0.6), ((-0.3, 0.8), 0.1),
+                                           ((1.0, 0.0), 0.3), ((0.5, 0.5), 0.75), ((2.0, 1.0), 5.0),
+                                           ((1.0, 1.0), -0.5)])
+def test_heaviside_integral_against_quad_of_the_section(normal, offset):
+    f = I.Heaviside(normal, offset)
+    a, b = normal
+    if b == 0:
+        want = integrate.quad(lambda x: 1.0 if a * x < offset else 0.0, 0, 1, points=[offset / a])[0]
+    else:
+        def section(x):   # length of {y in [0, 1]: a x + b y < offset}
+            t = (offset - a * x) / b
+            return min(1.0, max(0.0, t)) if b > 0 else 1.0 - min(1.0, max(0.0, t))
+        kinks = [v for v in ((offset - b) / a, offset / a) if 0 < v < 1] if a else []
+        want = integrate.quad(section, 0, 1, points=kinks or None, epsabs=1e-14)[0]
+    assert f.integral == pytest.approx(want, abs=1e-12)
+    assert grid_mean(f, 1024) == pytest.approx(want, abs=2e-3)
+
+
+def test_halfspace_volume_in_3d_against_a_grid():
+    f = I.Heaviside((0.7, -0.4, 0.55), 0.5)
+    pts = grid(100, 3)
+    assert np.mean(f(pts)) == pytest.approx(f.integral, abs=5e-3)
+    assert I.halfspace_volume((1, 1, 1), 1.5) == 0.5
+    assert I.halfspace_volume((1, 1), 1.0) == 0.5
+
+
+def test_pmj_integrals_against_quadrature():
+    opts = dict(epsabs=0, epsrel=1e-12)
+    gauss = integrate.dblquad(lambda y, x: math.exp(-x * x - y * y), 0, 1, 0, 1, **opts)[0]
+    assert I.PMJGaussian().integral == pytest.approx(gauss, rel=1e-11)
+    assert I.PMJBilinear().integral == pytest.approx(
+        integrate.dblquad(lambda y, x: x * y, 0, 1, 0, 1, **opts)[0], rel=1e-12)
+    r2 = 2.0 / math.pi
+    disk = integrate.quad(lambda x: math.sqrt(max(0.0, r2 - x * x)), 0, math.sqrt(r2), **opts)[0]
+    assert I.PMJDisk().integral == pytest.approx(disk, rel=1e-10)
+    assert I.PMJStep().integral == 1.0 / math.pi
+    assert I.PMJTriangle().integral == 0.5
+    for f in I.pmj_set():
+        assert grid_mean(f, 1024) == pytest.approx(f.integral, abs=2e-3), f.name
+
+
+def test_ball_volume_in_3d():
+    f = I.Disk(center=(0.5, 0.5, 0.5), radius=0.4)
+    assert f.integral == pytest.approx(4 / 3 * math.pi * 0.4**3, rel=1e-15)
+    assert np.mean(f(grid(100, 3))) == pytest.approx(f.integral, abs=5e-3)
+
+
+# -- shape of the functions ------------------------------------------------------------
+def test_torus_integrands_are_periodic():
+    y = np.linspace(0, 1, 50, endpoint=False)
+    lo = np.stack([np.zeros_like(y), y], -1)
+    hi = np.stack([np.full_like(y, 1 - 2**-40), y], -1)
+    g = I.Gaussian(center=(0.02, 0.5), sigma=0.1)
+    np.testing.assert_allclose(g(lo), g(hi), rtol=1e-9, atol=0)
+    d = I.Disk(center=(0.05, 0.5), radius=0.3)
+    assert np.array_equal(d(lo), d(hi)) and d(lo).any()
+
+
+def test_batch_shape_and_call():
+    f = I.Gaussian()
+    x = clsamp.make_sampler("random", seed=3).sample(10, realizations=4)
+    assert f(x).shape == (4, 10)
+    np.testing.assert_array_equal(f(x)[2], f(x[2]))
+
+
+# -- the kernel against the NumPy functions --------------------------------------------
+@pytest.mark.parametrize("name", I.integrand_names())
+def test_kernel_evaluation_equals_numpy(name):
+    from clsamp.convergence import _errors_numpy
+    f = I.make_integrand(name)
+    sampler = clsamp.make_sampler("random", seed=4)
+    res = clsamp.convergence(sampler, f, [37, 4096 + 5], realizations=6, seed=9, progress=False)
+    for n, e in zip(res.ns, res.errors, strict=True):
+        want = _errors_numpy(sampler, f, int(n), 6, True, 9)
+        np.testing.assert_allclose(e, want, rtol=1e-12, atol=1e-15)
+
+
+# -- bad input -------------------------------------------------------------------------
+def test_bad_parameters_name_the_argument():
+    with pytest.raises(InvalidArgumentError, match="'sigma'"):
+        I.Gaussian(sigma=0.3)
+    with pytest.raises(InvalidArgumentError, match="'center'"):
+        I.Gaussian(center=(0.5, 1.0))
+    with pytest.raises(InvalidArgumentError, match="'radius'"):
+        I.Disk(radius=0.5)
+    with pytest.raises(InvalidArgumentError, match="'normal'"):
+        I.Heaviside(normal=(0.0, 0.0))
+    with pytest.raises(InvalidArgumentError, match="'points'"):
+        I.Gaussian()(np.zeros((4, 3)))
+    with pytest.raises(InvalidArgumentError, match="Known integrands: gaussian, disk"):
+        I.make_integrand("gausian")
+    with pytest.raises(InvalidArgumentError, match="2-dimensional"):
+        I.make_integrand("pmj_step", d=3)
+    assert I.make_integrand("disk", d=3).d == 3
