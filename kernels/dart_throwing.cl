@@ -60,9 +60,10 @@ inline uint neighbour_cell(const int *bc, __global const int *off, const uint G)
 {
     uint flat = 0;
     for (int k = 0; k < DIM; ++k) {
-        int c = (bc[k] + off[k]) % (int)G;
-        if (c < 0)
-            c += (int)G;
+        /* |off| <= G (the host checks), so one correction wraps; an integer modulo
+         * here cost more than the distance test it feeds */
+        int c = bc[k] + off[k];
+        c = c < 0 ? c + (int)G : c >= (int)G ? c - (int)G : c;
         flat = flat * G + (uint)c;
     }
     return flat;
@@ -84,7 +85,7 @@ __kernel void dart_init(__global uint *rel, __global uint *base, __global uint *
 
 /* One dart per active entry, uniform in its cell; valid when no accepted point is
  * closer than r. The first entry of each grid cell registers the cell's run of
- * entries (tagged with the round) for dart_resolve. */
+ * entries (tagged with the round) for dart_resolve. valid[i] is DART_OPEN or DART_OUT. */
 __kernel void dart_throw(__global const uint *rel, __global const uint *base,
                          __global const uint *sub, __global const uint *first,
                          __global const uchar *occ, __global const double *pts,
@@ -148,55 +149,75 @@ __kernel void dart_throw(__global const uint *rel, __global const uint *base,
     valid[i] = ok;
 }
 
-/* Matern II among this round's valid darts: dart i is accepted unless a valid dart with
- * a higher key lies closer than r. Two darts in one grid cell always conflict (the cell
- * diagonal is shorter than r), so each grid cell gains at most one point; accepted
- * points never conflict, and acceptance reads only this round's darts. */
+/* Darts' states in dart_resolve: */
+#define DART_OUT 0          /* invalid, or conflicts with an accepted dart */
+#define DART_OPEN 1         /* valid, undecided */
+#define DART_IN 2           /* accepted */
+
+/* One step of the greedy independent set among this round's valid darts (Luby 1986 with
+ * fixed priorities): dart i goes out when a conflicting (closer than r) dart of a higher
+ * key (random priority, then lower index) is in, waits while such a dart is open, and goes
+ * in when there is neither. Only higher darts matter: a dart goes in only once every
+ * higher conflicting dart is out, so a lower one is never in while i is open. A step
+ * reads `in` and writes `out` and its rule asks only "is there any", so no result depends
+ * on the order in which work-items run or neighbours are scanned. Run to the end, the
+ * steps accept the set that throwing the darts one by one in priority order would; the
+ * host stops after RESOLVE_STEPS steps, and darts still open stay out this round (their
+ * cells stay active). Two darts in one grid cell always conflict (the cell diagonal is
+ * shorter than r), so each grid cell gains at most one point. Points are written to the
+ * grid as they are accepted (no step reads the grid). */
 __kernel void dart_resolve(__global const uint *rel, __global const uint *base,
                            __global const double *cand, __global const uint *prio,
-                           __global const uchar *valid, __global const uint *cand_round,
-                           __global const uint *cand_first, __global uchar *occ,
-                           __global double *pts, __global uchar *won,
-                           __global uint *accepted, const uint m, const uint G, __global const int *window,
-                           const uint nwindow,
-                           const uint cells, const uint round, const double r2)
+                           __global const uchar *in, __global uchar *out,
+                           __global const uint *cand_round, __global const uint *cand_first,
+                           __global uchar *occ, __global double *pts, __global uint *accepted,
+                           const uint m, const uint G,
+                           __global const int *window, const uint nwindow, const uint cells,
+                           const uint round, const double r2)
 {
     const uint i = get_global_id(0);
     if (i >= m)
         return;
-    uchar win = valid[i];
-    if (win) {
-        const uint ri = rel[i], bi = base[i], pi = prio[i];
-        double x[DIM];
-        for (int k = 0; k < DIM; ++k)
-            x[k] = cand[(size_t)i * DIM + k];
-        int bc[DIM];
-        cell_coords(bi, G, bc);
-            for (uint o = 0; win && o < nwindow; ++o) {
-            const uint nb = neighbour_cell(bc, window + o * DIM, G);
-            const size_t nslot = (size_t)ri * cells + nb;
-            if (cand_round[nslot] != round)
-                continue;
-            for (uint j = cand_first[nslot]; j < m && rel[j] == ri && base[j] == nb; ++j) {
-                if (j == i || !valid[j])
-                    continue;
-                const uint pj = prio[j];
-                if ((pj > pi || (pj == pi && j < i))
-                        && torus_distance2(x, cand + (size_t)j * DIM) < r2) {
-                    win = 0;
+    const uchar state = in[i];
+    if (state != DART_OPEN) {
+        out[i] = state;
+        return;
+    }
+    const uint ri = rel[i], bi = base[i], pi = prio[i];
+    double x[DIM];
+    for (int k = 0; k < DIM; ++k)
+        x[k] = cand[(size_t)i * DIM + k];
+    int bc[DIM];
+    cell_coords(bi, G, bc);
+    bool blocked = false, beaten = false;
+    for (uint o = 0; !beaten && o < nwindow; ++o) {
+        const uint nb = neighbour_cell(bc, window + o * DIM, G);
+        const size_t nslot = (size_t)ri * cells + nb;
+        if (cand_round[nslot] != round)
+            continue;
+        for (uint j = cand_first[nslot]; j < m && rel[j] == ri && base[j] == nb; ++j) {
+            const uint pj = prio[j];
+            if (!(pj > pi || (pj == pi && j < i)))
+                continue;       /* not higher (this also skips j == i) */
+            const uchar sj = in[j];
+            if (sj != DART_OUT && torus_distance2(x, cand + (size_t)j * DIM) < r2) {
+                if (sj == DART_IN) {
+                    beaten = true;
                     break;
                 }
+                blocked = true;
             }
         }
-        if (win) {
-            const size_t slot = (size_t)ri * cells + bi;
-            occ[slot] = 1;
-            for (int k = 0; k < DIM; ++k)
-                pts[slot * DIM + k] = x[k];
-            atomic_inc(accepted + ri);   /* a count: its value does not depend on order */
-        }
     }
-    won[i] = win;
+    const uchar next = beaten ? DART_OUT : blocked ? DART_OPEN : DART_IN;
+    out[i] = next;
+    if (next == DART_IN) {
+        const size_t slot = (size_t)ri * cells + bi;
+        occ[slot] = 1;
+        for (int k = 0; k < DIM; ++k)
+            pts[slot * DIM + k] = x[k];
+        atomic_inc(accepted + ri);  /* counts: their values do not depend on order */
+    }
 }
 
 /* Per axis, the distance from p to the farther end of [lo, hi], or 0.5 when the interval

@@ -33,8 +33,10 @@ LEVEL0_ROUNDS = 2           # rounds of darts at grid-cell level before refining
 MAX_LEVEL = 30              # subcell coordinates are 32-bit
 MAX_ROUNDS = 2048           # the dart tag holds the round in 11 bits
 MAX_RANK = 2**20            # and the rank within a grid cell's entries in 20 bits
+RESOLVE_STEPS = 4           # greedy steps per round (dart_resolve); darts still open stay out
 MAX_ATTEMPTS = 8            # redraws of a realization that became maximal below n
 _NO_ROUND = np.uint32(0xFFFFFFFF)
+_OUT, _OPEN, _IN = 0, 1, 2     # dart states of dart_resolve
 
 
 # -- the geometry both backends share -------------------------------------------------------
@@ -138,6 +140,8 @@ class _Geometry:
         self.G = grid_size(radius, d)
         self.cells = self.G ** d
         self.window = window_offsets(radius, self.G, d)
+        # the kernels wrap a neighbour's coordinate with one correction
+        assert np.abs(self.window).max() <= self.G
         self.nblocks = d // 2 + 1
 
 
@@ -210,34 +214,42 @@ class _NumpyDarts:
     def resolve(self, round_):
         g = self.geo
         m = self.m
-        win = self.valid.copy()
-        idx = np.flatnonzero(win)
-        bc = _cell_coords(self.base[idx], g.G, g.d)
-        rel = self.rel[idx]
-        pi = self.prio[idx]
-        for off in g.window:
-            nb = _flat(bc + off, g.G)
-            nslot = rel * g.cells + nb
-            live = win[idx] & (self.cand_round[nslot] == round_)
-            j = self.cand_first[nslot]
-            while True:
-                jj = np.minimum(j, m - 1)
-                live &= (j < m) & (self.rel[jj] == rel) & (self.base[jj] == nb)
-                if not live.any():
-                    break
-                pj = self.prio[jj]
-                beats = live & (jj != idx) & self.valid[jj] & ((pj > pi) | ((pj == pi) & (jj < idx)))
-                if beats.any():
-                    b = np.flatnonzero(beats)
-                    close = toroidal_distance2(self.cand[idx[b]], self.cand[jj[b]]) < g.r2
-                    win[idx[b[close]]] = False
-                live &= win[idx]
-                j = j + 1
         slot = self.rel * g.cells + self.base
-        self.occ[slot[win]] = 1
-        self.pts[slot[win]] = self.cand[win]
-        self.won = win
-        return np.bincount(self.rel[win], minlength=self.B)
+        state = np.where(self.valid, _OPEN, _OUT).astype(np.uint8)
+        accepted = np.zeros(self.B, dtype=np.int64)
+        for _ in range(RESOLVE_STEPS):
+            idx = np.flatnonzero(state == _OPEN)
+            bc = _cell_coords(self.base[idx], g.G, g.d)
+            rel, pi = self.rel[idx], self.prio[idx]
+            beaten = np.zeros(idx.size, dtype=bool)
+            blocked = np.zeros(idx.size, dtype=bool)
+            for off in g.window:
+                nb = _flat(bc + off, g.G)
+                nslot = rel * g.cells + nb
+                live = self.cand_round[nslot] == round_
+                j = self.cand_first[nslot]
+                while True:
+                    jj = np.minimum(j, m - 1)
+                    live &= (j < m) & (self.rel[jj] == rel) & (self.base[jj] == nb)
+                    if not live.any():
+                        break
+                    sj, pj = state[jj], self.prio[jj]
+                    higher = (pj > pi) | ((pj == pi) & (jj < idx))
+                    ask = live & higher & (sj != _OUT)
+                    if ask.any():
+                        q = np.flatnonzero(ask)
+                        close = toroidal_distance2(self.cand[idx[q]], self.cand[jj[q]]) < g.r2
+                        beaten[q[close & (sj[q] == _IN)]] = True
+                        blocked[q[close & (sj[q] == _OPEN)]] = True
+                    j = j + 1
+            nxt = np.where(beaten, _OUT, np.where(blocked, _OPEN, _IN)).astype(np.uint8)
+            state[idx] = nxt
+            won = idx[nxt == _IN]
+            self.occ[slot[won]] = 1
+            self.pts[slot[won]] = self.cand[won]
+            accepted += np.bincount(self.rel[won], minlength=self.B)
+        self.won = state == _IN
+        return accepted
 
     def won_entries(self):
         """(realization, slot, priority) of each dart accepted this round."""
@@ -329,7 +341,7 @@ class _DeviceDarts:
         self.cand = cla.empty(q, m * d, np.float64)
         self.prio = cla.empty(q, m, np.uint32)
         self.valid = cla.empty(q, m, np.uint8)
-        self.won = cla.empty(q, m, np.uint8)
+        self.state = cla.empty(q, m, np.uint8)
         self.mask = cla.empty(q, m, np.uint8)
         self.count = cla.empty(q, m, np.uint8)
 
@@ -357,10 +369,14 @@ class _DeviceDarts:
 
     def resolve(self, round_):
         self.accepted.fill(0)
-        self._run("dart_resolve", self.m, self.rel.data, self.base.data, self.cand.data,
-                  self.prio.data, self.valid.data, self.cand_round.data, self.cand_first.data,
-                  self.occ.data, self.pts.data, self.won.data, self.accepted.data, *self._common(),
-                  np.uint32(round_), np.float64(self.geo.r2))
+        state, other = self.valid, self.state
+        for _ in range(RESOLVE_STEPS):
+            self._run("dart_resolve", self.m, self.rel.data, self.base.data, self.cand.data,
+                      self.prio.data, state.data, other.data, self.cand_round.data,
+                      self.cand_first.data, self.occ.data, self.pts.data, self.accepted.data,
+                      *self._common(), np.uint32(round_), np.float64(self.geo.r2))
+            state, other = other, state
+        self.won = state
         accepted = self.accepted.get().astype(np.int64)
         if self.overflow.get()[0]:
             raise SamplingError(
@@ -370,7 +386,7 @@ class _DeviceDarts:
 
     def won_entries(self):
         m = self.m
-        won = self.won[:m].get().astype(bool)
+        won = self.won[:m].get() == _IN
         rel = self.rel[:m].get()[won].astype(np.int64)
         base = self.base[:m].get()[won].astype(np.int64)
         return rel, rel * self.geo.cells + base, self.prio[:m].get()[won]
