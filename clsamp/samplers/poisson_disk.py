@@ -161,6 +161,7 @@ class _NumpyDarts:
         self.pts = np.zeros((slots, geo.d), dtype=np.float64)
         self.cand_round = np.full(slots, _NO_ROUND, dtype=np.uint32)
         self.cand_first = np.zeros(slots, dtype=np.int64)
+        self.total = np.zeros(self.B, dtype=np.int64)
         i = np.arange(slots, dtype=np.int64)
         self.rel, self.base, self.first = i // geo.cells, i % geo.cells, i.copy()
         self.sub = np.zeros((slots, geo.d), dtype=np.int64)
@@ -206,17 +207,18 @@ class _NumpyDarts:
                 h = np.flatnonzero(hit)
                 ok[h[toroidal_distance2(x[h], self.pts[nslot[h]]) < g.r2]] = False
         self.cand, self.prio, self.valid = x, prio, ok
-        self._max_rank = int(np.max(np.arange(m) - self.first)) if m else 0
+        if m and int(np.max(np.arange(m) - self.first)) >= MAX_RANK:
+            raise _rank_overflow()
 
-    def rank_overflow(self):
-        return self._max_rank >= MAX_RANK
+    def accepted(self):
+        """Darts accepted so far, per realization (trimmed ones included)."""
+        return self.total.copy()
 
     def resolve(self, round_):
         g = self.geo
         m = self.m
         slot = self.rel * g.cells + self.base
         state = np.where(self.valid, _OPEN, _OUT).astype(np.uint8)
-        accepted = np.zeros(self.B, dtype=np.int64)
         for _ in range(RESOLVE_STEPS):
             idx = np.flatnonzero(state == _OPEN)
             bc = _cell_coords(self.base[idx], g.G, g.d)
@@ -247,9 +249,8 @@ class _NumpyDarts:
             won = idx[nxt == _IN]
             self.occ[slot[won]] = 1
             self.pts[slot[won]] = self.cand[won]
-            accepted += np.bincount(self.rel[won], minlength=self.B)
+            self.total += np.bincount(self.rel[won], minlength=self.B)
         self.won = state == _IN
-        return accepted
 
     def won_entries(self):
         """(realization, slot, priority) of each dart accepted this round."""
@@ -259,7 +260,7 @@ class _NumpyDarts:
     def clear(self, slots):
         self.occ[slots] = 0
 
-    def refine(self, level, split, done):
+    def refine(self, level, split, done, tally):
         g = self.geo
         children = (1 << g.d) if split else 1
         slot = self.rel * g.cells + self.base
@@ -323,10 +324,11 @@ class _DeviceDarts:
         self.cand_round = cla.empty(q, slots, np.uint32)
         self.cand_round.fill(_NO_ROUND)
         self.cand_first = cla.empty(q, slots, np.uint32)
-        self.accepted = cla.empty(q, self.B, np.uint32)
+        self.accepted_ = cla.zeros(q, self.B, np.uint32)
         self.overflow = cla.zeros(q, 1, np.uint32)
         self.remaining = cla.empty(q, self.B, np.uint32)
         self.done = cla.zeros(q, self.B, np.uint8)
+        self._done = np.zeros(self.B, dtype=np.uint8)
         self.m = slots
         self._alloc_entries(slots)
         self._run("dart_init", self.m, self.rel.data, self.base.data, self.sub.data,
@@ -364,25 +366,21 @@ class _DeviceDarts:
                   np.uint32(self.attempt), *runtime.key_args(self.seed),
                   np.uint32(philox.Stream.CANDIDATES))
 
-    def rank_overflow(self):
-        return False    # read with the next resolve: see there
-
     def resolve(self, round_):
-        self.accepted.fill(0)
         state, other = self.valid, self.state
         for _ in range(RESOLVE_STEPS):
             self._run("dart_resolve", self.m, self.rel.data, self.base.data, self.cand.data,
                       self.prio.data, state.data, other.data, self.cand_round.data,
-                      self.cand_first.data, self.occ.data, self.pts.data, self.accepted.data,
+                      self.cand_first.data, self.occ.data, self.pts.data, self.accepted_.data,
                       *self._common(), np.uint32(round_), np.float64(self.geo.r2))
             state, other = other, state
         self.won = state
-        accepted = self.accepted.get().astype(np.int64)
+
+    def accepted(self):
+        """Darts accepted so far, per realization (trimmed ones included)."""
         if self.overflow.get()[0]:
-            raise SamplingError(
-                f"poisson_disk: more than {MAX_RANK} active subcells in one grid cell "
-                "(a bug: please report it with the seed and radius)")
-        return accepted
+            raise _rank_overflow()
+        return self.accepted_.get().astype(np.int64)
 
     def won_entries(self):
         m = self.m
@@ -396,14 +394,18 @@ class _DeviceDarts:
             buf = cla.to_device(self.q, np.asarray(slots, dtype=np.uint32))
             self._run("dart_clear", len(slots), self.occ.data, buf.data, np.uint32(len(slots)))
 
-    def refine(self, level, split, done):
-        self.done.set(done.astype(np.uint8))
-        self.remaining.fill(0)
+    def refine(self, level, split, done, tally):
+        if not np.array_equal(done, self._done):
+            self._done = done.copy()
+            self.done.set(self._done)
+        if tally:
+            self.remaining.fill(0)
         self._run("dart_refine", self.m, self.rel.data, self.base.data, self.sub.data,
                   self.occ.data, self.pts.data, self.done.data, self.mask.data, self.count.data,
                   self.remaining.data, *self._common(), np.uint32(level), np.uint32(split),
                   np.float64(self.geo.r2))
-        return self.count[:self.m].get(), self.remaining.get().astype(np.int64)
+        return (self.count[:self.m].get(),
+                self.remaining.get().astype(np.int64) if tally else None)
 
     def emit(self, counts, offs, split):
         total = int(offs[-1] + counts[-1]) if len(counts) else 0
@@ -425,6 +427,12 @@ class _DeviceDarts:
 _SKIP = 0xFFFFFFFF   # gather: a realization that is redrawn
 
 
+def _rank_overflow():
+    return SamplingError(
+        f"poisson_disk: more than {MAX_RANK} active subcells in one grid cell "
+        "(a bug: please report it with the seed and radius)")
+
+
 # -- the round loop -------------------------------------------------------------------------
 def _throw_darts(backend, n):
     """Run rounds until every realization is maximal or (n given) holds n points.
@@ -442,6 +450,7 @@ def _throw_darts(backend, n):
     stats : dict, rounds and darts thrown
     """
     B = backend.B
+    trimmed = np.zeros(B, dtype=np.int64)
     counts = np.zeros(B, dtype=np.int64)
     done = np.zeros(B, dtype=np.uint8)
     short = np.zeros(B, dtype=bool)
@@ -454,27 +463,27 @@ def _throw_darts(backend, n):
                 f"poisson_disk did not finish in {MAX_ROUNDS} rounds / {MAX_LEVEL} levels "
                 "(a bug: please report it with the seed and radius)")
         backend.throw(round_, level)
-        if backend.rank_overflow():
-            raise SamplingError(
-                f"poisson_disk: more than {MAX_RANK} active subcells in one grid cell "
-                "(a bug: please report it with the seed and radius)")
         darts += backend.m
-        counts += backend.resolve(round_)
-        over = (counts >= n) & (done == 0) if n is not None else np.zeros(B, dtype=bool)
-        if over.any():
-            if np.any(counts[over] > n):
-                rel, slots, prio = backend.won_entries()
-                drop = []
-                for r in np.flatnonzero(over & (counts > n)):
-                    mine = np.flatnonzero(rel == r)
-                    # best first: higher priority, then lower entry index (dart_resolve's key)
-                    order = np.lexsort((mine, -prio[mine].astype(np.int64)))
-                    drop.append(slots[mine[order[len(mine) - (counts[r] - n):]]])
-                backend.clear(np.concatenate(drop))
-            counts[over] = n
-            done[over] = 1
+        backend.resolve(round_)
+        if n is not None:
+            # the maximal mode reads the counts once, at the end (one sync less a round)
+            counts = backend.accepted() - trimmed
+            over = (counts >= n) & (done == 0)
+            if over.any():
+                if np.any(counts[over] > n):
+                    rel, slots, prio = backend.won_entries()
+                    drop = []
+                    for r in np.flatnonzero(over & (counts > n)):
+                        mine = np.flatnonzero(rel == r)
+                        # best first: higher priority, then lower entry index (dart_resolve's key)
+                        order = np.lexsort((mine, -prio[mine].astype(np.int64)))
+                        drop.append(slots[mine[order[len(mine) - (counts[r] - n):]]])
+                        trimmed[r] += counts[r] - n
+                    backend.clear(np.concatenate(drop))
+                counts[over] = n
+                done[over] = 1
         split = int(level_of(round_ + 1) > level)
-        entry_counts, remaining = backend.refine(level, split, done)
+        entry_counts, remaining = backend.refine(level, split, done, n is not None)
         if n is not None:
             newly_short = (remaining == 0) & (done == 0)
             short |= newly_short
@@ -485,6 +494,7 @@ def _throw_darts(backend, n):
             raise SamplingError("poisson_disk: more than 2^32 active cells in one batch")
         backend.emit(entry_counts, offs, split)
         round_ += 1
+    counts = backend.accepted() - trimmed
     return counts, short, {"rounds": round_, "darts": darts}
 
 
