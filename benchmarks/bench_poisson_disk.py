@@ -83,11 +83,11 @@ def run(devices, quick):
             size = f"maximal r={radius}"
             t_s, q_s = peers[("scipy", radius)]
             rows.append(Row("poisson_disk", size, dev, t_cl, "scipy PoissonDisk.fill_space", t_s,
-                            quality, {"peer_quality": q_s, "points": len(pts)}))
+                            f"{quality} | peer: {q_s}", {"points": len(pts)}))
             if bridson is not None:
                 t_b, q_b = peers[("bridson", radius)]
-                rows.append(Row("poisson_disk", size, dev, t_cl, "bridson (k=30)", t_b, quality,
-                                {"peer_quality": q_b, "points": len(pts)}))
+                rows.append(Row("poisson_disk", size, dev, t_cl, "bridson (k=30)", t_b,
+                                f"{quality} | peer: {q_b}", {"points": len(pts)}))
             else:
                 rows.append(Row("poisson_disk", size, dev, t_cl, "bridson: not installed", None,
                                 quality))

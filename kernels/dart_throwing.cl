@@ -7,8 +7,8 @@
  * most one point each; the uncovered area is a list of active cells (level-L
  * subcells of the grid cells) that is refined until no active cell remains, which
  * makes the set maximal. Conflicts between darts thrown in the same round are settled
- * as in Matern's second thinning: a dart survives only if no conflicting valid dart
- * has a higher (random priority, then lower index) key, so the outcome depends on no
+ * by a few steps of the greedy independent set in the order of a random priority (Luby
+ * 1986; dart_resolve), whose rules ask only "is there any", so the outcome depends on no
  * scheduling order and every device gives the same set.
  *
  * Layout: B realizations of `cells` = G^DIM grid cells each; grid cell `cell` of local
@@ -173,7 +173,7 @@ __kernel void dart_resolve(__global const uint *rel, __global const uint *base,
                            __global uchar *occ, __global double *pts, __global uint *accepted,
                            const uint m, const uint G,
                            __global const int *window, const uint nwindow, const uint cells,
-                           const uint round, const double r2)
+                           const uint round, const uint step, const double r2)
 {
     const uint i = get_global_id(0);
     if (i >= m)
@@ -190,7 +190,7 @@ __kernel void dart_resolve(__global const uint *rel, __global const uint *base,
     int bc[DIM];
     cell_coords(bi, G, bc);
     bool blocked = false, beaten = false;
-    for (uint o = 0; !beaten && o < nwindow; ++o) {
+    for (uint o = 0; !beaten && !(blocked && step == 0) && o < nwindow; ++o) {
         const uint nb = neighbour_cell(bc, window + o * DIM, G);
         const size_t nslot = (size_t)ri * cells + nb;
         if (cand_round[nslot] != round)
@@ -206,6 +206,8 @@ __kernel void dart_resolve(__global const uint *rel, __global const uint *base,
                     break;
                 }
                 blocked = true;
+                if (step == 0)
+                    break;  /* no dart is in yet: the first blocker decides (exactly) */
             }
         }
     }

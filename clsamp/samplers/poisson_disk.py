@@ -27,8 +27,9 @@ from .base import Sampler, register
 
 HEXAGONAL_DENSITY = math.pi / math.sqrt(12.0)   # 0.9069: the largest 'rho' accepted
 MAX_RADIUS = 0.5            # beyond, a disk overlaps its own periodic image
-MAX_CELLS = 2**26           # grid cells per realization (memory: ~ 9 + 8 d bytes each)
-BATCH_CELLS = 2**22         # grid cells of the realizations handled in one launch
+MAX_CELLS = 2**24           # grid cells per realization (memory: ~ 9 + 8 d bytes each,
+                            # and about as much again for the active cells)
+BATCH_CELLS = 2**21         # grid cells of the realizations handled in one launch
 LEVEL0_ROUNDS = 2           # rounds of darts at grid-cell level before refining every round
 MAX_LEVEL = 30              # subcell coordinates are 32-bit
 MAX_ROUNDS = 2048           # the dart tag holds the round in 11 bits
@@ -368,11 +369,12 @@ class _DeviceDarts:
 
     def resolve(self, round_):
         state, other = self.valid, self.state
-        for _ in range(RESOLVE_STEPS):
+        for step in range(RESOLVE_STEPS):
             self._run("dart_resolve", self.m, self.rel.data, self.base.data, self.cand.data,
                       self.prio.data, state.data, other.data, self.cand_round.data,
                       self.cand_first.data, self.occ.data, self.pts.data, self.accepted_.data,
-                      *self._common(), np.uint32(round_), np.float64(self.geo.r2))
+                      *self._common(), np.uint32(round_), np.uint32(step),
+                      np.float64(self.geo.r2))
             state, other = other, state
         self.won = state
 
@@ -437,8 +439,8 @@ def _rank_overflow():
 def _throw_darts(backend, n):
     """Run rounds until every realization is maximal or (n given) holds n points.
 
-    Each round: one dart per active entry (``throw``), Matern II among the valid darts
-    (``resolve``), then the entries are refined (``refine``/``emit``): covered ones are
+    Each round: one dart per active entry (``throw``), RESOLVE_STEPS greedy steps among the
+    valid darts (``resolve``), then the entries are refined (``refine``/``emit``): covered ones are
     dropped, uncovered ones kept or split into their 2^d halves. With n given, the round
     that passes n keeps only its highest-priority darts, so exactly n points remain, and a
     realization that becomes maximal with fewer than n points is marked short.
@@ -512,8 +514,9 @@ class PoissonDiskSampler(Sampler):
         Relative radius in (0, 0.9069] for a fixed n (default 0.75 when ``radius`` is not
         given): the points are at least ``rho * d_max(n)`` apart, d_max from
         :func:`clsamp.point_metrics.max_min_distance` (2-D: sqrt(2 / (sqrt(3) n))).
-        Saturated (maximal) dart throwing reaches about 0.77 in 2-D, so values close to
-        that may fail for some seeds, and values above it fail: the error says so.
+        Saturated (maximal) dart throwing reaches about 0.77 in 2-D (0.80 in 3-D, 0.75 in
+        1-D), so values close to that may need redraws and values above it fail: the
+        error says so.
     radius : float, optional
         Absolute radius in (0, 0.5]. With ``sample()`` (n left out) the set is maximal:
         no point of the torus is r or more from every point. With ``sample(n)`` exactly n
@@ -538,23 +541,33 @@ class PoissonDiskSampler(Sampler):
     A background grid of G^d cells of side 1/G < r / sqrt(d) holds at most one point per
     cell (Wei 2008; Ebeida et al. 2011). Uncovered space is tracked as a list of active
     cells: all grid cells at first, then their 2^d-fold subdivisions (the flat quadtree of
-    Ebeida et al. 2011, 2012). In every round each active cell receives one dart, uniform in
-    the cell; a dart is valid when no accepted point is within r, and valid darts closer
-    than r to each other are settled as in Matern's second thinning: the one with the
-    higher Philox priority survives (ties: lower entry index). The outcome is therefore a
-    function of the seed alone, the same on every device and in the NumPy reference. An
-    active cell is dropped as soon as it lies inside one disk (its farthest corner closer
-    than r to a point); when none is left, the set is maximal -- exactly, not after a
-    count of failures.
+    Ebeida et al. 2011, 2012), one level deeper every round after the first two. In every
+    round each active cell receives one dart, uniform in the cell (so darts land uniformly
+    in the uncovered area's cover); a dart is valid when no accepted point is within r.
+    Valid darts closer than r to each other are settled by a few parallel steps of the
+    greedy independent set in the order of a random Philox priority (Luby 1986): a dart is
+    accepted when no higher conflicting dart is still in play, which is what throwing them
+    one at a time in that order would accept; darts still undecided after
+    ``RESOLVE_STEPS`` steps are dropped for the round (their cells stay active). Every
+    rule asks only whether some neighbour exists, so the outcome is a function of the seed
+    alone: the same on every device and in the NumPy reference. An active cell is dropped
+    as soon as it lies inside one disk (its farthest corner closer than r to a point); when
+    none is left, no point of the torus is r or more from the set: the set is maximal --
+    exactly, not after a count of failures.
 
     Fixed n runs the same process at r = rho * d_max(n) and stops a realization in the
     round its count passes n, keeping that round's n - (earlier points) highest-priority
-    darts. If a realization becomes maximal with fewer than n points, n points cannot be
-    placed at that rho and ``InvalidArgumentError`` says so.
+    darts (any subset of a valid set is valid). A realization that becomes maximal below n
+    (small n fluctuates) is drawn again from the next of ``MAX_ATTEMPTS`` independent Philox
+    streams, so realization k still depends on k alone; if all fail, n points cannot be
+    placed at that rho and ``InvalidArgumentError`` says so. Saturated dart throwing reaches
+    rho of about 0.75 in 1-D (Renyi's parking constant 0.7476), 0.77 in 2-D and 0.80 in 3-D,
+    so at the default 0.75 large 1-D sets fail: use a smaller rho there.
 
     In radius mode the count differs between realizations, so ``sample()`` accepts
     ``realizations`` of None (shape (m, d)) or 1 (shape (1, m, d)) only;
-    :meth:`sample_sets` returns a list of k maximal sets (made in one batch).
+    :meth:`sample_sets` returns a list of k maximal sets (made in one batch). ``start``
+    must be 0 (a set, not a sequence).
 
     Points are returned in grid-cell order (row-major), not in the order of acceptance.
 
@@ -566,6 +579,8 @@ class PoissonDiskSampler(Sampler):
     algorithm for maximal Poisson-disk sampling in high dimensions", Comput. Graph.
     Forum 31(2), 2012.
     L.-Y. Wei, "Parallel Poisson disk sampling", ACM Trans. Graph. 27(3), 2008.
+    M. Luby, "A simple parallel algorithm for the maximal independent set problem",
+    SIAM J. Comput. 15(4), 1986.
     A. Lagae, P. Dutre, "A comparison of methods for generating Poisson disk
     distributions", Comput. Graph. Forum 27(1), 2008.
 
@@ -708,6 +723,9 @@ def _draw(geo, ids, n, seed, device, what):
     """
     make = _DeviceDarts if device else _NumpyDarts
     per_batch = max(1, BATCH_CELLS // geo.cells)
+    if device:  # the point grid, the largest buffer, within a quarter of one allocation
+        per_batch = max(1, min(per_batch, runtime.current_device().max_allocation
+                               // (4 * 8 * geo.d * geo.cells)))
     stats = {"rounds": 0, "darts": 0, "redraws": 0}
 
     def alloc(rows):
@@ -754,8 +772,8 @@ def _draw(geo, ids, n, seed, device, what):
         raise InvalidArgumentError(
             f"n={n} points cannot be placed at {what} in d={geo.d}: realization "
             f"{int(ids[pending[0]])} became maximal below n in {MAX_ATTEMPTS} attempts (at most "
-            f"{best} points). Use a smaller 'rho' (saturated dart throwing reaches about 0.77 "
-            "in 2-D) or a smaller 'radius'")
+            f"{best} points). Use a smaller 'rho' (saturated dart throwing reaches about 0.75 "
+            "in 1-D, 0.77 in 2-D, 0.80 in 3-D) or a smaller 'radius'")
     return out, np.full(len(ids), n, dtype=np.int64), stats
 
 
