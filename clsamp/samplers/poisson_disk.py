@@ -91,6 +91,23 @@ def window_offsets(radius, G, d):
     return offsets[keep][order]
 
 
+def cover_window(radius, G, d, level):
+    """The grid offsets whose points can cover a whole level-``level`` box (side
+    w = 1 / (G 2^level)) of the centre cell, nearest first: dart_refine's table.
+
+    A point in the cell at offset o is, along axis k, at least w / 2 from the farther end
+    of the box when o_k = 0 and (|o_k| - 1) / G + w when o_k != 0; offsets whose bound
+    reaches r (with a margin of 1e-9) can cover nothing. At level 0 this leaves the 3^d
+    nearest cells of the 5^d that dart_throw must search, where most entries are refined.
+    """
+    offsets = window_offsets(radius, G, d)
+    w = 1.0 / (G * 2.0 ** level)
+    a = np.abs(offsets)
+    gap = np.where(a == 0, w / 2.0, (np.maximum(a, 1) - 1) / G + w)
+    keep = np.sum(gap * gap, axis=1) < radius * radius * (1.0 + 1e-9)
+    return offsets[keep]
+
+
 def _cell_coords(flat, G, d):
     coords = np.empty(flat.shape + (d,), dtype=np.int64)
     rest = flat.astype(np.int64)
@@ -144,6 +161,13 @@ class _Geometry:
         # the kernels wrap a neighbour's coordinate with one correction
         assert np.abs(self.window).max() <= self.G
         self.nblocks = d // 2 + 1
+        self._cover = {}
+
+    def cover(self, level):
+        """The cover window for boxes at ``level`` (cached)."""
+        if level not in self._cover:
+            self._cover[level] = cover_window(self.radius, self.G, self.d, level)
+        return self._cover[level]
 
 
 # -- the NumPy twin of kernels/dart_throwing.cl ---------------------------------------------
@@ -273,7 +297,7 @@ class _NumpyDarts:
         cp = (bc << level) | self.sub[idx]
         cc = (cp[:, None, :] << 1) | _child_bits(children, g.d)[None]
         Mp, Mc = float(g.G << level), float(g.G << (level + 1))
-        for off in g.window:
+        for off in g.cover(level + split):
             nslot = self.rel[idx] * g.cells + _flat(bc + off, g.G)
             has = self.occ[nslot] == 1
             if not has.any():
@@ -320,6 +344,7 @@ class _DeviceDarts:
         slots = self.B * geo.cells
         self.ids = cla.to_device(q, np.asarray(ids, dtype=np.uint32))
         self.window = cla.to_device(q, np.ascontiguousarray(geo.window, dtype=np.int32))
+        self._covers = {}
         self.occ = cla.zeros(q, slots, np.uint8)
         self.pts = cla.empty(q, slots * geo.d, np.float64)
         self.cand_round = cla.empty(q, slots, np.uint32)
@@ -352,6 +377,12 @@ class _DeviceDarts:
         k = runtime.kernel("dart_throwing.cl", name, defines=self.defines)
         size = max(self.ls, -(-items // self.ls) * self.ls)
         k(self.q, (size,), (self.ls,), *args)
+
+    def _cover_window(self, level):
+        if level not in self._covers:
+            self._covers[level] = cla.to_device(
+                self.q, np.ascontiguousarray(self.geo.cover(level), dtype=np.int32).ravel())
+        return self._covers[level]
 
     def _common(self):
         g = self.geo
@@ -402,10 +433,12 @@ class _DeviceDarts:
             self.done.set(self._done)
         if tally:
             self.remaining.fill(0)
+        window = self._cover_window(level + split)
         self._run("dart_refine", self.m, self.rel.data, self.base.data, self.sub.data,
                   self.occ.data, self.pts.data, self.done.data, self.mask.data, self.count.data,
-                  self.remaining.data, *self._common(), np.uint32(level), np.uint32(split),
-                  np.float64(self.geo.r2))
+                  self.remaining.data, np.uint32(self.m), np.uint32(self.geo.G), window.data,
+                  np.uint32(window.size // self.geo.d), np.uint32(self.geo.cells),
+                  np.uint32(level), np.uint32(split), np.float64(self.geo.r2))
         return (self.count[:self.m].get(),
                 self.remaining.get().astype(np.int64) if tally else None)
 
