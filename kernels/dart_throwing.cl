@@ -69,13 +69,17 @@ inline uint neighbour_cell(const int *bc, __global const int *off, const uint G)
     return flat;
 }
 
-/* First entries of every realization: all G^DIM grid cells at level 0. */
+/* First entries of every realization: all G^DIM grid cells at level 0 (one per grid
+ * slot, so the empty grid is set up here too). */
 __kernel void dart_init(__global uint *rel, __global uint *base, __global uint *sub,
-                        __global uint *first, const uint cells, const uint m)
+                        __global uint *first, __global uchar *occ, __global uint *cand_round,
+                        const uint cells, const uint m)
 {
     const uint i = get_global_id(0);
     if (i >= m)
         return;
+    occ[i] = 0;
+    cand_round[i] = 0xFFFFFFFFu;
     rel[i] = i / cells;
     base[i] = i % cells;
     first[i] = i;

@@ -345,20 +345,22 @@ class _DeviceDarts:
         self.ids = cla.to_device(q, np.asarray(ids, dtype=np.uint32))
         self.window = cla.to_device(q, np.ascontiguousarray(geo.window, dtype=np.int32))
         self._covers = {}
-        self.occ = cla.zeros(q, slots, np.uint8)
+        # dart_init clears occ and cand_round; the small buffers come from the host (no
+        # pyopencl fill kernels: runtime builds every program)
+        self.occ = cla.empty(q, slots, np.uint8)
         self.pts = cla.empty(q, slots * geo.d, np.float64)
         self.cand_round = cla.empty(q, slots, np.uint32)
-        self.cand_round.fill(_NO_ROUND)
         self.cand_first = cla.empty(q, slots, np.uint32)
-        self.accepted_ = cla.zeros(q, self.B, np.uint32)
-        self.overflow = cla.zeros(q, 1, np.uint32)
-        self.remaining = cla.empty(q, self.B, np.uint32)
-        self.done = cla.zeros(q, self.B, np.uint8)
+        self.accepted_ = cla.to_device(q, np.zeros(self.B, dtype=np.uint32))
+        self.overflow = cla.to_device(q, np.zeros(1, dtype=np.uint32))
+        self.remaining = cla.to_device(q, np.zeros(self.B, dtype=np.uint32))
+        self.done = cla.to_device(q, np.zeros(self.B, dtype=np.uint8))
         self._done = np.zeros(self.B, dtype=np.uint8)
         self.m = slots
         self._alloc_entries(slots)
         self._run("dart_init", self.m, self.rel.data, self.base.data, self.sub.data,
-                  self.first.data, np.uint32(geo.cells), np.uint32(self.m))
+                  self.first.data, self.occ.data, self.cand_round.data, np.uint32(geo.cells),
+                  np.uint32(self.m))
 
     def _alloc_entries(self, m):
         q, d, m = self.q, self.geo.d, max(m, 1)
@@ -432,7 +434,7 @@ class _DeviceDarts:
             self._done = done.copy()
             self.done.set(self._done)
         if tally:
-            self.remaining.fill(0)
+            self.remaining.set(np.zeros(self.B, dtype=np.uint32))
         window = self._cover_window(level + split)
         self._run("dart_refine", self.m, self.rel.data, self.base.data, self.sub.data,
                   self.occ.data, self.pts.data, self.done.data, self.mask.data, self.count.data,
