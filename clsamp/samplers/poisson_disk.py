@@ -507,16 +507,18 @@ def _throw_darts(backend, n):
             counts = backend.accepted() - trimmed
             over = (counts >= n) & (done == 0)
             if over.any():
-                if np.any(counts[over] > n):
+                excess = np.where(over, counts - n, 0)
+                if excess.any():
                     rel, slots, prio = backend.won_entries()
-                    drop = []
-                    for r in np.flatnonzero(over & (counts > n)):
-                        mine = np.flatnonzero(rel == r)
-                        # best first: higher priority, then lower entry index (dart_resolve's key)
-                        order = np.lexsort((mine, -prio[mine].astype(np.int64)))
-                        drop.append(slots[mine[order[len(mine) - (counts[r] - n):]]])
-                        trimmed[r] += counts[r] - n
-                    backend.clear(np.concatenate(drop))
+                    # each realization's darts of this round, best first: higher priority,
+                    # then lower entry index (dart_resolve's key); the last `excess` go
+                    order = np.lexsort((np.arange(rel.size), -prio.astype(np.int64), rel))
+                    rel, slots = rel[order], slots[order]
+                    start = np.searchsorted(rel, np.arange(B))
+                    size = np.bincount(rel, minlength=B)
+                    rank = np.arange(rel.size) - start[rel]
+                    backend.clear(slots[rank >= size[rel] - excess[rel]])
+                    trimmed += excess
                 counts[over] = n
                 done[over] = 1
         split = int(level_of(round_ + 1) > level)
@@ -729,7 +731,9 @@ class PoissonDiskSampler(Sampler):
         parts, counts, stats = _draw(geo, ids, n, self.seed, device, what)
         self.counts = counts
         self.radius_used = geo.radius
-        self.rho_bound = np.array([geo.radius / max_min_distance(int(c), self.d) for c in counts])
+        sizes, where = np.unique(counts, return_inverse=True)
+        self.rho_bound = np.array([geo.radius / max_min_distance(int(c), self.d)
+                                   for c in sizes])[where]
         self.stats = stats
         if as_list:
             sets = []
