@@ -52,12 +52,20 @@ inline void cell_coords(uint flat, const uint G, int *bc)
     }
 }
 
-/* Flat index of the grid cell at offset `off` (DIM ints of the window table) from bc,
- * wrapped on the torus. The table (clsamp.samplers.poisson_disk.window_offsets) lists the
- * offsets whose cells can hold a point closer than r, nearest first, so the loops that
- * stop at the first conflict or cover stop early. */
-inline uint neighbour_cell(const int *bc, __global const int *off, const uint G)
+/* Window tables (clsamp.samplers.poisson_disk.window_offsets, cover_window) list the
+ * offsets whose cells can matter, nearest first, so the loops that stop at the first
+ * conflict or cover stop early; each row is DIM offsets and the flat-index difference
+ * the offset makes when no coordinate wraps. */
+#define ROW (DIM + 1)
+
+/* Flat index of the grid cell at row `off` of a window from grid cell bi (coordinates
+ * bc): the flat difference inside the grid (`inner`: no coordinate of the window wraps,
+ * the common case), else each coordinate wrapped on the torus. */
+inline uint neighbour_cell(const int *bc, const uint bi, const bool inner,
+                           __global const int *off, const uint G)
 {
+    if (inner)
+        return (uint)((int)bi + off[DIM]);
     uint flat = 0;
     for (int k = 0; k < DIM; ++k) {
         /* |off| <= G (the host checks), so one correction wraps; an integer modulo
@@ -67,6 +75,15 @@ inline uint neighbour_cell(const int *bc, __global const int *off, const uint G)
         flat = flat * G + (uint)c;
     }
     return flat;
+}
+
+/* Whether a window reaching `reach` cells along each axis stays inside the grid. */
+inline bool inside(const int *bc, const int reach, const uint G)
+{
+    bool in = true;
+    for (int k = 0; k < DIM; ++k)
+        in = in && bc[k] >= reach && bc[k] + reach < (int)G;
+    return in;
 }
 
 /* First entries of every realization: all G^DIM grid cells at level 0 (one per grid
@@ -96,6 +113,7 @@ __kernel void dart_throw(__global const uint *rel, __global const uint *base,
                          __global double *cand, __global uint *prio, __global uchar *valid,
                          __global uint *cand_round, __global uint *cand_first,
                          __global uint *overflow, const uint m, const uint G, __global const int *window, const uint nwindow,
+                         const int reach,
                          const uint cells,
                          const uint level, const uint round, const double r2,
                          __global const uint *ids, const uint attempt, const uint key_lo,
@@ -112,6 +130,7 @@ __kernel void dart_throw(__global const uint *rel, __global const uint *base,
     }
     int bc[DIM];
     cell_coords(bi, G, bc);
+    const bool inner = inside(bc, reach, G);
     /* Philox counter (grid cell | attempt << 26, realization, dart tag, stream): the tag
      * numbers the round and the entry's rank among its grid cell's entries, so a dart
      * depends only on its own realization's state. */
@@ -143,7 +162,7 @@ __kernel void dart_throw(__global const uint *rel, __global const uint *base,
     }
     uchar ok = occ[slot] ? 0 : 1;
     for (uint o = 0; ok && o < nwindow; ++o) {
-        const size_t nslot = (size_t)ri * cells + neighbour_cell(bc, window + o * DIM, G);
+        const size_t nslot = (size_t)ri * cells + neighbour_cell(bc, bi, inner, window + o * ROW, G);
         if (occ[nslot] && torus_distance2(x, pts + nslot * DIM) < r2)
             ok = 0;
     }
@@ -176,7 +195,8 @@ __kernel void dart_resolve(__global const uint *rel, __global const uint *base,
                            __global const uint *cand_round, __global const uint *cand_first,
                            __global uchar *occ, __global double *pts, __global uint *accepted,
                            const uint m, const uint G,
-                           __global const int *window, const uint nwindow, const uint cells,
+                           __global const int *window, const uint nwindow, const int reach,
+                           const uint cells,
                            const uint round, const uint step, const double r2)
 {
     const uint i = get_global_id(0);
@@ -193,9 +213,10 @@ __kernel void dart_resolve(__global const uint *rel, __global const uint *base,
         x[k] = cand[(size_t)i * DIM + k];
     int bc[DIM];
     cell_coords(bi, G, bc);
+    const bool inner = inside(bc, reach, G);
     bool blocked = false, beaten = false;
     for (uint o = 0; !beaten && !(blocked && step == 0) && o < nwindow; ++o) {
-        const uint nb = neighbour_cell(bc, window + o * DIM, G);
+        const uint nb = neighbour_cell(bc, bi, inner, window + o * ROW, G);
         const size_t nslot = (size_t)ri * cells + nb;
         if (cand_round[nslot] != round)
             continue;
@@ -246,7 +267,8 @@ __kernel void dart_refine(__global const uint *rel, __global const uint *base,
                           __global const double *pts, __global const uchar *done,
                           __global uchar *mask, __global uchar *count,
                           __global uint *remaining, const uint m, const uint G,
-                          __global const int *window, const uint nwindow, const uint cells,
+                          __global const int *window, const uint nwindow, const int reach,
+                           const uint cells,
                           const uint level, const uint split, const double r2)
 {
     const uint i = get_global_id(0);
@@ -261,6 +283,7 @@ __kernel void dart_refine(__global const uint *rel, __global const uint *base,
     }
     int bc[DIM];
     cell_coords(bi, G, bc);
+    const bool inner = inside(bc, reach, G);
     const double Mp = (double)((ulong)G << level);
     const double Mc = (double)((ulong)G << (level + 1));
     double lo[DIM], mid[DIM], hi[DIM];
@@ -273,7 +296,7 @@ __kernel void dart_refine(__global const uint *rel, __global const uint *base,
     const uint children = split ? (1u << DIM) : 1u;
     uint open = (1u << children) - 1u;
     for (uint o = 0; open && o < nwindow; ++o) {
-        const size_t nslot = (size_t)ri * cells + neighbour_cell(bc, window + o * DIM, G);
+        const size_t nslot = (size_t)ri * cells + neighbour_cell(bc, bi, inner, window + o * ROW, G);
         if (!occ[nslot])
             continue;
         __global const double *p = pts + nslot * DIM;

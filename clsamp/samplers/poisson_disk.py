@@ -343,7 +343,7 @@ class _DeviceDarts:
         self.defines = {"DIM": geo.d}
         slots = self.B * geo.cells
         self.ids = cla.to_device(q, np.asarray(ids, dtype=np.uint32))
-        self.window = cla.to_device(q, np.ascontiguousarray(geo.window, dtype=np.int32))
+        self.window = self._table(geo.window)
         self._covers = {}
         # dart_init clears occ and cand_round; the small buffers come from the host (no
         # pyopencl fill kernels: runtime builds every program)
@@ -380,16 +380,24 @@ class _DeviceDarts:
         size = max(self.ls, -(-items // self.ls) * self.ls)
         k(self.q, (size,), (self.ls,), *args)
 
+    def _table(self, offsets):
+        """A window table for the kernels: rows of d offsets and their flat difference,
+        with the rows' count and their reach along an axis."""
+        G, d = self.geo.G, self.geo.d
+        flat = offsets @ (G ** np.arange(d - 1, -1, -1))
+        rows = np.concatenate([offsets, flat[:, None]], axis=1).astype(np.int32)
+        return (cla.to_device(self.q, np.ascontiguousarray(rows).ravel()), np.uint32(len(rows)),
+                np.int32(np.abs(offsets).max()))
+
     def _cover_window(self, level):
         if level not in self._covers:
-            self._covers[level] = cla.to_device(
-                self.q, np.ascontiguousarray(self.geo.cover(level), dtype=np.int32).ravel())
+            self._covers[level] = self._table(self.geo.cover(level))
         return self._covers[level]
 
-    def _common(self):
+    def _common(self, window=None):
         g = self.geo
-        return (np.uint32(self.m), np.uint32(g.G), self.window.data, np.uint32(len(g.window)),
-                np.uint32(g.cells))
+        table, rows, reach = window or self.window
+        return (np.uint32(self.m), np.uint32(g.G), table.data, rows, reach, np.uint32(g.cells))
 
     def throw(self, round_, level):
         self._run("dart_throw", self.m, self.rel.data, self.base.data, self.sub.data,
@@ -435,11 +443,9 @@ class _DeviceDarts:
             self.done.set(self._done)
         if tally:
             self.remaining.set(np.zeros(self.B, dtype=np.uint32))
-        window = self._cover_window(level + split)
         self._run("dart_refine", self.m, self.rel.data, self.base.data, self.sub.data,
                   self.occ.data, self.pts.data, self.done.data, self.mask.data, self.count.data,
-                  self.remaining.data, np.uint32(self.m), np.uint32(self.geo.G), window.data,
-                  np.uint32(window.size // self.geo.d), np.uint32(self.geo.cells),
+                  self.remaining.data, *self._common(self._cover_window(level + split)),
                   np.uint32(level), np.uint32(split), np.float64(self.geo.r2))
         return (self.count[:self.m].get(),
                 self.remaining.get().astype(np.int64) if tally else None)
