@@ -159,3 +159,13 @@ def test_unplaceable_n_says_so_and_suggests_a_smaller_rho():
         clsamp.make_sampler("poisson_disk", rho=0.85, seed=1).sample(64)
     with pytest.raises(InvalidArgumentError, match="cannot be placed"):
         clsamp.make_sampler("poisson_disk", radius=0.2, seed=1).sample(40)
+
+
+def test_acceptance_threshold_keeps_the_promise_to_the_last_ulp():
+    import math
+    for n in range(1, 3000):
+        d_max = max_min_distance(n, 2)
+        r2 = poisson_disk.acceptance_threshold(0.75 * d_max, d_max, 0.75)
+        assert math.sqrt(r2) / d_max >= 0.75 and math.sqrt(r2) >= 0.75 * d_max
+    for radius in (0.1, 0.01215, 1 / 3, 0.5):
+        assert math.sqrt(poisson_disk.acceptance_threshold(radius)) >= radius

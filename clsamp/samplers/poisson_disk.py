@@ -52,16 +52,19 @@ def reach(radius, G):
     return int(math.floor(radius * G)) + 1
 
 
-def acceptance_threshold(radius, scale=1.0):
-    """The smallest double r2 with sqrt(r2) / scale >= radius / scale in double arithmetic.
+def acceptance_threshold(radius, scale=1.0, target=None):
+    """The smallest double r2 >= radius^2 with sqrt(r2) / scale >= target in double
+    arithmetic (target defaults to radius / scale).
 
     Darts are accepted when their squared distance is >= r2, so the minimum distance that
     :func:`clsamp.point_metrics.min_distance` measures (a square root of the same bits),
-    divided by ``scale`` (d_max for a relative radius), is never below the promise.
+    divided by ``scale`` (d_max for a relative radius, whose target is rho), is never
+    below the promise, not even by an ulp.
     """
+    if target is None:
+        target = radius / scale
     r2 = radius * radius
-    target = radius / scale
-    while math.sqrt(r2) / scale < target:
+    while math.sqrt(r2) < radius or math.sqrt(r2) / scale < target:
         r2 = math.nextafter(r2, math.inf)
     return r2
 
@@ -725,7 +728,7 @@ class PoissonDiskSampler(Sampler):
             raise InvalidArgumentError(
                 f"'n'={n} is too large for d={self.d}: the background grid would have "
                 f"{G ** self.d} cells, more than {MAX_CELLS}")
-        return _Geometry(self.d, radius, acceptance_threshold(radius, d_max))
+        return _Geometry(self.d, radius, acceptance_threshold(radius, d_max, self.rho))
 
     def _run(self, n, realizations, device, as_list=False):
         geo = self._geometry(n)
