@@ -112,10 +112,9 @@ __kernel void dart_throw(__global const uint *rel, __global const uint *base,
                          __global const uchar *occ, __global const double *pts,
                          __global double *cand, __global uint *prio, __global uchar *valid,
                          __global uint *cand_round, __global uint *cand_first,
-                         __global uint *overflow, const uint m, const uint G, __global const int *window, const uint nwindow,
-                         const int reach,
-                         const uint cells,
-                         const uint level, const uint round, const double r2,
+                         __global uint *overflow, const uint m, const uint G,
+                         __global const int *window, const uint nwindow, const int reach,
+                         const uint cells, const uint level, const uint round, const double r2,
                          __global const uint *ids, const uint attempt, const uint key_lo,
                          const uint key_hi, const uint stream)
 {
@@ -162,7 +161,8 @@ __kernel void dart_throw(__global const uint *rel, __global const uint *base,
     }
     uchar ok = occ[slot] ? 0 : 1;
     for (uint o = 0; ok && o < nwindow; ++o) {
-        const size_t nslot = (size_t)ri * cells + neighbour_cell(bc, bi, inner, window + o * ROW, G);
+        const size_t nslot = (size_t)ri * cells
+                             + neighbour_cell(bc, bi, inner, window + o * ROW, G);
         if (occ[nslot] && torus_distance2(x, pts + nslot * DIM) < r2)
             ok = 0;
     }
@@ -194,9 +194,8 @@ __kernel void dart_resolve(__global const uint *rel, __global const uint *base,
                            __global const uchar *in, __global uchar *out,
                            __global const uint *cand_round, __global const uint *cand_first,
                            __global uchar *occ, __global double *pts, __global uint *accepted,
-                           const uint m, const uint G,
-                           __global const int *window, const uint nwindow, const int reach,
-                           const uint cells,
+                           const uint m, const uint G, __global const int *window,
+                           const uint nwindow, const int reach, const uint cells,
                            const uint round, const uint step, const double r2)
 {
     const uint i = get_global_id(0);
@@ -261,15 +260,16 @@ inline double far_end(const double lo, const double hi, const double tl, const d
  * to one point (a box lies in a disk iff its corners do; the farthest corner is, per axis,
  * the farther end); a child also counts as covered when its whole parent is, which is
  * what nearly always drops an entry. A child's ends are its parent's ends and midpoint,
- * computed once: (2c)/(2M) rounds as c/M, so these are the bits of the child's own ends. */
+ * computed once: (2c)/(2M) rounds as c/M, so these are the bits of the child's own ends.
+ * `window` is the cover table of the children's level: only its cells can cover. */
 __kernel void dart_refine(__global const uint *rel, __global const uint *base,
                           __global const uint *sub, __global const uchar *occ,
                           __global const double *pts, __global const uchar *done,
                           __global uchar *mask, __global uchar *count,
                           __global uint *remaining, const uint m, const uint G,
                           __global const int *window, const uint nwindow, const int reach,
-                           const uint cells,
-                          const uint level, const uint split, const double r2)
+                          const uint cells, const uint level, const uint split,
+                          const double r2)
 {
     const uint i = get_global_id(0);
     if (i >= m)
@@ -296,7 +296,8 @@ __kernel void dart_refine(__global const uint *rel, __global const uint *base,
     const uint children = split ? (1u << DIM) : 1u;
     uint open = (1u << children) - 1u;
     for (uint o = 0; open && o < nwindow; ++o) {
-        const size_t nslot = (size_t)ri * cells + neighbour_cell(bc, bi, inner, window + o * ROW, G);
+        const size_t nslot = (size_t)ri * cells
+                             + neighbour_cell(bc, bi, inner, window + o * ROW, G);
         if (!occ[nslot])
             continue;
         __global const double *p = pts + nslot * DIM;
