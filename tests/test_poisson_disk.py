@@ -169,3 +169,16 @@ def test_acceptance_threshold_keeps_the_promise_to_the_last_ulp():
         assert math.sqrt(r2) / d_max >= 0.75 and math.sqrt(r2) >= 0.75 * d_max
     for radius in (0.1, 0.01215, 1 / 3, 0.5):
         assert math.sqrt(poisson_disk.acceptance_threshold(radius)) >= radius
+
+
+@pytest.mark.slow
+def test_benchmark_sizes_hold_their_promises():
+    # the maximal case (about 4.7k points) and the tour's largest fixed-n batch
+    sampler = clsamp.make_sampler("poisson_disk", radius=0.01215, seed=1)
+    pts = sampler.sample()
+    assert 4500 < len(pts) < 5000 and min_distance(pts) >= 0.01215
+    rng = np.random.default_rng(1)
+    probes = np.concatenate([probe_grid(1024, 2), rng.random((500_000, 2))])
+    assert uncovered(pts, 0.01215, probes).size == 0
+    fixed = clsamp.make_sampler("poisson_disk", rho=0.75, seed=2).sample(1024, realizations=128)
+    assert np.all(relative_radius(fixed) >= 0.75)
