@@ -185,7 +185,7 @@ __kernel void dart_throw(__global const uint *rel, __global const uint *base,
  * reads `in` and writes `out` and its rule asks only "is there any", so no result depends
  * on the order in which work-items run or neighbours are scanned. Run to the end, the
  * steps accept the set that throwing the darts one by one in priority order would; the
- * host stops after RESOLVE_STEPS steps, and darts still open stay out this round (their
+ * host stops after a few steps (resolve_steps), and darts still open stay out this round (their
  * cells stay active). Two darts in one grid cell always conflict (the cell diagonal is
  * shorter than r), so each grid cell gains at most one point. Points are written to the
  * grid as they are accepted (no step reads the grid). */

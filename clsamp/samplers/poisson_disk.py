@@ -34,7 +34,8 @@ LEVEL0_ROUNDS = 2           # rounds of darts at grid-cell level before refining
 MAX_LEVEL = 30              # subcell coordinates are 32-bit
 MAX_ROUNDS = 2048           # the dart tag holds the round in 11 bits
 MAX_RANK = 2**20            # and the rank within a grid cell's entries in 20 bits
-RESOLVE_STEPS = 4           # greedy steps per round (dart_resolve); darts still open stay out
+RESOLVE_STEPS = (4, 2)      # greedy steps per round at level 0 and deeper (dart_resolve);
+                            # darts still open stay out (deep darts rarely conflict)
 MAX_ATTEMPTS = 8            # redraws of a realization that became maximal below n
 _NO_ROUND = np.uint32(0xFFFFFFFF)
 _OUT, _OPEN, _IN = 0, 1, 2     # dart states of dart_resolve
@@ -73,6 +74,11 @@ def level_of(round_):
     """Refinement level of round ``round_``: level 0 for LEVEL0_ROUNDS rounds, then one
     level deeper each round (the same for all realizations, so none depends on another)."""
     return max(0, round_ - (LEVEL0_ROUNDS - 1))
+
+
+def resolve_steps(round_):
+    """Greedy steps of round ``round_`` (a function of the round alone, as the level)."""
+    return RESOLVE_STEPS[0] if level_of(round_) == 0 else RESOLVE_STEPS[1]
 
 
 def window_offsets(radius, G, d):
@@ -247,7 +253,7 @@ class _NumpyDarts:
         m = self.m
         slot = self.rel * g.cells + self.base
         state = np.where(self.valid, _OPEN, _OUT).astype(np.uint8)
-        for _ in range(RESOLVE_STEPS):
+        for _ in range(resolve_steps(round_)):
             idx = np.flatnonzero(state == _OPEN)
             bc = _cell_coords(self.base[idx], g.G, g.d)
             rel, pi = self.rel[idx], self.prio[idx]
@@ -413,7 +419,7 @@ class _DeviceDarts:
 
     def resolve(self, round_):
         state, other = self.valid, self.state
-        for step in range(RESOLVE_STEPS):
+        for step in range(resolve_steps(round_)):
             self._run("dart_resolve", self.m, self.rel.data, self.base.data, self.cand.data,
                       self.prio.data, state.data, other.data, self.cand_round.data,
                       self.cand_first.data, self.occ.data, self.pts.data, self.accepted_.data,
@@ -483,7 +489,7 @@ def _rank_overflow():
 def _throw_darts(backend, n):
     """Run rounds until every realization is maximal or (n given) holds n points.
 
-    Each round: one dart per active entry (``throw``), RESOLVE_STEPS greedy steps among the
+    Each round: one dart per active entry (``throw``), a few greedy steps among the
     valid darts (``resolve``), then the entries are refined (``refine``/``emit``): covered ones are
     dropped, uncovered ones kept or split into their 2^d halves. With n given, the round
     that passes n keeps only its highest-priority darts, so exactly n points remain, and a
@@ -594,7 +600,7 @@ class PoissonDiskSampler(Sampler):
     greedy independent set in the order of a random Philox priority (Luby 1986): a dart is
     accepted when no higher conflicting dart is still in play, which is what throwing them
     one at a time in that order would accept; darts still undecided after
-    ``RESOLVE_STEPS`` steps are dropped for the round (their cells stay active). Every
+    :func:`resolve_steps` steps are dropped for the round (their cells stay active). Every
     rule asks only whether some neighbour exists, so the outcome is a function of the seed
     alone: the same on every device and in the NumPy reference. An active cell is dropped
     as soon as it lies inside one disk (its farthest corner closer than r to a point); when
