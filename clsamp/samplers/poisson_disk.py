@@ -17,6 +17,7 @@ bit for bit. The round loop that both share is :func:`_throw_darts`.
 import math
 
 import numpy as np
+import pyopencl as cl
 import pyopencl.array as cla
 
 from .. import philox, runtime
@@ -372,17 +373,29 @@ class _DeviceDarts:
                   np.uint32(self.m))
 
     def _alloc_entries(self, m):
+        """Entry buffers for m entries: the (rel, base, sub, first) set not in use is
+        reused when large enough (emit reads one set and writes the other), the per-dart
+        buffers grow only; creating buffers every round cost more than a small round."""
         q, d, m = self.q, self.geo.d, max(m, 1)
-        self.rel = cla.empty(q, m, np.uint32)
-        self.base = cla.empty(q, m, np.uint32)
-        self.sub = cla.empty(q, m * d, np.uint32)
-        self.first = cla.empty(q, m, np.uint32)
-        self.cand = cla.empty(q, m * d, np.float64)
-        self.prio = cla.empty(q, m, np.uint32)
-        self.valid = cla.empty(q, m, np.uint8)
-        self.state = cla.empty(q, m, np.uint8)
-        self.mask = cla.empty(q, m, np.uint8)
-        self.count = cla.empty(q, m, np.uint8)
+        spare = getattr(self, "_spare", None)
+        current = getattr(self, "rel", None)
+        if current is not None:
+            self._spare = (self.rel, self.base, self.sub, self.first)
+        if spare is not None and spare[0].size >= m:
+            self.rel, self.base, self.sub, self.first = spare
+        else:
+            self.rel = cla.empty(q, m, np.uint32)
+            self.base = cla.empty(q, m, np.uint32)
+            self.sub = cla.empty(q, m * d, np.uint32)
+            self.first = cla.empty(q, m, np.uint32)
+        if getattr(self, "_darts", 0) < m:
+            self._darts = m
+            self.cand = cla.empty(q, m * d, np.float64)
+            self.prio = cla.empty(q, m, np.uint32)
+            self.valid = cla.empty(q, m, np.uint8)
+            self.state = cla.empty(q, m, np.uint8)
+            self.mask = cla.empty(q, m, np.uint8)
+            self.count = cla.empty(q, m, np.uint8)
 
     def _run(self, name, items, *args):
         k = runtime.kernel("dart_throwing.cl", name, defines=self.defines)
@@ -461,12 +474,16 @@ class _DeviceDarts:
 
     def emit(self, counts, offs, split):
         total = int(offs[-1] + counts[-1]) if len(counts) else 0
-        old = (self.rel, self.base, self.sub, self.first, self.mask)
-        offs_dev = cla.to_device(self.q, offs.astype(np.uint32))
         m = self.m
+        if getattr(self, "_offs", None) is None or self._offs.size < m:
+            self._offs = cla.empty(self.q, max(m, 1), np.uint32)
+        # not blocking: the host array is kept until the next round's blocking read
+        self._offs_host = np.ascontiguousarray(offs, dtype=np.uint32)
+        cl.enqueue_copy(self.q, self._offs.data, self._offs_host, is_blocking=False)
+        old = (self.rel, self.base, self.sub, self.first, self.mask)
         self._alloc_entries(total)
         self._run("dart_emit", m, old[0].data, old[1].data, old[2].data, old[3].data,
-                  old[4].data, offs_dev.data, self.rel.data, self.base.data, self.sub.data,
+                  old[4].data, self._offs.data, self.rel.data, self.base.data, self.sub.data,
                   self.first.data, np.uint32(m), np.uint32(split))
         self.m = total
 
