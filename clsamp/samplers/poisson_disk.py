@@ -674,8 +674,12 @@ class PoissonDiskSampler(Sampler):
                 "give 'radius' (absolute) or 'rho' (relative to d_max(n)), not both; "
                 f"got radius={radius!r}, rho={rho!r}")
         if radius is not None:
-            self.radius = check_real(radius, "radius", minimum=0.0, maximum=MAX_RADIUS,
-                                     open_minimum=True)
+            self.radius = check_real(radius, "radius", minimum=0.0, open_minimum=True)
+            if self.radius > MAX_RADIUS:
+                raise InvalidArgumentError(
+                    f"'radius' must be <= {MAX_RADIUS} on the unit torus, got {self.radius}: a "
+                    "wider disk around a point overlaps its own periodic image, so it is no "
+                    "longer a disk on the torus")
             G = grid_size(self.radius, self.d)
             if G ** self.d > MAX_CELLS:
                 raise InvalidArgumentError(
@@ -685,8 +689,13 @@ class PoissonDiskSampler(Sampler):
             self.needs_n = False
         else:
             self.radius = None
-            self.rho = 0.75 if rho is None else check_real(
-                rho, "rho", minimum=0.0, maximum=HEXAGONAL_DENSITY, open_minimum=True)
+            self.rho = 0.75 if rho is None else check_real(rho, "rho", minimum=0.0,
+                                                           open_minimum=True)
+            if self.rho > HEXAGONAL_DENSITY:
+                raise InvalidArgumentError(
+                    f"'rho' must be <= {HEXAGONAL_DENSITY:.4f} (pi / sqrt(12), beyond "
+                    f"hexagonal packing), got {self.rho}; maximal dart throwing reaches "
+                    "about 0.77 in 2-D")
         self.counts = None
         self.radius_used = None
         self.rho_bound = None
