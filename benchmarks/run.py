@@ -23,6 +23,7 @@ MODULES = (
     "bench_lowdiscrepancy",
     "bench_spectrum",
     "bench_convergence",
+    "bench_poisson_disk",
 )
 
 

@@ -3,6 +3,7 @@
 # Importing a module registers its samplers.
 from . import (  # noqa: F401
     lowdiscrepancy,  # van_der_corput, halton, hammersley, sobol
+    poisson_disk,  # poisson_disk (dart throwing)
     random,  # random
     stratified,  # regular, jittered, uncorrelated_jitter, latin_hypercube, (correlated_)multijittered
 )

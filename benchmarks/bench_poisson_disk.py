@@ -1,0 +1,118 @@
+"""Poisson disk by parallel dart throwing against scipy.stats.qmc.PoissonDisk and the
+`bridson` package, and the fixed-n sizes that the tour and the convergence sweep use.
+
+    python benchmarks/bench_poisson_disk.py [--device all] [--quick] [--out FILE]
+
+Cases:
+
+* maximal sets at r = 0.01215 (about 4.7k points) and r = 0.006077 (about 19k; not with
+  ``--quick``), on the unit torus. Peers, timed in the same run, in the unit square (they
+  are not periodic): ``scipy.stats.qmc.PoissonDisk(d=2, radius=r).fill_space()`` (Bridson
+  sampling with 30 candidates per active point; not maximal) and ``bridson``'s
+  ``poisson_disc_samples(1, 1, r, k=30)`` (pure Python; skipped if not installed). The
+  quality column gives the points, the relative radius rho (clsamp: toroidal) and the
+  fraction of a 1024^2 probe grid farther than r from every point (0 = maximal; the
+  peers' probes are taken 2r inside the square's edges, where they are not penalized
+  for the boundary).
+* fixed n at rho = 0.75: 256 x 8 and 1024 x 128 realizations (the tour's sizes) and the
+  convergence sweep n = 16, 64, 256, 1024 with 128 realizations each, against the NumPy
+  reference for the smallest (which gives the same bits).
+"""
+
+import random
+
+import numpy as np
+from common import Row, main, on_device, short_name, timed
+from scipy.spatial import cKDTree
+from scipy.stats import qmc
+
+import clsamp
+from clsamp.point_metrics import min_distance, relative_radius
+
+try:
+    import bridson
+except ImportError:     # an optional peer: say so in the table, do not fail
+    bridson = None
+
+RADII = (0.01215, 0.006077)
+PROBES = 1024
+
+
+def _void_fraction(points, radius, periodic, margin=0.0):
+    """Fraction of a PROBES^2 grid of probes farther than r from every point."""
+    axis = (np.arange(PROBES) + 0.5) / PROBES
+    axis = axis[(axis >= margin) & (axis <= 1.0 - margin)]
+    probes = np.stack(np.meshgrid(axis, axis, indexing="ij"), axis=-1).reshape(-1, 2)
+    tree = cKDTree(points, boxsize=1.0 if periodic else None)
+    dist, _ = tree.query(probes, k=1)
+    return float(np.mean(dist >= radius))
+
+
+def _peer_quality(points, radius):
+    points = np.asarray(points, dtype=np.float64)
+    dist, _ = cKDTree(points).query(points, k=2)
+    ratio = float(dist[:, 1].min()) / radius
+    void = _void_fraction(points, radius, periodic=False, margin=2 * radius)
+    return f"{len(points)} pts, min dist {ratio:.3f} r (square), void {void:.2%}"
+
+
+def run(devices, quick):
+    rows = []
+    radii = RADII[:1] if quick else RADII
+    peers = {}
+    for radius in radii:
+        engine = qmc.PoissonDisk(d=2, radius=radius, seed=1)
+        t, pts = timed(lambda: (engine.reset(), engine.fill_space())[1], repeats=1, warmup=0)
+        peers[("scipy", radius)] = (t, _peer_quality(pts, radius))
+        if bridson is not None:
+            rng = random.Random(1)
+            t, pts = timed(lambda: bridson.poisson_disc_samples(1.0, 1.0, radius, k=30,
+                                                                 random=rng.random),
+                           repeats=1, warmup=0)
+            peers[("bridson", radius)] = (t, _peer_quality(pts, radius))
+    for device in devices:
+        on_device(device)
+        dev = short_name(device)
+        for radius in radii:
+            sampler = clsamp.make_sampler("poisson_disk", radius=radius, seed=1)
+            t_cl, pts = timed(sampler.sample, repeats=7)
+            assert min_distance(pts) >= radius
+            void = _void_fraction(pts, radius, periodic=True)
+            quality = (f"{len(pts)} pts, rho {relative_radius(pts):.4f}, void {void:.2%}, "
+                       f"{sampler.stats['rounds']} rounds, {sampler.stats['darts']} darts")
+            size = f"maximal r={radius}"
+            t_s, q_s = peers[("scipy", radius)]
+            rows.append(Row("poisson_disk", size, dev, t_cl, "scipy PoissonDisk.fill_space", t_s,
+                            f"{quality} | peer: {q_s}", {"points": len(pts)}))
+            if bridson is not None:
+                t_b, q_b = peers[("bridson", radius)]
+                rows.append(Row("poisson_disk", size, dev, t_cl, "bridson (k=30)", t_b,
+                                f"{quality} | peer: {q_b}", {"points": len(pts)}))
+            else:
+                rows.append(Row("poisson_disk", size, dev, t_cl, "bridson: not installed", None,
+                                quality))
+        sampler = clsamp.make_sampler("poisson_disk", rho=0.75, seed=1)
+        reference = clsamp.make_sampler("poisson_disk", rho=0.75, seed=1, backend="numpy")
+        sweep = 0.0
+        for n, r in ((256, 8), (16, 128), (64, 128), (256, 128), (1024, 128)):
+            t_cl, pts = timed(lambda: sampler.sample(n, realizations=r), repeats=3)
+            rho = relative_radius(pts)
+            quality = (f"rho min {rho.min():.4f} mean {rho.mean():.4f}, {n} pts each, "
+                       f"{sampler.stats['redraws']} redraws")
+            if r == 128:
+                sweep += t_cl
+            if (n, r) == (256, 8):
+                t_ref, ref = timed(lambda: reference.sample(n, realizations=r), repeats=1, warmup=0)
+                same = "bit-identical" if np.array_equal(ref, pts) else "DIFFERS"
+                rows.append(Row("poisson_disk rho=0.75", f"{r}x{n}x2D", dev, t_cl,
+                                "numpy reference", t_ref, f"{same}, {quality}"))
+            else:
+                rows.append(Row("poisson_disk rho=0.75", f"{r}x{n}x2D", dev, t_cl, "", None,
+                                quality))
+        rows.append(Row("poisson_disk rho=0.75", "sweep 16..1024 x128", dev, sweep, "", None,
+                        "sum of the four sizes above"))
+    return rows
+
+
+if __name__ == "__main__":
+    main(run, __doc__)

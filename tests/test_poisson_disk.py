@@ -1,0 +1,184 @@
+"""The poisson_disk sampler: fixed n at a relative radius, maximal sets, the kernels
+against the NumPy reference, and bad input."""
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+import clsamp
+from clsamp.errors import InvalidArgumentError
+from clsamp.point_metrics import max_min_distance, min_distance, relative_radius
+from clsamp.samplers import poisson_disk
+
+
+def uncovered(points, radius, probes):
+    """The probes r or more from every point (toroidal), exactly: candidates from a
+    periodic k-d tree, then the distance recomputed as the sampler computes it."""
+    tree = cKDTree(points, boxsize=1.0)
+    dist, _ = tree.query(probes, k=1)
+    return probes[dist >= radius * (1.0 - 1e-12)]
+
+
+def probe_grid(k, d):
+    axes = [(np.arange(k) + 0.5) / k] * d
+    return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, d)
+
+
+@pytest.mark.parametrize("d, n, r", [(2, 256, 6), (3, 256, 3)])
+def test_fixed_n_reaches_rho_in_every_realization(d, n, r):
+    sampler = clsamp.make_sampler("poisson_disk", d=d, rho=0.75, seed=5)
+    pts = sampler.sample(n, realizations=r)
+    assert pts.shape == (r, n, d) and pts.dtype == np.float64
+    assert pts.min() >= 0.0 and pts.max() < 1.0
+    rho = relative_radius(pts)
+    assert np.all(rho >= 0.75), rho
+    assert np.all(sampler.counts == n)
+    assert sampler.radius_used == pytest.approx(0.75 * max_min_distance(n, d))
+    for i in range(r):
+        for j in range(i):
+            assert not np.array_equal(pts[i], pts[j])
+
+
+def test_default_rho_is_075_and_interfaces_used_elsewhere():
+    pts = clsamp.make_sampler("poisson_disk", d=2, seed=1).sample(256, realizations=8)
+    assert pts.shape == (8, 256, 2) and np.all(relative_radius(pts) >= 0.75)
+    one = clsamp.make_sampler("poisson_disk", d=2, seed=1).sample(256)
+    np.testing.assert_array_equal(one, pts[0])
+
+
+def test_realization_k_does_not_depend_on_how_many_were_asked():
+    sampler = clsamp.make_sampler("poisson_disk", seed=3)
+    five = sampler.sample(128, realizations=5)
+    np.testing.assert_array_equal(sampler.sample(128, realizations=2), five[:2])
+
+
+def test_same_seed_same_set_other_seed_other_set():
+    a = clsamp.make_sampler("poisson_disk", seed=11).sample(200, realizations=2)
+    b = clsamp.make_sampler("poisson_disk", seed=11).sample(200, realizations=2)
+    np.testing.assert_array_equal(a, b)
+    c = clsamp.make_sampler("poisson_disk", seed=12).sample(200, realizations=2)
+    assert not np.array_equal(a, c)
+    s = clsamp.make_sampler("poisson_disk", radius=0.06, seed=11)
+    np.testing.assert_array_equal(s.sample(), s.sample())
+
+
+@pytest.mark.parametrize("d, n, r, rho", [(1, 40, 3, 0.7), (2, 64, 3, 0.75), (3, 64, 2, 0.75)])
+def test_kernel_equals_numpy_reference_fixed_n(d, n, r, rho):
+    kw = dict(d=d, seed=2**40 + 9, rho=rho)
+    cl = clsamp.make_sampler("poisson_disk", **kw).sample(n, realizations=r)
+    ref = clsamp.make_sampler("poisson_disk", backend="numpy", **kw).sample(n, realizations=r)
+    np.testing.assert_array_equal(cl, ref)
+
+
+def test_kernel_equals_numpy_reference_with_redraws():
+    # At n = 16 a few realizations become maximal below n and are drawn again.
+    cl = clsamp.make_sampler("poisson_disk", seed=1)
+    ref = clsamp.make_sampler("poisson_disk", seed=1, backend="numpy")
+    a = cl.sample(16, realizations=64)
+    b = ref.sample(16, realizations=64)
+    assert cl.stats["redraws"] > 0 and ref.stats == cl.stats
+    np.testing.assert_array_equal(a, b)
+    assert np.all(relative_radius(a) >= 0.75)
+
+
+@pytest.mark.parametrize("d, radius", [(2, 0.07), (3, 0.2)])
+def test_kernel_equals_numpy_reference_maximal(d, radius):
+    cl = clsamp.make_sampler("poisson_disk", d=d, radius=radius, seed=7)
+    ref = clsamp.make_sampler("poisson_disk", d=d, radius=radius, seed=7, backend="numpy")
+    np.testing.assert_array_equal(cl.sample(), ref.sample())
+    np.testing.assert_array_equal(cl.counts, ref.counts)
+
+
+@pytest.mark.parametrize("d, radius, k", [(2, 0.03, 600), (3, 0.11, 64)])
+def test_maximal_set_leaves_no_void(d, radius, k):
+    sampler = clsamp.make_sampler("poisson_disk", d=d, radius=radius, seed=4)
+    pts = sampler.sample()
+    assert pts.shape == (sampler.counts[0], d) and not sampler.needs_n
+    assert min_distance(pts) >= radius
+    rng = np.random.default_rng(0)
+    probes = np.concatenate([probe_grid(k, d), rng.random((200_000, d))])
+    assert uncovered(pts, radius, probes).size == 0
+    # the probes do see a void: drop one point and its neighbourhood opens up
+    assert uncovered(pts[1:], radius, probes).size > 0
+    # and maximal dart throwing lands where the literature puts it (rho about 0.7-0.8 in 2-D)
+    if d == 2:
+        assert 0.68 < relative_radius(pts) < 0.80
+
+
+def test_sample_device_and_sample_sets():
+    sampler = clsamp.make_sampler("poisson_disk", rho=0.75, seed=2)
+    on_device = sampler.sample_device(256, realizations=3)
+    assert on_device.shape == (3, 256, 2)
+    np.testing.assert_array_equal(on_device.get(), sampler.sample(256, realizations=3))
+    maximal = clsamp.make_sampler("poisson_disk", radius=0.08, seed=2)
+    sets = maximal.sample_sets(3)
+    assert len(sets) == 3 and len({len(s) for s in sets}) >= 2
+    np.testing.assert_array_equal(sets[0], maximal.sample())
+    np.testing.assert_array_equal(maximal.sample_device().get()[0], sets[0])
+    assert maximal.sample(realizations=1).shape == (1, len(sets[0]), 2)
+
+
+def test_batches_give_the_same_sets(monkeypatch):
+    sampler = clsamp.make_sampler("poisson_disk", seed=6)
+    whole = sampler.sample(100, realizations=5)
+    monkeypatch.setattr(poisson_disk, "BATCH_CELLS", 700)   # two realizations per batch
+    np.testing.assert_array_equal(sampler.sample(100, realizations=5), whole)
+
+
+def test_radius_with_n_gives_exactly_n_points_r_apart():
+    sampler = clsamp.make_sampler("poisson_disk", radius=0.05, seed=8)
+    pts = sampler.sample(150, realizations=2)
+    assert pts.shape == (2, 150, 2) and np.all(min_distance(pts) >= 0.05)
+
+
+@pytest.mark.parametrize("params, name", [
+    ({"radius": 0.0}, "radius"), ({"radius": -0.1}, "radius"), ({"radius": 0.51}, "radius"),
+    ({"radius": 1e-5}, "radius"), ({"rho": 0.91}, "rho"), ({"rho": 0.0}, "rho"),
+    ({"rho": -1.0}, "rho"), ({"rho": 0.7, "radius": 0.1}, "radius"), ({"d": 4}, "d"),
+])
+def test_bad_parameters_name_the_argument(params, name):
+    with pytest.raises(InvalidArgumentError, match=f"'{name}'"):
+        clsamp.make_sampler("poisson_disk", **params)
+
+
+def test_bad_calls_name_the_argument():
+    sampler = clsamp.make_sampler("poisson_disk", seed=1)
+    for n in (0, -3):
+        with pytest.raises(InvalidArgumentError, match="'n'"):
+            sampler.sample(n)
+    with pytest.raises(InvalidArgumentError, match="'n'"):
+        sampler.sample()
+    with pytest.raises(InvalidArgumentError, match="'start'"):
+        sampler.sample(16, start=3)
+    with pytest.raises(InvalidArgumentError, match="'realizations'"):
+        clsamp.make_sampler("poisson_disk", radius=0.1).sample(realizations=3)
+
+
+def test_unplaceable_n_says_so_and_suggests_a_smaller_rho():
+    with pytest.raises(InvalidArgumentError, match="cannot be placed.*smaller 'rho'"):
+        clsamp.make_sampler("poisson_disk", rho=0.85, seed=1).sample(64)
+    with pytest.raises(InvalidArgumentError, match="cannot be placed"):
+        clsamp.make_sampler("poisson_disk", radius=0.2, seed=1).sample(40)
+
+
+def test_acceptance_threshold_keeps_the_promise_to_the_last_ulp():
+    import math
+    for n in range(1, 3000):
+        d_max = max_min_distance(n, 2)
+        r2 = poisson_disk.acceptance_threshold(0.75 * d_max, d_max, 0.75)
+        assert math.sqrt(r2) / d_max >= 0.75 and math.sqrt(r2) >= 0.75 * d_max
+    for radius in (0.1, 0.01215, 1 / 3, 0.5):
+        assert math.sqrt(poisson_disk.acceptance_threshold(radius)) >= radius
+
+
+@pytest.mark.slow
+def test_benchmark_sizes_hold_their_promises():
+    # the issue's maximal case (about 4.7k points) and the tour's largest fixed-n batch
+    sampler = clsamp.make_sampler("poisson_disk", radius=0.01215, seed=1)
+    pts = sampler.sample()
+    assert 4500 < len(pts) < 5000 and min_distance(pts) >= 0.01215
+    rng = np.random.default_rng(1)
+    probes = np.concatenate([probe_grid(1024, 2), rng.random((500_000, 2))])
+    assert uncovered(pts, 0.01215, probes).size == 0
+    fixed = clsamp.make_sampler("poisson_disk", rho=0.75, seed=2).sample(1024, realizations=128)
+    assert np.all(relative_radius(fixed) >= 0.75)
