@@ -8,6 +8,7 @@ Quick start::
 See README.md for a tour and ``clsamp --help`` for the command line.
 """
 
+from . import render  # noqa: F401  (the module; the function is clsamp.render.render)
 from .errors import (
                      BuildError,
                      ClsampError,
