@@ -13,7 +13,8 @@ pixel 2, lens 2, time 1, 2 per AO ray, light 2 (``scene.sample_groups``). With
 2-D points per pair of dimensions (a 1-D set for time: ``d=1`` where the sampler has
 it, else the first coordinate of a 2-D set), and the sets are *padded* as pbrt pads
 (Pharr et al., PBR 3rd ed., 7.2.3): the samples of every set are reordered by an
-independent, exactly uniform random permutation (Fisher–Yates on the Philox stream
+independent, exactly uniform random permutation (skipped when a pixel sample has a
+single set, whose order cannot change the pixel's mean) (Fisher–Yates on the Philox stream
 ``PIXEL``, realization = pixel number, permutation = set number; see
 :mod:`clsamp.permutation`), so that no correlation links the order of one set to
 another's. With ``pad=False`` the sampler makes all ``d = scene.sample_dimensions``
@@ -206,7 +207,7 @@ def pixel_samples(scene, sampler, spp, resolution, seed=0, sampler_params=None, 
                                    f"got {pixels!r}")
     lo, hi = pixels.start, pixels.stop
     perms = None
-    if pad:
+    if pad and len(sets) > 1:   # one set alone: its order cannot change the pixel's mean
         perms = permutation.random_permutations_device(
             seed, philox.Stream.PIXEL, range(lo, hi), spp, range(len(sets))).get()
     for g, s in enumerate(sets):
@@ -232,7 +233,8 @@ def pixel_samples(scene, sampler, spp, resolution, seed=0, sampler_params=None, 
                 got = sampler_b.sample(spp, realizations=b_hi - b * block)
                 points[b_lo - lo:b_hi - lo] = got[b_lo - b * block:]
         if perms is not None:
-            points = np.take_along_axis(points, perms[:, g, :, None].astype(np.intp), axis=1)
+            flat = perms[:, g, :].astype(np.intp) + (np.arange(hi - lo, dtype=np.intp) * spp)[:, None]
+            points = points.reshape(-1, s.d)[flat.ravel()].reshape(hi - lo, spp, s.d)
         out[:, s.offset:s.offset + s.width, :] = points[:, :, :s.width].transpose(0, 2, 1)
     return out
 
@@ -443,7 +445,8 @@ def render_reference(scene, samples, resolution, pixel0=0):
         w = q - x
         dist2 = np.sum(w * w, -1)
         dist = np.sqrt(dist2)
-        w = w / dist[..., None]
+        with np.errstate(invalid="ignore"):     # missed rays: inf - inf, masked below
+            w = w / dist[..., None]
         cos_light = -(w @ np.cross(e1, e2))
         cos_surf = np.sum(n * w, -1)
         lit = (cos_light > 0) & (cos_surf > 0)
