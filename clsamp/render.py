@@ -293,26 +293,41 @@ def render_samples(scene, samples, resolution, pixel0=0, backend="opencl", width
     f32 = _float32_below_one(samples) if dims else samples.astype(np.float32)
     if backend == "numpy":
         return render_reference(scene, f32.astype(np.float64), resolution, pixel0)
+    spp_pad = -(-spp // (width or vector_width())) * (width or vector_width())
+    host = np.full((npix, max(dims, 1), spp_pad), 0.5, dtype=np.float32)
+    host[:, :dims, :spp] = f32
+    return _launch(scene, host, pixel0, npix, resolution, spp, width)
+
+
+def _launch(scene, host, pixel0, npix, resolution, spp, width=None, keys=None, block=1):
+    """Run render_pixels on ``host`` samples (npix, dims, spp_pad) float32, or, with
+    ``keys`` ((blocks, 2) uint32 seeds of the seed blocks), on Philox draws made in the kernel."""
     import pyopencl.array as cla
     width = width or vector_width()
     runtime.require_fp64()
     queue = runtime.queue()
     spp_pad = -(-spp // width) * width
-    host = np.full((npix, max(dims, 1), spp_pad), 0.5, dtype=np.float32)
-    host[:, :dims, :spp] = f32
-    buffers = [cla.to_device(queue, np.ascontiguousarray(a).reshape(-1) if a.size else
-                             np.zeros(1, np.float32)) for a in _scene_arrays(scene)]
-    camera, shading, spheres, planes, boxes, light = buffers
-    counts = [len(a) for a in _scene_arrays(scene)[2:5]]
+    arrays = _scene_arrays(scene)
+    camera, shading, spheres, planes, boxes, light = (
+        cla.to_device(queue, np.ascontiguousarray(a).reshape(-1) if a.size else np.zeros(1, np.float32))
+        for a in arrays)
+    counts = [len(a) for a in arrays[2:5]]
     out = cla.empty(queue, (npix,), np.float32)
-    samples_d = cla.to_device(queue, host.reshape(-1))
     defines = {**scene.kernel_defines(), "VW": width}
+    if keys is None:
+        samples_d = cla.to_device(queue, host.reshape(-1))
+        keys_d = cla.to_device(queue, np.zeros(2, np.uint32))
+    else:
+        samples_d = cla.to_device(queue, np.zeros(1, np.float32))
+        keys_d = cla.to_device(queue, np.ascontiguousarray(keys, dtype=np.uint32).reshape(-1))
+        defines.update(SAMPLES_PHILOX=True, SAMPLES_PHILOX_STREAM=int(philox.Stream.POINTS))
     kernel = runtime.kernel("render.cl", "render_pixels", defines=defines, options=("-cl-mad-enable",))
     local = runtime.local_size(64 if width == 1 else 8)
     kernel(queue, (-(-npix // local) * local,), (local,), out.data, samples_d.data,
            np.uint32(pixel0), np.uint32(npix), np.uint32(resolution), np.uint32(spp),
            np.uint32(spp_pad), camera.data, shading.data, spheres.data, np.uint32(counts[0]),
-           planes.data, np.uint32(counts[1]), boxes.data, np.uint32(counts[2]), light.data)
+           planes.data, np.uint32(counts[1]), boxes.data, np.uint32(counts[2]), light.data,
+           keys_d.data, np.uint32(block))
     return out.get()
 
 
@@ -527,6 +542,8 @@ def render(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=Tru
     dims = scene.sample_dimensions
     block = block_size(spp, dims)
     blocks = -(-total // block)
+    if sampler == "random" and not sampler_params and not pad:
+        return _render_random(scene, spp, resolution, seed, block, blocks)
     # device bytes per block: float32 samples (padded to the vector width) and the output
     per_block = block * (4 * max(dims, 1) * (spp + 8) + 4)
     tiles = runtime.chunk_ranges(blocks, per_block)
@@ -541,6 +558,19 @@ def render(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=Tru
                                     _sets=sets)
             image[pixels.start:pixels.stop] = render_samples(scene, samples, resolution, pixels.start)
             bar.update(len(pixels))
+    return image.reshape(resolution, resolution)
+
+
+def _render_random(scene, spp, resolution, seed, block, blocks):
+    """``random`` with ``pad=False``, its draws made in the kernel: the same samples as
+    :func:`pixel_samples` gives (the same Philox doubles, the same seeds per block), so the
+    same image, without sample buffers."""
+    total = resolution * resolution
+    keys = np.array([philox.seed_key(derived_seed(seed, b, 0)) for b in range(blocks)],
+                    dtype=np.uint32)
+    image = np.empty(total, dtype=np.float32)
+    for lo, hi in runtime.chunk_ranges(total, 4):
+        image[lo:hi] = _launch(scene, None, lo, hi - lo, resolution, spp, keys=keys, block=block)
     return image.reshape(resolution, resolution)
 
 

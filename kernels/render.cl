@@ -16,7 +16,7 @@
  * summed in float (VW terms of at most a few units) and added to a double accumulator,
  * so the mean of any number of samples carries no growing rounding error.
  */
-#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#include "philox.h"
 
 #ifndef VW
 #define VW 8
@@ -25,18 +25,42 @@
 #if VW == 1
 typedef float vfloat;
 typedef int vint;
+typedef uint vuint;
+typedef ulong vulong;
+typedef double vdouble;
+#define TO_ULONG convert_ulong
+#define TO_UINT convert_uint
+#define TO_DOUBLE convert_double
+#define TO_FLOAT_RTZ convert_float_rtz
+#define LANE_INDEX 0u
 #define VLOAD(p) (*(p))
 #define LANES 0.0f
 #define HSUM(v) (v)
 #elif VW == 4
 typedef float4 vfloat;
 typedef int4 vint;
+typedef uint4 vuint;
+typedef ulong4 vulong;
+typedef double4 vdouble;
+#define TO_ULONG convert_ulong4
+#define TO_UINT convert_uint4
+#define TO_DOUBLE convert_double4
+#define TO_FLOAT_RTZ convert_float4_rtz
+#define LANE_INDEX ((vuint)(0u, 1u, 2u, 3u))
 #define VLOAD(p) vload4(0, p)
 #define LANES ((vfloat)(0.0f, 1.0f, 2.0f, 3.0f))
 #define HSUM(v) (((v).s0 + (v).s1) + ((v).s2 + (v).s3))
 #elif VW == 8
 typedef float8 vfloat;
 typedef int8 vint;
+typedef uint8 vuint;
+typedef ulong8 vulong;
+typedef double8 vdouble;
+#define TO_ULONG convert_ulong8
+#define TO_UINT convert_uint8
+#define TO_DOUBLE convert_double8
+#define TO_FLOAT_RTZ convert_float8_rtz
+#define LANE_INDEX ((vuint)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u))
 #define VLOAD(p) vload8(0, p)
 #define LANES ((vfloat)(0.0f, 1.0f, 2.0f, 3.0f, 4.0f, 5.0f, 6.0f, 7.0f))
 #define HSUM(v) ((((v).s0 + (v).s1) + ((v).s2 + (v).s3)) + (((v).s4 + (v).s5) + ((v).s6 + (v).s7)))
@@ -78,6 +102,51 @@ typedef int8 vint;
 #define SAMPLE_DIMS (END_AO + 2)
 #else
 #define SAMPLE_DIMS END_AO
+#endif
+
+/* Where sample dimension `dim` of samples s .. s+VW-1 comes from: the buffer the
+ * sampler filled, or (SAMPLES_PHILOX: the `random` sampler with all dimensions at once)
+ * Philox draws made here, the same doubles `random_points` makes for realization
+ * `pixel % block` under the seed of block `pixel / block`, rounded toward zero. */
+#ifdef SAMPLES_PHILOX
+#define LOAD(dim) drawn[dim]
+
+/* philox4x32_10 of philox.h on VW counters at once (the index differs per lane): the
+ * same words, computed in vector lanes (a loop over lanes ran 3x slower on PoCL). */
+inline void philox_lanes(const uint2 key0, const uint stream, const uint realization,
+                         const vuint index, const uint pair, vuint *w0, vuint *w1, vuint *w2,
+                         vuint *w3)
+{
+    vuint c0 = index, c1 = (vuint)realization, c2 = (vuint)pair, c3 = (vuint)stream;
+    uint2 key = key0;
+    for (int round = 0; round < 10; ++round) {
+        if (round) {
+            key.x += CLSAMP_PHILOX_W0;
+            key.y += CLSAMP_PHILOX_W1;
+        }
+        const vulong p0 = TO_ULONG(c0) * (ulong)CLSAMP_PHILOX_M0;
+        const vulong p1 = TO_ULONG(c2) * (ulong)CLSAMP_PHILOX_M1;
+        const vuint n0 = TO_UINT(p1 >> 32) ^ c1 ^ key.x;
+        const vuint n2 = TO_UINT(p0 >> 32) ^ c3 ^ key.y;
+        c1 = TO_UINT(p1);
+        c3 = TO_UINT(p0);
+        c0 = n0;
+        c2 = n2;
+    }
+    *w0 = c0;
+    *w1 = c1;
+    *w2 = c2;
+    *w3 = c3;
+}
+
+/* clsamp_unit (53 bits) rounded toward zero to float, lane by lane */
+inline vfloat unit_lanes(const vuint hi, const vuint lo)
+{
+    const vdouble x = (TO_DOUBLE(hi >> 5) * 67108864.0 + TO_DOUBLE(lo >> 6)) * (1.0 / 9007199254740992.0);
+    return TO_FLOAT_RTZ(x);
+}
+#else
+#define LOAD(dim) VLOAD(mine + (dim) * spp_pad + s)
 #endif
 
 #define PI_F 3.14159265358979f
@@ -228,7 +297,9 @@ inline vint occluded(vec3 o, vec3 d, vfloat time, vfloat tmax, const float eps,
 }
 
 /* Grid: one work-item per pixel of the tile [pixel0, pixel0 + npix).
- * samples: (npix, SAMPLE_DIMS, spp_pad) float in [0, 1); spp_pad = spp rounded up to VW.
+ * samples: (npix, SAMPLE_DIMS, spp_pad) float in [0, 1); spp_pad = spp rounded up to VW
+ *   (unused with SAMPLES_PHILOX, which reads the seed of each block of `block` pixels
+ *   from block_keys as (low, high) words instead).
  * camera: eye(3) forward(3) right(3) up(3) tan(fov/2) aperture focus shutter0 shutter1.
  * shading: ambient background ao_distance epsilon.
  * light: corner(3) edge1(3) edge2(3) emission. */
@@ -239,7 +310,8 @@ __kernel void render_pixels(__global float *out, __global const float *samples,
                             __global const float *spheres, const uint nspheres,
                             __global const float *planes, const uint nplanes,
                             __global const float *boxes, const uint nboxes,
-                            __global const float *light)
+                            __global const float *light, __global const uint *block_keys,
+                            const uint block)
 {
     const uint i = get_global_id(0);
     if (i >= npix)
@@ -250,10 +322,30 @@ __kernel void render_pixels(__global float *out, __global const float *samples,
     const float eps = shading[3];
     __global const float *mine = samples + (size_t)i * SAMPLE_DIMS * spp_pad;
     double sum = 0.0;
+#ifdef SAMPLES_PHILOX
+    const uint2 key = vload2(pixel / block, block_keys);
+    const uint realization = pixel % block;
+    vfloat drawn[SAMPLE_DIMS > 0 ? SAMPLE_DIMS : 1];
+    (void)mine;
+#else
+    (void)block_keys;
+    (void)block;
+#endif
     for (uint s = 0; s < spp; s += VW) {
+#ifdef SAMPLES_PHILOX
+#pragma unroll
+        for (uint pair = 0; 2 * pair < SAMPLE_DIMS; ++pair) {
+            vuint w0, w1, w2, w3;
+            philox_lanes(key, SAMPLES_PHILOX_STREAM, realization, s + LANE_INDEX, pair, &w0, &w1,
+                         &w2, &w3);
+            drawn[2 * pair] = unit_lanes(w0, w1);
+            if (2 * pair + 1 < SAMPLE_DIMS)
+                drawn[2 * pair + 1] = unit_lanes(w2, w3);
+        }
+#endif
 #ifdef EFFECT_AA
-        const vfloat px = VLOAD(mine + (DIM_PIXEL + 0) * spp_pad + s);
-        const vfloat py = VLOAD(mine + (DIM_PIXEL + 1) * spp_pad + s);
+        const vfloat px = LOAD(DIM_PIXEL + 0);
+        const vfloat py = LOAD(DIM_PIXEL + 1);
 #else
         const vfloat px = 0.5f, py = 0.5f;
 #endif
@@ -267,8 +359,8 @@ __kernel void render_pixels(__global float *out, __global const float *samples,
 #ifdef EFFECT_DOF
         {
             vfloat lx, ly;
-            concentric_disk(VLOAD(mine + (DIM_LENS + 0) * spp_pad + s),
-                            VLOAD(mine + (DIM_LENS + 1) * spp_pad + s), &lx, &ly);
+            concentric_disk(LOAD(DIM_LENS + 0),
+                            LOAD(DIM_LENS + 1), &lx, &ly);
             lx *= camera[13];
             ly *= camera[13];
             /* the point this pixel sees in focus: on the plane at the focus distance
@@ -281,7 +373,7 @@ __kernel void render_pixels(__global float *out, __global const float *samples,
 #endif
         d = normalize3(d);
 #ifdef EFFECT_MB
-        const vfloat time = camera[15] + (camera[16] - camera[15]) * VLOAD(mine + DIM_TIME * spp_pad + s);
+        const vfloat time = camera[15] + (camera[16] - camera[15]) * LOAD(DIM_TIME);
 #else
         const vfloat time = 0.0f;
 #endif
@@ -306,8 +398,8 @@ __kernel void render_pixels(__global float *out, __global const float *samples,
             /* Malley's method: cosine-weighted directions are disk points lifted to
              * the hemisphere */
             vfloat hx, hy;
-            concentric_disk(VLOAD(mine + (DIM_AO + 2 * a) * spp_pad + s),
-                            VLOAD(mine + (DIM_AO + 2 * a + 1) * spp_pad + s), &hx, &hy);
+            concentric_disk(LOAD(DIM_AO + 2 * a),
+                            LOAD(DIM_AO + 2 * a + 1), &hx, &hy);
             const vfloat hz = sqrt(fmax(1.0f - hx * hx - hy * hy, 0.0f));
             const vec3 w = v3(hx * b1.x + hy * b2.x + hz * n.x, hx * b1.y + hy * b2.y + hz * n.y,
                               hx * b1.z + hy * b2.z + hz * n.z);
@@ -323,8 +415,8 @@ __kernel void render_pixels(__global float *out, __global const float *samples,
         const vec3 e1 = v3((vfloat)light[3], (vfloat)light[4], (vfloat)light[5]);
         const vec3 e2 = v3((vfloat)light[6], (vfloat)light[7], (vfloat)light[8]);
 #ifdef EFFECT_SOFT
-        const vfloat lu = VLOAD(mine + (DIM_LIGHT + 0) * spp_pad + s);
-        const vfloat lv = VLOAD(mine + (DIM_LIGHT + 1) * spp_pad + s);
+        const vfloat lu = LOAD(DIM_LIGHT + 0);
+        const vfloat lv = LOAD(DIM_LIGHT + 1);
 #else
         const vfloat lu = 0.5f, lv = 0.5f;
 #endif

@@ -119,6 +119,20 @@ def test_same_seed_same_image_and_a_sampler_object_is_reseeded_like_a_name():
     np.testing.assert_array_equal(a, rendering.render(scene, obj, 16, 16, seed=9, progress=False))
 
 
+@pytest.mark.parametrize("name", ["ao", "combined"])
+def test_random_unpadded_draws_in_the_kernel_equal_the_sampler_path(name):
+    # render("random", pad=False) makes its Philox draws in the kernel (the reference's path);
+    # they must be the random sampler's points bit for bit, so the image is the same
+    scene = Scene.from_file(name)
+    fast = rendering.render(scene, "random", 13, 40, seed=3, pad=False, progress=False)
+    samples = rendering.pixel_samples(scene, "random", 13, 40, seed=3, pad=False)
+    np.testing.assert_array_equal(fast.ravel(), rendering.render_samples(scene, samples, 40))
+    points = clsamp.make_sampler("random", d=scene.sample_dimensions,
+                                 seed=rendering.derived_seed(3, 1, 0)).sample(13, realizations=3)
+    block = rendering.block_size(13, scene.sample_dimensions)
+    np.testing.assert_array_equal(samples[block:block + 3], points.transpose(0, 2, 1))
+
+
 def test_tiles_do_not_change_the_image(monkeypatch):
     scene = Scene.from_file("ao")
     whole = rendering.render(scene, "jittered", 16, 48, seed=1, progress=False)   # 3 seed blocks
