@@ -13,12 +13,14 @@ pixel 2, lens 2, time 1, 2 per AO ray, light 2 (``scene.sample_groups``). With
 2-D points per pair of dimensions (a 1-D set for time: ``d=1`` where the sampler has
 it, else the first coordinate of a 2-D set), and the sets are *padded* as pbrt pads
 (Pharr et al., PBR 3rd ed., 7.2.3): the samples of every set are reordered by an
-independent, exactly uniform random permutation (skipped when a pixel sample has a
-single set, whose order cannot change the pixel's mean) (Fisher–Yates on the Philox stream
-``PIXEL``, realization = pixel number, permutation = set number; see
-:mod:`clsamp.permutation`), so that no correlation links the order of one set to
-another's. With ``pad=False`` the sampler makes all ``d = scene.sample_dimensions``
-dimensions at once (random, latin_hypercube, halton, sobol, ...), unpermuted.
+independent, exactly uniform random permutation, so that no correlation links the
+order of one set to another's (Fisher–Yates on the Philox stream ``PIXEL``,
+realization = pixel number, permutation = set number; see :mod:`clsamp.permutation`).
+A pixel sample made of a single set is not permuted: its order cannot change the
+pixel's mean. With ``pad=False`` the sampler makes all ``d = scene.sample_dimensions``
+dimensions at once (random, latin_hypercube, halton, sobol, ...), unpermuted;
+``random`` with ``pad=False`` (the reference's sampler) draws the very same Philox
+numbers inside the kernel instead of through a sample buffer.
 
 Decorrelation across pixels
 ---------------------------
@@ -30,9 +32,10 @@ follows only from ``spp`` and the dimensions, never from the device, so the same
 gives the same samples on every device, and the same image up to float rounding
 (the ray math is float32; on one device the image is bit-identical run to run).
 
-*Expensive* samplers (those named in :data:`EXPENSIVE_SAMPLERS`, or whose class sets
-``expensive = True``: optimizers and dart throwing) cannot afford one realization per
-pixel. For them a pool of ``pool`` realizations per set is made once (seeded per set),
+*Expensive* samplers (those named in :data:`EXPENSIVE_SAMPLERS`, or whose class or
+object sets ``expensive = True``: optimizers and dart throwing) cannot afford one
+realization per pixel. For them a pool of ``pool`` realizations (default
+:data:`DEFAULT_POOL`) per set is made once (seeded per set),
 and pixel ``p`` takes pool member ``j(p)`` shifted by its own random toroidal vector
 ``u(p)``: ``x -> (x + u) mod 1`` (Cranley–Patterson). The shift keeps the set's
 blue-noise and stratification on the torus and makes each pixel's estimate unbiased
@@ -60,7 +63,7 @@ from .scene import Scene
 from .validation import check_int, check_positive_int, check_seed
 
 EXPENSIVE_SAMPLERS = frozenset({"poisson_disk", "lloyd", "ccvt"})
-DEFAULT_POOL = 64                   # realizations per set of an expensive sampler
+DEFAULT_POOL = 8                    # realizations per set of an expensive sampler
 MAX_BLOCK = 1024                    # pixels per seed block at most
 BLOCK_BYTES = 64 * 2**20            # float64 sample bytes of one block at most
 REFERENCE_PASS = 256                # spp per pass of a reference render

@@ -133,6 +133,26 @@ def test_random_unpadded_draws_in_the_kernel_equal_the_sampler_path(name):
     np.testing.assert_array_equal(samples[block:block + 3], points.transpose(0, 2, 1))
 
 
+def test_scalar_kernel_draws_the_same_numbers(monkeypatch):
+    # width 1 is what GPUs get: the in-kernel Philox path must not depend on the width
+    scene = Scene.from_file("combined")
+    wide = rendering.render(scene, "random", 11, 6, seed=8, pad=False, progress=False)
+    monkeypatch.setattr(rendering, "vector_width", lambda: 1)
+    scalar = rendering.render(scene, "random", 11, 6, seed=8, pad=False, progress=False)
+    np.testing.assert_allclose(scalar, wide, rtol=0, atol=2e-6)
+
+
+def test_a_scene_without_effects_uses_no_samples():
+    data = Scene.from_file("dof").to_dict()
+    data["effects"] = []
+    scene = Scene.from_dict(data)
+    assert scene.sample_dimensions == 0
+    a = rendering.render(scene, "random", 4, 6, seed=1, progress=False)
+    b = rendering.render(scene, "jittered", 16, 6, seed=2, progress=False)
+    np.testing.assert_allclose(a, b, rtol=0, atol=1e-6)
+    assert np.ptp(a) > 0.05
+
+
 def test_tiles_do_not_change_the_image(monkeypatch):
     scene = Scene.from_file("ao")
     whole = rendering.render(scene, "jittered", 16, 48, seed=1, progress=False)   # 3 seed blocks
@@ -200,8 +220,13 @@ def test_ccvt_beats_poisson_disk_at_96_ao_rays():
         pytest.skip("ccvt and poisson_disk are not registered yet")
     scene = Scene.from_file("ao")
     ref = rendering.reference(scene, 24, spp=4096, progress=False)
-    poisson = rendering.mse(rendering.render(scene, "poisson_disk", 96, 24, seed=4, progress=False), ref)
-    ccvt = rendering.mse(rendering.render(scene, "ccvt", 96, 24, seed=4, progress=False), ref)
+    # expensive samplers share a pool of 8 sets per image, so sum over three images;
+    # 64 points per site keeps CCVT test-sized (on PoCL it beat Poisson disk in 8 of 8 seeds)
+    poisson = sum(rendering.mse(rendering.render(scene, "poisson_disk", 96, 24, seed=s,
+                                                 progress=False), ref) for s in (4, 5, 6))
+    ccvt = sum(rendering.mse(rendering.render(scene, "ccvt", 96, 24, seed=s, progress=False,
+                                              sampler_params={"points_per_site": 64}), ref)
+               for s in (4, 5, 6))
     assert ccvt < poisson, (ccvt, poisson)
 
 
