@@ -43,8 +43,9 @@ blue-noise and stratification on the torus and makes each pixel's estimate unbia
 so pixels sharing a pool member still see different point positions.
 
 Images are rendered in tiles of whole seed blocks sized from the device's largest
-allocation (:func:`clsamp.runtime.chunk_ranges`), so large images never exceed device
-memory. Samples cross to the kernel as float32, rounded toward zero (so they stay
+allocation (:func:`clsamp.runtime.chunk_ranges`) and at most :data:`TILE_BYTES` of
+samples, so large images never exceed device (or host) memory; the tiling does not
+change the image. Samples cross to the kernel as float32, rounded toward zero (so they stay
 below 1); the pixel mean is accumulated in double.
 """
 
@@ -66,6 +67,7 @@ EXPENSIVE_SAMPLERS = frozenset({"poisson_disk", "lloyd", "ccvt"})
 DEFAULT_POOL = 8                    # realizations per set of an expensive sampler
 MAX_BLOCK = 1024                    # pixels per seed block at most
 BLOCK_BYTES = 64 * 2**20            # float64 sample bytes of one block at most
+TILE_BYTES = 128 * 2**20            # float32 sample bytes of one tile at most (host memory)
 REFERENCE_PASS = 256                # spp per pass of a reference render
 REFERENCE_SEED = 0x5EED_0F_2EF
 RENDER_VERSION = "1"                # bump when the renderer's output changes (cache key)
@@ -549,7 +551,10 @@ def render(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=Tru
         return _render_random(scene, spp, resolution, seed, block, blocks)
     # device bytes per block: float32 samples (padded to the vector width) and the output
     per_block = block * (4 * max(dims, 1) * (spp + 8) + 4)
-    tiles = runtime.chunk_ranges(blocks, per_block)
+    # host memory holds each tile's samples several times over (float64, permuted, float32)
+    cap = max(1, TILE_BYTES // per_block)
+    tiles = [(start, min(hi, start + cap)) for lo, hi in runtime.chunk_ranges(blocks, per_block)
+             for start in range(lo, hi, cap)]
     image = np.empty(total, dtype=np.float32)
     from tqdm import tqdm
     long = total * spp * scene.rays_per_sample() > 2**27
