@@ -32,6 +32,8 @@ times the quad's solid angle, cosine-weighted, with shadows; sampled over the qu
 area with ``soft_shadows``, else from its centre as a point light of the same power:
 hard shadows). Rays that hit nothing see ``background``. The light is one-sided,
 emitting towards ``edge1 x edge2``, and not itself visible. Surfaces are two-sided.
+Ambient-occlusion and shadow rays leave from ``epsilon`` (scene units) above the
+surface, on the side the camera sees, so a surface does not shadow itself.
 
 Effects and their dimensions per pixel sample, in this fixed order:
 ``antialiasing`` 2 (pixel area; else pixel centres), ``depth_of_field`` 2 (thin lens of

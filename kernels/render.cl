@@ -1,6 +1,5 @@
 /* The renderer: ray casting of spheres (optionally moving), planes and axis-aligned boxes,
- * shaded with ambient occlusion and a quad area light. NumPy reference: clsamp.render
- * (`render_reference`), which follows this file line for line in float64.
+ * shaded with ambient occlusion and a quad area light (shading model: clsamp/scene.py).
  *
  * Effects are compiled in only when the scene lists them (DESIGN.md, "Rendering"):
  *   EFFECT_AA      pixel area sampling (2 dimensions), else pixel centres
@@ -9,6 +8,10 @@
  *   AO_RAYS=n      n ambient-occlusion rays (2 dimensions each), else unoccluded ambient
  *   HAS_LIGHT      a quad light: EFFECT_SOFT samples its area (2 dimensions), else its centre
  * in that order: the dimension offsets below are the only place that order is written.
+ * SAMPLES_PHILOX makes the samples here (the `random` sampler's Philox doubles) instead
+ * of reading them from the buffer the renderer filled.
+ *
+ * NumPy reference: clsamp.render.render_reference (float64, same steps).
  *
  * Ray math is float (fp32): one work-item renders one pixel, VW of its samples at a
  * time in explicit vector lanes (POCL_NOTES: PoCL vectorizes explicit vector types, not
