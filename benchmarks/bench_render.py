@@ -3,7 +3,8 @@
     python benchmarks/bench_render.py [--device all] [--quick] [--out FILE]
 
 Cases, on each device:
-- ``rays/s <scene>``: the kernel alone on pre-made samples (every shipped scene), against
+- ``rays/s <scene>``: the kernel alone on pre-made float32 samples (every shipped scene;
+  the upload included, sampling not), against
   the NumPy reference renderer on the same samples (a smaller image: it holds every ray
   in memory). Rays = camera rays + AO rays + shadow rays.
 - ``combined -<effect>``: the combined scene with one effect taken out, full render
@@ -48,7 +49,8 @@ def run(devices, quick):
             scene = Scene.from_file(name)
             spp = 96
             samples = rendering.pixel_samples(scene, "random", spp, res, seed=1)
-            seconds, _ = timed(lambda: rendering.render_samples(scene, samples, res), repeats=5)
+            f32 = rendering.float32_samples(samples)
+            seconds, _ = timed(lambda: rendering.render_samples(scene, f32, res), repeats=5)  # noqa: B023
             few = samples[:small * small]
             t_np, _ = timed(lambda: rendering.render_samples(scene, few, res, backend="numpy"),
                             repeats=1, warmup=0)

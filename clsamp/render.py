@@ -103,10 +103,13 @@ def block_size(spp, dimensions):
     return b
 
 
-def _float32_below_one(x):
-    """float64 in [0, 1) to float32 rounded toward zero, so the result stays in [0, 1)."""
+def float32_samples(x):
+    """Samples as the kernel reads them: float64 in [0, 1) to float32 rounded toward zero
+    (round-to-nearest could give 1.0), so they stay in [0, 1)."""
     f = x.astype(np.float32)
-    return np.where(f.astype(np.float64) > x, np.nextafter(f, np.float32(0)), f)
+    up = f > x
+    f[up] = np.nextafter(f[up], np.float32(0))
+    return f
 
 
 # -- the plan: which sampler makes which dimensions ------------------------------------------
@@ -286,16 +289,17 @@ def render_samples(scene, samples, resolution, pixel0=0, backend="opencl", width
     """Render given samples: float32 pixel values for pixels [pixel0, pixel0 + len(samples)).
 
     ``samples`` has shape (pixels, scene.sample_dimensions, spp) in [0, 1) (as from
-    :func:`pixel_samples`); they are rounded toward zero to float32 first on both
-    backends. ``backend="numpy"`` is the NumPy reference (float64 ray math);
-    ``width`` overrides the kernel's vector width (1, 4 or 8).
+    :func:`pixel_samples`); float64 samples are rounded toward zero to float32 first on
+    both backends, float32 samples are taken as they are. ``backend="numpy"`` is the
+    NumPy reference (float64 ray math); ``width`` overrides the kernel's vector width
+    (1, 4 or 8).
     """
     samples = np.asarray(samples)
     npix, dims, spp = samples.shape
     if dims != scene.sample_dimensions:
         raise InvalidArgumentError(f"'samples' must have {scene.sample_dimensions} dimensions "
                                    f"(axis 1), got {dims}")
-    f32 = _float32_below_one(samples) if dims else samples.astype(np.float32)
+    f32 = samples if samples.dtype == np.float32 else float32_samples(samples)
     if backend == "numpy":
         return render_reference(scene, f32.astype(np.float64), resolution, pixel0)
     spp_pad = -(-spp // (width or vector_width())) * (width or vector_width())

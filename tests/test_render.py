@@ -100,6 +100,13 @@ def test_kernel_agrees_with_the_numpy_reference(name):
     assert np.ptp(kernel) > 0.05          # not a blank image agreeing with a blank image
 
 
+def test_samples_cross_to_float32_toward_zero():
+    x = np.concatenate([np.random.default_rng(0).random(10**5), [1 - 2.0**-53, 0.0, 0.5]])
+    f = rendering.float32_samples(x)
+    assert f.dtype == np.float32 and f.max() < 1 and np.all(f.astype(np.float64) <= x)
+    assert np.all(np.nextafter(f, np.float32(1)).astype(np.float64) > x)   # the largest below
+
+
 def test_vector_widths_agree():
     scene = Scene.from_file("combined")
     samples = rendering.pixel_samples(scene, "random", 13, 5, seed=4)   # 13: a partial lane group
