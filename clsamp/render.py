@@ -192,7 +192,7 @@ def _plan(scene, sampler, spp, sampler_params, pad, pool):
 
 
 def pixel_samples(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=True,
-                  pixels=None, pool=DEFAULT_POOL, _sets=None):
+                  pixels=None, pool=DEFAULT_POOL, _sets=None, _into=None):
     """The samples the renderer feeds the kernel: float64 array (pixels, dimensions, spp).
 
     Parameters are those of :func:`render`; ``pixels`` is a range of row-major pixel
@@ -206,7 +206,8 @@ def pixel_samples(scene, sampler, spp, resolution, seed=0, sampler_params=None, 
     pixels = range(total) if pixels is None else pixels
     sets = _sets if _sets is not None else _plan(scene, sampler, spp, sampler_params, pad, pool)
     dims = scene.sample_dimensions
-    out = np.empty((len(pixels), dims, spp), dtype=np.float64)
+    # _into: the kernel's float32 buffer (pixels, >= dims, >= spp), filled set by set
+    out = np.empty((len(pixels), dims, spp), dtype=np.float64) if _into is None else _into
     if not dims or not len(pixels):
         return out
     block = block_size(spp, dims)
@@ -243,7 +244,11 @@ def pixel_samples(scene, sampler, spp, resolution, seed=0, sampler_params=None, 
         if perms is not None:
             flat = perms[:, g, :].astype(np.intp) + (np.arange(hi - lo, dtype=np.intp) * spp)[:, None]
             points = points.reshape(-1, s.d)[flat.ravel()].reshape(hi - lo, spp, s.d)
-        out[:, s.offset:s.offset + s.width, :] = points[:, :, :s.width].transpose(0, 2, 1)
+        columns = points[:, :, :s.width].transpose(0, 2, 1)
+        if _into is None:
+            out[:, s.offset:s.offset + s.width, :] = columns
+        else:
+            out[:, s.offset:s.offset + s.width, :spp] = float32_samples(columns)
     return out
 
 
@@ -553,8 +558,10 @@ def render(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=Tru
     blocks = -(-total // block)
     if sampler == "random" and not sampler_params and not pad:
         return _render_random(scene, spp, resolution, seed, block, blocks)
+    width = vector_width()
+    spp_pad = -(-spp // width) * width
     # device bytes per block: float32 samples (padded to the vector width) and the output
-    per_block = block * (4 * max(dims, 1) * (spp + 8) + 4)
+    per_block = block * (4 * max(dims, 1) * spp_pad + 4)
     # host memory holds each tile's samples several times over (float64, permuted, float32)
     cap = max(1, TILE_BYTES // per_block)
     tiles = [(start, min(hi, start + cap)) for lo, hi in runtime.chunk_ranges(blocks, per_block)
@@ -566,9 +573,11 @@ def render(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=Tru
               disable=not (progress and long)) as bar:
         for b_lo, b_hi in tiles:
             pixels = range(b_lo * block, min(total, b_hi * block))
-            samples = pixel_samples(scene, sampler, spp, resolution, seed, pixels=pixels, pad=pad,
-                                    _sets=sets)
-            image[pixels.start:pixels.stop] = render_samples(scene, samples, resolution, pixels.start)
+            host = np.full((len(pixels), max(dims, 1), spp_pad), 0.5, dtype=np.float32)
+            pixel_samples(scene, sampler, spp, resolution, seed, pixels=pixels, pad=pad, _sets=sets,
+                          _into=host)
+            image[pixels.start:pixels.stop] = _launch(scene, host, pixels.start, len(pixels),
+                                                      resolution, spp, width)
             bar.update(len(pixels))
     return image.reshape(resolution, resolution)
 
