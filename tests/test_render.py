@@ -161,13 +161,13 @@ def test_a_scene_without_effects_uses_no_samples():
 
 
 def test_tiles_do_not_change_the_image(monkeypatch):
-    scene = Scene.from_file("ao")
-    whole = rendering.render(scene, "jittered", 16, 48, seed=1, progress=False)   # 3 seed blocks
-    samples = rendering.pixel_samples(scene, "jittered", 16, 48, seed=1)
-    np.testing.assert_array_equal(whole.ravel(), rendering.render_samples(scene, samples, 48))
+    scene = Scene.from_file("combined")                     # five padded sets per sample
+    whole = rendering.render(scene, "jittered", 16, 40, seed=1, progress=False)   # 2 seed blocks
+    samples = rendering.pixel_samples(scene, "jittered", 16, 40, seed=1)
+    np.testing.assert_array_equal(whole.ravel(), rendering.render_samples(scene, samples, 40))
     monkeypatch.setattr(rendering.runtime, "chunk_ranges",
                         lambda total, _: [(k, k + 1) for k in range(total)])
-    np.testing.assert_array_equal(whole, rendering.render(scene, "jittered", 16, 48, seed=1,
+    np.testing.assert_array_equal(whole, rendering.render(scene, "jittered", 16, 40, seed=1,
                                                           progress=False))
 
 
