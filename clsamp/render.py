@@ -59,7 +59,7 @@ import numpy as np
 
 from . import io, permutation, philox, runtime
 from .errors import InvalidArgumentError
-from .samplers import Sampler, make_sampler
+from .samplers import Sampler, make_sampler, sampler_names
 from .scene import Scene
 from .validation import check_int, check_positive_int, check_seed
 
@@ -145,7 +145,15 @@ def _sampler_factory(sampler, sampler_params):
     if not isinstance(sampler, str):
         raise InvalidArgumentError(f"'sampler' must be a sampler name or a Sampler, got {sampler!r}")
     params = dict(sampler_params or {})
-    probe = make_sampler(sampler, d=2, seed=0, **dict(params))   # unknown names fail here, by name
+    if sampler.partition(":")[0] not in sampler_names(aliases=True):
+        make_sampler(sampler)                # raises, naming the unknown sampler and the known ones
+    probe = None
+    for d in (2, 1):                         # an instance, to read its class attributes
+        try:
+            probe = make_sampler(sampler, d=d, seed=0, **dict(params))
+            break
+        except InvalidArgumentError:
+            continue
 
     def make(d, seed):
         return make_sampler(sampler, d=d, seed=seed, **dict(params))
