@@ -7,10 +7,10 @@ setup(
     long_description=open("README.md", encoding="utf-8").read(),
     long_description_content_type="text/markdown",
     python_requires=">=3.10",
-    packages=["clsamp", "clsamp.samplers", "clsamp.kernels", "clsamp.data"],
+    packages=["clsamp", "clsamp.samplers", "clsamp.kernels", "clsamp.data", "clsamp.scenes"],
     # The OpenCL sources live in kernels/ at the top level and ship inside the package.
-    package_dir={"clsamp.kernels": "kernels"},
-    package_data={"clsamp.kernels": ["*.cl", "*.h"], "clsamp.data": ["*"]},
+    package_dir={"clsamp.kernels": "kernels", "clsamp.scenes": "scenes"},
+    package_data={"clsamp.kernels": ["*.cl", "*.h"], "clsamp.data": ["*"], "clsamp.scenes": ["*.json"]},
     include_package_data=False,
     install_requires=[
         "numpy>=1.24",

@@ -24,6 +24,7 @@ MODULES = (
     "bench_spectrum",
     "bench_convergence",
     "bench_poisson_disk",
+    "bench_render",
 )
 
 

@@ -10,6 +10,7 @@ See README.md for a tour and ``clsamp --help`` for the command line.
 
 from . import integrands, theory
 from .convergence import convergence  # the function; `from clsamp.convergence import x` reads the module
+from . import render  # noqa: F401  (the module; the function is clsamp.render.render)
 from .errors import (
                      BuildError,
                      ClsampError,

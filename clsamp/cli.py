@@ -219,6 +219,53 @@ def _run_convergence(args):
     json_path = output.with_suffix(".json")
     io.write_text(json_path, json.dumps(document, indent=1, default=str))
     print(f"wrote {output}, {time_plot} and {json_path}", file=sys.stderr)
+# -- render --------------------------------------------------------------------
+def _add_render(sub):
+    p = sub.add_parser("render", help="render a scene with a sampler; OpenEXR plus a PNG preview",
+                       description="Ray-cast a scene (a JSON file, or a shipped scene's name: ao, "
+                       "dof, motion_blur, soft_shadows, combined) with SPP samples per pixel from a "
+                       "sampler; write OpenEXR (sampler, spp and seed in the header) and a "
+                       "tone-mapped PNG beside it.")
+    p.add_argument("scene", help="scene file (e.g. scenes/ao.json) or shipped scene name (e.g. ao)")
+    p.add_argument("--sampler", default="random", help="sampler name, e.g. jittered, sobol:owen")
+    p.add_argument("--spp", type=int, default=None, help="samples per pixel (default: the scene's)")
+    p.add_argument("--resolution", type=int, default=256, help="image side in pixels (default 256)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--param", action="append", metavar="KEY=VALUE",
+                   help="sampler parameter, e.g. --param strata=12x8 (repeatable)")
+    p.add_argument("--no-pad", action="store_true",
+                   help="one d-dimensional set per pixel instead of padded 2-D sets")
+    p.add_argument("--reference", action="store_true",
+                   help="also print MSE, PSNR and SSIM against the cached reference render")
+    p.add_argument("--reference-spp", type=int, default=None,
+                   help="samples per pixel of the reference (default 64 x the scene's spp)")
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    p.add_argument("-o", "--output", required=True, help="output .exr (the preview gets .png)")
+    p.set_defaults(run=_run_render)
+
+
+def _run_render(args):
+    import time
+
+    from . import render as rendering
+    from .scene import Scene
+    scene = Scene.from_file(args.scene)
+    spp = scene.default_spp if args.spp is None else args.spp
+    params = _parse_params(args.param)
+    t0 = time.perf_counter()
+    image = rendering.render(scene, args.sampler, spp, args.resolution, seed=args.seed,
+                             sampler_params=params or None, pad=not args.no_pad,
+                             progress=not args.no_progress)
+    seconds = time.perf_counter() - t0
+    path = rendering.save(args.output, image, args.sampler, spp, args.seed, scene=scene)
+    print(f"wrote {path} and {path.with_suffix('.png')}: {scene.name}, {args.sampler}, {spp} spp, "
+          f"{args.resolution}x{args.resolution}, seed {args.seed}, {seconds:.2f} s")
+    if args.reference:
+        ref = rendering.reference(scene, args.resolution, spp=args.reference_spp,
+                                  progress=not args.no_progress)
+        m = rendering.compare(image, ref)
+        print(f"against the reference: MSE {m['mse']:.4g}  PSNR {m['psnr']:.2f} dB  "
+              f"SSIM {m['ssim']:.4f}")
     return 0
 
 
@@ -227,6 +274,7 @@ _COMMANDS = (
     _add_sample,
     _add_spectrum,
     _add_convergence,
+    _add_render,
     _add_tour,
 )
 

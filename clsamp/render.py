@@ -1,0 +1,727 @@
+"""The renderer: a scene, a sampler and a number of samples per pixel in, an image out.
+
+``render(scene, sampler, spp, resolution, seed)`` ray-casts a :class:`~clsamp.scene.Scene`
+with ``kernels/render.cl`` and returns a float32 image of shape (resolution, resolution)
+(one channel: the scenes are gray). ``reference`` renders (and caches) a high-spp
+reference, ``compare`` and ``mse`` measure an image against it.
+
+Sample dimensions (DESIGN.md, "Rendering")
+------------------------------------------
+Each pixel sample has exactly the dimensions of the scene's effects, in the fixed order
+pixel 2, lens 2, time 1, 2 per AO ray, light 2 (``scene.sample_groups``). With
+``pad=True`` (the default) the sampler is asked, for each pixel, for one set of ``spp``
+2-D points per pair of dimensions (a 1-D set for time: ``d=1`` where the sampler has
+it, else the first coordinate of a 2-D set), and the sets are *padded* as pbrt pads
+(Pharr et al., PBR 3rd ed., 7.2.3): the samples of every set are reordered by an
+independent, exactly uniform random permutation, so that no correlation links the
+order of one set to another's (Fisher–Yates on the Philox stream ``PIXEL``,
+realization = pixel number, permutation = set number; see :mod:`clsamp.permutation`).
+A pixel sample made of a single set is not permuted: its order cannot change the
+pixel's mean. With ``pad=False`` the sampler makes all ``d = scene.sample_dimensions``
+dimensions at once (random, latin_hypercube, halton, sobol, ...), unpermuted;
+``random`` with ``pad=False`` (the reference's sampler) draws the very same Philox
+numbers inside the kernel instead of through a sample buffer.
+
+Decorrelation across pixels
+---------------------------
+Every pixel uses its own independent realization of the sampler. Pixels are grouped
+in *seed blocks* of :func:`block_size` consecutive pixels (row-major); the sampler of
+set ``g`` in block ``b`` is created with the seed ``philox(seed, PIXEL, index=b,
+realization=g)`` and pixel ``b * B + k`` takes its realization ``k``. The block size
+follows only from ``spp`` and the dimensions, never from the device, so the same seed
+gives the same samples on every device, and the same image up to float rounding
+(the ray math is float32; on one device the image is bit-identical run to run).
+
+*Expensive* samplers (those named in :data:`EXPENSIVE_SAMPLERS`, or whose class or
+object sets ``expensive = True``: optimizers and dart throwing) cannot afford one
+realization per pixel. For them a pool of ``pool`` realizations (default
+:data:`DEFAULT_POOL`) per set is made once (seeded per set),
+and pixel ``p`` takes pool member ``j(p)`` shifted by its own random toroidal vector
+``u(p)``: ``x -> (x + u) mod 1`` (Cranley–Patterson). The shift keeps the set's
+blue-noise and stratification on the torus and makes each pixel's estimate unbiased
+(every point uniform); ``j`` and ``u`` are Philox draws keyed by (seed, pixel, set),
+so pixels sharing a pool member still see different point positions.
+
+Images are rendered in tiles of whole seed blocks sized from the device's largest
+allocation (:func:`clsamp.runtime.chunk_ranges`) and at most :data:`TILE_BYTES` of
+samples, so large images never exceed device (or host) memory; the tiling does not
+change the image. Samples cross to the kernel as float32, rounded toward zero (so they stay
+below 1); the pixel mean is accumulated in double.
+"""
+
+import copy
+import hashlib
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+
+from . import io, permutation, philox, runtime
+from .errors import InvalidArgumentError
+from .samplers import Sampler, make_sampler, sampler_names
+from .scene import Scene
+from .validation import check_int, check_positive_int, check_seed
+
+EXPENSIVE_SAMPLERS = frozenset({"poisson_disk", "lloyd", "ccvt"})
+DEFAULT_POOL = 8                    # realizations per set of an expensive sampler
+MAX_BLOCK = 1024                    # pixels per seed block at most
+BLOCK_BYTES = 64 * 2**20            # float64 sample bytes of one block at most
+TILE_BYTES = 128 * 2**20            # float32 sample bytes of one tile at most (host memory)
+REFERENCE_PASS = 256                # spp per pass of a reference render
+REFERENCE_SEED = 0x5EED_0F_2EF
+RENDER_VERSION = "1"                # bump when the renderer's output changes (cache key)
+
+_SEED_BLOCK = 0x40000000            # Philox block word of derived seeds (above every perm << 8)
+_PURPOSE_SEED, _PURPOSE_POOL, _PURPOSE_SHIFT, _PURPOSE_PASS = 0, 1, 2, 3
+
+
+# -- randomness of the renderer ----------------------------------------------------------
+def _words(seed, index, realization, purpose):
+    """Four Philox words per (index, realization) on the PIXEL stream, one block per purpose."""
+    index, realization = np.broadcast_arrays(np.asarray(index, dtype=np.uint32),
+                                             np.asarray(realization, dtype=np.uint32))
+    counter = np.stack([index, realization,
+                        np.full(index.shape, _SEED_BLOCK + purpose, dtype=np.uint32),
+                        np.full(index.shape, philox.Stream.PIXEL, dtype=np.uint32)], axis=-1)
+    return philox.philox4x32(counter, np.stack(philox.seed_key(seed)))
+
+
+def derived_seed(seed, index, realization, purpose=_PURPOSE_SEED):
+    """A 64-bit seed drawn from (seed, index, realization): the seed of one sampler."""
+    w = _words(seed, index, realization, purpose)
+    return int(w[..., 0]) | (int(w[..., 1]) << 32)
+
+
+def block_size(spp, dimensions):
+    """Pixels per seed block: a power of two up to 1024, smaller when one block's float64
+    samples would pass 64 MiB. Depends on ``spp`` and ``dimensions`` only (never the device)."""
+    per_pixel = 8 * spp * max(1, dimensions)
+    b = MAX_BLOCK
+    while b > 1 and b * per_pixel > BLOCK_BYTES:
+        b //= 2
+    return b
+
+
+def float32_samples(x):
+    """Samples as the kernel reads them: float64 in [0, 1) to float32 rounded toward zero
+    (round-to-nearest could give 1.0), so they stay in [0, 1)."""
+    f = x.astype(np.float32)
+    up = f > x
+    f[up] = np.nextafter(f[up], np.float32(0))
+    return f
+
+
+# -- the plan: which sampler makes which dimensions ------------------------------------------
+class _Set:
+    """One sampler set of a pixel: dimensions [offset, offset + width) from a d-D sampler."""
+
+    def __init__(self, offset, width, d, factory, pooled):
+        self.offset, self.width, self.d, self.factory, self.pooled = offset, width, d, factory, pooled
+        self.pool = None
+
+
+def _sampler_factory(sampler, sampler_params):
+    """(name, make(d, seed) -> Sampler, supports(d) -> bool, expensive)."""
+    if isinstance(sampler, Sampler):
+        if sampler_params:
+            raise InvalidArgumentError("'sampler_params' can only be given with a sampler name, "
+                                       "not with a Sampler object")
+        base = sampler
+
+        def make(d, seed):
+            if d != base.d:
+                raise InvalidArgumentError(
+                    f"'sampler' has d={base.d}; this render needs d={d} (pairs of dimensions "
+                    "with pad=True, scene.sample_dimensions with pad=False)")
+            # a copy re-seeded per block or set: the sampler's other parameters are kept
+            other = copy.copy(base)
+            other.seed = check_seed(seed)
+            return other
+
+        name = type(base).name or type(base).__name__
+        expensive = name in EXPENSIVE_SAMPLERS or bool(getattr(base, "expensive", False))
+        return name, make, lambda d: d == base.d, expensive
+    if not isinstance(sampler, str):
+        raise InvalidArgumentError(f"'sampler' must be a sampler name or a Sampler, got {sampler!r}")
+    params = dict(sampler_params or {})
+    if sampler.partition(":")[0] not in sampler_names(aliases=True):
+        make_sampler(sampler)                # raises, naming the unknown sampler and the known ones
+    probe = None
+    for d in (2, 1):                         # an instance, to read its class attributes
+        try:
+            probe = make_sampler(sampler, d=d, seed=0, **dict(params))
+            break
+        except InvalidArgumentError:
+            continue
+
+    def make(d, seed):
+        return make_sampler(sampler, d=d, seed=seed, **dict(params))
+
+    def supports(d):
+        try:
+            make(d, 0)
+            return True
+        except InvalidArgumentError:
+            return False
+
+    base = sampler.partition(":")[0]
+    expensive = base in EXPENSIVE_SAMPLERS or bool(getattr(probe, "expensive", False))
+    return sampler, make, supports, expensive
+
+
+def _plan(scene, sampler, spp, sampler_params, pad, pool):
+    name, make, supports, expensive = _sampler_factory(sampler, sampler_params)
+    sets, offset = [], 0
+    if pad:
+        for _, width in scene.sample_groups:
+            d = width
+            if width == 1 and not supports(1):
+                d = 2          # a 2-D-only sampler: time is the first coordinate of a 2-D set
+            sets.append(_Set(offset, width, d, make, expensive))
+            offset += width
+    elif scene.sample_dimensions:
+        sets.append(_Set(0, scene.sample_dimensions, scene.sample_dimensions, make, expensive))
+    for s in sets:
+        probe = make(s.d, 0)
+        valid = probe.valid_n(spp)
+        if valid != spp:
+            raise InvalidArgumentError(
+                f"'spp'={spp}: sampler {name!r} cannot make {spp} points in d={s.d} "
+                f"(the renderer asks for one {s.d}-D set of spp points per pixel"
+                f"{' and pair of dimensions' if pad else ''}); the nearest valid spp is {valid}")
+        if spp > probe.max_n:
+            raise InvalidArgumentError(f"'spp'={spp} exceeds what sampler {name!r} can make "
+                                       f"({probe.max_n})")
+    for s in sets:
+        if s.pooled:
+            s.pool_size = pool
+    return sets
+
+
+def pixel_samples(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=True,
+                  pixels=None, pool=DEFAULT_POOL, _sets=None, _into=None):
+    """The samples the renderer feeds the kernel: float64 array (pixels, dimensions, spp).
+
+    Parameters are those of :func:`render`; ``pixels`` is a range of row-major pixel
+    numbers (default: all ``resolution**2``), starting on a seed-block boundary
+    (:func:`block_size`) unless it is the whole image. Values are in [0, 1).
+    """
+    resolution = check_positive_int(resolution, "resolution", maximum=65535)
+    spp = check_positive_int(spp, "spp", maximum=2**31)
+    seed = check_seed(seed)
+    total = resolution * resolution
+    pixels = range(total) if pixels is None else pixels
+    sets = _sets if _sets is not None else _plan(scene, sampler, spp, sampler_params, pad, pool)
+    dims = scene.sample_dimensions
+    # _into: the kernel's float32 buffer (pixels, >= dims, >= spp), filled set by set
+    out = np.empty((len(pixels), dims, spp), dtype=np.float64) if _into is None else _into
+    if not dims or not len(pixels):
+        return out
+    block = block_size(spp, dims)
+    if pixels.start % block:
+        raise InvalidArgumentError(f"'pixels' must start on a seed block boundary ({block}), "
+                                   f"got {pixels!r}")
+    lo, hi = pixels.start, pixels.stop
+    perms = None
+    if pad and len(sets) > 1:   # one set alone: its order cannot change the pixel's mean
+        perms = permutation.random_permutations_device(
+            seed, philox.Stream.PIXEL, range(lo, hi), spp, range(len(sets))).get()
+    for g, s in enumerate(sets):
+        if s.pooled:
+            if s.pool is None:
+                count = min(s.pool_size, total)
+                s.pool = s.factory(s.d, derived_seed(seed, 0xFFFFFFFF, g)).sample(
+                    spp, realizations=count)
+            w = _words(seed, np.arange(lo, hi), g, _PURPOSE_POOL)
+            # Lemire's multiply-shift: bias below pool / 2^32, negligible and deterministic
+            choice = ((w[:, 0].astype(np.uint64) * np.uint64(len(s.pool))) >> np.uint64(32)).astype(np.intp)
+            w = _words(seed, np.arange(lo, hi), g, _PURPOSE_SHIFT)
+            shift = np.stack([philox.words_to_unit(w[:, 0], w[:, 1]),
+                              philox.words_to_unit(w[:, 2], w[:, 3])], axis=-1)[:, :s.d]
+            y = s.pool[choice] + shift[:, None, :]
+            points = np.where(y >= 1.0, y - 1.0, y)
+        else:
+            points = np.empty((hi - lo, spp, s.d))
+            for b in range(lo // block, -(-hi // block)):
+                b_lo, b_hi = max(lo, b * block), min(hi, (b + 1) * block)
+                sampler_b = s.factory(s.d, derived_seed(seed, b, g))
+                # realization k of block b is pixel b * block + k: ask for the first b_hi - b*block
+                got = sampler_b.sample(spp, realizations=b_hi - b * block)
+                points[b_lo - lo:b_hi - lo] = got[b_lo - b * block:]
+        if perms is not None:
+            flat = perms[:, g, :].astype(np.intp) + (np.arange(hi - lo, dtype=np.intp) * spp)[:, None]
+            points = points.reshape(-1, s.d)[flat.ravel()].reshape(hi - lo, spp, s.d)
+        columns = points[:, :, :s.width].transpose(0, 2, 1)
+        if _into is None:
+            out[:, s.offset:s.offset + s.width, :] = columns
+        else:
+            out[:, s.offset:s.offset + s.width, :spp] = float32_samples(columns)
+    return out
+
+
+# -- the kernel and its NumPy reference ------------------------------------------------------
+def _camera_frame(scene):
+    cam = scene.camera
+    eye = np.array(cam["eye"], dtype=np.float64)
+    forward = np.array(cam["look_at"]) - eye
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, np.array(cam["up"], dtype=np.float64))
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    return eye, forward, right, up
+
+
+def _scene_arrays(scene):
+    """The float32 buffers of render.cl: camera, shading, spheres, planes, boxes, light."""
+    eye, forward, right, up = _camera_frame(scene)
+    cam = scene.camera
+    lens = cam.get("lens") or {"aperture": 0.0, "focus_distance": 1.0}
+    camera = np.concatenate([eye, forward, right, up, [math.tan(math.radians(cam["fov"]) / 2),
+                             lens["aperture"], lens["focus_distance"], *cam["shutter"]]])
+    shading = np.array([scene.ambient, scene.background, scene.ao_distance, scene.epsilon])
+    spheres = [[*s["center"], s["radius"], *s["velocity"], s["albedo"]]
+               for s in scene.shapes if s["type"] == "sphere"]
+    planes = [[*s["point"], *s["normal"], s["albedo"]] for s in scene.shapes if s["type"] == "plane"]
+    boxes = [[*s["min"], *s["max"], s["albedo"]] for s in scene.shapes if s["type"] == "box"]
+    light = scene.light
+    light = (np.zeros(10) if light is None else
+             np.array([*light["corner"], *light["edge1"], *light["edge2"], light["emission"]]))
+    f32 = lambda rows, width: np.asarray(rows, dtype=np.float32).reshape(-1, width)  # noqa: E731
+    return (camera.astype(np.float32), shading.astype(np.float32), f32(spheres, 8), f32(planes, 7),
+            f32(boxes, 7), light.astype(np.float32))
+
+
+def vector_width():
+    """Samples per vector lane group in render.cl: 8 on CPU devices (PoCL vectorizes explicit
+    vectors only), 1 on GPUs (one sample per lane of a warp is the natural width there)."""
+    return 8 if runtime.current_device().type == "cpu" else 1
+
+
+def render_samples(scene, samples, resolution, pixel0=0, backend="opencl", width=None):
+    """Render given samples: float32 pixel values for pixels [pixel0, pixel0 + len(samples)).
+
+    ``samples`` has shape (pixels, scene.sample_dimensions, spp) in [0, 1) (as from
+    :func:`pixel_samples`); float64 samples are rounded toward zero to float32 first on
+    both backends, float32 samples are taken as they are. ``backend="numpy"`` is the
+    NumPy reference (float64 ray math); ``width`` overrides the kernel's vector width
+    (1, 4 or 8).
+    """
+    samples = np.asarray(samples)
+    npix, dims, spp = samples.shape
+    if dims != scene.sample_dimensions:
+        raise InvalidArgumentError(f"'samples' must have {scene.sample_dimensions} dimensions "
+                                   f"(axis 1), got {dims}")
+    f32 = samples if samples.dtype == np.float32 else float32_samples(samples)
+    if backend == "numpy":
+        return render_reference(scene, f32.astype(np.float64), resolution, pixel0)
+    spp_pad = -(-spp // (width or vector_width())) * (width or vector_width())
+    host = np.full((npix, max(dims, 1), spp_pad), 0.5, dtype=np.float32)
+    host[:, :dims, :spp] = f32
+    return _launch(scene, host, pixel0, npix, resolution, spp, width)
+
+
+def _launch(scene, host, pixel0, npix, resolution, spp, width=None, keys=None, block=1):
+    """Run render_pixels on ``host`` samples (npix, dims, spp_pad) float32, or, with
+    ``keys`` ((blocks, 2) uint32 seeds of the seed blocks), on Philox draws made in the kernel."""
+    import pyopencl.array as cla
+    width = width or vector_width()
+    runtime.require_fp64()
+    queue = runtime.queue()
+    spp_pad = -(-spp // width) * width
+    arrays = _scene_arrays(scene)
+    camera, shading, spheres, planes, boxes, light = (
+        cla.to_device(queue, np.ascontiguousarray(a).reshape(-1) if a.size else np.zeros(1, np.float32))
+        for a in arrays)
+    counts = [len(a) for a in arrays[2:5]]
+    out = cla.empty(queue, (npix,), np.float32)
+    defines = {**scene.kernel_defines(), "VW": width}
+    if keys is None:
+        samples_d = cla.to_device(queue, host.reshape(-1))
+        keys_d = cla.to_device(queue, np.zeros(2, np.uint32))
+    else:
+        samples_d = cla.to_device(queue, np.zeros(1, np.float32))
+        keys_d = cla.to_device(queue, np.ascontiguousarray(keys, dtype=np.uint32).reshape(-1))
+        defines.update(SAMPLES_PHILOX=True, SAMPLES_PHILOX_STREAM=int(philox.Stream.POINTS))
+    kernel = runtime.kernel("render.cl", "render_pixels", defines=defines, options=("-cl-mad-enable",))
+    local = runtime.local_size(64 if width == 1 else 8)
+    kernel(queue, (-(-npix // local) * local,), (local,), out.data, samples_d.data,
+           np.uint32(pixel0), np.uint32(npix), np.uint32(resolution), np.uint32(spp),
+           np.uint32(spp_pad), camera.data, shading.data, spheres.data, np.uint32(counts[0]),
+           planes.data, np.uint32(counts[1]), boxes.data, np.uint32(counts[2]), light.data,
+           keys_d.data, np.uint32(block))
+    return out.get()
+
+
+def _concentric(u1, u2):
+    a, b = 2.0 * u1 - 1.0, 2.0 * u2 - 1.0
+    wide = np.abs(a) > np.abs(b)
+    r = np.where(wide, a, b)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        num = np.where(wide, b, a)
+        den = np.where(wide, a, np.where(b == 0, 1.0, b))
+        phi = np.where(wide, np.pi / 4 * (num / den), np.pi / 2 - np.pi / 4 * (num / den))
+    zero = (a == 0) & (b == 0)
+    return np.where(zero, 0.0, r * np.cos(phi)), np.where(zero, 0.0, r * np.sin(phi))
+
+
+def _trace(scene, o, d, time, tmax, nearest):
+    """NumPy twin of nearest_hit / occluded: (t, normal, albedo) or the occlusion mask."""
+    best = np.broadcast_to(np.asarray(tmax, dtype=np.float64), o.shape[:-1]).copy()
+    normal = np.zeros(o.shape)
+    albedo = np.zeros(o.shape[:-1])
+    blocked = np.zeros(o.shape[:-1], dtype=bool)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        for s in scene.shapes:
+            if s["type"] == "sphere":
+                c = np.array(s["center"]) + np.array(s["velocity"]) * time[..., None]
+                oc = o - c
+                b = np.sum(oc * d, -1)
+                cc = np.sum(oc * oc, -1) - s["radius"] ** 2
+                disc = b * b - cc
+                root = np.sqrt(np.maximum(disc, 0))
+                t0 = -b - root
+                t = np.where(t0 > 0, t0, -b + root)
+                hit = (disc >= 0) & (t > 0)
+                n = (oc + t[..., None] * d) / s["radius"]
+            elif s["type"] == "plane":
+                pn = np.array(s["normal"])
+                den = d @ pn
+                t = ((np.array(s["point"]) - o) @ pn) / den
+                hit = (den != 0) & (t > 0)
+                n = np.broadcast_to(pn, o.shape)
+            else:
+                ia = 1.0 / d
+                a = (np.array(s["min"]) - o) * ia
+                bb = (np.array(s["max"]) - o) * ia
+                lo, hi = np.minimum(a, bb), np.maximum(a, bb)
+                t = lo.max(-1)
+                hit = (t <= hi.min(-1)) & (t > 0)
+                onx = t == lo[..., 0]
+                ony = ~onx & (t == lo[..., 1])
+                n = np.stack([onx, ony, ~onx & ~ony], -1).astype(np.float64)
+            if nearest:
+                take = hit & (t < best)
+                best = np.where(take, t, best)
+                normal = np.where(take[..., None], n, normal)
+                albedo = np.where(take, s["albedo"], albedo)
+            else:
+                blocked |= hit & (t < tmax)
+    if not nearest:
+        return blocked
+    flip = np.where(np.sum(normal * d, -1) > 0, -1.0, 1.0)
+    return best, normal * flip[..., None], albedo
+
+
+def render_reference(scene, samples, resolution, pixel0=0):
+    """NumPy reference of ``render_pixels`` (float64): pixel values for the given samples.
+
+    ``samples``: (pixels, scene.sample_dimensions, spp) in [0, 1). Follows
+    kernels/render.cl step by step; for checks on small images (it holds every ray of
+    the tile in memory).
+    """
+    samples = np.asarray(samples, dtype=np.float64)
+    npix, dims, spp = samples.shape
+    eye, forward, right, up = _camera_frame(scene)
+    cam = scene.camera
+    tan_half = math.tan(math.radians(cam["fov"]) / 2)
+    pixel = pixel0 + np.arange(npix)
+    col = (pixel % resolution).astype(np.float64)[:, None]
+    row = (pixel // resolution).astype(np.float64)[:, None]
+    offsets, k = {}, 0
+    for g, w in scene.sample_groups:
+        offsets[g] = k
+        k += w
+
+    def dim(name, j=0):
+        return samples[:, offsets[name] + j, :]
+
+    px, py = (dim("pixel"), dim("pixel", 1)) if "pixel" in offsets else (0.5, 0.5)
+    sx = (2 * (col + px) / resolution - 1) * tan_half
+    sy = (1 - 2 * (row + py) / resolution) * tan_half
+    sx, sy = (np.broadcast_to(a, (npix, spp)) for a in (sx, sy))
+    d = forward + sx[..., None] * right + sy[..., None] * up
+    o = np.broadcast_to(eye, d.shape).copy()
+    if "lens" in offsets:
+        lens = cam["lens"]
+        lx, ly = _concentric(dim("lens"), dim("lens", 1))
+        focus = o + d * lens["focus_distance"]
+        o = o + (lx * lens["aperture"])[..., None] * right + (ly * lens["aperture"])[..., None] * up
+        d = focus - o
+    d = d / np.linalg.norm(d, axis=-1, keepdims=True)
+    if "time" in offsets:
+        time = cam["shutter"][0] + (cam["shutter"][1] - cam["shutter"][0]) * dim("time")
+    else:
+        time = np.zeros(d.shape[:-1])
+    t, n, albedo = _trace(scene, o, d, time, np.inf, nearest=True)
+    hit = np.isfinite(t)
+    with np.errstate(invalid="ignore"):
+        x = o + t[..., None] * d + scene.epsilon * n
+    if scene.ao_rays:
+        sign = np.where(np.signbit(n[..., 2]), -1.0, 1.0)
+        ia = -1.0 / (sign + n[..., 2])
+        bb = n[..., 0] * n[..., 1] * ia
+        b1 = np.stack([1 + sign * n[..., 0] ** 2 * ia, sign * bb, -sign * n[..., 0]], -1)
+        b2 = np.stack([bb, sign + n[..., 1] ** 2 * ia, -n[..., 1]], -1)
+        open_ = np.zeros(t.shape)
+        for a in range(scene.ao_rays):
+            hx, hy = _concentric(dim(f"ao{a}"), dim(f"ao{a}", 1))
+            hz = np.sqrt(np.maximum(1 - hx * hx - hy * hy, 0))
+            w = hx[..., None] * b1 + hy[..., None] * b2 + hz[..., None] * n
+            open_ += ~_trace(scene, x, w, time, scene.ao_distance, nearest=False)
+        ambient = scene.ambient * open_ / scene.ao_rays
+    else:
+        ambient = scene.ambient
+    direct = 0.0
+    if scene.light is not None:
+        light = scene.light
+        e1, e2 = np.array(light["edge1"]), np.array(light["edge2"])
+        lu, lv = (dim("light"), dim("light", 1)) if "light" in offsets else (0.5, 0.5)
+        lu, lv = np.broadcast_arrays(lu, lv, t)[:2]
+        q = np.array(light["corner"]) + lu[..., None] * e1 + lv[..., None] * e2
+        w = q - x
+        dist2 = np.sum(w * w, -1)
+        dist = np.sqrt(dist2)
+        with np.errstate(invalid="ignore"):     # missed rays: inf - inf, masked below
+            w = w / dist[..., None]
+        cos_light = -(w @ np.cross(e1, e2))
+        cos_surf = np.sum(n * w, -1)
+        lit = (cos_light > 0) & (cos_surf > 0)
+        shadow = _trace(scene, x, w, time, dist, nearest=False)
+        with np.errstate(invalid="ignore"):
+            direct = np.where(lit & ~shadow, light["emission"] * cos_light * cos_surf / dist2 / np.pi, 0)
+    radiance = np.where(hit, albedo * (ambient + direct), scene.background)
+    return radiance.mean(axis=1).astype(np.float32)
+
+
+# -- the public entry points ----------------------------------------------------------------
+def _as_scene(scene):
+    if isinstance(scene, Scene):
+        return scene
+    if isinstance(scene, dict):
+        return Scene.from_dict(scene)
+    if isinstance(scene, (str, os.PathLike)):
+        return Scene.from_file(scene)
+    raise InvalidArgumentError(f"'scene' must be a Scene, a dict or a scene file, got {scene!r}")
+
+
+def render(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=True, progress=True,
+           pool=DEFAULT_POOL):
+    """Render ``scene`` with ``spp`` samples per pixel from ``sampler``.
+
+    Parameters
+    ----------
+    scene : Scene, dict or path
+        The scene (a path or a shipped scene's bare name goes to :meth:`Scene.from_file`).
+    sampler : str or Sampler
+        A registered name (``"random"``, ``"jittered"``, ``"sobol:owen"``, ``"ccvt"``, ...)
+        made with :func:`clsamp.make_sampler`, or a Sampler object (``d=2`` with
+        ``pad=True``, ``d=scene.sample_dimensions`` with ``pad=False``), re-seeded per
+        seed block by copying it.
+    spp : int
+        Samples per pixel (>= 1); the sampler must be able to make spp points
+        (jittered in 2-D needs k^2 or its ``strata`` product).
+    resolution : int
+        The image is resolution x resolution pixels.
+    seed : int
+        Seed in [0, 2^64); the same seed gives the same image.
+    sampler_params : dict, optional
+        Passed to :func:`clsamp.make_sampler` (e.g. ``{"strata": (12, 8)}``).
+    pad : bool
+        True: 2-D (and 1-D) sets padded with random permutations, as pbrt pads; False:
+        one d-dimensional set per pixel from a sampler that makes all dimensions.
+    progress : bool
+        Show a progress bar over the pixels when the render is long.
+    pool : int
+        Realizations per set reused (with per-pixel toroidal shifts) by expensive samplers.
+
+    Returns
+    -------
+    ndarray of float32, shape (resolution, resolution)
+        Row 0 is the top of the image; values are linear radiance.
+
+    Notes
+    -----
+    See the module docstring for the sample layout, padding and decorrelation. The
+    kernel casts rays in float32; the pixel mean is accumulated in double.
+
+    Examples
+    --------
+    >>> from clsamp import render as rendering
+    >>> img = rendering.render("ao", "jittered", spp=16, resolution=8, seed=1, progress=False)
+    >>> img.shape, img.dtype
+    ((8, 8), dtype('float32'))
+    """
+    scene = _as_scene(scene)
+    spp = check_int(spp, "spp", minimum=1, maximum=2**31)
+    resolution = check_positive_int(resolution, "resolution", maximum=65535)
+    seed = check_seed(seed)
+    pool = check_positive_int(pool, "pool")
+    if not isinstance(pad, bool):
+        raise InvalidArgumentError(f"'pad' must be True or False, got {pad!r}")
+    sets = _plan(scene, sampler, spp, sampler_params, pad, pool)
+    total = resolution * resolution
+    dims = scene.sample_dimensions
+    block = block_size(spp, dims)
+    blocks = -(-total // block)
+    if sampler == "random" and not sampler_params and not pad:
+        return _render_random(scene, spp, resolution, seed, block, blocks)
+    width = vector_width()
+    spp_pad = -(-spp // width) * width
+    # device bytes per block: float32 samples (padded to the vector width) and the output
+    per_block = block * (4 * max(dims, 1) * spp_pad + 4)
+    # host memory holds each tile's samples several times over (float64, permuted, float32)
+    cap = max(1, TILE_BYTES // per_block)
+    tiles = [(start, min(hi, start + cap)) for lo, hi in runtime.chunk_ranges(blocks, per_block)
+             for start in range(lo, hi, cap)]
+    image = np.empty(total, dtype=np.float32)
+    from tqdm import tqdm
+    long = total * spp * scene.rays_per_sample() > 2**27
+    with tqdm(total=total, desc=f"render {scene.name}", unit="px",
+              disable=not (progress and long)) as bar:
+        for b_lo, b_hi in tiles:
+            pixels = range(b_lo * block, min(total, b_hi * block))
+            host = np.full((len(pixels), max(dims, 1), spp_pad), 0.5, dtype=np.float32)
+            pixel_samples(scene, sampler, spp, resolution, seed, pixels=pixels, pad=pad, _sets=sets,
+                          _into=host)
+            image[pixels.start:pixels.stop] = _launch(scene, host, pixels.start, len(pixels),
+                                                      resolution, spp, width)
+            bar.update(len(pixels))
+    return image.reshape(resolution, resolution)
+
+
+def _render_random(scene, spp, resolution, seed, block, blocks):
+    """``random`` with ``pad=False``, its draws made in the kernel: the same samples as
+    :func:`pixel_samples` gives (the same Philox doubles, the same seeds per block), so the
+    same image, without sample buffers."""
+    total = resolution * resolution
+    keys = np.array([philox.seed_key(derived_seed(seed, b, 0)) for b in range(blocks)],
+                    dtype=np.uint32)
+    image = np.empty(total, dtype=np.float32)
+    for lo, hi in runtime.chunk_ranges(total, 4):
+        image[lo:hi] = _launch(scene, None, lo, hi - lo, resolution, spp, keys=keys, block=block)
+    return image.reshape(resolution, resolution)
+
+
+def cache_folder():
+    """Where reference renders are cached: ``$CLSAMP_CACHE``, else ``~/.cache/clsamp``."""
+    env = os.environ.get("CLSAMP_CACHE")
+    return Path(env) if env else Path.home() / ".cache" / "clsamp"
+
+
+def reference_key(scene, resolution, spp, seed=REFERENCE_SEED):
+    """The cache key of a reference: SHA-256 of the scene's content, resolution, spp, seed."""
+    text = f"render-{RENDER_VERSION}|{scene.content_hash()}|{resolution}|{spp}|{seed}"
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def reference(scene, resolution, spp=None, progress=True, seed=REFERENCE_SEED, cache=True):
+    """A high-spp reference render, cached as OpenEXR.
+
+    The reference is the mean of passes of :data:`REFERENCE_PASS` samples per pixel
+    from the ``random`` sampler with all dimensions at once (``pad=False``), each pass
+    with its own derived seed: an unbiased estimate whose variance is 1/spp of one
+    sample's. It is cached in :func:`cache_folder` under a name holding
+    :func:`reference_key` (scene content, resolution, spp, seed); a missing, unreadable or
+    mismatching cache file is rendered again and rewritten atomically.
+
+    Parameters
+    ----------
+    scene : Scene, dict or path
+    resolution : int
+    spp : int, optional
+        Samples per pixel (default 64 x ``scene.default_spp``).
+    progress : bool
+        Show a progress bar over the passes.
+    seed : int
+        Seed of the reference.
+    cache : bool
+        Read and write the cache (False: always render, write nothing).
+
+    Returns
+    -------
+    ndarray of float32, shape (resolution, resolution)
+    """
+    scene = _as_scene(scene)
+    resolution = check_positive_int(resolution, "resolution", maximum=65535)
+    spp = 64 * scene.default_spp if spp is None else check_positive_int(spp, "spp", maximum=2**40)
+    seed = check_seed(seed)
+    key = reference_key(scene, resolution, spp, seed)
+    path = cache_folder() / f"reference-{scene.name}-{resolution}px-{spp}spp-{key[:16]}.exr"
+    if cache and path.is_file():
+        try:
+            image, header = io.read_exr(path, with_header=True)
+            if image.shape == (resolution, resolution) and _header_text(header.get("key")) == key:
+                return np.ascontiguousarray(image, dtype=np.float32)
+        except Exception:  # a corrupt or foreign file: render again and overwrite it
+            pass
+    from tqdm import tqdm
+    total = np.zeros((resolution, resolution), dtype=np.float64)
+    passes = -(-spp // REFERENCE_PASS)
+    for k in tqdm(range(passes), desc=f"reference {scene.name}", unit="pass", disable=not progress):
+        n = min(REFERENCE_PASS, spp - k * REFERENCE_PASS)
+        image = render(scene, "random", n, resolution, seed=derived_seed(seed, k, 0, _PURPOSE_PASS),
+                       pad=False, progress=False)
+        total += n * image.astype(np.float64)
+    result = (total / spp).astype(np.float32)
+    if cache:
+        io.write_exr(path, result, {"key": key, "scene": scene.name, "sampler": "random (reference)",
+                                    "spp": spp, "seed": seed, "resolution": resolution})
+    return result
+
+
+def _header_text(value):
+    if isinstance(value, bytes):
+        return value.decode(errors="replace")
+    return None if value is None else str(value)
+
+
+def _check_pair(image, ref):
+    image = np.asarray(image)
+    ref = np.asarray(ref)
+    if image.shape != ref.shape:
+        raise InvalidArgumentError(f"'image' and 'ref' must have the same shape, got {image.shape} "
+                                   f"and {ref.shape}")
+    for name, a in (("image", image), ("ref", ref)):
+        if not np.issubdtype(a.dtype, np.floating) or not np.all(np.isfinite(a)):
+            raise InvalidArgumentError(f"'{name}' must be a finite float image")
+    return image.astype(np.float64), ref.astype(np.float64)
+
+
+def mse(image, ref):
+    """Mean squared error of ``image`` against ``ref`` (float64 arithmetic)."""
+    image, ref = _check_pair(image, ref)
+    return float(np.mean((image - ref) ** 2))
+
+
+def compare(image, ref):
+    """MSE, PSNR (dB) and SSIM of ``image`` against the reference ``ref`` (scikit-image).
+
+    ``data_range`` is the reference's max - min (1 when the reference is constant). SSIM
+    uses scikit-image's default 7 x 7 window, shrunk to the largest odd size the image
+    allows; it is NaN for images smaller than 3 x 3.
+    """
+    from skimage.metrics import mean_squared_error, peak_signal_noise_ratio, structural_similarity
+    image, ref = _check_pair(image, ref)
+    data_range = float(ref.max() - ref.min()) or 1.0
+    error = float(mean_squared_error(ref, image))
+    psnr = float(peak_signal_noise_ratio(ref, image, data_range=data_range)) if error > 0 else math.inf
+    side = min(ref.shape[:2])
+    win = min(7, side if side % 2 else side - 1)
+    ssim = (float(structural_similarity(ref, image, data_range=data_range, win_size=win,
+                                        channel_axis=2 if ref.ndim == 3 else None))
+            if win >= 3 else math.nan)
+    return {"mse": error, "psnr": psnr, "ssim": ssim}
+
+
+def save(path, image, sampler, spp, seed, scene=None, preview=True):
+    """Write ``image`` as OpenEXR with sampler, spp and seed in the header, and a
+    tone-mapped PNG preview beside it (same name, .png). Returns the EXR path."""
+    header = {"sampler": sampler if isinstance(sampler, str) else repr(sampler), "spp": spp,
+              "seed": seed}
+    if scene is not None:
+        header["scene"] = scene.name
+    path = io.write_exr(path, image, header)
+    if preview:
+        io.write_png(Path(path).with_suffix(".png"), image)
+    return Path(path)
