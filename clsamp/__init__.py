@@ -8,9 +8,10 @@ Quick start::
 See README.md for a tour and ``clsamp --help`` for the command line.
 """
 
-from . import integrands, theory
-from .convergence import convergence  # the function; `from clsamp.convergence import x` reads the module
-from . import render  # noqa: F401  (the module; the function is clsamp.render.render)
+# clsamp.render is the module (its function is clsamp.render.render); clsamp.convergence is the
+# function, while `from clsamp.convergence import x` still reads the module.
+from . import integrands, render, theory
+from .convergence import convergence
 from .errors import (
                      BuildError,
                      ClsampError,
@@ -28,6 +29,6 @@ __version__ = "0.1.0"
 __all__ = [
     "BuildError", "ClsampError", "DeviceMemoryError", "InvalidArgumentError", "NoDeviceError",
     "SamplingError", "Sampler", "anisotropy", "convergence", "current_device", "devices",
-    "integrands", "make_sampler", "theory",
+    "integrands", "make_sampler", "render", "theory",
     "power_spectrum", "radial_mean", "sampler_names", "use_device",
 ]
