@@ -2,6 +2,7 @@
 
 # Importing a module registers its samplers.
 from . import (  # noqa: F401
+    lloyd,  # lloyd
     lowdiscrepancy,  # van_der_corput, halton, hammersley, sobol
     random,  # random
     stratified,  # regular, jittered, uncorrelated_jitter, latin_hypercube, (correlated_)multijittered
