@@ -2,6 +2,7 @@
 
 # Importing a module registers its samplers.
 from . import (  # noqa: F401
+    ccvt,  # ccvt
     lloyd,  # lloyd
     lowdiscrepancy,  # van_der_corput, halton, hammersley, sobol
     random,  # random

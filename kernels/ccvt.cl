@@ -1,0 +1,186 @@
+/* Capacity-constrained Voronoi tessellation (Balzer, Schloemer, Deussen 2009) on the
+ * integer torus of voronoi.h. NumPy reference: clsamp/samplers/ccvt.py (ccvt_reference).
+ *
+ * Every site owns exactly p density points: members[r][i][0..p) are point indices, and the
+ * only change ever made to them is an exchange of one point of site i for one of site j,
+ * so the capacities are exact at every moment by construction. One iteration is
+ *   voronoi_build_grid -> ccvt_swap for each of the 9 phases -> ccvt_centroids.
+ * The phases pair grid cells so that no cell, hence no site, is in two pairs of one
+ * launch: phase 0 takes the site pairs inside each cell, then for each offset (1,0),
+ * (0,1), (1,1), (1,-1) and parity 0, 1 the cells whose x (for (0,1): y) has that parity
+ * are paired with the cell at that offset (G is even, so the partners have the other
+ * parity). That is a deterministic matching of the neighbour graph: every pair of sites
+ * in the same or adjacent cells meets once per iteration, independent pairs run in
+ * parallel, and the result does not depend on the device or the scheduling. */
+#pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
+#include "voronoi.h"
+
+#define CCVT_TOP 16   /* candidates per site and round (clsamp.samplers.ccvt.CCVT_TOP) */
+
+/* Order of the candidates: larger gain first, then the smaller point index. */
+inline int ccvt_before(const long g, const uint idx, const long g2, const uint idx2)
+{
+    return g > g2 || (g == g2 && idx < idx2);
+}
+
+/* The CCVT_TOP points of a site (members mem, position (ax, ay)) that gain most by moving
+ * to the site at (bx, by), gain = d^2(x, a) - d^2(x, b), among those with gain > floor;
+ * sorted by ccvt_before. Returns how many (<= CCVT_TOP). */
+inline uint ccvt_top(__global const uint *mem, const uint p, __global const uint *pts,
+                     const uint ax, const uint ay, const uint bx, const uint by,
+                     const long floor, long *gain, uint *slot, uint *index)
+{
+    uint c = 0;
+    for (uint k = 0; k < p; ++k) {
+        const uint j = mem[k];
+        const uint x = pts[2 * j], y = pts[2 * j + 1];
+        const long g = vor_d2(x, y, ax, ay) - vor_d2(x, y, bx, by);
+        if (g <= floor)
+            continue;
+        if (c == CCVT_TOP && !ccvt_before(g, j, gain[CCVT_TOP - 1], index[CCVT_TOP - 1]))
+            continue;
+        uint q = c < CCVT_TOP ? c++ : CCVT_TOP - 1;
+        while (q > 0 && ccvt_before(g, j, gain[q - 1], index[q - 1])) {
+            gain[q] = gain[q - 1];
+            slot[q] = slot[q - 1];
+            index[q] = index[q - 1];
+            --q;
+        }
+        gain[q] = g;
+        slot[q] = k;
+        index[q] = j;
+    }
+    return c;
+}
+
+/* Balzer's pairwise swap for sites i and j: their best candidates toward each other,
+ * sorted, are exchanged in order while the two gains sum to more than zero (each exchange
+ * lowers the energy by exactly that sum). A round looks at CCVT_TOP candidates a side;
+ * when all of them were exchanged another round starts from the new memberships. */
+inline uint ccvt_pair(const uint i, const uint j, __global uint *members, const uint p,
+                      __global const uint *pts, __global const uint *s,
+                      __global const long *reach2, __global const uint *dirty,
+                      __global uint *touched)
+{
+    /* Skipping is exact, never a change of result: a pair where neither site moved nor
+     * changed members since it last met found nothing then and finds nothing now; and a
+     * point of i can gain by going to j only if |s_i - s_j| < 2 R_i (triangle inequality,
+     * R_i the farthest member of i), so pairs farther apart than both reaches cannot swap. */
+    const int fresh = touched[i] || touched[j];
+    if (!fresh && !dirty[i] && !dirty[j])
+        return 0;
+    const uint ix = s[2 * i], iy = s[2 * i + 1], jx = s[2 * j], jy = s[2 * j + 1];
+    const long reach = max(reach2[i], reach2[j]);
+    if (!fresh && vor_d2(ix, iy, jx, jy) >= 4 * reach)
+        return 0;
+    __global uint *mi = members + (size_t)i * p;
+    __global uint *mj = members + (size_t)j * p;
+    long gi[CCVT_TOP], gj[CCVT_TOP];
+    uint si[CCVT_TOP], sj[CCVT_TOP], xi[CCVT_TOP], xj[CCVT_TOP];
+    uint total = 0;
+    for (;;) {
+        const uint cj = ccvt_top(mj, p, pts, jx, jy, ix, iy, LONG_MIN, gj, sj, xj);
+        /* a point of i can only be exchanged if its gain beats minus j's best */
+        const uint ci = ccvt_top(mi, p, pts, ix, iy, jx, jy, -gj[0], gi, si, xi);
+        const uint k = min(ci, cj);
+        uint done = 0;
+        while (done < k && gi[done] + gj[done] > 0) {
+            const uint t = mi[si[done]];
+            mi[si[done]] = mj[sj[done]];
+            mj[sj[done]] = t;
+            ++done;
+        }
+        total += done;
+        if (done < CCVT_TOP)
+            break;
+    }
+    if (total) {
+        touched[i] = 1;
+        touched[j] = 1;
+    }
+    return total;
+}
+
+/* Grid (G, G, r) for phase 0 (pairs inside a cell), (G/2, G, r) for a cell offset
+ * (ox, oy) and a parity. swaps[r] counts the exchanges of the iteration. */
+__kernel void ccvt_swap(__global uint *members, const uint n, const uint p,
+                        __global const uint *points, const uint M, __global const uint *sites,
+                        __global const uint *cell_start, __global const uint *cell_sites,
+                        const uint G, const int ox, const int oy, const uint parity,
+                        __global const uint *active, __global const long *reach2,
+                        __global const uint *dirty, __global uint *touched,
+                        __global uint *swaps)
+{
+    const uint a = get_global_id(0), b = get_global_id(1), r = get_global_id(2);
+    const int internal = ox == 0 && oy == 0;
+    if (a >= (internal ? G : G / 2) || b >= G || !active[r])
+        return;
+    __global const uint *start = cell_start + (size_t)r * (G * G + 1);
+    __global const uint *list = cell_sites + (size_t)r * n;
+    __global uint *mem = members + (size_t)r * n * p;
+    __global const uint *pts = points + (size_t)r * M * 2;
+    __global const uint *s = sites + (size_t)r * n * 2;
+    __global const long *rr = reach2 + (size_t)r * n;
+    __global const uint *dd = dirty + (size_t)r * n;
+    __global uint *tt = touched + (size_t)r * n;
+    uint total = 0;
+    if (internal) {
+        const uint c = b * G + a;
+        for (uint qa = start[c]; qa < start[c + 1]; ++qa)
+            for (uint qb = qa + 1; qb < start[c + 1]; ++qb)
+                total += ccvt_pair(list[qa], list[qb], mem, p, pts, s, rr, dd, tt);
+    } else {
+        const uint ax = ox != 0 ? 2 * a + parity : b;
+        const uint ay = ox != 0 ? b : 2 * a + parity;
+        const uint bx = (uint)(((int)ax + ox + (int)G) % (int)G);
+        const uint by = (uint)(((int)ay + oy + (int)G) % (int)G);
+        const uint ca = ay * G + ax, cb = by * G + bx;
+        for (uint qa = start[ca]; qa < start[ca + 1]; ++qa)
+            for (uint qb = start[cb]; qb < start[cb + 1]; ++qb)
+                total += ccvt_pair(list[qa], list[qb], mem, p, pts, s, rr, dd, tt);
+    }
+    if (total)
+        atomic_add(swaps + r, total);
+}
+
+/* Grid (n, r): each site of an active realization to the rounded mean of its members
+ * (unwrapped relative to the site, which never raises its energy: vor_round_mean), then
+ * its energy (added to energy[r] as low 32 bits, high bits), its reach (largest squared
+ * distance to a member) and whether it changed in this iteration (dirty). */
+__kernel void ccvt_centroids(__global uint *sites, const uint n, const uint p,
+                             __global const uint *points, const uint M,
+                             __global const uint *members, __global const uint *active,
+                             __global long *reach2, __global uint *dirty,
+                             __global uint *touched, __global long *energy)
+{
+    const uint i = get_global_id(0), r = get_global_id(1);
+    if (i >= n || !active[r])
+        return;
+    const size_t site = (size_t)r * n + i;
+    __global uint *s = sites + site * 2;
+    __global const uint *mem = members + site * p;
+    __global const uint *pts = points + (size_t)r * M * 2;
+    const uint x0 = s[0], y0 = s[1];
+    long sx = 0, sy = 0;
+    for (uint k = 0; k < p; ++k) {
+        const uint j = mem[k];
+        sx += vor_delta(pts[2 * j], x0);
+        sy += vor_delta(pts[2 * j + 1], y0);
+    }
+    const uint x = (uint)((long)x0 + vor_round_mean(sx, (long)p)) & VOR_MASK;
+    const uint y = (uint)((long)y0 + vor_round_mean(sy, (long)p)) & VOR_MASK;
+    long e = 0, reach = 0;
+    for (uint k = 0; k < p; ++k) {
+        const uint j = mem[k];
+        const long d2 = vor_d2(pts[2 * j], pts[2 * j + 1], x, y);
+        e += d2;
+        reach = max(reach, d2);
+    }
+    s[0] = x;
+    s[1] = y;
+    reach2[site] = reach;
+    dirty[site] = touched[site] || x != x0 || y != y0;
+    touched[site] = 0;
+    atom_add(energy + 2 * r, e & 0xFFFFFFFFL);
+    atom_add(energy + 2 * r + 1, e >> 32);
+}
