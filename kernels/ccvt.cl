@@ -1,7 +1,8 @@
 /* Capacity-constrained Voronoi tessellation (Balzer, Schloemer, Deussen 2009) on the
  * integer torus of voronoi.h. NumPy reference: clsamp/samplers/ccvt.py (ccvt_reference).
  *
- * Every site owns exactly p density points: members[r][i][0..p) are point indices, and the
+ * Every site owns exactly p density points: slots [r][i][0..p) hold their point indices (ids)
+ * and their coordinates (xy, so the scans stream through memory instead of gathering), and the
  * only change ever made to them is an exchange of one point of site i for one of site j,
  * so the capacities are exact at every moment by construction. One iteration is
  *   voronoi_build_grid -> ccvt_swap for each of the 9 phases -> ccvt_centroids.
@@ -26,17 +27,17 @@ inline int ccvt_before(const long g, const uint idx, const long g2, const uint i
 /* The CCVT_TOP points of a site (members mem, position (ax, ay)) that gain most by moving
  * to the site at (bx, by), gain = d^2(x, a) - d^2(x, b), among those with gain > floor;
  * sorted by ccvt_before. Returns how many (<= CCVT_TOP). */
-inline uint ccvt_top(__global const uint *mem, const uint p, __global const uint *pts,
+inline uint ccvt_top(__global const uint *ids, __global const uint2 *xy, const uint p,
                      const uint ax, const uint ay, const uint bx, const uint by,
                      const long floor, long *gain, uint *slot, uint *index)
 {
     uint c = 0;
     for (uint k = 0; k < p; ++k) {
-        const uint j = mem[k];
-        const uint x = pts[2 * j], y = pts[2 * j + 1];
-        const long g = vor_d2(x, y, ax, ay) - vor_d2(x, y, bx, by);
+        const uint2 q2 = xy[k];
+        const long g = vor_d2(q2.x, q2.y, ax, ay) - vor_d2(q2.x, q2.y, bx, by);
         if (g <= floor)
             continue;
+        const uint j = ids[k];
         if (c == CCVT_TOP && !ccvt_before(g, j, gain[CCVT_TOP - 1], index[CCVT_TOP - 1]))
             continue;
         uint q = c < CCVT_TOP ? c++ : CCVT_TOP - 1;
@@ -53,12 +54,24 @@ inline uint ccvt_top(__global const uint *mem, const uint p, __global const uint
     return c;
 }
 
+/* The largest gain d^2(x, a) - d^2(x, b) of the members of the site at (ax, ay). */
+inline long ccvt_best(__global const uint2 *xy, const uint p,
+                      const uint ax, const uint ay, const uint bx, const uint by)
+{
+    long best = LONG_MIN;
+    for (uint k = 0; k < p; ++k) {
+        const uint2 q2 = xy[k];
+        best = max(best, vor_d2(q2.x, q2.y, ax, ay) - vor_d2(q2.x, q2.y, bx, by));
+    }
+    return best;
+}
+
 /* Balzer's pairwise swap for sites i and j: their best candidates toward each other,
  * sorted, are exchanged in order while the two gains sum to more than zero (each exchange
  * lowers the energy by exactly that sum). A round looks at CCVT_TOP candidates a side;
  * when all of them were exchanged another round starts from the new memberships. */
-inline uint ccvt_pair(const uint i, const uint j, __global uint *members, const uint p,
-                      __global const uint *pts, __global const uint *s,
+inline uint ccvt_pair(const uint i, const uint j, __global uint *ids, __global uint2 *xy,
+                      const uint p, __global const uint *s,
                       __global const long *reach2, __global const uint *dirty,
                       __global uint *touched)
 {
@@ -73,21 +86,31 @@ inline uint ccvt_pair(const uint i, const uint j, __global uint *members, const 
     const long reach = max(reach2[i], reach2[j]);
     if (!fresh && vor_d2(ix, iy, jx, jy) >= 4 * reach)
         return 0;
-    __global uint *mi = members + (size_t)i * p;
-    __global uint *mj = members + (size_t)j * p;
+    __global uint *mi = ids + (size_t)i * p;
+    __global uint *mj = ids + (size_t)j * p;
+    __global uint2 *pi = xy + (size_t)i * p;
+    __global uint2 *pj = xy + (size_t)j * p;
     long gi[CCVT_TOP], gj[CCVT_TOP];
     uint si[CCVT_TOP], sj[CCVT_TOP], xi[CCVT_TOP], xj[CCVT_TOP];
     uint total = 0;
     for (;;) {
-        const uint cj = ccvt_top(mj, p, pts, jx, jy, ix, iy, LONG_MIN, gj, sj, xj);
-        /* a point of i can only be exchanged if its gain beats minus j's best */
-        const uint ci = ccvt_top(mi, p, pts, ix, iy, jx, jy, -gj[0], gi, si, xi);
+        /* a cheap pass first: most pairs that meet have nothing to exchange */
+        const long bi = ccvt_best(pi, p, ix, iy, jx, jy);
+        const long bj = ccvt_best(pj, p, jx, jy, ix, iy);
+        if (bi + bj <= 0)
+            break;
+        /* a point can only be exchanged if its gain beats minus the other side's best */
+        const uint cj = ccvt_top(mj, pj, p, jx, jy, ix, iy, -bi, gj, sj, xj);
+        const uint ci = ccvt_top(mi, pi, p, ix, iy, jx, jy, -bj, gi, si, xi);
         const uint k = min(ci, cj);
         uint done = 0;
         while (done < k && gi[done] + gj[done] > 0) {
             const uint t = mi[si[done]];
             mi[si[done]] = mj[sj[done]];
             mj[sj[done]] = t;
+            const uint2 u = pi[si[done]];
+            pi[si[done]] = pj[sj[done]];
+            pj[sj[done]] = u;
             ++done;
         }
         total += done;
@@ -103,8 +126,8 @@ inline uint ccvt_pair(const uint i, const uint j, __global uint *members, const 
 
 /* Grid (G, G, r) for phase 0 (pairs inside a cell), (G/2, G, r) for a cell offset
  * (ox, oy) and a parity. swaps[r] counts the exchanges of the iteration. */
-__kernel void ccvt_swap(__global uint *members, const uint n, const uint p,
-                        __global const uint *points, const uint M, __global const uint *sites,
+__kernel void ccvt_swap(__global uint *ids, __global uint2 *xy, const uint n, const uint p,
+                        __global const uint *sites,
                         __global const uint *cell_start, __global const uint *cell_sites,
                         const uint G, const int ox, const int oy, const uint parity,
                         __global const uint *active, __global const long *reach2,
@@ -117,8 +140,8 @@ __kernel void ccvt_swap(__global uint *members, const uint n, const uint p,
         return;
     __global const uint *start = cell_start + (size_t)r * (G * G + 1);
     __global const uint *list = cell_sites + (size_t)r * n;
-    __global uint *mem = members + (size_t)r * n * p;
-    __global const uint *pts = points + (size_t)r * M * 2;
+    __global uint *rid = ids + (size_t)r * n * p;
+    __global uint2 *rxy = xy + (size_t)r * n * p;
     __global const uint *s = sites + (size_t)r * n * 2;
     __global const long *rr = reach2 + (size_t)r * n;
     __global const uint *dd = dirty + (size_t)r * n;
@@ -128,7 +151,7 @@ __kernel void ccvt_swap(__global uint *members, const uint n, const uint p,
         const uint c = b * G + a;
         for (uint qa = start[c]; qa < start[c + 1]; ++qa)
             for (uint qb = qa + 1; qb < start[c + 1]; ++qb)
-                total += ccvt_pair(list[qa], list[qb], mem, p, pts, s, rr, dd, tt);
+                total += ccvt_pair(list[qa], list[qb], rid, rxy, p, s, rr, dd, tt);
     } else {
         const uint ax = ox != 0 ? 2 * a + parity : b;
         const uint ay = ox != 0 ? b : 2 * a + parity;
@@ -137,7 +160,7 @@ __kernel void ccvt_swap(__global uint *members, const uint n, const uint p,
         const uint ca = ay * G + ax, cb = by * G + bx;
         for (uint qa = start[ca]; qa < start[ca + 1]; ++qa)
             for (uint qb = start[cb]; qb < start[cb + 1]; ++qb)
-                total += ccvt_pair(list[qa], list[qb], mem, p, pts, s, rr, dd, tt);
+                total += ccvt_pair(list[qa], list[qb], rid, rxy, p, s, rr, dd, tt);
     }
     if (total)
         atomic_add(swaps + r, total);
@@ -148,8 +171,7 @@ __kernel void ccvt_swap(__global uint *members, const uint n, const uint p,
  * its energy (added to energy[r] as low 32 bits, high bits), its reach (largest squared
  * distance to a member) and whether it changed in this iteration (dirty). */
 __kernel void ccvt_centroids(__global uint *sites, const uint n, const uint p,
-                             __global const uint *points, const uint M,
-                             __global const uint *members, __global const uint *active,
+                             __global const uint2 *xy, __global const uint *active,
                              __global long *reach2, __global uint *dirty,
                              __global uint *touched, __global long *energy)
 {
@@ -158,21 +180,18 @@ __kernel void ccvt_centroids(__global uint *sites, const uint n, const uint p,
         return;
     const size_t site = (size_t)r * n + i;
     __global uint *s = sites + site * 2;
-    __global const uint *mem = members + site * p;
-    __global const uint *pts = points + (size_t)r * M * 2;
+    __global const uint2 *q = xy + site * p;
     const uint x0 = s[0], y0 = s[1];
     long sx = 0, sy = 0;
     for (uint k = 0; k < p; ++k) {
-        const uint j = mem[k];
-        sx += vor_delta(pts[2 * j], x0);
-        sy += vor_delta(pts[2 * j + 1], y0);
+        sx += vor_delta(q[k].x, x0);
+        sy += vor_delta(q[k].y, y0);
     }
     const uint x = (uint)((long)x0 + vor_round_mean(sx, (long)p)) & VOR_MASK;
     const uint y = (uint)((long)y0 + vor_round_mean(sy, (long)p)) & VOR_MASK;
     long e = 0, reach = 0;
     for (uint k = 0; k < p; ++k) {
-        const uint j = mem[k];
-        const long d2 = vor_d2(pts[2 * j], pts[2 * j + 1], x, y);
+        const long d2 = vor_d2(q[k].x, q[k].y, x, y);
         e += d2;
         reach = max(reach, d2);
     }

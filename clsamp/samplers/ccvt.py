@@ -200,12 +200,14 @@ def _ccvt_device(sites, points, members, iterations, callback=None):
     runtime.require_fp64()
     q = runtime.queue()
     r, n, p = members.shape
-    M = points.shape[1]
     G = ccvt_grid_size(n)
     u32 = np.uint32
     d_sites = cla.to_device(q, np.ascontiguousarray(sites, dtype=np.uint32))
-    d_points = cla.to_device(q, np.ascontiguousarray(points, dtype=np.uint32))
-    d_members = cla.to_device(q, np.ascontiguousarray(members, dtype=np.uint32))
+    members = np.ascontiguousarray(members, dtype=np.uint32)
+    d_members = cla.to_device(q, members)
+    # each slot carries its point's coordinates, so the kernels stream instead of gathering
+    d_xy = cla.to_device(q, np.ascontiguousarray(
+        np.asarray(points, dtype=np.uint32)[np.arange(r)[:, None, None], members]))
     cell_start = cla.empty(q, (r, G * G + 1), np.uint32)
     cell_sites = cla.empty(q, (r, n), np.uint32)
     active_host = np.ones(r, dtype=np.uint32)
@@ -221,8 +223,8 @@ def _ccvt_device(sites, points, members, iterations, callback=None):
 
     def centroid_step():
         energy.fill(0)
-        centroids(q, (n, r), None, d_sites.data, u32(n), u32(p), d_points.data, u32(M),
-                  d_members.data, active.data, reach2.data, dirty.data, touched.data, energy.data)
+        centroids(q, (n, r), None, d_sites.data, u32(n), u32(p), d_xy.data, active.data,
+                  reach2.data, dirty.data, touched.data, energy.data)
 
     centroid_step()      # the sites to the centroids of the starting partition
     dirty.fill(1)        # every pair meets in the first iteration
@@ -233,7 +235,7 @@ def _ccvt_device(sites, points, members, iterations, callback=None):
         swaps.fill(0)
         for ox, oy, parity in PHASES:
             size = (G if ox == 0 and oy == 0 else G // 2, G, r)
-            swap(q, size, None, d_members.data, u32(n), u32(p), d_points.data, u32(M),
+            swap(q, size, None, d_members.data, d_xy.data, u32(n), u32(p),
                  d_sites.data, cell_start.data, cell_sites.data, u32(G), np.int32(ox),
                  np.int32(oy), u32(parity), active.data, reach2.data, dirty.data,
                  touched.data, swaps.data)
