@@ -21,6 +21,7 @@ MODULES = (
     "bench_random",
     "bench_stratified",
     "bench_spectrum",
+    "bench_voronoi",
 )
 
 

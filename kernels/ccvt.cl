@@ -54,18 +54,6 @@ inline uint ccvt_top(__global const uint *ids, __global const uint2 *xy, const u
     return c;
 }
 
-/* The largest gain d^2(x, a) - d^2(x, b) of the members of the site at (ax, ay). */
-inline long ccvt_best(__global const uint2 *xy, const uint p,
-                      const uint ax, const uint ay, const uint bx, const uint by)
-{
-    long best = LONG_MIN;
-    for (uint k = 0; k < p; ++k) {
-        const uint2 q2 = xy[k];
-        best = max(best, vor_d2(q2.x, q2.y, ax, ay) - vor_d2(q2.x, q2.y, bx, by));
-    }
-    return best;
-}
-
 /* Balzer's pairwise swap for sites i and j: their best candidates toward each other,
  * sorted, are exchanged in order while the two gains sum to more than zero (each exchange
  * lowers the energy by exactly that sum). A round looks at CCVT_TOP candidates a side;
@@ -94,14 +82,9 @@ inline uint ccvt_pair(const uint i, const uint j, __global uint *ids, __global u
     uint si[CCVT_TOP], sj[CCVT_TOP], xi[CCVT_TOP], xj[CCVT_TOP];
     uint total = 0;
     for (;;) {
-        /* a cheap pass first: most pairs that meet have nothing to exchange */
-        const long bi = ccvt_best(pi, p, ix, iy, jx, jy);
-        const long bj = ccvt_best(pj, p, jx, jy, ix, iy);
-        if (bi + bj <= 0)
-            break;
-        /* a point can only be exchanged if its gain beats minus the other side's best */
-        const uint cj = ccvt_top(mj, pj, p, jx, jy, ix, iy, -bi, gj, sj, xj);
-        const uint ci = ccvt_top(mi, pi, p, ix, iy, jx, jy, -bj, gi, si, xi);
+        /* a point of j can only be exchanged if its gain beats minus i's best, gi[0] */
+        const uint ci = ccvt_top(mi, pi, p, ix, iy, jx, jy, LONG_MIN, gi, si, xi);
+        const uint cj = ccvt_top(mj, pj, p, jx, jy, ix, iy, -gi[0], gj, sj, xj);
         const uint k = min(ci, cj);
         uint done = 0;
         while (done < k && gi[done] + gj[done] > 0) {

@@ -341,6 +341,20 @@ class CCVTSampler(voronoi.VoronoiSampler):
         iteration in which no exchange lowers the energy.
     backend : {"opencl", "numpy"}
 
+    Attributes
+    ----------
+    energy_history : ndarray
+        After ``sample``: E after each iteration, (iterations,) or (r, iterations); a
+        realization that converged before the others repeats its final value.
+    capacities : ndarray (n,) or (r, n)
+        Density points owned by each site, counted from the final ownership.
+    normalized_energy : float or ndarray (r,)
+        N*E of the returned set(s).
+    relative_radius : float or ndarray (r,)
+        rho of the returned set(s) (:func:`clsamp.point_metrics.relative_radius`).
+    iterations_run, converged : int / bool, or ndarray (r,)
+        Iterations each realization ran; whether it stopped because no exchange improved.
+
     Notes
     -----
     Balzer, Schloemer and Deussen minimize the energy E = mean over density points of

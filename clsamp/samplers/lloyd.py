@@ -236,6 +236,17 @@ class LloydSampler(voronoi.VoronoiSampler):
         g = ceil(sqrt(n * density)).
     backend : {"opencl", "numpy"}
 
+    Attributes
+    ----------
+    energy_history : ndarray
+        After ``sample``: E after each iteration, (iterations,) or (r, iterations).
+    normalized_energy : float or ndarray (r,)
+        N*E of the returned set(s).
+    relative_radius : float or ndarray (r,)
+        rho of the returned set(s) (:func:`clsamp.point_metrics.relative_radius`).
+    counts : ndarray (n,) or (r, n)
+        Density points in each returned site's Voronoi cell (none is empty).
+
     Notes
     -----
     Lloyd's method (Lloyd 1982; Du, Faber, Gunzburger 1999) alternates two steps that
@@ -289,6 +300,8 @@ class LloydSampler(voronoi.VoronoiSampler):
         if n * self.density > 2**32 - 1:
             raise InvalidArgumentError(
                 f"'density' * n must stay below 2^32 density points, got {self.density} * {n}")
-        result = _run(sites, n, self.density, self.iterations, backend or self.backend)
-        self.counts = result.counts
-        return result
+        return _run(sites, n, self.density, self.iterations, backend or self.backend)
+
+    def _keep(self, result, single):
+        super()._keep(result, single)
+        self.counts = result.counts[0] if single else result.counts
