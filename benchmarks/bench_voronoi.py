@@ -76,11 +76,11 @@ def run(devices, quick):
                         f"after 1: {ne[0]:.5f} ({n_lloyd * e_kd[0]:.5f})"))
         for n, p in ccvt_cases:
             sites = voronoi.initial_sites(1, np.arange(1), n)
-            ccvt._run(voronoi.to_unit(voronoi.initial_sites(2, np.arange(1), 16)),
-                      np.arange(1), 16, 5, 2, "opencl")                 # build the kernels
-            seconds, res = timed(lambda: ccvt._run(voronoi.to_unit(sites), np.arange(1), p,  # noqa: B023
-                                                   2000, 1, "opencl"),
-                                 repeats=1, warmup=1 if quick else 0)
+            ccvt.ccvt_optimize(voronoi.to_unit(voronoi.initial_sites(2, np.arange(1), 16)),
+                               points_per_site=16, iterations=5)          # build the kernels
+            seconds, res = timed(lambda: ccvt.ccvt_optimize(  # noqa: B023
+                voronoi.to_unit(sites), points_per_site=p, iterations=2000, seed=1),  # noqa: B023
+                repeats=1, warmup=1 if quick else 0)
             ne = n * res.energy_history[0, -1]
             rho = point_metrics.relative_radius(res.points[0])
             peer = BALZER.get((n, p))

@@ -112,7 +112,8 @@ def test_ccvt_capacities_exact_after_every_iteration_and_energy_never_rises():
         for k in range(owned.shape[0]):
             seen.append(np.array_equal(np.sort(owned[k].ravel()), np.arange(40 * 16)))
 
-    result = ccvt._run(voronoi.to_unit(sites), np.arange(2), 16, 60, 8, "opencl", check)
+    result = ccvt.ccvt_optimize(voronoi.to_unit(sites), points_per_site=16, iterations=60,
+                                seed=8, callback=check)
     assert len(seen) >= 4 and all(seen)       # every point owned exactly once, every time
     assert np.all(result.capacities == 16)
     h = result.energy_history

@@ -97,15 +97,21 @@ def _assign_reference(sites, g):
     return label, best, voronoi.delta(X, sx[label]), voronoi.delta(Y, sy[label])
 
 
-def _segment_far(d2):
+def segment_count(g):
+    """Work-items of lloyd_assign per realization: each row of the g x g density grid in
+    pieces of LLOYD_SEGMENT points."""
+    return g * (-(-g // LLOYD_SEGMENT))
+
+
+def _segment_far(d2, g):
     """Each segment's farthest density point (d2, index): the kernel's far_d2/far_index."""
-    M = d2.size
-    segments = -(-M // LLOYD_SEGMENT)
-    padded = np.full(segments * LLOYD_SEGMENT, -1, dtype=np.int64)
-    padded[:M] = d2
-    blocks = padded.reshape(segments, LLOYD_SEGMENT)
+    per_row = -(-g // LLOYD_SEGMENT)
+    padded = np.full((g, per_row * LLOYD_SEGMENT), -1, dtype=np.int64)
+    padded[:, :g] = d2.reshape(g, g)
+    blocks = padded.reshape(g * per_row, LLOYD_SEGMENT)
     arg = np.argmax(blocks, axis=1)
-    return blocks[np.arange(segments), arg], np.arange(segments) * LLOYD_SEGMENT + arg
+    seg = np.arange(g * per_row)
+    return blocks[seg, arg], (seg // per_row) * g + (seg % per_row) * LLOYD_SEGMENT + arg
 
 
 def lloyd_reference(sites, g, iterations):
@@ -131,7 +137,7 @@ def lloyd_reference(sites, g, iterations):
             s[full, 0] = (s[full, 0] + voronoi.round_mean(sumx[full], c[full])) & voronoi.MASK
             s[full, 1] = (s[full, 1] + voronoi.round_mean(sumy[full], c[full])) & voronoi.MASK
             if not full.all():
-                far_d2, far_index = _segment_far(d2)
+                far_d2, far_index = _segment_far(d2, g)
                 _reseed(s, c, far_d2, far_index, g)
     return sites.astype(np.uint32), energies, counts
 
@@ -143,8 +149,7 @@ def _lloyd_device(sites, g, iterations):
     q = runtime.queue()
     r, n, _ = sites.shape
     G = lloyd_grid_size(n)
-    M = g * g
-    segments = -(-M // LLOYD_SEGMENT)
+    segments = segment_count(g)
     d_sites = cla.to_device(q, np.ascontiguousarray(sites, dtype=np.uint32))
     cell_start = cla.empty(q, (r, G * G + 1), np.uint32)
     cell_sites = cla.empty(q, (r, n), np.uint32)
