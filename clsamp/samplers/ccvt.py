@@ -120,15 +120,20 @@ def _centroids_reference(sites, points, members):
     return np.stack([x, y], axis=1), voronoi.split_total(d2)
 
 
+def _gains(x, a, b):
+    """Gains 2 u.D - |D|^2 of the points x (owned by the site at a) toward the site at b:
+    u = delta(x, a), D = delta(b, a) (``ccvt_top``)."""
+    dx, dy = voronoi.delta(b[0], a[0]), voronoi.delta(b[1], a[1])
+    u = voronoi.delta(x[:, 0], a[0]), voronoi.delta(x[:, 1], a[1])
+    return 2 * (u[0] * dx + u[1] * dy) - (dx * dx + dy * dy)
+
+
 def _pair_reference(mi, mj, points, si, sj):
     """Balzer's swap of one pair, in place on the member rows mi, mj (the kernel's ccvt_pair)."""
     total = 0
     while True:
-        xi, xj = points[mi].astype(np.int64), points[mj].astype(np.int64)
-        gi = (voronoi.distance2(xi[:, 0], xi[:, 1], si[0], si[1])
-              - voronoi.distance2(xi[:, 0], xi[:, 1], sj[0], sj[1]))
-        gj = (voronoi.distance2(xj[:, 0], xj[:, 1], sj[0], sj[1])
-              - voronoi.distance2(xj[:, 0], xj[:, 1], si[0], si[1]))
+        gi = _gains(points[mi], si, sj)
+        gj = _gains(points[mj], sj, si)
         oi = np.lexsort((mi, -gi))[:CCVT_TOP]
         oj = np.lexsort((mj, -gj))[:CCVT_TOP]
         positive = (gi[oi] + gj[oj]) > 0
