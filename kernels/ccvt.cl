@@ -66,7 +66,7 @@ inline uint ccvt_top(__global const uint *ids, __global const uint2 *xy, const u
 inline uint ccvt_pair(const uint i, const uint j, __global uint *ids, __global uint2 *xy,
                       const uint p, __global const uint *s,
                       __global const long *reach2, __global const uint *dirty,
-                      __global uint *touched)
+                      __global uint *touched, const long near2)
 {
     /* Skipping is exact, never a change of result: a pair where neither site moved nor
      * changed members since it last met found nothing then and finds nothing now; and a
@@ -76,8 +76,11 @@ inline uint ccvt_pair(const uint i, const uint j, __global uint *ids, __global u
     if (!fresh && !dirty[i] && !dirty[j])
         return 0;
     const uint ix = s[2 * i], iy = s[2 * i + 1], jx = s[2 * j], jy = s[2 * j + 1];
+    const long dist2 = vor_d2(ix, iy, jx, jy);
+    if (dist2 >= near2)
+        return 0;   /* not neighbours: the pair graph joins sites closer than ccvt_near */
     const long reach = max(reach2[i], reach2[j]);
-    if (!fresh && vor_d2(ix, iy, jx, jy) >= 4 * reach)
+    if (!fresh && dist2 >= 4 * reach)
         return 0;
     /* offsets of each site from the other: delta is antisymmetric but at exactly half the
      * torus, so each direction is computed, not negated */
@@ -125,7 +128,7 @@ __kernel void ccvt_swap(__global uint *ids, __global uint2 *xy, const uint n, co
                         const uint G, const int ox, const int oy, const uint parity,
                         __global const uint *active, __global const long *reach2,
                         __global const uint *dirty, __global uint *touched,
-                        __global uint *swaps)
+                        __global uint *swaps, const long near2)
 {
     const uint a = get_global_id(0), b = get_global_id(1), r = get_global_id(2);
     const int internal = ox == 0 && oy == 0;
@@ -144,7 +147,7 @@ __kernel void ccvt_swap(__global uint *ids, __global uint2 *xy, const uint n, co
         const uint c = b * G + a;
         for (uint qa = start[c]; qa < start[c + 1]; ++qa)
             for (uint qb = qa + 1; qb < start[c + 1]; ++qb)
-                total += ccvt_pair(list[qa], list[qb], rid, rxy, p, s, rr, dd, tt);
+                total += ccvt_pair(list[qa], list[qb], rid, rxy, p, s, rr, dd, tt, near2);
     } else {
         const uint ax = ox != 0 ? 2 * a + parity : b;
         const uint ay = ox != 0 ? b : 2 * a + parity;
@@ -153,7 +156,7 @@ __kernel void ccvt_swap(__global uint *ids, __global uint2 *xy, const uint n, co
         const uint ca = ay * G + ax, cb = by * G + bx;
         for (uint qa = start[ca]; qa < start[ca + 1]; ++qa)
             for (uint qb = start[cb]; qb < start[cb + 1]; ++qb)
-                total += ccvt_pair(list[qa], list[qb], rid, rxy, p, s, rr, dd, tt);
+                total += ccvt_pair(list[qa], list[qb], rid, rxy, p, s, rr, dd, tt, near2);
     }
     if (total)
         atomic_add(swaps + r, total);

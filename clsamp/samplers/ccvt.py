@@ -49,10 +49,20 @@ class CCVTResult:
     converged: np.ndarray
 
 
+NEAR = 2   # neighbours: sites closer than NEAR / sqrt(n) (about twice the hexagonal spacing)
+
+
+def ccvt_near2(n):
+    """Squared distance (integer torus units) below which two sites are neighbours and
+    exchange points: (NEAR / sqrt(n))^2. A site's Voronoi neighbours in a CCVT lie within
+    about 1.4 / sqrt(n); this is the pair graph, found through the grid, never all pairs."""
+    return (NEAR * NEAR * voronoi.SIZE * voronoi.SIZE) // n
+
+
 def ccvt_grid_size(n):
-    """Cells per axis of the site grid: even, with cells at least 1.5 mean spacings wide
-    (so each site meets its Voronoi neighbours), and at least 2."""
-    return max(2, 2 * int(math.isqrt(4 * n) // 6))
+    """Cells per axis of the site grid: even, at least 2, and with cells at least NEAR /
+    sqrt(n) wide, so every neighbour pair is in the same or adjacent cells."""
+    return max(2, (math.isqrt(n) // NEAR) // 2 * 2)
 
 
 def density_points(seed, realizations, M):
@@ -153,6 +163,13 @@ def _sweep_reference(sites, points, members, G):
         c = cy * G + cx
         return order[start[c]:start[c + 1]]
 
+    near2 = ccvt_near2(len(sites))
+
+    def pair(i, j):
+        if voronoi.distance2(sites[i, 0], sites[i, 1], sites[j, 0], sites[j, 1]) >= near2:
+            return 0
+        return _pair_reference(members[i], members[j], points, sites[i], sites[j])
+
     total = 0
     for ox, oy, parity in PHASES:
         if ox == 0 and oy == 0:
@@ -161,9 +178,7 @@ def _sweep_reference(sites, points, members, G):
                     inside = cell(cx, cy)
                     for qa in range(len(inside)):
                         for qb in range(qa + 1, len(inside)):
-                            i, j = inside[qa], inside[qb]
-                            total += _pair_reference(members[i], members[j], points,
-                                                     sites[i], sites[j])
+                            total += pair(inside[qa], inside[qb])
             continue
         for a in range(G // 2):
             for b in range(G):
@@ -171,8 +186,7 @@ def _sweep_reference(sites, points, members, G):
                 bx, by = (ax + ox) % G, (ay + oy) % G
                 for i in cell(ax, ay):
                     for j in cell(bx, by):
-                        total += _pair_reference(members[i], members[j], points,
-                                                 sites[i], sites[j])
+                        total += pair(i, j)
     return total
 
 
@@ -206,6 +220,7 @@ def _ccvt_device(sites, points, members, iterations, callback=None):
     q = runtime.queue()
     r, n, p = members.shape
     G = ccvt_grid_size(n)
+    near2 = ccvt_near2(n)
     u32 = np.uint32
     d_sites = cla.to_device(q, np.ascontiguousarray(sites, dtype=np.uint32))
     members = np.ascontiguousarray(members, dtype=np.uint32)
@@ -243,7 +258,7 @@ def _ccvt_device(sites, points, members, iterations, callback=None):
             swap(q, size, None, d_members.data, d_xy.data, u32(n), u32(p),
                  d_sites.data, cell_start.data, cell_sites.data, u32(G), np.int32(ox),
                  np.int32(oy), u32(parity), active.data, reach2.data, dirty.data,
-                 touched.data, swaps.data)
+                 touched.data, swaps.data, np.int64(near2))
         centroid_step()
         made = swaps.get()
         totals = voronoi.exact_total(*energy.get().T)
