@@ -162,19 +162,27 @@ __kernel void ccvt_swap(__global uint *ids, __global uint2 *xy, const uint n, co
         atomic_add(swaps + r, total);
 }
 
-/* Grid (n, r): each site of an active realization to the rounded mean of its members
- * (unwrapped relative to the site, which never raises its energy: vor_round_mean), then
- * its energy (added to energy[r] as low 32 bits, high bits), its reach (largest squared
- * distance to a member) and whether it changed in this iteration (dirty). */
+/* Grid (n, r): each site of an active realization whose members changed in this iteration
+ * (all of them when `all`) to the rounded mean of its members (unwrapped relative to the
+ * site, which never raises its energy: vor_round_mean), then its energy, its reach (largest
+ * squared distance to a member) and whether it changed (dirty). A site whose members did
+ * not change already sits at their rounded mean and keeps everything. site_energy holds
+ * each site's energy; energy[r] their total as (low 32 bits, high bits) sums, updated by
+ * the differences (exact, in any order). */
 __kernel void ccvt_centroids(__global uint *sites, const uint n, const uint p,
                              __global const uint2 *xy, __global const uint *active,
                              __global long *reach2, __global uint *dirty,
-                             __global uint *touched, __global long *energy)
+                             __global uint *touched, __global long *site_energy,
+                             __global long *energy, const uint all)
 {
     const uint i = get_global_id(0), r = get_global_id(1);
     if (i >= n || !active[r])
         return;
     const size_t site = (size_t)r * n + i;
+    if (!all && !touched[site]) {
+        dirty[site] = 0;
+        return;
+    }
     __global uint *s = sites + site * 2;
     __global const uint2 *q = xy + site * p;
     const uint x0 = s[0], y0 = s[1];
@@ -196,6 +204,8 @@ __kernel void ccvt_centroids(__global uint *sites, const uint n, const uint p,
     reach2[site] = reach;
     dirty[site] = touched[site] || x != x0 || y != y0;
     touched[site] = 0;
-    atom_add(energy + 2 * r, e & 0xFFFFFFFFL);
-    atom_add(energy + 2 * r + 1, e >> 32);
+    const long old = all ? 0 : site_energy[site];
+    site_energy[site] = e;
+    atom_add(energy + 2 * r, (e & 0xFFFFFFFFL) - (old & 0xFFFFFFFFL));
+    atom_add(energy + 2 * r + 1, (e >> 32) - (old >> 32));
 }

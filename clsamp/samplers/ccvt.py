@@ -119,15 +119,18 @@ def kd_partition(sites, points, p):
     return members
 
 
-def _centroids_reference(sites, points, members):
-    """One realization's centroid step: new sites, energy (int), per-site energies."""
-    px = points[members, 0].astype(np.int64)
-    py = points[members, 1].astype(np.int64)
+def _centroids_reference(sites, points, members, site_energy, which):
+    """One realization's centroid step for the sites ``which`` (``ccvt_centroids``): moves
+    them, refreshes their entries of site_energy, returns the total energy (int)."""
+    px = points[members[which], 0].astype(np.int64)
+    py = points[members[which], 1].astype(np.int64)
     p = members.shape[1]
-    x = (sites[:, 0] + voronoi.round_mean(voronoi.delta(px, sites[:, 0:1]).sum(1), p)) & voronoi.MASK
-    y = (sites[:, 1] + voronoi.round_mean(voronoi.delta(py, sites[:, 1:2]).sum(1), p)) & voronoi.MASK
-    d2 = voronoi.distance2(px, py, x[:, None], y[:, None])
-    return np.stack([x, y], axis=1), voronoi.split_total(d2)
+    s = sites[which]
+    x = (s[:, 0] + voronoi.round_mean(voronoi.delta(px, s[:, 0:1]).sum(1), p)) & voronoi.MASK
+    y = (s[:, 1] + voronoi.round_mean(voronoi.delta(py, s[:, 1:2]).sum(1), p)) & voronoi.MASK
+    sites[which] = np.stack([x, y], axis=1)
+    site_energy[which] = voronoi.distance2(px, py, x[:, None], y[:, None]).sum(axis=1)
+    return voronoi.split_total(site_energy)
 
 
 def _gains(x, a, b):
@@ -155,8 +158,9 @@ def _pair_reference(mi, mj, points, si, sj):
             return total
 
 
-def _sweep_reference(sites, points, members, G):
-    """One realization's swap phases; returns the number of exchanges."""
+def _sweep_reference(sites, points, members, G, touched):
+    """One realization's swap phases; returns the number of exchanges and marks the sites
+    whose members changed in ``touched``."""
     start, order = voronoi.build_grid(sites, G)
 
     def cell(cx, cy):
@@ -168,7 +172,10 @@ def _sweep_reference(sites, points, members, G):
     def pair(i, j):
         if voronoi.distance2(sites[i, 0], sites[i, 1], sites[j, 0], sites[j, 1]) >= near2:
             return 0
-        return _pair_reference(members[i], members[j], points, sites[i], sites[j])
+        made = _pair_reference(members[i], members[j], points, sites[i], sites[j])
+        if made:
+            touched[i] = touched[j] = True
+        return made
 
     total = 0
     for ox, oy, parity in PHASES:
@@ -200,10 +207,12 @@ def ccvt_reference(sites, points, members, iterations, callback=None):
     energies = [[] for _ in range(r)]
     converged = np.zeros(r, dtype=bool)
     for k in range(r):
-        sites[k], _ = _centroids_reference(sites[k], points[k], members[k])
+        site_energy = np.zeros(n, dtype=np.int64)
+        _centroids_reference(sites[k], points[k], members[k], site_energy, np.ones(n, bool))
         for _ in range(iterations):
-            swaps = _sweep_reference(sites[k], points[k], members[k], G)
-            sites[k], e = _centroids_reference(sites[k], points[k], members[k])
+            touched = np.zeros(n, dtype=bool)
+            swaps = _sweep_reference(sites[k], points[k], members[k], G, touched)
+            e = _centroids_reference(sites[k], points[k], members[k], site_energy, touched)
             energies[k].append(e)
             if swaps == 0:
                 converged[k] = True
@@ -236,17 +245,18 @@ def _ccvt_device(sites, points, members, iterations, callback=None):
     dirty = cla.zeros(q, (r, n), np.uint32)
     touched = cla.zeros(q, (r, n), np.uint32)
     energy = cla.zeros(q, (r, 2), np.int64)
+    site_energy = cla.zeros(q, (r, n), np.int64)
     swaps = cla.zeros(q, (r,), np.uint32)
     build = runtime.kernel("ccvt.cl", "voronoi_build_grid")
     swap = runtime.kernel("ccvt.cl", "ccvt_swap")
     centroids = runtime.kernel("ccvt.cl", "ccvt_centroids")
 
-    def centroid_step():
-        energy.fill(0)
+    def centroid_step(everything):
         centroids(q, (n, r), None, d_sites.data, u32(n), u32(p), d_xy.data, active.data,
-                  reach2.data, dirty.data, touched.data, energy.data)
+                  reach2.data, dirty.data, touched.data, site_energy.data, energy.data,
+                  u32(everything))
 
-    centroid_step()      # the sites to the centroids of the starting partition
+    centroid_step(True)      # the sites to the centroids of the starting partition
     dirty.fill(1)        # every pair meets in the first iteration
     energies = [[] for _ in range(r)]
     converged = np.zeros(r, dtype=bool)
@@ -259,7 +269,7 @@ def _ccvt_device(sites, points, members, iterations, callback=None):
                  d_sites.data, cell_start.data, cell_sites.data, u32(G), np.int32(ox),
                  np.int32(oy), u32(parity), active.data, reach2.data, dirty.data,
                  touched.data, swaps.data, np.int64(near2))
-        centroid_step()
+        centroid_step(False)
         made = swaps.get()
         totals = voronoi.exact_total(*energy.get().T)
         for k in np.flatnonzero(active_host):
