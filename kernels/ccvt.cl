@@ -150,30 +150,16 @@ inline uint ccvt_pair(const uint i, const uint j, __global uint *ids, __global u
     return total;
 }
 
-/* Grid (G, G, r) for phase 0 (pairs inside a cell), (G/2, G, r) for a cell offset
- * (ox, oy) and a parity. swaps[r] counts the exchanges of the iteration. */
-__kernel void ccvt_swap(__global uint *ids, __global uint2 *xy, const uint n, const uint p,
-                        __global const uint *sites,
-                        __global const uint *cell_start, __global const uint *cell_sites,
-                        const uint G, const int ox, const int oy, const uint parity,
-                        __global const uint *active, __global const long *reach2,
-                        __global const uint *dirty, __global uint *touched,
-                        __global uint *swaps, const long near2)
+/* The exchanges of one cell pair of a phase: (a, b) numbers the pair, (ox, oy) = (0, 0)
+ * is phase 0 (the pairs inside cell (a, b)). Returns the number of exchanges. */
+inline uint ccvt_cell_pairs(const uint a, const uint b, const int ox, const int oy,
+                            const uint parity, const uint G, __global const uint *start,
+                            __global const uint *list, __global uint *rid, __global uint2 *rxy,
+                            const uint p, __global const uint *s, __global const long *rr,
+                            __global const uint *dd, __global uint *tt, const long near2)
 {
-    const uint a = get_global_id(0), b = get_global_id(1), r = get_global_id(2);
-    const int internal = ox == 0 && oy == 0;
-    if (a >= (internal ? G : G / 2) || b >= G || !active[r])
-        return;
-    __global const uint *start = cell_start + (size_t)r * (G * G + 1);
-    __global const uint *list = cell_sites + (size_t)r * n;
-    __global uint *rid = ids + (size_t)r * n * p;
-    __global uint2 *rxy = xy + (size_t)r * n * p;
-    __global const uint *s = sites + (size_t)r * n * 2;
-    __global const long *rr = reach2 + (size_t)r * n;
-    __global const uint *dd = dirty + (size_t)r * n;
-    __global uint *tt = touched + (size_t)r * n;
     uint total = 0;
-    if (internal) {
+    if (ox == 0 && oy == 0) {
         const uint c = b * G + a;
         for (uint qa = start[c]; qa < start[c + 1]; ++qa)
             for (uint qb = qa + 1; qb < start[c + 1]; ++qb)
@@ -188,30 +174,45 @@ __kernel void ccvt_swap(__global uint *ids, __global uint2 *xy, const uint n, co
             for (uint qb = start[cb]; qb < start[cb + 1]; ++qb)
                 total += ccvt_pair(list[qa], list[qb], rid, rxy, p, s, rr, dd, tt, near2);
     }
+    return total;
+}
+
+/* Grid (G, G, r) for phase 0 (pairs inside a cell), (G/2, G, r) for a cell offset
+ * (ox, oy) and a parity. swaps[r] counts the exchanges of the iteration. */
+__kernel void ccvt_swap(__global uint *ids, __global uint2 *xy, const uint n, const uint p,
+                        __global const uint *sites,
+                        __global const uint *cell_start, __global const uint *cell_sites,
+                        const uint G, const int ox, const int oy, const uint parity,
+                        __global const uint *active, __global const long *reach2,
+                        __global const uint *dirty, __global uint *touched,
+                        __global uint *swaps, const long near2)
+{
+    const uint a = get_global_id(0), b = get_global_id(1), r = get_global_id(2);
+    const int internal = ox == 0 && oy == 0;
+    if (a >= (internal ? G : G / 2) || b >= G || !active[r])
+        return;
+    const uint total = ccvt_cell_pairs(
+        a, b, ox, oy, parity, G, cell_start + (size_t)r * (G * G + 1), cell_sites + (size_t)r * n,
+        ids + (size_t)r * n * p, xy + (size_t)r * n * p, p, sites + (size_t)r * n * 2,
+        reach2 + (size_t)r * n, dirty + (size_t)r * n, touched + (size_t)r * n, near2);
     if (total)
         atomic_add(swaps + r, total);
 }
 
-/* Grid (n, r): each site of an active realization whose members changed in this iteration
- * (all of them when `all`) to the rounded mean of its members (unwrapped relative to the
- * site, which never raises its energy: vor_round_mean), then its energy, its reach (largest
- * squared distance to a member) and whether it changed (dirty). A site whose members did
- * not change already sits at their rounded mean and keeps everything. site_energy holds
- * each site's energy; energy[r] their total as (low 32 bits, high bits) sums, updated by
- * the differences (exact, in any order). */
-__kernel void ccvt_centroids(__global uint *sites, const uint n, const uint p,
-                             __global const uint2 *xy, __global const uint *active,
-                             __global long *reach2, __global uint *dirty,
-                             __global uint *touched, __global long *site_energy,
-                             __global long *energy, const uint all)
+/* The centroid step of one site (index `site` over all realizations): to the rounded mean
+ * of its members (unwrapped relative to the site, which never raises its energy:
+ * vor_round_mean), then its energy, its reach (largest squared distance to a member) and
+ * whether it changed (dirty). Only sites whose members changed in this iteration are
+ * visited (all of them when `all`): the others already sit at their rounded mean. Returns
+ * the change of the site's energy, which site_energy keeps. */
+inline long2 ccvt_centroid_site(const size_t site, __global uint *sites, const uint p,
+                                __global const uint2 *xy, __global long *reach2,
+                                __global uint *dirty, __global uint *touched,
+                                __global long *site_energy, const uint all)
 {
-    const uint i = get_global_id(0), r = get_global_id(1);
-    if (i >= n || !active[r])
-        return;
-    const size_t site = (size_t)r * n + i;
     if (!all && !touched[site]) {
         dirty[site] = 0;
-        return;
+        return (long2)(0, 0);
     }
     __global uint *s = sites + site * 2;
     __global const uint2 *q = xy + site * p;
@@ -236,6 +237,99 @@ __kernel void ccvt_centroids(__global uint *sites, const uint n, const uint p,
     touched[site] = 0;
     const long old = all ? 0 : site_energy[site];
     site_energy[site] = e;
-    atom_add(energy + 2 * r, (e & 0xFFFFFFFFL) - (old & 0xFFFFFFFFL));
-    atom_add(energy + 2 * r + 1, (e >> 32) - (old >> 32));
+    /* (low 32 bits, high bits) parts: the realization's total cannot overflow */
+    return (long2)((e & 0xFFFFFFFFL) - (old & 0xFFFFFFFFL), (e >> 32) - (old >> 32));
+}
+
+/* Grid (n, r): the centroid step of every site of the active realizations; energy[r]
+ * holds their total energy as (low, high) sums, updated by the differences. */
+__kernel void ccvt_centroids(__global uint *sites, const uint n, const uint p,
+                             __global const uint2 *xy, __global const uint *active,
+                             __global long *reach2, __global uint *dirty,
+                             __global uint *touched, __global long *site_energy,
+                             __global long *energy, const uint all)
+{
+    const uint i = get_global_id(0), r = get_global_id(1);
+    if (i >= n || !active[r])
+        return;
+    const long2 d = ccvt_centroid_site((size_t)r * n + i, sites, p, xy, reach2, dirty, touched,
+                                       site_energy, all);
+    if (d.x)
+        atom_add(energy + 2 * r, d.x);
+    if (d.y)
+        atom_add(energy + 2 * r + 1, d.y);
+}
+
+/* The whole optimization of a realization in one work-group (group r = realization r):
+ * the same steps as the launches above, in the same order, with barriers between them, so
+ * the results are identical; many realizations then cost one launch instead of a dozen
+ * per iteration. history[r][t] = the total energy after iteration t as (low, high);
+ * state[r] = (iterations run, converged). */
+__kernel void ccvt_solve(__global uint *ids, __global uint2 *xy, const uint n, const uint p,
+                         __global uint *sites, __global uint *cell_start,
+                         __global uint *cell_sites, const uint G, __global long *reach2,
+                         __global uint *dirty, __global uint *touched,
+                         __global long *site_energy, const long near2, const uint iterations,
+                         __global long *history, __global uint *state)
+{
+    const uint r = get_group_id(0), lid = get_local_id(0), L = get_local_size(0);
+    __local long total[2];
+    __local uint swaps;
+    __global uint *start = cell_start + (size_t)r * (G * G + 1);
+    __global uint *list = cell_sites + (size_t)r * n;
+    __global uint *rid = ids + (size_t)r * n * p;
+    __global uint2 *rxy = xy + (size_t)r * n * p;
+    __global uint *s = sites + (size_t)r * n * 2;
+    __global long *rr = reach2 + (size_t)r * n;
+    __global uint *dd = dirty + (size_t)r * n;
+    __global uint *tt = touched + (size_t)r * n;
+    if (lid == 0)
+        total[0] = total[1] = 0;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    for (uint i = lid; i < n; i += L) {
+        const long2 d = ccvt_centroid_site((size_t)r * n + i, sites, p, xy, reach2, dirty,
+                                           touched, site_energy, 1);
+        atom_add(total, d.x);
+        atom_add(total + 1, d.y);
+        dd[i] = 1;   /* every pair meets in the first iteration */
+    }
+    uint done = 0, t = 0;
+    for (; t < iterations && !done; ++t) {
+        barrier(CLK_GLOBAL_MEM_FENCE | CLK_LOCAL_MEM_FENCE);
+        if (lid == 0) {
+            vor_build_grid_one(s, n, G, start, list);
+            swaps = 0;
+        }
+        barrier(CLK_GLOBAL_MEM_FENCE | CLK_LOCAL_MEM_FENCE);
+        uint made = 0;
+        for (uint phase = 0; phase < 9; ++phase) {
+            const int ox = phase == 0 ? 0 : (phase <= 2 ? 1 : phase <= 4 ? 0 : 1);
+            const int oy = phase == 0 ? 0 : (phase <= 2 ? 0 : phase <= 6 ? 1 : -1);
+            const uint parity = phase == 0 ? 0 : (phase - 1) & 1;
+            const uint A = phase == 0 ? G : G / 2;
+            for (uint w = lid; w < A * G; w += L)
+                made += ccvt_cell_pairs(w % A, w / A, ox, oy, parity, G, start, list, rid, rxy,
+                                        p, s, rr, dd, tt, near2);
+            barrier(CLK_GLOBAL_MEM_FENCE);
+        }
+        atomic_add(&swaps, made);
+        for (uint i = lid; i < n; i += L) {
+            const long2 d = ccvt_centroid_site((size_t)r * n + i, sites, p, xy, reach2, dirty,
+                                               touched, site_energy, 0);
+            if (d.x)
+                atom_add(total, d.x);
+            if (d.y)
+                atom_add(total + 1, d.y);
+        }
+        barrier(CLK_GLOBAL_MEM_FENCE | CLK_LOCAL_MEM_FENCE);
+        if (lid == 0) {
+            history[((size_t)r * iterations + t) * 2] = total[0];
+            history[((size_t)r * iterations + t) * 2 + 1] = total[1];
+        }
+        done = swaps == 0;
+    }
+    if (lid == 0) {
+        state[2 * r] = t;
+        state[2 * r + 1] = done;
+    }
 }

@@ -50,19 +50,12 @@ inline long vor_round_mean(const long s, const long c)
 }
 
 /* Background grid of the sites of one realization: a counting sort into G x G cells,
- * sites in index order inside each cell (deterministic). One work-item per realization:
- * n is small next to the density points, and a sequential sort needs no atomics. */
-__kernel void voronoi_build_grid(__global const uint *sites, const uint n, const uint G,
-                                 __global uint *cell_start, __global uint *cell_sites,
-                                 const uint realizations)
+ * sites in index order inside each cell (deterministic). Sequential: n is small next to
+ * the density points, and a sequential sort needs no atomics. */
+inline void vor_build_grid_one(__global const uint *s, const uint n, const uint G,
+                               __global uint *start, __global uint *list)
 {
-    const uint r = get_global_id(0);
-    if (r >= realizations)
-        return;
     const uint cells = G * G;
-    __global const uint *s = sites + (size_t)r * n * 2;
-    __global uint *start = cell_start + (size_t)r * (cells + 1);
-    __global uint *list = cell_sites + (size_t)r * n;
     for (uint c = 0; c <= cells; ++c)
         start[c] = 0;
     for (uint i = 0; i < n; ++i)
@@ -77,6 +70,18 @@ __kernel void voronoi_build_grid(__global const uint *sites, const uint n, const
     for (uint c = cells; c > 0; --c)
         start[c] = start[c - 1];
     start[0] = 0;
+}
+
+/* One work-item per realization. */
+__kernel void voronoi_build_grid(__global const uint *sites, const uint n, const uint G,
+                                 __global uint *cell_start, __global uint *cell_sites,
+                                 const uint realizations)
+{
+    const uint r = get_global_id(0);
+    if (r >= realizations)
+        return;
+    vor_build_grid_one(sites + (size_t)r * n * 2, n, G, cell_start + (size_t)r * (G * G + 1),
+                       cell_sites + (size_t)r * n);
 }
 
 #endif

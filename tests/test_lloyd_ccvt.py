@@ -104,6 +104,19 @@ def test_ccvt_kernel_equals_reference():
     assert np.array_equal(a[3], b[3])          # converged
 
 
+def test_ccvt_one_workgroup_per_realization_equals_launch_per_step():
+    sites, points, members = _start(7, 3, 45, 20)
+    a = ccvt._ccvt_device(sites, points, members, 50, fused=True)
+    b = ccvt._ccvt_device(sites, points, members, 50, fused=False)
+    assert np.array_equal(a[0], b[0])
+    assert a[1] == b[1]
+    assert np.array_equal(a[2], b[2])
+    assert np.array_equal(a[3], b[3])
+    c = ccvt._ccvt_device(sites, points, members, 3, fused=True)      # stopped by the cap
+    assert [len(e) for e in c[1]] == [3, 3, 3] and not c[3].any()
+    assert c[1][0] == b[1][0][:3]
+
+
 def test_ccvt_capacities_exact_after_every_iteration_and_energy_never_rises():
     sites, points, members = _start(8, 2, 40, 16)
     seen = []

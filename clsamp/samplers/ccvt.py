@@ -222,12 +222,22 @@ def ccvt_reference(sites, points, members, iterations, callback=None):
     return sites.astype(np.uint32), energies, members.astype(np.uint32), converged
 
 
-def _ccvt_device(sites, points, members, iterations, callback=None):
-    """OpenCL CCVT: integer sites (r, n, 2), points (r, M, 2), members (r, n, p)."""
+def _ccvt_device(sites, points, members, iterations, callback=None, fused=None):
+    """OpenCL CCVT: integer sites (r, n, 2), points (r, M, 2), members (r, n, p).
+
+    With ``fused`` (default: when there are at least twice as many realizations as compute
+    units and no callback) each realization runs whole in one work-group (``ccvt_solve``,
+    one launch); otherwise every step is its own launch over all realizations, which keeps
+    a single large realization spread over the whole device. Both give the same bits.
+    """
     import pyopencl.array as cla
     runtime.require_fp64()
     q = runtime.queue()
     r, n, p = members.shape
+    if fused is None:
+        fused = callback is None and r >= 2 * runtime.current_device().compute_units
+    if fused:
+        return _ccvt_solve_device(sites, points, members, iterations)
     G = ccvt_grid_size(n)
     near2 = ccvt_near2(n)
     u32 = np.uint32
@@ -284,6 +294,36 @@ def _ccvt_device(sites, points, members, iterations, callback=None):
                 break
             active.set(active_host)
     return d_sites.get(), energies, d_members.get(), converged
+
+
+def _ccvt_solve_device(sites, points, members, iterations):
+    """``ccvt_solve``: one work-group per realization, one launch for everything."""
+    import pyopencl.array as cla
+    q = runtime.queue()
+    r, n, p = members.shape
+    G = ccvt_grid_size(n)
+    members = np.ascontiguousarray(members, dtype=np.uint32)
+    d_members = cla.to_device(q, members)
+    d_xy = cla.to_device(q, np.ascontiguousarray(
+        np.asarray(points, dtype=np.uint32)[np.arange(r)[:, None, None], members]))
+    d_sites = cla.to_device(q, np.ascontiguousarray(sites, dtype=np.uint32))
+    cell_start = cla.empty(q, (r, G * G + 1), np.uint32)
+    cell_sites = cla.empty(q, (r, n), np.uint32)
+    reach2 = cla.zeros(q, (r, n), np.int64)
+    dirty = cla.zeros(q, (r, n), np.uint32)
+    touched = cla.zeros(q, (r, n), np.uint32)
+    site_energy = cla.zeros(q, (r, n), np.int64)
+    history = cla.zeros(q, (r, iterations, 2), np.int64)
+    state = cla.zeros(q, (r, 2), np.uint32)
+    local = runtime.local_size(64)
+    solve = runtime.kernel("ccvt.cl", "ccvt_solve")
+    solve(q, (local * r,), (local,), d_members.data, d_xy.data, np.uint32(n), np.uint32(p),
+          d_sites.data, cell_start.data, cell_sites.data, np.uint32(G), reach2.data, dirty.data,
+          touched.data, site_energy.data, np.int64(ccvt_near2(n)), np.uint32(iterations),
+          history.data, state.data)
+    h, st = history.get(), state.get()
+    energies = [voronoi.exact_total(h[k, :st[k, 0], 0], h[k, :st[k, 0], 1]) for k in range(r)]
+    return d_sites.get(), energies, d_members.get(), st[:, 1].astype(bool)
 
 
 def ccvt_optimize(sites, points_per_site=1024, iterations=200, seed=0, backend="opencl",
