@@ -15,6 +15,7 @@
  * parallel, and the result does not depend on the device or the scheduling. */
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
 #include "voronoi.h"
+#include "philox.h"
 
 #define CCVT_TOP 16   /* candidates per site and round (clsamp.samplers.ccvt.CCVT_TOP) */
 
@@ -332,4 +333,17 @@ __kernel void ccvt_solve(__global uint *ids, __global uint2 *xy, const uint n, c
         state[2 * r] = t;
         state[2 * r + 1] = done;
     }
+}
+
+/* Grid (M, r): the density, point j of realization realization0 + r from words 4, 5 (Philox
+ * block 1) of (key, stream, realization, j), top VOR_BITS bits each; the NumPy twin is
+ * clsamp.samplers.ccvt.density_points. */
+__kernel void ccvt_density(__global uint2 *out, const uint M, const uint realization0,
+                           const uint key_lo, const uint key_hi, const uint stream)
+{
+    const uint j = get_global_id(0), r = get_global_id(1);
+    if (j >= M)
+        return;
+    const uint4 b = clsamp_block((uint2)(key_lo, key_hi), stream, realization0 + r, j, 1);
+    out[(size_t)r * M + j] = (uint2)(b.x >> (32 - VOR_BITS), b.y >> (32 - VOR_BITS));
 }

@@ -87,6 +87,11 @@ def _start(seed, r, n, p):
     return sites, points, ccvt.kd_partition(sites, points, p)
 
 
+def test_density_kernel_equals_reference():
+    a = ccvt.density_points_device(12, np.arange(3, 6), 1000)
+    assert np.array_equal(a, ccvt.density_points(12, np.arange(3, 6), 1000))
+
+
 def test_kd_partition_is_exact():
     sites, points, members = _start(1, 2, 13, 7)
     assert members.shape == (2, 13, 7)

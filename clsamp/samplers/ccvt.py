@@ -74,6 +74,20 @@ def density_points(seed, realizations, M):
     return philox.random_words(seed, philox.Stream.INIT, r, j, w) >> np.uint32(32 - voronoi.BITS)
 
 
+def density_points_device(seed, realizations, M):
+    """:func:`density_points` made by the ``ccvt_density`` kernel (the same integers)."""
+    import pyopencl.array as cla
+    realizations = np.asarray(realizations)
+    r = len(realizations)
+    out = cla.empty(runtime.queue(), (r, M, 2), np.uint32)
+    if r and not np.array_equal(realizations, realizations[0] + np.arange(r)):
+        raise ValueError("realizations must be consecutive")
+    kernel = runtime.kernel("ccvt.cl", "ccvt_density")
+    kernel(runtime.queue(), (M, r), None, out.data, np.uint32(M), np.uint32(realizations[0]),
+           *runtime.key_args(seed), np.uint32(philox.Stream.INIT))
+    return out.get()
+
+
 def kd_partition(sites, points, p):
     """A starting ownership with exact capacities that follows the sites: a principal-axis
     k-d tree. The points of a node are cut perpendicular to their principal axis, the
@@ -371,7 +385,8 @@ def _run(sites, realizations, p, iterations, seed, backend, callback=None):
     M = n * p
     results = []
     for lo, hi in runtime.chunk_ranges(r, 16 * M + 64 * n):
-        points = density_points(seed, realizations[lo:hi], M)
+        make = density_points if backend == "numpy" else density_points_device
+        points = make(seed, realizations[lo:hi], M)
         members = kd_partition(sites[lo:hi], points, p)
         run = ccvt_reference if backend == "numpy" else _ccvt_device
         results.append((points,) + run(sites[lo:hi], points, members, iterations, callback))
