@@ -25,6 +25,7 @@ MODULES = (
     "bench_convergence",
     "bench_poisson_disk",
     "bench_render",
+    "bench_voronoi",
 )
 
 

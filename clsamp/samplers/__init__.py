@@ -2,6 +2,8 @@
 
 # Importing a module registers its samplers.
 from . import (  # noqa: F401
+    ccvt,  # ccvt
+    lloyd,  # lloyd
     lowdiscrepancy,  # van_der_corput, halton, hammersley, sobol
     poisson_disk,  # poisson_disk (dart throwing)
     random,  # random
