@@ -27,6 +27,9 @@ def test_every_section_is_present_and_none_failed(tour):
     for key, title, _ in SECTIONS:
         assert f"id='{key}'" in page, title
     assert "This section failed" not in page, page[page.find("This section failed"):][:3000]
+    # a section can also fail in one of its parts (section 4) or in one row (a sampler)
+    assert "class='error'" not in page, page[page.find("class='error'"):][:3000]
+    assert "failed:" not in page, page[page.find("failed:") - 500:][:3000]
 
 
 def test_every_linked_file_exists(tour):
@@ -42,3 +45,17 @@ def test_json_parses_and_holds_every_section(tour):
     data = json.loads((tour / "tour.json").read_text())
     assert set(data["sections"]) == {key for key, _, _ in SECTIONS}
     assert all(s["error"] is None for s in data["sections"].values())
+
+
+def test_every_stability_case_holds_and_every_sampler_is_shown(tour):
+    from clsamp.samplers import sampler_names
+    from clsamp.tour import TOUR_SAMPLERS
+    sections = json.loads((tour / "tour.json").read_text())["sections"]
+    cases = sections["stability"]["data"]
+    assert cases and all(case["passed"] for case in cases.values()), cases
+    shown = sections["samplers"]["data"]
+    for name, _ in TOUR_SAMPLERS:
+        assert name in sampler_names(), name
+        assert "error" not in shown[name], shown[name].get("error")
+    verdicts = [c["comparison"]["verdict"].split()[0] for c in sections["convergence"]["data"].values()]
+    assert verdicts and set(verdicts) <= {"matches", "differs", "unknown"}
