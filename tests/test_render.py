@@ -225,8 +225,6 @@ def test_jittered_beats_random_at_96_ao_rays():
 
 
 def test_ccvt_beats_poisson_disk_at_96_ao_rays():
-    if not {"ccvt", "poisson_disk"} <= set(clsamp.sampler_names()):
-        pytest.skip("ccvt and poisson_disk are not registered yet")
     scene = Scene.from_file("ao")
     ref = rendering.reference(scene, 24, spp=4096, progress=False)
     # expensive samplers share a pool of 8 sets per image, so sum over three images;
