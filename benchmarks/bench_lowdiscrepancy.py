@@ -58,7 +58,7 @@ def run(devices, quick):
                 for n in sizes:
                     for randomize in variants:
                         sampler = clsamp.make_sampler(name, d=d, seed=1, randomize=randomize)
-                        seconds, points = timed(lambda: sampler.sample(n), repeats=5)
+                        seconds, points = timed(lambda: sampler.sample(n), repeats=5, min_time=2.0)
                         peer_seconds, peer_points = peers[(name, d, n, randomize is not None)]
                         rate = f"{n * d / seconds / 1e6:.0f} M coords/s"
                         if randomize is None:
