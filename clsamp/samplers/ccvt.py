@@ -11,7 +11,7 @@ import numpy as np
 
 from .. import philox, runtime
 from ..errors import InvalidArgumentError
-from ..validation import check_positive_int
+from ..validation import check_choice, check_positive_int
 from . import voronoi
 from .base import register
 
@@ -65,26 +65,74 @@ def ccvt_grid_size(n):
     return max(2, (math.isqrt(n) // NEAR) // 2 * 2)
 
 
-def density_points(seed, realizations, M):
-    """The density, uint32 (r, M, 2): uniform points from words 4, 5 (Philox block 1) of
-    (seed, Stream.INIT, r, j); the sites' starting positions use words 0, 1 of block 0."""
+DENSITIES = ("jittered", "random")
+
+
+def density_rows(M):
+    """Rows of the jittered density: isqrt(M). Row i holds points floor(i M / k) to
+    floor((i+1) M / k) - 1, so every row has isqrt(M) to isqrt(M) + 2 cells and every
+    cell is within a factor (1 + 2 / isqrt(M))^2 of square."""
+    return max(1, math.isqrt(M))
+
+
+def density_points(seed, realizations, M, density="jittered"):
+    """The density, uint32 (r, M, 2) on the integer torus.
+
+    ``"random"``: M i.i.d. uniform points from words 4, 5 (Philox block 1) of
+    (seed, Stream.INIT, r, j). ``"jittered"``: the same words place point j uniformly in
+    its own stratum of an equal-area partition of the torus into exactly M cells:
+    k = :func:`density_rows` rows, row i of height c_i / M cut into c_i cells of width
+    1 / c_i, c_i = floor((i+1) M / k) - floor(i M / k) (Bresenham: any M, near-square
+    cells, unlike a kx-by-ky grid that needs a divisor of M and degenerates into 1 x M
+    strips for prime M); then the whole set is shifted by a random toroidal offset (words
+    6, 7 of (seed, Stream.INIT, r, 0)), which makes the density, hence the optimized
+    sites, stationary on the torus. All integer arithmetic, exact in 64 bits. The sites'
+    starting positions use words 0, 1 of block 0."""
+    check_choice(density, "density", DENSITIES)
     r = np.asarray(realizations, dtype=np.uint32)[:, None, None]
     j = np.arange(M, dtype=np.uint32)[None, :, None]
     w = np.arange(4, 6, dtype=np.uint32)[None, None, :]
-    return philox.random_words(seed, philox.Stream.INIT, r, j, w) >> np.uint32(32 - voronoi.BITS)
+    u = philox.random_words(seed, philox.Stream.INIT, r, j, w) >> np.uint32(32 - voronoi.BITS)
+    if density == "random":
+        return u
+    k = np.uint64(density_rows(M))
+    M64, bits = np.uint64(M), np.uint64(voronoi.BITS)
+    j = np.arange(M, dtype=np.uint64)
+    row = ((j + np.uint64(1)) * k - np.uint64(1)) // M64
+    start = row * M64 // k
+    c = ((row + np.uint64(1)) * M64 // k - start)[None, :]
+    u = u.astype(np.uint64)
+    x = (((j - start)[None, :] << bits) + u[..., 0]) // c
+    y = ((start[None, :] << bits) + u[..., 1] * c) // M64
+    shift = philox.random_words(seed, philox.Stream.INIT, r[:, :, 0], np.uint32(0),
+                                np.arange(6, 8, dtype=np.uint32)[None, :])
+    shift = (shift >> np.uint32(32 - voronoi.BITS)).astype(np.uint64)
+    mask = np.uint64(voronoi.MASK)
+    return np.stack([(x + shift[:, 0:1]) & mask, (y + shift[:, 1:2]) & mask],
+                    axis=-1).astype(np.uint32)
 
 
-def density_points_device(seed, realizations, M):
-    """:func:`density_points` made by the ``ccvt_density`` kernel (the same integers)."""
+def density_points_device(seed, realizations, M, density="jittered"):
+    """:func:`density_points` made by the ``ccvt_density`` / ``ccvt_density_jittered``
+    kernels (the same integers)."""
     import pyopencl.array as cla
+    check_choice(density, "density", DENSITIES)
     realizations = np.asarray(realizations)
     r = len(realizations)
     out = cla.empty(runtime.queue(), (r, M, 2), np.uint32)
     if r and not np.array_equal(realizations, realizations[0] + np.arange(r)):
         raise ValueError("realizations must be consecutive")
-    kernel = runtime.kernel("ccvt.cl", "ccvt_density")
-    kernel(runtime.queue(), (M, r), None, out.data, np.uint32(M), np.uint32(realizations[0]),
-           *runtime.key_args(seed), np.uint32(philox.Stream.INIT))
+    if r == 0:
+        return out.get()
+    key = (*runtime.key_args(seed), np.uint32(philox.Stream.INIT))
+    if density == "random":
+        kernel = runtime.kernel("ccvt.cl", "ccvt_density")
+        kernel(runtime.queue(), (M, r), None, out.data, np.uint32(M),
+               np.uint32(realizations[0]), *key)
+    else:
+        kernel = runtime.kernel("ccvt.cl", "ccvt_density_jittered")
+        kernel(runtime.queue(), (M, r), None, out.data, np.uint32(M),
+               np.uint32(density_rows(M)), np.uint32(realizations[0]), *key)
     return out.get()
 
 
@@ -341,7 +389,7 @@ def _ccvt_solve_device(sites, points, members, iterations):
 
 
 def ccvt_optimize(sites, points_per_site=1024, iterations=200, seed=0, backend="opencl",
-                  callback=None):
+                  callback=None, density="jittered"):
     """CCVT from given starting sites on the unit torus.
 
     Parameters
@@ -359,6 +407,9 @@ def ccvt_optimize(sites, points_per_site=1024, iterations=200, seed=0, backend="
     callback : callable, optional
         ``callback(members, sites)`` with the ownership (r, n, p) and the integer sites
         after every iteration (OpenCL) or at the end (NumPy); for tests.
+    density : {"jittered", "random"}
+        The density points: one per cell of an equal-area stratification (default) or
+        i.i.d. uniform (:func:`density_points`; see :class:`CCVTSampler`).
 
     Returns
     -------
@@ -368,8 +419,9 @@ def ccvt_optimize(sites, points_per_site=1024, iterations=200, seed=0, backend="
     batch, _ = voronoi.check_sites(sites)
     points_per_site = _check_points_per_site(points_per_site, batch.shape[1])
     iterations = check_positive_int(iterations, "iterations")
+    check_choice(density, "density", DENSITIES)
     return _run(batch, np.arange(batch.shape[0]), points_per_site, iterations, seed,
-                backend, callback)
+                backend, callback, density)
 
 
 def _check_points_per_site(points_per_site, n):
@@ -380,13 +432,13 @@ def _check_points_per_site(points_per_site, n):
     return p
 
 
-def _run(sites, realizations, p, iterations, seed, backend, callback=None):
+def _run(sites, realizations, p, iterations, seed, backend, callback=None, density="jittered"):
     r, n, _ = sites.shape
     M = n * p
     results = []
     for lo, hi in runtime.chunk_ranges(r, 16 * M + 64 * n):
         make = density_points if backend == "numpy" else density_points_device
-        points = make(seed, realizations[lo:hi], M)
+        points = make(seed, realizations[lo:hi], M, density)
         members = kd_partition(sites[lo:hi], points, p)
         run = ccvt_reference if backend == "numpy" else _ccvt_device
         results.append((points,) + run(sites[lo:hi], points, members, iterations, callback))
@@ -497,11 +549,13 @@ class CCVTSampler(voronoi.VoronoiSampler):
     True
     """
 
-    def __init__(self, d=2, seed=0, points_per_site=1024, iterations=200, backend="opencl"):
+    def __init__(self, d=2, seed=0, points_per_site=1024, iterations=200, backend="opencl",
+                 density="jittered"):
         super().__init__(d=d, seed=seed, backend=backend)
         self.points_per_site = check_positive_int(points_per_site, "points_per_site",
                                                   maximum=MAX_POINTS_PER_SITE)
         self.iterations = check_positive_int(iterations, "iterations")
+        self.density = check_choice(density, "density", DENSITIES)
         self.capacities = None
         self.iterations_run = None
         self.converged = None
@@ -509,7 +563,7 @@ class CCVTSampler(voronoi.VoronoiSampler):
     def _optimize(self, sites, realizations, backend=None):
         p = _check_points_per_site(self.points_per_site, sites.shape[1])
         return _run(sites, np.asarray(realizations, dtype=np.int64), p, self.iterations,
-                    self.seed, backend or self.backend)
+                    self.seed, backend or self.backend, density=self.density)
 
     def _keep(self, result, single):
         super()._keep(result, single)
