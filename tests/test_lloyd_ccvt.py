@@ -84,7 +84,7 @@ def test_lloyd_degenerate_starts_recover():
 def _start(seed, r, n, p):
     sites = voronoi.initial_sites(seed, np.arange(r), n)
     points = ccvt.density_points(seed, np.arange(r), n * p)
-    return sites, points, ccvt.kd_partition(sites, points, p)
+    return sites, points, ccvt.greedy_partition(sites, points, p)
 
 
 def test_density_kernel_equals_reference():
@@ -92,11 +92,51 @@ def test_density_kernel_equals_reference():
     assert np.array_equal(a, ccvt.density_points(12, np.arange(3, 6), 1000))
 
 
-def test_kd_partition_is_exact():
+def test_greedy_partition_is_exact():
     sites, points, members = _start(1, 2, 13, 7)
     assert members.shape == (2, 13, 7)
     for k in range(2):
         assert np.array_equal(np.sort(members[k].ravel()), np.arange(13 * 7))
+    sites, points, members = _start(3, 3, 300, 20)          # on the grid, with leftovers
+    for k in range(3):
+        assert np.array_equal(np.sort(members[k].ravel()), np.arange(300 * 20))
+        assert np.all(np.diff(members[k].astype(np.int64), axis=1) > 0)
+
+
+def _sequential_greedy(sites, points, p):
+    """Every (point, site) pair in order of (squared distance, point, site); a pair is
+    taken when its point is unplaced and its site has room."""
+    n, M = len(sites), len(points)
+    d2 = voronoi.distance2(points[:, None, 0], points[:, None, 1], sites[None, :, 0], sites[None, :, 1])
+    q, s = np.meshgrid(np.arange(M), np.arange(n), indexing="ij")
+    owner, room = np.full(M, -1), np.full(n, p)
+    for e in np.lexsort((s.ravel(), q.ravel(), d2.ravel())):
+        a, b = q.flat[e], s.flat[e]
+        if owner[a] < 0 and room[b] > 0:
+            owner[a], room[b] = b, room[b] - 1
+    return np.argsort(owner, kind="stable").reshape(n, p)
+
+
+@pytest.mark.parametrize("seed, n, p", [(1, 12, 5), (2, 20, 7)])
+def test_greedy_partition_is_the_sequential_greedy(seed, n, p):
+    # few sites: every site is a candidate, so the deferred acceptance must be the greedy
+    sites, points, members = _start(seed, 2, n, p)
+    for k in range(2):
+        assert np.array_equal(members[k], _sequential_greedy(sites[k], points[k], p))
+    duplicates = np.full((1, n, 2), 12345, dtype=np.uint32)      # every distance ties
+    assert np.array_equal(ccvt.greedy_partition(duplicates, points[:1], p)[0],
+                          _sequential_greedy(duplicates[0], points[0], p))
+
+
+def test_ccvt_has_no_axis_cross_in_its_spectrum():
+    # a start that cuts the unit square leaves seams on x = 0 and y = 0, which show as
+    # excess power on the frequency axes (1.44 times the power beside them, measured)
+    pts = clsamp.make_sampler("ccvt", seed=1, points_per_site=64).sample(256, realizations=32)
+    P = clsamp.power_spectrum(pts, resolution=64, method="direct", progress=False)
+    c = P.shape[0] // 2
+    axes = np.concatenate([P[c, c + 8:], P[c + 8:, c]]).mean()
+    beside = np.concatenate([P[c + 3, c + 8:], P[c + 8:, c + 3]]).mean()
+    assert axes / beside < 1.15, (axes, beside)
 
 
 def test_ccvt_kernel_equals_reference():
@@ -157,10 +197,13 @@ def test_ccvt_sampler():
 
 def test_ccvt_quality():
     s = clsamp.make_sampler("ccvt", seed=4, points_per_site=256)
-    pts = s.sample(128, realizations=2)
+    pts = s.sample(128, realizations=4)
     assert np.all(s.converged)
-    # white noise 0.32, hexagonal 0.1604; Balzer's code reaches 0.1677 at 1024 x 1024
-    assert np.all(s.normalized_energy < 0.1715)
+    # white noise 0.32, hexagonal 0.1604; Balzer's code reaches 0.1677 at 1024 x 1024.
+    # Local optima at 128 x 256 spread from about 0.169 to 0.1736 (8 realizations, seed 4),
+    # so the mean is held to the bound and each set to a looser one.
+    assert np.mean(s.normalized_energy) < 0.1715
+    assert np.all(s.normalized_energy < 0.1745)
     assert np.all(s.normalized_energy > voronoi.HEXAGONAL_NE)
     assert np.all(point_metrics.relative_radius(pts) > 0.65)
 

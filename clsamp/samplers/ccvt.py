@@ -88,49 +88,203 @@ def density_points_device(seed, realizations, M):
     return out.get()
 
 
-def kd_partition(sites, points, p):
-    """A starting ownership with exact capacities that follows the sites: a principal-axis
-    k-d tree. The points of a node are cut perpendicular to their principal axis, the
-    sites at their median along it and the points at the matching count (k_left * p), and
-    so on down to one site with p points. Cutting across the longest extent keeps the
-    parts compact, and the cut directions vary from realization to realization (the top
-    one is the noise of a square's covariance), so the start has none of the axis-aligned
-    grid structure a plain x/y k-d tree imposes. Keys are made unique by the index, so
-    the split is canonical. Vectorized over realizations (the tree's sizes depend only
-    on n).
+START_OCCUPANCY = 2    # sites per cell of the start's grid: a 3 x 3 block offers about 18
+START_CHUNK = 1 << 21  # candidate distances computed at once (bounds the start's memory)
 
-    Returns members (r, n, p), point indices.
+
+def _start_table(xy, ids, G, pad):
+    """Candidate table of one realization for :func:`greedy_partition`: row c lists the
+    sites (global ids, ascending, padded with ``pad``) of the 3 x 3 cells of a G x G grid
+    around cell c, or all the sites when G == 1. Returns (table, lengths)."""
+    if G == 1:
+        return ids[None, :].copy(), np.array([len(ids)])
+    start, order = voronoi.build_grid(xy, G)
+    count = np.diff(start)
+    cy, cx = np.divmod(np.arange(G * G), G)
+    near = np.stack([((cy + oy) % G) * G + (cx + ox) % G
+                     for oy in (-1, 0, 1) for ox in (-1, 0, 1)], axis=1).ravel()
+    each = count[near]                              # sites in each (cell, neighbour) pair
+    lengths = each.reshape(G * G, 9).sum(axis=1)
+    total = int(each.sum())
+    within = np.arange(total) - np.repeat(np.cumsum(each) - each, each)
+    site = ids[order[np.repeat(start[near], each) + within]]
+    col = np.arange(total) - np.repeat(np.cumsum(lengths) - lengths, lengths)
+    table = np.full((G * G, max(1, int(lengths.max()))), pad, dtype=np.int64)
+    table[np.repeat(np.arange(G * G), lengths), col] = site
+    table.sort(axis=1)                              # index order: argmin breaks ties by index
+    return table, lengths
+
+
+def _keep_order(q, d2, s, sites_total):
+    """Order of the entries by (site, d2, point): composite keys where they fit in int64."""
+    qb = max(1, int(q.max()).bit_length())
+    if int(d2.max()).bit_length() + qb <= 63:
+        o = np.argsort((d2 << qb) | q)
+        by = s[o].astype(np.uint16 if sites_total <= 1 << 16 else np.int64)
+        return o[np.argsort(by, kind="stable")]
+    return np.lexsort((q, d2, s))
+
+
+def _start_phase(px, py, sx, sy, cap, table, lengths, cell, left):
+    """Deferred acceptance of the points ``left`` (global ids) by the sites (global ids,
+    capacities ``cap``; the last site is the padding) over the candidate table rows
+    ``cell[left]``. Returns the owner of every point (-1: left over, or not in ``left``)."""
+    S = len(cap) - 1
+    thr_d = np.full(S + 1, np.inf)                  # key (d2, point) of a full site's worst point
+    thr_q = np.zeros(S + 1, dtype=np.int64)
+    thr_d[S] = -np.inf                              # the padding accepts nothing
+    owner = np.full(len(px), S, dtype=np.int64)
+    own_d = np.zeros(len(px), dtype=np.int64)
+    count = np.zeros(S + 1, dtype=np.int64)
+    hx = (px + voronoi.HALF).astype(np.int32)
+    hy = (py + voronoi.HALF).astype(np.int32)
+    tx = sx[table].astype(np.int32)                 # the candidates' coordinates, row by row
+    ty = sy[table].astype(np.int32)
+    active = left
+    while active.size:
+        # each active point proposes to its nearest candidate that would keep it
+        active = active[np.argsort(lengths[cell[active]].astype(np.uint16 if lengths.max() < 1 << 16
+                                                                 else np.int64), kind="stable")]
+        site = np.full(active.size, S, dtype=np.int64)
+        dist = np.zeros(active.size, dtype=np.int64)
+        width = max(1, START_CHUNK // max(1, int(lengths.max())))
+        full = bool((thr_d[:S] < np.inf).any())     # before any site fills, only padding is out
+        for lo in range(0, active.size, width):
+            q = active[lo:lo + width]
+            rows = cell[q]
+            L = max(1, int(lengths[rows].max()))
+            cand = table[rows, :L]
+            # toroidal differences, computed as (x - s + HALF) mod SIZE - HALF in int32
+            dx = ((hx[q, None] - tx[rows, :L]) & voronoi.MASK).astype(np.float64) - voronoi.HALF
+            dy = ((hy[q, None] - ty[rows, :L]) & voronoi.MASK).astype(np.float64) - voronoi.HALF
+            d2 = dx * dx + dy * dy                  # exact: integers below 2^44
+            if full:
+                t = thr_d[cand]
+                ok = d2 < t
+                tie = d2 == t
+                if tie.any():
+                    ok |= tie & (q[:, None] < thr_q[cand])
+                d2[~ok] = np.inf
+            else:
+                d2[np.arange(L)[None, :] >= lengths[rows][:, None]] = np.inf
+            best = np.argmin(d2, axis=1)
+            bd = d2[np.arange(len(q)), best]
+            found = bd < np.inf
+            site[lo:lo + width][found] = cand[found, best[found]]
+            dist[lo:lo + width][found] = bd[found].astype(np.int64)
+        go = site < S
+        q, s, d = active[go], site[go], dist[go]
+        if not q.size:
+            break
+        new = np.bincount(s, minlength=S + 1)
+        over = (new > 0) & (count + new >= cap)     # the sites that fill up or overflow now
+        easy = ~over[s]
+        owner[q[easy]] = s[easy]
+        own_d[q[easy]] = d[easy]
+        count += np.bincount(s[easy], minlength=S + 1)
+        if not over.any():
+            break
+        # a site given more than its room keeps its nearest points, old or new
+        held = np.flatnonzero(over[owner])
+        aq = np.concatenate([held, q[~easy]])
+        as_ = np.concatenate([owner[held], s[~easy]])
+        ad = np.concatenate([own_d[held], d[~easy]])
+        o = _keep_order(aq, ad, as_, S + 1)
+        aq, as_, ad = aq[o], as_[o], ad[o]
+        idx = np.arange(len(aq))
+        first = np.ones(len(aq), dtype=bool)
+        first[1:] = as_[1:] != as_[:-1]
+        rank = idx - np.maximum.accumulate(np.where(first, idx, 0))
+        keep = rank < cap[as_]
+        owner[aq] = np.where(keep, as_, S)
+        own_d[aq[keep]] = ad[keep]
+        last = rank == cap[as_] - 1
+        thr_d[as_[last]] = ad[last]
+        thr_q[as_[last]] = aq[last]
+        count[over] = cap[over]
+        active = np.sort(aq[~keep])
+    owner[owner == S] = -1
+    return owner
+
+
+def greedy_partition(sites, points, p):
+    """A seam-free starting ownership with exact capacities: every density point goes to
+    its nearest site that still has room, the pairs taken in order of increasing toroidal
+    distance (ties by point index, then site index).
+
+    The greedy is computed as point-proposing deferred acceptance (Gale and Shapley
+    1962): each unplaced point proposes to its nearest candidate site that would keep it,
+    and a site offered more than its room keeps its nearest points, old or new. Points
+    and sites rank each other by one and the same order of the pairs, so the stable
+    assignment is unique (it is the greedy one) and the rounds compute it in parallel.
+    The candidates of a point are the sites in the 3 x 3 cells of a grid of about
+    ``START_OCCUPANCY`` sites per cell around it; points that every candidate turns away
+    are placed the same way in a next phase, among the sites that still have room (on a
+    grid of those), and a phase that places none of them uses all of them. Unlike a
+    partition of the unit square (a k-d tree), this has no seam at x = 0 or y = 0, and no
+    preferred direction: cells are Voronoi cells trimmed to their nearest points, and
+    the optimization that follows does not inherit a cut along the axes (an axis-aligned
+    cut is a local optimum of the exchanges, and shows as a cross in the power spectrum).
+    Vectorized over realizations (disjoint sites, one problem).
+
+    Parameters
+    ----------
+    sites : ndarray (r, n, 2)
+        Integer torus coordinates.
+    points : ndarray (r, n * p, 2)
+        Integer torus coordinates of the density points.
+    p : int
+        Capacity of every site.
+
+    Returns
+    -------
+    ndarray (r, n, p) of uint32
+        Point indices owned by each site, ascending.
+
+    References
+    ----------
+    D. Gale, L. S. Shapley, "College admissions and the stability of marriage",
+    Amer. Math. Monthly 69(1), 1962.
     """
     r, n, _ = sites.shape
-    rows = np.arange(r)[:, None]
-    members = np.empty((r, n, p), dtype=np.uint32)
-    sites = sites.astype(np.float64)
-    points = points.astype(np.float64)
-    stack = [(np.broadcast_to(np.arange(n, dtype=np.int64), (r, n)),
-              np.broadcast_to(np.arange(points.shape[1], dtype=np.int64), (r, points.shape[1]))),
-             ]
-    while stack:
-        S, P = stack.pop()
-        k = S.shape[1]
-        if k == 1:
-            members[np.arange(r), S[:, 0]] = P
-            continue
-        left = k // 2
-        px, py = points[rows, P, 0], points[rows, P, 1]
-        dx = px - px.mean(axis=1, keepdims=True)
-        dy = py - py.mean(axis=1, keepdims=True)
-        angle = 0.5 * np.arctan2(2.0 * (dx * dy).mean(axis=1, keepdims=True),
-                                 (dx * dx).mean(axis=1, keepdims=True)
-                                 - (dy * dy).mean(axis=1, keepdims=True))
-        c, s = np.cos(angle), np.sin(angle)
-        skey = (np.floor(sites[rows, S, 0] * c + sites[rows, S, 1] * s).astype(np.int64) << 32) | S
-        smask = skey <= np.partition(skey, left - 1, axis=1)[:, left - 1:left]
-        pkey = (np.floor(px * c + py * s).astype(np.int64) << 32) | P
-        cut = left * p
-        pmask = pkey <= np.partition(pkey, cut - 1, axis=1)[:, cut - 1:cut]
-        stack.append((S[~smask].reshape(r, k - left), P[~pmask].reshape(r, -1)))
-        stack.append((S[smask].reshape(r, left), P[pmask].reshape(r, cut)))
-    return members
+    M = points.shape[1]
+    S = r * n
+    sx = np.append(sites[..., 0].ravel().astype(np.int64), 0)
+    sy = np.append(sites[..., 1].ravel().astype(np.int64), 0)
+    px = points[..., 0].ravel().astype(np.int64)
+    py = points[..., 1].ravel().astype(np.int64)
+    owner = np.full(r * M, -1, dtype=np.int64)
+    room = np.append(np.full(S, p, dtype=np.int64), 0)
+    left = np.arange(r * M)
+    everything = np.zeros(r, dtype=bool)            # last phase placed none: all open sites
+    while left.size:
+        tables, lengths, cell = [], [], np.zeros(r * M, dtype=np.int64)
+        realization = left // M
+        bounds = np.searchsorted(realization, np.arange(r + 1))
+        base = 0
+        for k in np.flatnonzero(np.diff(bounds)):
+            ids = k * n + np.flatnonzero(room[k * n:(k + 1) * n] > 0)
+            G = math.isqrt(len(ids) // START_OCCUPANCY)
+            G = 1 if G < 4 or everything[k] else G
+            xy = np.stack([sx[ids], sy[ids]], axis=1)
+            t, length = _start_table(xy, ids, G, S)
+            q = left[bounds[k]:bounds[k + 1]]
+            cell[q] = base + (voronoi.cell_of(py[q], G) * G + voronoi.cell_of(px[q], G))
+            tables.append(t)
+            lengths.append(length)
+            base += len(t)
+        width = max(t.shape[1] for t in tables)
+        table = np.concatenate([np.pad(t, ((0, 0), (0, width - t.shape[1])), constant_values=S)
+                                for t in tables])
+        got = _start_phase(px, py, sx, sy, room, table, np.concatenate(lengths), cell, left)
+        placed = left[got[left] >= 0]
+        owner[placed] = got[placed]
+        room -= np.bincount(got[placed], minlength=S + 1)
+        everything = np.bincount(realization, minlength=r) > 0
+        everything &= np.bincount(placed // M, minlength=r) == 0
+        left = left[got[left] < 0]
+    order = np.argsort(owner, kind="stable")        # points ascending within each site
+    return (order.reshape(r, n, p) - (np.arange(r) * M)[:, None, None]).astype(np.uint32)
 
 
 def _centroids_reference(sites, points, members, site_energy, which):
@@ -387,7 +541,7 @@ def _run(sites, realizations, p, iterations, seed, backend, callback=None):
     for lo, hi in runtime.chunk_ranges(r, 16 * M + 64 * n):
         make = density_points if backend == "numpy" else density_points_device
         points = make(seed, realizations[lo:hi], M)
-        members = kd_partition(sites[lo:hi], points, p)
+        members = greedy_partition(sites[lo:hi], points, p)
         run = ccvt_reference if backend == "numpy" else _ccvt_device
         results.append((points,) + run(sites[lo:hi], points, members, iterations, callback))
     length = max(len(e) for part in results for e in part[2])
@@ -444,9 +598,11 @@ class CCVTSampler(voronoi.VoronoiSampler):
     -----
     Balzer, Schloemer and Deussen minimize the energy E = mean over density points of
     the squared toroidal distance to the site owning them, under the constraint that
-    every site owns the same number of points. The start is a principal-axis k-d
-    partition of the points that follows the random starting sites, exact in capacity
-    (:func:`kd_partition`; the sites then move to its centroids). Each iteration then
+    every site owns the same number of points. The start gives every density point to
+    its nearest random starting site that still has room, pairs in order of increasing
+    toroidal distance (:func:`greedy_partition`: exact in capacity and, unlike a
+    partition of the unit square, without seams on the axes; the sites then move to its
+    centroids). Each iteration then
     (1) exchanges points between neighbouring sites i, j: the candidates of each are
     ordered by the gain of moving to the other site, and pairs are exchanged in order
     while the two gains sum to more than zero (the paper's heap-based swap, here in
