@@ -2,6 +2,8 @@
 rising, exact capacities, degenerate starts, quality, bad input. Sizes are small: the
 references are exact twins, so a small case checks every branch."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -126,6 +128,29 @@ def test_greedy_partition_is_the_sequential_greedy(seed, n, p):
     duplicates = np.full((1, n, 2), 12345, dtype=np.uint32)      # every distance ties
     assert np.array_equal(ccvt.greedy_partition(duplicates, points[:1], p)[0],
                           _sequential_greedy(duplicates[0], points[0], p))
+
+
+def test_greedy_partition_phase_on_the_grid_is_the_restricted_greedy():
+    # many sites: candidates are the 3 x 3 cells around a point; the first phase must be
+    # the sequential greedy over exactly those pairs (its leftovers included)
+    n, p = 300, 20
+    sites = voronoi.initial_sites(1, np.arange(1), n)[0].astype(np.int64)
+    points = ccvt.density_points(1, np.arange(1), n * p)[0].astype(np.int64)
+    G = math.isqrt(n // ccvt.START_OCCUPANCY)
+    table, lengths = ccvt._start_table(sites, np.arange(n), G, n)
+    cell = voronoi.cell_of(points[:, 1], G) * G + voronoi.cell_of(points[:, 0], G)
+    got = ccvt._start_phase(points[:, 0], points[:, 1], np.append(sites[:, 0], 0),
+                            np.append(sites[:, 1], 0), np.append(np.full(n, p), 0), table,
+                            lengths, cell, np.arange(n * p))
+    q = np.repeat(np.arange(n * p), lengths[cell])
+    s = np.concatenate([table[c, :lengths[c]] for c in cell])
+    d2 = voronoi.distance2(points[q, 0], points[q, 1], sites[s, 0], sites[s, 1])
+    owner, room = np.full(n * p, -1), np.full(n, p)
+    for e in np.lexsort((s, q, d2)):
+        if owner[q[e]] < 0 and room[s[e]] > 0:
+            owner[q[e]], room[s[e]] = s[e], room[s[e]] - 1
+    assert np.array_equal(got, owner)
+    assert 0 < np.sum(owner < 0) < n * p // 5          # some left over for the next phase
 
 
 def test_ccvt_has_no_axis_cross_in_its_spectrum():

@@ -89,7 +89,7 @@ def density_points_device(seed, realizations, M):
 
 
 START_OCCUPANCY = 2    # sites per cell of the start's grid: a 3 x 3 block offers about 18
-START_CHUNK = 1 << 21  # candidate distances computed at once (bounds the start's memory)
+START_CHUNK = 1 << 16  # candidate distances computed at once (in cache, and bounded)
 
 
 def _start_table(xy, ids, G, pad):
@@ -125,6 +125,15 @@ def _keep_order(q, d2, s, sites_total):
     return np.lexsort((q, d2, s))
 
 
+def _square_delta(h, t):
+    """Squared toroidal differences (float64, exact) of x = h - HALF and the sites t."""
+    d = h - t
+    np.bitwise_and(d, voronoi.MASK, out=d)
+    d -= voronoi.HALF
+    d2 = d.astype(np.float64)
+    return np.multiply(d2, d2, out=d2)
+
+
 def _start_phase(px, py, sx, sy, cap, table, lengths, cell, left):
     """Deferred acceptance of the points ``left`` (global ids) by the sites (global ids,
     capacities ``cap``; the last site is the padding) over the candidate table rows
@@ -155,9 +164,8 @@ def _start_phase(px, py, sx, sy, cap, table, lengths, cell, left):
             L = max(1, int(lengths[rows].max()))
             cand = table[rows, :L]
             # toroidal differences, computed as (x - s + HALF) mod SIZE - HALF in int32
-            dx = ((hx[q, None] - tx[rows, :L]) & voronoi.MASK).astype(np.float64) - voronoi.HALF
-            dy = ((hy[q, None] - ty[rows, :L]) & voronoi.MASK).astype(np.float64) - voronoi.HALF
-            d2 = dx * dx + dy * dy                  # exact: integers below 2^44
+            d2 = _square_delta(hx[q, None], tx[rows, :L])
+            d2 += _square_delta(hy[q, None], ty[rows, :L])   # exact: integers below 2^44
             if full:
                 t = thr_d[cand]
                 ok = d2 < t
@@ -283,7 +291,8 @@ def greedy_partition(sites, points, p):
         everything = np.bincount(realization, minlength=r) > 0
         everything &= np.bincount(placed // M, minlength=r) == 0
         left = left[got[left] < 0]
-    order = np.argsort(owner, kind="stable")        # points ascending within each site
+    # points ascending within each site (a radix sort where the site ids fit in 16 bits)
+    order = np.argsort(owner.astype(np.uint16) if S <= 1 << 16 else owner, kind="stable")
     return (order.reshape(r, n, p) - (np.arange(r) * M)[:, None, None]).astype(np.uint32)
 
 
