@@ -105,6 +105,18 @@ def test_greedy_partition_is_exact():
         assert np.all(np.diff(members[k].astype(np.int64), axis=1) > 0)
 
 
+def test_greedy_partition_of_crowded_sites():
+    # 1000 sites on one spot, and one set of spread sites beside it in the batch
+    sites = voronoi.initial_sites(4, np.arange(2), 1000)
+    sites[1] = 7654321 % voronoi.SIZE
+    points = ccvt.density_points(4, np.arange(2), 1000 * 6)
+    members = ccvt.greedy_partition(sites, points, 6)
+    for k in range(2):
+        assert np.array_equal(np.sort(members[k].ravel()), np.arange(1000 * 6))
+    assert np.array_equal(members[0], ccvt.greedy_partition(sites[:1], points[:1], 6)[0])
+    assert np.array_equal(members[1], ccvt.kd_partition(sites[1:], points[1:], 6)[0])
+
+
 def _sequential_greedy(sites, points, p):
     """Every (point, site) pair in order of (squared distance, point, site); a pair is
     taken when its point is unplaced and its site has room."""

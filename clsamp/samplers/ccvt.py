@@ -90,6 +90,7 @@ def density_points_device(seed, realizations, M):
 
 START_OCCUPANCY = 2    # sites per cell of the start's grid: a 3 x 3 block offers about 18
 START_CHUNK = 1 << 16  # candidate distances computed at once (in cache, and bounded)
+START_CROWD = 16      # more sites in one cell: the sites are clustered (kd_partition)
 
 
 def _start_table(xy, ids, G, pad):
@@ -215,6 +216,54 @@ def _start_phase(px, py, sx, sy, cap, table, lengths, cell, left):
     return owner
 
 
+def kd_partition(sites, points, p):
+    """The starting ownership where sites are too crowded for :func:`greedy_partition`
+    (duplicates, tight clusters): exact capacities that follow the sites, from a
+    principal-axis k-d tree. It cuts the unit square, not the torus, so its cells meet
+    seams on x = 0 and y = 0; that is why it is not the start for spread-out sites.
+    The points of a node are cut perpendicular to their principal axis, the
+    sites at their median along it and the points at the matching count (k_left * p), and
+    so on down to one site with p points. Cutting across the longest extent keeps the
+    parts compact, and the cut directions vary from realization to realization (the top
+    one is the noise of a square's covariance), so the start has none of the axis-aligned
+    grid structure a plain x/y k-d tree imposes. Keys are made unique by the index, so
+    the split is canonical. Vectorized over realizations (the tree's sizes depend only
+    on n).
+
+    Returns members (r, n, p), point indices.
+    """
+    r, n, _ = sites.shape
+    rows = np.arange(r)[:, None]
+    members = np.empty((r, n, p), dtype=np.uint32)
+    sites = sites.astype(np.float64)
+    points = points.astype(np.float64)
+    stack = [(np.broadcast_to(np.arange(n, dtype=np.int64), (r, n)),
+              np.broadcast_to(np.arange(points.shape[1], dtype=np.int64), (r, points.shape[1]))),
+             ]
+    while stack:
+        S, P = stack.pop()
+        k = S.shape[1]
+        if k == 1:
+            members[np.arange(r), S[:, 0]] = P
+            continue
+        left = k // 2
+        px, py = points[rows, P, 0], points[rows, P, 1]
+        dx = px - px.mean(axis=1, keepdims=True)
+        dy = py - py.mean(axis=1, keepdims=True)
+        angle = 0.5 * np.arctan2(2.0 * (dx * dy).mean(axis=1, keepdims=True),
+                                 (dx * dx).mean(axis=1, keepdims=True)
+                                 - (dy * dy).mean(axis=1, keepdims=True))
+        c, s = np.cos(angle), np.sin(angle)
+        skey = (np.floor(sites[rows, S, 0] * c + sites[rows, S, 1] * s).astype(np.int64) << 32) | S
+        smask = skey <= np.partition(skey, left - 1, axis=1)[:, left - 1:left]
+        pkey = (np.floor(px * c + py * s).astype(np.int64) << 32) | P
+        cut = left * p
+        pmask = pkey <= np.partition(pkey, cut - 1, axis=1)[:, cut - 1:cut]
+        stack.append((S[~smask].reshape(r, k - left), P[~pmask].reshape(r, -1)))
+        stack.append((S[smask].reshape(r, left), P[pmask].reshape(r, cut)))
+    return members
+
+
 def greedy_partition(sites, points, p):
     """A seam-free starting ownership with exact capacities: every density point goes to
     its nearest site that still has room, the pairs taken in order of increasing toroidal
@@ -233,7 +282,9 @@ def greedy_partition(sites, points, p):
     preferred direction: cells are Voronoi cells trimmed to their nearest points, and
     the optimization that follows does not inherit a cut along the axes (an axis-aligned
     cut is a local optimum of the exchanges, and shows as a cross in the power spectrum).
-    Vectorized over realizations (disjoint sites, one problem).
+    Vectorized over realizations (disjoint sites, one problem). Sites crowded into one
+    cell (more than ``START_CROWD``: duplicates, clusters) would need about one round per
+    site sharing the spot, so such realizations take :func:`kd_partition`.
 
     Parameters
     ----------
@@ -261,9 +312,18 @@ def greedy_partition(sites, points, p):
     sy = np.append(sites[..., 1].ravel().astype(np.int64), 0)
     px = points[..., 0].ravel().astype(np.int64)
     py = points[..., 1].ravel().astype(np.int64)
-    owner = np.full(r * M, -1, dtype=np.int64)
+    owner = np.repeat(np.arange(S), p)              # a placeholder where the greedy does not run
     room = np.append(np.full(S, p, dtype=np.int64), 0)
-    left = np.arange(r * M)
+    # deferred acceptance needs about as many rounds as sites share a spot: crowded
+    # realizations (never random sites: 16 in a cell of mean 2 has odds ~1e-9) take the
+    # k-d partition instead
+    G = math.isqrt(n // START_OCCUPANCY)
+    crowded = np.zeros(r, dtype=bool)
+    if G >= 4:
+        cells = voronoi.cell_of(sites[..., 1], G) * G + voronoi.cell_of(sites[..., 0], G)
+        crowded = np.array([np.bincount(c, minlength=G * G).max() > START_CROWD for c in cells])
+    room[:S].reshape(r, n)[crowded] = 0
+    left = np.flatnonzero(~np.repeat(crowded, M))
     everything = np.zeros(r, dtype=bool)            # last phase placed none: all open sites
     while left.size:
         tables, lengths, cell = [], [], np.zeros(r * M, dtype=np.int64)
@@ -293,7 +353,10 @@ def greedy_partition(sites, points, p):
         left = left[got[left] < 0]
     # points ascending within each site (a radix sort where the site ids fit in 16 bits)
     order = np.argsort(owner.astype(np.uint16) if S <= 1 << 16 else owner, kind="stable")
-    return (order.reshape(r, n, p) - (np.arange(r) * M)[:, None, None]).astype(np.uint32)
+    members = (order.reshape(r, n, p) - (np.arange(r) * M)[:, None, None]).astype(np.uint32)
+    if crowded.any():
+        members[crowded] = kd_partition(sites[crowded], points[crowded], p)
+    return members
 
 
 def _centroids_reference(sites, points, members, site_energy, which):
