@@ -273,7 +273,9 @@ def greedy_partition(sites, points, p):
     1962): each unplaced point proposes to its nearest candidate site that would keep it,
     and a site offered more than its room keeps its nearest points, old or new. Points
     and sites rank each other by one and the same order of the pairs, so the stable
-    assignment is unique (it is the greedy one) and the rounds compute it in parallel.
+    assignment is unique and is the greedy one (the first pair of the order must be in
+    every stable assignment, else it blocks; by induction so must every pair the greedy
+    takes), and the rounds compute it in parallel.
     The candidates of a point are the sites in the 3 x 3 cells of a grid of about
     ``START_OCCUPANCY`` sites per cell around it; points that every candidate turns away
     are placed the same way in a next phase, among the sites that still have room (on a
