@@ -318,6 +318,14 @@ def test_bad_n(name):
             s.sample(n)
 
 
+@pytest.mark.parametrize("name", ["lloyd", "ccvt"])
+def test_start_other_than_zero_is_refused(name):
+    s = clsamp.make_sampler(name, points_per_site=8) if name == "ccvt" else clsamp.make_sampler(name)
+    for call in (s.sample, s.sample_device):
+        with pytest.raises(InvalidArgumentError, match="'start'"):
+            call(16, realizations=2, start=3)
+
+
 def test_bad_sites():
     with pytest.raises(InvalidArgumentError, match="sites"):
         lloyd.lloyd_relax(np.full((4, 2), 1.5))

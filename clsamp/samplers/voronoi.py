@@ -13,6 +13,7 @@ spacing of any set these optimizers are used for.
 import numpy as np
 
 from .. import philox, point_metrics
+from ..errors import InvalidArgumentError
 from ..validation import check_points
 from .base import Sampler
 
@@ -120,6 +121,16 @@ class VoronoiSampler(Sampler):
         if self._points is None:
             return None
         return point_metrics.relative_radius(self._points)
+
+    def _check_call(self, n, realizations, start):
+        n, r, start = super()._check_call(n, realizations, start)
+        if start != 0:
+            # the density points are keyed by realization only: an offset start would move
+            # the starting sites but not the density, a set that belongs to no realization
+            raise InvalidArgumentError(
+                f"'start' must be 0 for {self.name!r} (its points are an optimized set, not a "
+                f"sequence), got {start}")
+        return n, r, start
 
     def sample(self, n=None, realizations=None, start=0):
         n, r, start = self._check_call(n, realizations, start)
