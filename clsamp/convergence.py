@@ -502,11 +502,15 @@ def _pyplot():
     return plt
 
 
-def _by_integrand(results):
+def _panels(results):
+    """One matplotlib panel per integrand: (figure, [(axes, integrand name, its results)])."""
     groups = {}
     for res in results:
         groups.setdefault(res.integrand, []).append(res)
-    return groups
+    if not groups:
+        raise InvalidArgumentError("'results' must hold at least one ConvergenceResult")
+    fig, axes = _pyplot().subplots(1, len(groups), figsize=(5.5 * len(groups), 4.5), squeeze=False)
+    return fig, list(zip(axes[0], groups, groups.values(), strict=True))
 
 
 def convergence_plot(results, path):
@@ -518,12 +522,8 @@ def convergence_plot(results, path):
     :func:`clsamp.io.save_figure`; returns its path.
     """
     from . import io, theory
-    plt = _pyplot()
-    groups = _by_integrand(results)
-    if not groups:
-        raise InvalidArgumentError("'results' must hold at least one ConvergenceResult")
-    fig, axes = plt.subplots(1, len(groups), figsize=(5.5 * len(groups), 4.5), squeeze=False)
-    for ax, (name, group) in zip(axes[0], groups.items(), strict=True):
+    fig, panels = _panels(results)
+    for ax, name, group in panels:
         for res in group:
             ok = res.mse > 0
             cmp = theory.compare(res)
@@ -551,12 +551,8 @@ def pareto_plot(results, path):
     """MSE against seconds per estimate (generation included), one panel per integrand,
     with the accuracy-time front (:func:`pareto_front`) drawn in black; returns the path."""
     from . import io
-    plt = _pyplot()
-    groups = _by_integrand(results)
-    if not groups:
-        raise InvalidArgumentError("'results' must hold at least one ConvergenceResult")
-    fig, axes = plt.subplots(1, len(groups), figsize=(5.5 * len(groups), 4.5), squeeze=False)
-    for ax, (name, group) in zip(axes[0], groups.items(), strict=True):
+    fig, panels = _panels(results)
+    for ax, name, group in panels:
         for res in group:
             ok = (res.mse > 0) & (res.seconds_per_estimate > 0)
             ax.loglog(res.seconds_per_estimate[ok], res.mse[ok], "o-", markersize=3, label=res.sampler)

@@ -195,6 +195,53 @@ inline void concentric_disk(vfloat u1, vfloat u2, vfloat *x, vfloat *y)
     *y = select(r * sin(phi), (vfloat)0.0f, zero);
 }
 
+/* The shapes' intersections, shared by nearest_hit and occluded so that a shadow ray and a
+ * camera ray can never disagree about a surface. Each returns the lanes that hit in
+ * (eps, inf) and writes the ray parameter t of the hit. */
+
+/* Sphere s (centre moving with velocity s[4..6]); *oc is the origin relative to the
+ * centre at `time` (the normal at the hit is (oc + t d) / radius). */
+inline vint sphere_hit(vec3 o, vec3 d, vfloat time, const float eps, __global const float *s,
+                       vfloat *t, vec3 *oc)
+{
+    const vfloat ox = o.x - (s[0] + s[4] * time), oy = o.y - (s[1] + s[5] * time);
+    const vfloat oz = o.z - (s[2] + s[6] * time);
+    const vfloat b = ox * d.x + oy * d.y + oz * d.z;
+    const vfloat c = ox * ox + oy * oy + oz * oz - s[3] * s[3];
+    const vfloat disc = b * b - c;
+    const vfloat root = sqrt(fmax(disc, 0.0f));
+    const vfloat t0 = -b - root;
+    *t = select(-b + root, t0, t0 > eps);
+    *oc = v3(ox, oy, oz);
+    return (disc >= 0.0f) & (*t > eps);
+}
+
+/* Plane through p[0..2] with normal p[3..5]. */
+inline vint plane_hit(vec3 o, vec3 d, const float eps, __global const float *p, vfloat *t)
+{
+    const vfloat den = d.x * p[3] + d.y * p[4] + d.z * p[5];
+    const vfloat num = (p[0] - o.x) * p[3] + (p[1] - o.y) * p[4] + (p[2] - o.z) * p[5];
+    *t = num / den;
+    return (den != 0.0f) & (*t > eps);
+}
+
+/* Axis-aligned box q[0..2]..q[3..5] (slabs); *lx, *ly are the entry parameters of the x and
+ * y slabs, which tell the face that was hit. */
+inline vint box_hit(vec3 o, vec3 d, const float eps, __global const float *q, vfloat *t,
+                    vfloat *lx, vfloat *ly)
+{
+    const vfloat ix = 1.0f / d.x, iy = 1.0f / d.y, iz = 1.0f / d.z;
+    const vfloat ax = (q[0] - o.x) * ix, bx = (q[3] - o.x) * ix;
+    const vfloat ay = (q[1] - o.y) * iy, by = (q[4] - o.y) * iy;
+    const vfloat az = (q[2] - o.z) * iz, bz = (q[5] - o.z) * iz;
+    *lx = fmin(ax, bx);
+    *ly = fmin(ay, by);
+    const vfloat tnear = fmax(fmax(*lx, *ly), fmin(az, bz));
+    const vfloat tfar = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
+    *t = tnear;
+    return (tnear <= tfar) & (tnear > eps);
+}
+
 /* Nearest hit along o + t d, t in (eps, tmax): returns t (tmax when nothing is hit) and
  * the shading normal (facing the ray) and albedo of the hit. */
 inline vfloat nearest_hit(vec3 o, vec3 d, vfloat time, vfloat tmax, const float eps,
@@ -205,30 +252,21 @@ inline vfloat nearest_hit(vec3 o, vec3 d, vfloat time, vfloat tmax, const float 
 {
     vfloat best = tmax;
     vfloat nx = 0.0f, ny = 0.0f, nz = 0.0f, alb = 0.0f;
+    vfloat t, lx, ly;
+    vec3 oc;
     for (uint k = 0; k < nspheres; ++k) {
         __global const float *s = spheres + k * SPHERE_STRIDE;
-        const vfloat cx = s[0] + s[4] * time, cy = s[1] + s[5] * time, cz = s[2] + s[6] * time;
-        const vfloat ox = o.x - cx, oy = o.y - cy, oz = o.z - cz;
-        const vfloat b = ox * d.x + oy * d.y + oz * d.z;
-        const vfloat c = ox * ox + oy * oy + oz * oz - s[3] * s[3];
-        const vfloat disc = b * b - c;
-        const vfloat root = sqrt(fmax(disc, 0.0f));
-        const vfloat t0 = -b - root;
-        const vfloat t = select(-b + root, t0, t0 > eps);
-        const vint hit = (disc >= 0.0f) & (t > eps) & (t < best);
+        const vint hit = sphere_hit(o, d, time, eps, s, &t, &oc) & (t < best);
         best = select(best, t, hit);
         const vfloat inv = 1.0f / s[3];
-        nx = select(nx, (ox + t * d.x) * inv, hit);
-        ny = select(ny, (oy + t * d.y) * inv, hit);
-        nz = select(nz, (oz + t * d.z) * inv, hit);
+        nx = select(nx, (oc.x + t * d.x) * inv, hit);
+        ny = select(ny, (oc.y + t * d.y) * inv, hit);
+        nz = select(nz, (oc.z + t * d.z) * inv, hit);
         alb = select(alb, (vfloat)s[7], hit);
     }
     for (uint k = 0; k < nplanes; ++k) {
         __global const float *p = planes + k * PLANE_STRIDE;
-        const vfloat den = d.x * p[3] + d.y * p[4] + d.z * p[5];
-        const vfloat num = (p[0] - o.x) * p[3] + (p[1] - o.y) * p[4] + (p[2] - o.z) * p[5];
-        const vfloat t = num / den;
-        const vint hit = (den != 0.0f) & (t > eps) & (t < best);
+        const vint hit = plane_hit(o, d, eps, p, &t) & (t < best);
         best = select(best, t, hit);
         nx = select(nx, (vfloat)p[3], hit);
         ny = select(ny, (vfloat)p[4], hit);
@@ -237,16 +275,9 @@ inline vfloat nearest_hit(vec3 o, vec3 d, vfloat time, vfloat tmax, const float 
     }
     for (uint k = 0; k < nboxes; ++k) {
         __global const float *q = boxes + k * BOX_STRIDE;
-        const vfloat ix = 1.0f / d.x, iy = 1.0f / d.y, iz = 1.0f / d.z;
-        const vfloat ax = (q[0] - o.x) * ix, bx = (q[3] - o.x) * ix;
-        const vfloat ay = (q[1] - o.y) * iy, by = (q[4] - o.y) * iy;
-        const vfloat az = (q[2] - o.z) * iz, bz = (q[5] - o.z) * iz;
-        const vfloat lx = fmin(ax, bx), ly = fmin(ay, by), lz = fmin(az, bz);
-        const vfloat tnear = fmax(fmax(lx, ly), lz);
-        const vfloat tfar = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
-        const vint hit = (tnear <= tfar) & (tnear > eps) & (tnear < best);
-        best = select(best, tnear, hit);
-        const vint onx = tnear == lx, ony = NOT(onx) & (tnear == ly);
+        const vint hit = box_hit(o, d, eps, q, &t, &lx, &ly) & (t < best);
+        best = select(best, t, hit);
+        const vint onx = t == lx, ony = NOT(onx) & (t == ly);
         const vint onz = NOT(onx) & NOT(ony);
         nx = select(nx, select((vfloat)0.0f, (vfloat)1.0f, onx), hit);
         ny = select(ny, select((vfloat)0.0f, (vfloat)1.0f, ony), hit);
@@ -267,35 +298,14 @@ inline vint occluded(vec3 o, vec3 d, vfloat time, vfloat tmax, const float eps,
                      __global const float *boxes, const uint nboxes)
 {
     vint blocked = (vint)0;
-    for (uint k = 0; k < nspheres; ++k) {
-        __global const float *s = spheres + k * SPHERE_STRIDE;
-        const vfloat ox = o.x - (s[0] + s[4] * time), oy = o.y - (s[1] + s[5] * time);
-        const vfloat oz = o.z - (s[2] + s[6] * time);
-        const vfloat b = ox * d.x + oy * d.y + oz * d.z;
-        const vfloat c = ox * ox + oy * oy + oz * oz - s[3] * s[3];
-        const vfloat disc = b * b - c;
-        const vfloat root = sqrt(fmax(disc, 0.0f));
-        const vfloat t0 = -b - root;
-        const vfloat t = select(-b + root, t0, t0 > eps);
-        blocked |= (disc >= 0.0f) & (t > eps) & (t < tmax);
-    }
-    for (uint k = 0; k < nplanes; ++k) {
-        __global const float *p = planes + k * PLANE_STRIDE;
-        const vfloat den = d.x * p[3] + d.y * p[4] + d.z * p[5];
-        const vfloat num = (p[0] - o.x) * p[3] + (p[1] - o.y) * p[4] + (p[2] - o.z) * p[5];
-        const vfloat t = num / den;
-        blocked |= (den != 0.0f) & (t > eps) & (t < tmax);
-    }
-    for (uint k = 0; k < nboxes; ++k) {
-        __global const float *q = boxes + k * BOX_STRIDE;
-        const vfloat ix = 1.0f / d.x, iy = 1.0f / d.y, iz = 1.0f / d.z;
-        const vfloat ax = (q[0] - o.x) * ix, bx = (q[3] - o.x) * ix;
-        const vfloat ay = (q[1] - o.y) * iy, by = (q[4] - o.y) * iy;
-        const vfloat az = (q[2] - o.z) * iz, bz = (q[5] - o.z) * iz;
-        const vfloat tnear = fmax(fmax(fmin(ax, bx), fmin(ay, by)), fmin(az, bz));
-        const vfloat tfar = fmin(fmin(fmax(ax, bx), fmax(ay, by)), fmax(az, bz));
-        blocked |= (tnear <= tfar) & (tnear > eps) & (tnear < tmax);
-    }
+    vfloat t, lx, ly;
+    vec3 oc;
+    for (uint k = 0; k < nspheres; ++k)
+        blocked |= sphere_hit(o, d, time, eps, spheres + k * SPHERE_STRIDE, &t, &oc) & (t < tmax);
+    for (uint k = 0; k < nplanes; ++k)
+        blocked |= plane_hit(o, d, eps, planes + k * PLANE_STRIDE, &t) & (t < tmax);
+    for (uint k = 0; k < nboxes; ++k)
+        blocked |= box_hit(o, d, eps, boxes + k * BOX_STRIDE, &t, &lx, &ly) & (t < tmax);
     return blocked;
 }
 

@@ -91,7 +91,7 @@ class Sampler:
     """Base of every sampler.
 
     Subclasses set ``name`` (via :func:`register`), may set ``dimensions`` (the
-    tuple of supported d, or None for any), ``max_n`` and ``randomized``, and
+    tuple of supported d, or None for any), ``max_n``, ``randomized`` and ``accepts_start``, and
     implement ``_reference`` and ``_device``. ``_check_n`` maps a requested n to
     itself or raises naming the nearest valid one.
     """
@@ -102,6 +102,7 @@ class Sampler:
     sequence = False        # whether `start` continues a sequence
     max_n = MAX_UINT32      # point indices are 32-bit counters
     needs_n = True          # False for samplers whose n follows from parameters (maximal Poisson disk)
+    accepts_start = True    # False for point sets made whole (dart throwing, optimizers): start must be 0
 
     def __init__(self, d=2, seed=0, backend="opencl"):
         self.d = check_positive_int(d, "d")
@@ -168,6 +169,10 @@ class Sampler:
         r = 1 if realizations is None else check_positive_int(realizations, "realizations",
                                                               maximum=MAX_UINT32)
         start = check_int(start, "start", minimum=0)
+        if start != 0 and not self.accepts_start:
+            raise InvalidArgumentError(
+                f"'start' must be 0 for {self.name!r} (its points are a set, not a sequence), "
+                f"got {start}")
         if n is not None and start + n - 1 > self.max_n:
             raise InvalidArgumentError(
                 f"'start' + 'n' must stay within the {self.max_n + 1} point indices of "

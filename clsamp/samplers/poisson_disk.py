@@ -666,6 +666,7 @@ class PoissonDiskSampler(Sampler):
     """
 
     dimensions = (1, 2, 3)
+    accepts_start = False
 
     def __init__(self, d=2, seed=0, rho=None, radius=None, backend="opencl"):
         super().__init__(d=d, seed=seed, backend=backend)
@@ -733,14 +734,6 @@ class PoissonDiskSampler(Sampler):
                 f"'realizations'={realizations!r}: maximal sets (radius mode, n left out) have "
                 "different sizes, so they do not fit one (r, n, d) array; use "
                 "sample_sets(realizations) for a list, or give n for exactly n points each")
-
-    def _check_call(self, n, realizations, start):
-        n, r, start = super()._check_call(n, realizations, start)
-        if start != 0:
-            raise InvalidArgumentError(
-                f"'start' must be 0 for {self.name!r} (its points are a set, not a sequence), "
-                f"got {start}")
-        return n, r, start
 
     # -- what the base calls ------------------------------------------------------------
     def _reference(self, n, realizations, start):

@@ -13,7 +13,6 @@ spacing of any set these optimizers are used for.
 import numpy as np
 
 from .. import philox, point_metrics
-from ..errors import InvalidArgumentError
 from ..validation import check_points
 from .base import Sampler
 
@@ -108,6 +107,9 @@ class VoronoiSampler(Sampler):
 
     dimensions = (2,)
     max_n = 2**31
+    # the density points are keyed by realization only: an offset start would move the
+    # starting sites but not the density, a set that belongs to no realization
+    accepts_start = False
 
     def __init__(self, d=2, seed=0, backend="opencl"):
         super().__init__(d=d, seed=seed, backend=backend)
@@ -121,16 +123,6 @@ class VoronoiSampler(Sampler):
         if self._points is None:
             return None
         return point_metrics.relative_radius(self._points)
-
-    def _check_call(self, n, realizations, start):
-        n, r, start = super()._check_call(n, realizations, start)
-        if start != 0:
-            # the density points are keyed by realization only: an offset start would move
-            # the starting sites but not the density, a set that belongs to no realization
-            raise InvalidArgumentError(
-                f"'start' must be 0 for {self.name!r} (its points are an optimized set, not a "
-                f"sequence), got {start}")
-        return n, r, start
 
     def sample(self, n=None, realizations=None, start=0):
         n, r, start = self._check_call(n, realizations, start)
