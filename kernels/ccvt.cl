@@ -90,19 +90,42 @@ inline uint ccvt_top(__global const uint *ids, __global const uint2 *xy, const u
     return c;
 }
 
+/* A site to the rounded periodic mean of its members, unwrapped relative to it (never
+ * raises its energy: vor_round_mean), and its reach (squared distance of the farthest
+ * member) from there. ccvt_pair calls it for both sites of a pair that exchanged. */
+inline void ccvt_move(__global uint *s, __global const uint2 *q, const uint p,
+                      __global long *reach2)
+{
+    const uint x0 = s[0], y0 = s[1];
+    long sx = 0, sy = 0;
+    for (uint k = 0; k < p; ++k) {
+        sx += vor_delta(q[k].x, x0);
+        sy += vor_delta(q[k].y, y0);
+    }
+    const uint x = (uint)((long)x0 + vor_round_mean(sx, (long)p)) & VOR_MASK;
+    const uint y = (uint)((long)y0 + vor_round_mean(sy, (long)p)) & VOR_MASK;
+    long reach = 0;
+    for (uint k = 0; k < p; ++k)
+        reach = max(reach, vor_d2(q[k].x, q[k].y, x, y));
+    s[0] = x;
+    s[1] = y;
+    *reach2 = reach;
+}
+
 /* Balzer's pairwise swap for sites i and j: their best candidates toward each other,
  * sorted, are exchanged in order while the two gains sum to more than zero (each exchange
  * lowers the energy by exactly that sum). A round looks at CCVT_TOP candidates a side;
  * when all of them were exchanged another round starts from the new memberships. */
 inline uint ccvt_pair(const uint i, const uint j, __global uint *ids, __global uint2 *xy,
-                      const uint p, __global const uint *s,
-                      __global const long *reach2, __global const uint *dirty,
+                      const uint p, __global uint *s,
+                      __global long *reach2, __global const uint *dirty,
                       __global uint *touched, const long near2)
 {
     /* Skipping is exact, never a change of result: a pair where neither site moved nor
-     * changed members since it last met found nothing then and finds nothing now; and a
-     * point of i can gain by going to j only if |s_i - s_j| < 2 R_i (triangle inequality,
-     * R_i the farthest member of i), so pairs farther apart than both reaches cannot swap. */
+     * changed members since it last met found nothing then and finds nothing now; and with
+     * R_i, R_j the reaches (farthest members, kept current by ccvt_move) the two gains sum
+     * to at most 2 |D| (R_i + R_j - |D|), so sites farther apart than R_i + R_j cannot
+     * swap (the test is in doubles with a margin that covers their rounding). */
     const int fresh = touched[i] || touched[j];
     if (!fresh && !dirty[i] && !dirty[j])
         return 0;
@@ -110,8 +133,8 @@ inline uint ccvt_pair(const uint i, const uint j, __global uint *ids, __global u
     const long dist2 = vor_d2(ix, iy, jx, jy);
     if (dist2 >= near2)
         return 0;   /* not neighbours: the pair graph joins sites closer than ccvt_near */
-    const long reach = max(reach2[i], reach2[j]);
-    if (!fresh && dist2 >= 4 * reach)
+    const double ri = (double)reach2[i], rj = (double)reach2[j];
+    if ((double)dist2 > ri + rj + 2.0 * sqrt(ri * rj) * (1.0 + 1e-9) + 4.0)
         return 0;
     /* offsets of each site from the other: delta is antisymmetric but at exactly half the
      * torus, so each direction is computed, not negated */
@@ -147,6 +170,8 @@ inline uint ccvt_pair(const uint i, const uint j, __global uint *ids, __global u
     if (total) {
         touched[i] = 1;
         touched[j] = 1;
+        ccvt_move(s + 2 * i, pi, p, reach2 + i);
+        ccvt_move(s + 2 * j, pj, p, reach2 + j);
     }
     return total;
 }
@@ -156,7 +181,7 @@ inline uint ccvt_pair(const uint i, const uint j, __global uint *ids, __global u
 inline uint ccvt_cell_pairs(const uint a, const uint b, const int ox, const int oy,
                             const uint parity, const uint G, __global const uint *start,
                             __global const uint *list, __global uint *rid, __global uint2 *rxy,
-                            const uint p, __global const uint *s, __global const long *rr,
+                            const uint p, __global uint *s, __global long *rr,
                             __global const uint *dd, __global uint *tt, const long near2)
 {
     uint total = 0;
@@ -181,10 +206,10 @@ inline uint ccvt_cell_pairs(const uint a, const uint b, const int ox, const int 
 /* Grid (G, G, r) for phase 0 (pairs inside a cell), (G/2, G, r) for a cell offset
  * (ox, oy) and a parity. swaps[r] counts the exchanges of the iteration. */
 __kernel void ccvt_swap(__global uint *ids, __global uint2 *xy, const uint n, const uint p,
-                        __global const uint *sites,
+                        __global uint *sites,
                         __global const uint *cell_start, __global const uint *cell_sites,
                         const uint G, const int ox, const int oy, const uint parity,
-                        __global const uint *active, __global const long *reach2,
+                        __global const uint *active, __global long *reach2,
                         __global const uint *dirty, __global uint *touched,
                         __global uint *swaps, const long near2)
 {

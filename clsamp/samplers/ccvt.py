@@ -458,6 +458,7 @@ def _sweep_reference(sites, points, members, G, touched):
         return order[start[c]:start[c + 1]]
 
     near2 = ccvt_near2(len(sites))
+    p = members.shape[1]
 
     def pair(i, j):
         if voronoi.distance2(sites[i, 0], sites[i, 1], sites[j, 0], sites[j, 1]) >= near2:
@@ -465,6 +466,10 @@ def _sweep_reference(sites, points, members, G, touched):
         made = _pair_reference(members[i], members[j], points, sites[i], sites[j])
         if made:
             touched[i] = touched[j] = True
+            for k in (i, j):
+                for axis in (0, 1):
+                    u = voronoi.delta(points[members[k], axis], sites[k, axis]).sum()
+                    sites[k, axis] = (sites[k, axis] + voronoi.round_mean(u, p)) & voronoi.MASK
         return made
 
     total = 0
@@ -738,8 +743,11 @@ class CCVTSampler(voronoi.VoronoiSampler):
     (1) exchanges points between neighbouring sites i, j: the candidates of each are
     ordered by the gain of moving to the other site, and pairs are exchanged in order
     while the two gains sum to more than zero (the paper's heap-based swap, here in
-    rounds of the 16 best candidates a side); (2) moves every site whose points changed
-    to the periodic centroid of its points. Both steps lower E, so ``energy_history``
+    rounds of the 16 best candidates a side), and a pair that exchanged moves both its
+    sites to the periodic centroids of their points at once, before the next pair (as
+    Balzer et al.'s code does: later pairs see the moved sites, which takes fewer
+    iterations than moving all sites at the end); (2) moves every site whose points
+    changed to its periodic centroid. Both steps lower E, so ``energy_history``
     never rises, and since an exchange is one point for one point, ``capacities`` are all
     equal at every moment. The optimization stops at the first iteration that makes no
     exchange (a local optimum: no neighbour pair can improve), or at ``iterations``.
@@ -754,7 +762,8 @@ class CCVTSampler(voronoi.VoronoiSampler):
     the sites inside each cell, then each cell with its neighbour along (1,0), (0,1),
     (1,1), (1,-1), cells of one parity at a time, so no site is in two pairs at once (a
     deterministic matching of the neighbour graph). Pairs that cannot have changed since
-    they last met, and pairs farther apart than twice the reach of both sites, are
+    they last met, and pairs farther apart than the sum of their reaches (the farthest
+    member of each; the two gains then sum to at most 2 |D| (R_i + R_j - |D|) <= 0), are
     skipped (both exact), so an iteration costs O(n p). A batch runs one realization
     per work-group in a single launch; one large set runs step by step over the whole
     device; both give the same bits, as does the NumPy reference. Positions are
