@@ -14,10 +14,191 @@
  * in the same or adjacent cells meets once per iteration, independent pairs run in
  * parallel, and the result does not depend on the device or the scheduling. */
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #include "voronoi.h"
 #include "philox.h"
 
 #define CCVT_TOP 16   /* candidates per site and round (clsamp.samplers.ccvt.CCVT_TOP) */
+
+/* Buckets. The members of a site are kept grouped in CCVT_BUCKETS buckets: 16 angular
+ * sectors times 4 radial bands of their offset w from the site's `base` (its position
+ * when the buckets were last built), each with the largest |w| in it; a point that
+ * arrives is moved into its own bucket. That bounds u.D over a bucket for any
+ * direction D without reading it, so a pair reads only the buckets that face it: the
+ * points that can move between two neighbouring cells are a thin strip along their
+ * common edge, a few per cent of them.
+ * The bounds only ever decide what need not be read: a bucket is skipped only when no
+ * point in it can matter, so the result is exactly that of reading everything (the
+ * NumPy reference does), on every device. */
+#define CCVT_SECTORS 16
+#define CCVT_BANDS 4
+#define CCVT_BUCKETS (CCVT_SECTORS * CCVT_BANDS)
+/* Per-site record (longs), kept exact between rebuilds by the exchanges and moves:
+ * sums of the offsets u = x - s and of |u|^2 over the members (s: the site now), a
+ * bound on the reach (largest |u|, rounded up), the largest |w| (a double, rounded up),
+ * the base, `wide`; then for each bucket its largest |w| (doubles, rounded up).
+ * A site is wide while its reach may exceed CCVT_LIMIT (1/8 of the torus): offsets of
+ * its members could then wrap when it moves, so its sums are recomputed from scratch
+ * instead of updated, and its buckets are read whole. Only rebuilds clear it. */
+#define CCVT_SUMX 0
+#define CCVT_SUMY 1
+#define CCVT_ENERGY 2
+#define CCVT_REACH 3
+#define CCVT_FAR 4
+#define CCVT_BASE 5
+#define CCVT_WIDE 6
+#define CCVT_RHO 7
+#define CCVT_RHOSEC (CCVT_RHO + CCVT_BUCKETS)   /* per sector: the largest, -1 if empty */
+#define CCVT_META (CCVT_RHOSEC + CCVT_SECTORS)   /* clsamp.samplers.ccvt.CCVT_META */
+#define CCVT_LIMIT (1L << 19)
+
+/* Rays of the sector boundaries, counter-clockwise (the octants, each halved by a ray
+ * at 22.6 degrees from its first side); sector k lies between rays k and k + 1. */
+__constant int CCVT_RAY[2 * (CCVT_SECTORS + 1)] = {
+    1, 0, 12, 5, 1, 1, 5, 12, 0, 1, -5, 12, -1, 1, -12, 5, -1, 0,
+    -12, -5, -1, -1, -5, -12, 0, -1, 5, -12, 1, -1, 12, -5, 1, 0};
+/* 1 / |ray k| */
+__constant double CCVT_RAY_INV[CCVT_SECTORS] = {
+    1.0, 1.0 / 13.0, M_SQRT1_2, 1.0 / 13.0, 1.0, 1.0 / 13.0, M_SQRT1_2, 1.0 / 13.0,
+    1.0, 1.0 / 13.0, M_SQRT1_2, 1.0 / 13.0, 1.0, 1.0 / 13.0, M_SQRT1_2, 1.0 / 13.0};
+
+typedef struct {
+    __global uint *ids;       /* members' point indices, p slots per site */
+    __global uint2 *xy;       /* their coordinates */
+    __global uint *tids;      /* scratch of the same shape, for rebuilds */
+    __global uint2 *txy;
+    __global uint *s;         /* sites */
+    __global long *meta;      /* CCVT_META per site */
+    __global uint *bstart;    /* CCVT_BUCKETS + 1 per site: the slot range of each bucket */
+    __global const uint *dirty;
+    __global uint *touched;
+    uint p;
+    long edge[CCVT_BANDS - 1];  /* squared radii between the bands */
+    double lo[CCVT_BANDS];      /* radius below which no point of a band lies (rounded down) */
+    long drift;                 /* drift from the base that makes the iteration's end rebuild */
+} ccvt_t;
+
+inline ccvt_t ccvt_state(const uint n, const uint p, __global uint *ids, __global uint2 *xy,
+                         __global uint *tids, __global uint2 *txy, __global uint *s,
+                         __global long *meta, __global uint *bstart,
+                         __global const uint *dirty, __global uint *touched)
+{
+    ccvt_t c;
+    c.ids = ids;
+    c.xy = xy;
+    c.tids = tids;
+    c.txy = txy;
+    c.s = s;
+    c.meta = meta;
+    c.bstart = bstart;
+    c.dirty = dirty;
+    c.touched = touched;
+    c.p = p;
+    /* band edges at 0.42, 0.49, 0.545 / sqrt(n): a cell of area 1/n has its inradius
+     * near 0.54 / sqrt(n), so the outer bands hold the points near its edges */
+    const double unit = (double)VOR_SIZE * (double)VOR_SIZE / (double)n;
+    const double f[CCVT_BANDS - 1] = {0.42, 0.49, 0.545};
+    c.lo[0] = 0.0;
+    c.drift = (long)(0.1 * sqrt(unit));
+    for (int b = 0; b < CCVT_BANDS - 1; ++b) {
+        c.edge[b] = (long)(f[b] * f[b] * unit);
+        c.lo[b + 1] = max(0.0, sqrt((double)c.edge[b]) * (1.0 - 1e-12) - 1.0);
+    }
+    return c;
+}
+
+/* The sector of offset (x, y): its octant, then the side of the octant's middle ray. A
+ * point on a ray may go either way: the cones are closed. */
+inline int ccvt_sector(const long x, const long y)
+{
+    int octant;
+    if (y >= 0)
+        octant = x > 0 ? (y < x ? 0 : 1) : (-x <= y ? 2 : 3);
+    else
+        octant = x < 0 ? (-y < -x ? 4 : 5) : (x <= -y ? 6 : 7);
+    const long mx = CCVT_RAY[4 * octant + 2], my = CCVT_RAY[4 * octant + 3];
+    return 2 * octant + (mx * y - my * x >= 0);
+}
+
+inline int ccvt_bucket(const ccvt_t *c, const long x, const long y, const long d2)
+{
+    int band = 0;
+    for (int b = 0; b < CCVT_BANDS - 1; ++b)
+        band += d2 >= c->edge[b];
+    return ccvt_sector(x, y) * CCVT_BANDS + band;
+}
+
+/* An upper bound on |u| from |u|^2. */
+inline long ccvt_ceil_sqrt(const long d2)
+{
+    return (long)sqrt((double)d2) + 1;
+}
+
+/* The view of a site from a direction D: for each sector k, the largest e.D over the unit
+ * vectors e between rays k and k + 1 (|D| when D lies between them, else that of the
+ * nearer ray), and Q.D with Q the site's drift from its base. A bucket's members w = u + Q
+ * then have u.D <= rho cone - Q.D (rho its largest |w|) when cone >= 0, and
+ * <= lo cone - Q.D otherwise (lo the smallest |w| of its band). */
+typedef struct {
+    double cone[CCVT_SECTORS];
+    double qd, dlen;
+    int wide;
+} ccvt_view;
+
+inline void ccvt_look(const ccvt_t *c, const uint i, const long dx, const long dy,
+                      ccvt_view *v)
+{
+    __global const long *m = c->meta + (size_t)i * CCVT_META;
+    const ulong base = (ulong)m[CCVT_BASE];
+    v->qd = (double)(vor_delta(c->s[2 * i], (uint)(base & 0xFFFFFFFFUL)) * dx
+                     + vor_delta(c->s[2 * i + 1], (uint)(base >> 32)) * dy);
+    v->dlen = sqrt((double)(dx * dx + dy * dy));
+    v->wide = m[CCVT_WIDE] != 0;
+    double dot = 0.0;
+    int left = 0;
+    for (int k = 0; k <= CCVT_SECTORS; ++k) {
+        const int r = k % CCVT_SECTORS;
+        const long ax = CCVT_RAY[2 * r], ay = CCVT_RAY[2 * r + 1];
+        const double d = (double)(ax * dx + ay * dy) * CCVT_RAY_INV[r];
+        const int l = ax * dy - ay * dx >= 0;
+        if (k > 0)
+            v->cone[k - 1] = left && !l ? v->dlen : fmax(dot, d);
+        dot = d;
+        left = l;
+    }
+}
+
+/* An upper bound on u.D over the members of a bucket whose largest |w| is rho (with the
+ * margin that covers the rounding of the doubles). */
+inline double ccvt_bound(const ccvt_t *c, const ccvt_view *v, const int k, const double rho)
+{
+    const double e = v->cone[k / CCVT_BANDS];
+    const double b = (e >= 0.0 ? rho : c->lo[k % CCVT_BANDS]) * e - v->qd;
+    return b + 1e-9 * (fabs(b) + fabs(v->qd) + rho * v->dlen) + 64.0;
+}
+
+/* An upper bound on u.D over the members of a sector whose largest |w| is rho. */
+inline double ccvt_sector_bound(const ccvt_view *v, const int sector, const double rho)
+{
+    const double b = rho * fmax(v->cone[sector], 0.0) - v->qd;
+    return b + 1e-9 * (fabs(b) + fabs(v->qd) + rho * v->dlen) + 64.0;
+}
+
+/* An upper bound on max u.D over all members of site i: per sector, the largest |w| of
+ * its members (CCVT_RHOSEC); INFINITY while the site is wide. */
+inline double ccvt_site_bound(const ccvt_t *c, const uint i, const ccvt_view *v)
+{
+    if (v->wide)
+        return INFINITY;
+    __global const long *m = c->meta + (size_t)i * CCVT_META;
+    double b = -INFINITY;
+    for (int k = 0; k < CCVT_SECTORS; ++k) {
+        const double rho = as_double(m[CCVT_RHOSEC + k]);
+        if (rho >= 0.0)
+            b = fmax(b, ccvt_sector_bound(v, k, rho));
+    }
+    return b;
+}
 
 /* Order of the candidates: larger gain first, then the smaller point index. */
 inline int ccvt_before(const long g, const uint idx, const long g2, const uint idx2)
@@ -25,19 +206,9 @@ inline int ccvt_before(const long g, const uint idx, const long g2, const uint i
     return g > g2 || (g == g2 && idx < idx2);
 }
 
-/* The CCVT_TOP points of a site at (ax, ay) that gain most by moving to the site at offset
- * D = (dx, dy) from it, among those with gain > floor, sorted by ccvt_before. Returns how
- * many (<= CCVT_TOP). The gain of x, with u its offset from a, is
- *     |u|^2 - |u - D|^2 = 2 u.D - |D|^2  (dd = |D|^2),
- * the exact change of its squared distance when the other site's image at a + D is the
- * nearest, and never more than the true change otherwise (the torus can only bring the
- * other site nearer): an exchange accepted on these gains lowers the energy at least as
- * much as they say, and costs two products a point instead of two distances. */
-inline void ccvt_insert(const long g, const uint k, const uint j, const long floor, uint *c,
-                        long *gain, uint *slot, uint *index)
+inline void ccvt_insert(const long g, const uint k, const uint j, const uint bucket, uint *c,
+                        long *gain, uint *slot, uint *index, uint *bk)
 {
-    if (g <= floor)
-        return;
     if (*c == CCVT_TOP && !ccvt_before(g, j, gain[CCVT_TOP - 1], index[CCVT_TOP - 1]))
         return;
     uint q = *c < CCVT_TOP ? (*c)++ : CCVT_TOP - 1;
@@ -45,151 +216,359 @@ inline void ccvt_insert(const long g, const uint k, const uint j, const long flo
         gain[q] = gain[q - 1];
         slot[q] = slot[q - 1];
         index[q] = index[q - 1];
+        bk[q] = bk[q - 1];
         --q;
     }
     gain[q] = g;
     slot[q] = k;
     index[q] = j;
+    bk[q] = bucket;
 }
 
-inline uint ccvt_top(__global const uint *ids, __global const uint2 *xy, const uint p,
-                     const uint ax, const uint ay, const long dx, const long dy, const long dd,
-                     const long floor, long *gain, uint *slot, uint *index)
+/* The CCVT_TOP points of site i that gain most by moving to the site at offset D from it,
+ * among those with gain > floor, sorted by ccvt_before; only the buckets whose bound on
+ * u.D exceeds thr (the u.D that gain = floor means) are read. Returns how many. The gain
+ * of x, with u its offset from s_i, is
+ *     |u|^2 - |u - D|^2 = 2 u.D - |D|^2  (dd = |D|^2),
+ * the exact change of its squared distance when the other site's image at s_i + D is the
+ * nearest, and never more than the true change otherwise (the torus can only bring the
+ * other site nearer): an exchange accepted on these gains lowers the energy at least as
+ * much as they say. */
+inline uint ccvt_top(const ccvt_t *c, const uint i, const long dx, const long dy, const long dd,
+                     const ccvt_view *v, const double thr, const long floor, long *gain,
+                     uint *slot, uint *index, uint *bk)
 {
-    uint c = 0, k = 0;
-    /* Four points at a time in double4 (PoCL vectorizes explicit vectors only): every
-     * value is an integer below 2^53, so the doubles are exact and equal the long gains.
-     * The vector test only pre-selects; ccvt_insert decides exactly. */
-    const double fx = (double)dx, fy = (double)dy, fd = (double)dd;
-    __global const uint *raw = (__global const uint *)xy;
-    for (; k + 4 <= p; k += 4) {
-        const uint8 v = vload8(0, raw + 2 * (size_t)k);
-        int4 ux = as_int4((v.s0246 - (uint4)ax) & (uint4)VOR_MASK);
-        int4 uy = as_int4((v.s1357 - (uint4)ay) & (uint4)VOR_MASK);
-        ux = select(ux, ux - (int4)VOR_SIZE, ux >= (int4)VOR_HALF);
-        uy = select(uy, uy - (int4)VOR_SIZE, uy >= (int4)VOR_HALF);
-        const double4 g = 2.0 * (convert_double4(ux) * fx + convert_double4(uy) * fy) - fd;
-        const long low = c == CCVT_TOP ? max(floor, gain[CCVT_TOP - 1] - 1) : floor;
-        const long4 pass = isgreater(g, (double4)((double)low));
-        if (any(pass)) {
-            double gg[4];
-            vstore4(g, 0, gg);
-            const long pp[4] = {pass.s0, pass.s1, pass.s2, pass.s3};
-            for (uint lane = 0; lane < 4; ++lane)
-                if (pp[lane])
-                    ccvt_insert((long)gg[lane], k + lane, ids[k + lane], floor, &c, gain, slot,
-                                index);
+    __global const uint *bs = c->bstart + (size_t)i * (CCVT_BUCKETS + 1);
+    __global const uint *ids = c->ids + (size_t)i * c->p;
+    __global const uint2 *q = c->xy + (size_t)i * c->p;
+    __global long *m = c->meta + (size_t)i * CCVT_META;
+    const uint sx = c->s[2 * i], sy = c->s[2 * i + 1];
+    const ulong base = (ulong)m[CCVT_BASE];
+    /* w = u + Q: a bucket that is read anyway gets its exact largest |w| back (arrivals
+     * only ever raise it, departures leave it high) */
+    const long qx = vor_delta(sx, (uint)(base & 0xFFFFFFFFUL));
+    const long qy = vor_delta(sy, (uint)(base >> 32));
+    uint count = 0;
+    for (int sector = 0; sector < CCVT_SECTORS; ++sector) {
+        const double top = as_double(m[CCVT_RHOSEC + sector]);
+        if (top < 0.0)
+            continue;   /* no members */
+        if (!v->wide && !(ccvt_sector_bound(v, sector, top) > thr))
+            continue;
+        double most = -1.0;
+        for (int band = CCVT_BANDS - 1; band >= 0; --band) {
+            const int k = sector * CCVT_BANDS + band;
+            if (bs[k] == bs[k + 1])
+                continue;
+            const double rho = as_double(m[CCVT_RHO + k]);
+            if (!v->wide && !(ccvt_bound(c, v, k, rho) > thr)) {
+                most = fmax(most, rho);
+                continue;
+            }
+            long w2 = 0;
+            for (uint t = bs[k]; t < bs[k + 1]; ++t) {
+                const long ux = vor_delta(q[t].x, sx), uy = vor_delta(q[t].y, sy);
+                const long g = 2 * (ux * dx + uy * dy) - dd;
+                w2 = max(w2, (ux + qx) * (ux + qx) + (uy + qy) * (uy + qy));
+                if (g > floor)
+                    ccvt_insert(g, t, ids[t], (uint)k, &count, gain, slot, index, bk);
+            }
+            const double exact = sqrt((double)w2) * (1.0 + 1e-12) + 1.0;
+            if (!v->wide)
+                m[CCVT_RHO + k] = as_long(exact);
+            most = fmax(most, exact);
         }
+        if (!v->wide)
+            m[CCVT_RHOSEC + sector] = as_long(most);
     }
-    for (; k < p; ++k) {
-        const uint2 q2 = xy[k];
-        const long g = 2 * (vor_delta(q2.x, ax) * dx + vor_delta(q2.y, ay) * dy) - dd;
-        if (g > floor)
-            ccvt_insert(g, k, ids[k], floor, &c, gain, slot, index);
-    }
-    return c;
+    return count;
 }
 
-/* A site to the rounded periodic mean of its members, unwrapped relative to it (never
- * raises its energy: vor_round_mean), and its reach (squared distance of the farthest
- * member) from there. ccvt_pair calls it for both sites of a pair that exchanged. */
-inline void ccvt_move(__global uint *s, __global const uint2 *q, const uint p,
-                      __global long *reach2)
+/* Point `in` takes the place of `out` among the members of site i: the sums change by the
+ * difference and the reach bound grows to cover it (its bucket: ccvt_rehome). */
+inline void ccvt_enter(const ccvt_t *c, const uint i, const uint2 in, const uint2 out)
 {
-    const uint x0 = s[0], y0 = s[1];
-    long sx = 0, sy = 0;
-    for (uint k = 0; k < p; ++k) {
-        sx += vor_delta(q[k].x, x0);
-        sy += vor_delta(q[k].y, y0);
+    __global long *m = c->meta + (size_t)i * CCVT_META;
+    const uint sx = c->s[2 * i], sy = c->s[2 * i + 1];
+    const long ux = vor_delta(in.x, sx), uy = vor_delta(in.y, sy);
+    const long vx = vor_delta(out.x, sx), vy = vor_delta(out.y, sy);
+    const long u2 = ux * ux + uy * uy;
+    m[CCVT_SUMX] += ux - vx;
+    m[CCVT_SUMY] += uy - vy;
+    m[CCVT_ENERGY] += u2 - (vx * vx + vy * vy);
+    m[CCVT_REACH] = max(m[CCVT_REACH], ccvt_ceil_sqrt(u2));
+    if (m[CCVT_REACH] >= CCVT_LIMIT)
+        m[CCVT_WIDE] = 1;
+}
+
+/* Exchanges the contents of slots a and b of a site, and follows them in pend[0..np). */
+inline void ccvt_slot_swap(__global uint *ids, __global uint2 *q, const uint a, const uint b,
+                           uint *pend, const uint np)
+{
+    if (a == b)
+        return;
+    const uint t = ids[a];
+    ids[a] = ids[b];
+    ids[b] = t;
+    const uint2 u = q[a];
+    q[a] = q[b];
+    q[b] = u;
+    for (uint k = 0; k < np; ++k)
+        pend[k] = pend[k] == a ? b : (pend[k] == b ? a : pend[k]);
+}
+
+/* The member that arrived in slot t of site i (the bucket `from` of the one it replaced)
+ * moves to its own bucket: it crosses the buckets between one boundary at a time, each
+ * time exchanging places with the boundary slot, which moves that boundary by one. The
+ * bucket's largest |w| grows to cover it. pend[0..np) are slots still to move. */
+inline void ccvt_rehome(const ccvt_t *c, const uint i, uint t, int from, uint *pend,
+                        const uint np)
+{
+    __global long *m = c->meta + (size_t)i * CCVT_META;
+    __global uint *bs = c->bstart + (size_t)i * (CCVT_BUCKETS + 1);
+    __global uint *ids = c->ids + (size_t)i * c->p;
+    __global uint2 *q = c->xy + (size_t)i * c->p;
+    const ulong base = (ulong)m[CCVT_BASE];
+    const long wx = vor_delta(q[t].x, (uint)(base & 0xFFFFFFFFUL));
+    const long wy = vor_delta(q[t].y, (uint)(base >> 32));
+    const long w2 = wx * wx + wy * wy;
+    const int to = ccvt_bucket(c, wx, wy, w2);
+    const double w = sqrt((double)w2) * (1.0 + 1e-12) + 1.0;
+    m[CCVT_RHO + to] = as_long(fmax(as_double(m[CCVT_RHO + to]), w));
+    m[CCVT_RHOSEC + to / CCVT_BANDS] = as_long(fmax(as_double(m[CCVT_RHOSEC + to / CCVT_BANDS]),
+                                                    w));
+    m[CCVT_FAR] = as_long(fmax(as_double(m[CCVT_FAR]), w));
+    for (; from < to; ++from) {
+        const uint last = bs[from + 1] - 1;
+        ccvt_slot_swap(ids, q, t, last, pend, np);
+        t = last;
+        bs[from + 1] = last;
     }
-    const uint x = (uint)((long)x0 + vor_round_mean(sx, (long)p)) & VOR_MASK;
-    const uint y = (uint)((long)y0 + vor_round_mean(sy, (long)p)) & VOR_MASK;
-    long reach = 0;
-    for (uint k = 0; k < p; ++k)
-        reach = max(reach, vor_d2(q[k].x, q[k].y, x, y));
-    s[0] = x;
-    s[1] = y;
-    *reach2 = reach;
+    for (; from > to; --from) {
+        const uint first = bs[from];
+        ccvt_slot_swap(ids, q, t, first, pend, np);
+        t = first;
+        bs[from] = first + 1;
+    }
+}
+
+/* Sums, energy, reach, base and buckets of site i from scratch, relative to where it is;
+ * the slots are regrouped by bucket (through the scratch slots). */
+inline void ccvt_rebuild(const ccvt_t *c, const uint i)
+{
+    const uint p = c->p;
+    __global uint *ids = c->ids + (size_t)i * p;
+    __global uint2 *q = c->xy + (size_t)i * p;
+    __global uint *tids = c->tids + (size_t)i * p;
+    __global uint2 *txy = c->txy + (size_t)i * p;
+    __global long *m = c->meta + (size_t)i * CCVT_META;
+    __global uint *bs = c->bstart + (size_t)i * (CCVT_BUCKETS + 1);
+    const uint sx = c->s[2 * i], sy = c->s[2 * i + 1];
+    uint count[CCVT_BUCKETS];
+    long top[CCVT_BUCKETS];
+    for (int k = 0; k < CCVT_BUCKETS; ++k) {
+        count[k] = 0;
+        top[k] = 0;
+    }
+    long sumx = 0, sumy = 0, e = 0, far = 0;
+    for (uint t = 0; t < p; ++t) {
+        const long ux = vor_delta(q[t].x, sx), uy = vor_delta(q[t].y, sy);
+        const long d2 = ux * ux + uy * uy;
+        sumx += ux;
+        sumy += uy;
+        e += d2;
+        far = max(far, d2);
+        const int k = ccvt_bucket(c, ux, uy, d2);
+        count[k] += 1;
+        top[k] = max(top[k], d2);
+    }
+    uint at = 0;
+    for (int k = 0; k < CCVT_BUCKETS; ++k) {
+        bs[k] = at;
+        at += count[k];
+        count[k] = bs[k];
+        m[CCVT_RHO + k] = as_long(sqrt((double)top[k]) * (1.0 + 1e-12) + 1.0);
+    }
+    for (int sector = 0; sector < CCVT_SECTORS; ++sector) {
+        double most = -1.0;
+        for (int band = 0; band < CCVT_BANDS; ++band) {
+            const int k = sector * CCVT_BANDS + band;
+            if (bs[k] != bs[k + 1])
+                most = fmax(most, as_double(m[CCVT_RHO + k]));
+        }
+        m[CCVT_RHOSEC + sector] = as_long(most);
+    }
+    bs[CCVT_BUCKETS] = at;
+    for (uint t = 0; t < p; ++t) {
+        const long ux = vor_delta(q[t].x, sx), uy = vor_delta(q[t].y, sy);
+        const uint to = count[ccvt_bucket(c, ux, uy, ux * ux + uy * uy)]++;
+        tids[to] = ids[t];
+        txy[to] = q[t];
+    }
+    for (uint t = 0; t < p; ++t) {
+        ids[t] = tids[t];
+        q[t] = txy[t];
+    }
+    m[CCVT_SUMX] = sumx;
+    m[CCVT_SUMY] = sumy;
+    m[CCVT_ENERGY] = e;
+    m[CCVT_REACH] = ccvt_ceil_sqrt(far);
+    m[CCVT_FAR] = as_long(sqrt((double)far) * (1.0 + 1e-12) + 1.0);
+    m[CCVT_BASE] = (long)((ulong)sx | ((ulong)sy << 32));
+    m[CCVT_WIDE] = m[CCVT_REACH] >= CCVT_LIMIT;
+}
+
+/* Site i to the rounded periodic mean of its members, unwrapped relative to it (never
+ * raises its energy: vor_round_mean), as the NumPy reference computes it. From the kept
+ * sums (moving by q changes them by -p q and -2 q.sum + p |q|^2, exactly, since no offset
+ * wraps while the reach stays below CCVT_LIMIT); a wide site from scratch. */
+inline void ccvt_move(const ccvt_t *c, const uint i)
+{
+    __global long *m = c->meta + (size_t)i * CCVT_META;
+    __global uint *s = c->s + 2 * i;
+    const long p = c->p;
+    if (m[CCVT_WIDE]) {
+        __global const uint2 *q = c->xy + (size_t)i * c->p;
+        const uint x0 = s[0], y0 = s[1];
+        long sx = 0, sy = 0;
+        for (uint t = 0; t < c->p; ++t) {
+            sx += vor_delta(q[t].x, x0);
+            sy += vor_delta(q[t].y, y0);
+        }
+        const uint x = (uint)((long)x0 + vor_round_mean(sx, p)) & VOR_MASK;
+        const uint y = (uint)((long)y0 + vor_round_mean(sy, p)) & VOR_MASK;
+        long far = 0;
+        for (uint t = 0; t < c->p; ++t)
+            far = max(far, vor_d2(q[t].x, q[t].y, x, y));
+        s[0] = x;
+        s[1] = y;
+        m[CCVT_REACH] = ccvt_ceil_sqrt(far);   /* the sums wait for the rebuild */
+        return;
+    }
+    const long mx = vor_round_mean(m[CCVT_SUMX], p), my = vor_round_mean(m[CCVT_SUMY], p);
+    m[CCVT_ENERGY] += p * (mx * mx + my * my) - 2 * (mx * m[CCVT_SUMX] + my * m[CCVT_SUMY]);
+    m[CCVT_SUMX] -= p * mx;
+    m[CCVT_SUMY] -= p * my;
+    m[CCVT_REACH] += ((long)abs(mx)) + ((long)abs(my));
+    if (m[CCVT_REACH] >= CCVT_LIMIT)
+        m[CCVT_WIDE] = 1;
+    s[0] = (uint)((long)s[0] + mx) & VOR_MASK;
+    s[1] = (uint)((long)s[1] + my) & VOR_MASK;
+}
+
+/* A bound on the distance from site i to its farthest member: the reach bound, or the
+ * largest |w| plus the drift from the base if that is smaller (not while wide). */
+inline double ccvt_reach(const ccvt_t *c, const uint i)
+{
+    __global const long *m = c->meta + (size_t)i * CCVT_META;
+    if (m[CCVT_WIDE])
+        return (double)m[CCVT_REACH];
+    const ulong base = (ulong)m[CCVT_BASE];
+    const long qx = vor_delta(c->s[2 * i], (uint)(base & 0xFFFFFFFFUL));
+    const long qy = vor_delta(c->s[2 * i + 1], (uint)(base >> 32));
+    return fmin((double)m[CCVT_REACH],
+                as_double(m[CCVT_FAR]) + (double)((long)abs(qx) + (long)abs(qy)));
 }
 
 /* Balzer's pairwise swap for sites i and j: their best candidates toward each other,
  * sorted, are exchanged in order while the two gains sum to more than zero (each exchange
  * lowers the energy by exactly that sum). A round looks at CCVT_TOP candidates a side;
- * when all of them were exchanged another round starts from the new memberships. */
-inline uint ccvt_pair(const uint i, const uint j, __global uint *ids, __global uint2 *xy,
-                      const uint p, __global uint *s,
-                      __global long *reach2, __global const uint *dirty,
-                      __global uint *touched, const long near2)
+ * when all of them were exchanged another round starts from the new memberships. A pair
+ * that exchanged moves both sites to their centroids at once (as Balzer et al.'s code
+ * does), so the pairs after it see them moved. */
+inline uint ccvt_pair(const ccvt_t *c, const uint i, const uint j, const long near2)
 {
     /* Skipping is exact, never a change of result: a pair where neither site moved nor
-     * changed members since it last met found nothing then and finds nothing now; and with
-     * R_i, R_j the reaches (farthest members, kept current by ccvt_move) the two gains sum
-     * to at most 2 |D| (R_i + R_j - |D|), so sites farther apart than R_i + R_j cannot
-     * swap (the test is in doubles with a margin that covers their rounding). */
-    const int fresh = touched[i] || touched[j];
-    if (!fresh && !dirty[i] && !dirty[j])
+     * changed members since it last met found nothing then and finds nothing now. With
+     * Hi >= max u.D over i's members and Hj >= max v.(-D) over j's (the bucket bounds), the
+     * two gains of an exchange sum to at most 2 (Hi + Hj - |D|^2), so nothing moves unless
+     * Hi + Hj > |D|^2, and a point of i is a candidate only if its gain exceeds
+     * -(2 Hj - |D|^2); and Hi + Hj <= |D| (R_i + R_j) with the reaches R, so sites
+     * farther apart than R_i + R_j are not even read. */
+    const int fresh = c->touched[i] || c->touched[j];
+    if (!fresh && !c->dirty[i] && !c->dirty[j])
         return 0;
+    __global uint *s = c->s;
     const uint ix = s[2 * i], iy = s[2 * i + 1], jx = s[2 * j], jy = s[2 * j + 1];
     const long dist2 = vor_d2(ix, iy, jx, jy);
     if (dist2 >= near2)
         return 0;   /* not neighbours: the pair graph joins sites closer than ccvt_near */
-    const double ri = (double)reach2[i], rj = (double)reach2[j];
-    if ((double)dist2 > ri + rj + 2.0 * sqrt(ri * rj) * (1.0 + 1e-9) + 4.0)
+    const double rr = ccvt_reach(c, i) + ccvt_reach(c, j);
+    if ((double)dist2 > rr * rr * (1.0 + 1e-9) + 64.0)
         return 0;
     /* offsets of each site from the other: delta is antisymmetric but at exactly half the
      * torus, so each direction is computed, not negated */
     const long dijx = vor_delta(jx, ix), dijy = vor_delta(jy, iy);
     const long djix = vor_delta(ix, jx), djiy = vor_delta(iy, jy);
     const long dd = dijx * dijx + dijy * dijy;
-    __global uint *mi = ids + (size_t)i * p;
-    __global uint *mj = ids + (size_t)j * p;
-    __global uint2 *pi = xy + (size_t)i * p;
-    __global uint2 *pj = xy + (size_t)j * p;
+    __global uint *mi = c->ids + (size_t)i * c->p;
+    __global uint *mj = c->ids + (size_t)j * c->p;
+    __global uint2 *pi = c->xy + (size_t)i * c->p;
+    __global uint2 *pj = c->xy + (size_t)j * c->p;
+    ccvt_view vi, vj;
     long gi[CCVT_TOP], gj[CCVT_TOP];
-    uint si[CCVT_TOP], sj[CCVT_TOP], xi[CCVT_TOP], xj[CCVT_TOP];
+    uint si[CCVT_TOP], sj[CCVT_TOP], xi[CCVT_TOP], xj[CCVT_TOP], ki[CCVT_TOP], kj[CCVT_TOP];
     uint total = 0;
     for (;;) {
-        /* a point of j can only be exchanged if its gain beats minus i's best, gi[0] */
-        const uint ci = ccvt_top(mi, pi, p, ix, iy, dijx, dijy, dd, LONG_MIN, gi, si, xi);
-        const uint cj = ccvt_top(mj, pj, p, jx, jy, djix, djiy, dd, -gi[0], gj, sj, xj);
+        ccvt_look(c, i, dijx, dijy, &vi);
+        ccvt_look(c, j, djix, djiy, &vj);
+        const double hi = ccvt_site_bound(c, i, &vi), hj = ccvt_site_bound(c, j, &vj);
+        if (hi + hj <= (double)dd)
+            break;
+        /* a point of i can only be exchanged if its gain beats minus j's best, at most
+         * 2 Hj - dd; one of j only if it beats minus i's best, gi[0] */
+        const double low = (double)dd - 2.0 * hj;
+        const long floor_i = low > -4e18 ? (long)floor(low) - 1 : LONG_MIN;
+        const uint ci = ccvt_top(c, i, dijx, dijy, dd, &vi, 0.5 * (double)(dd + floor_i),
+                                 floor_i, gi, si, xi, ki);
+        if (ci == 0)
+            break;
+        const uint cj = ccvt_top(c, j, djix, djiy, dd, &vj, 0.5 * (double)(dd - gi[0]),
+                                 -gi[0], gj, sj, xj, kj);
         const uint k = min(ci, cj);
         uint done = 0;
         while (done < k && gi[done] + gj[done] > 0) {
-            const uint t = mi[si[done]];
-            mi[si[done]] = mj[sj[done]];
-            mj[sj[done]] = t;
-            const uint2 u = pi[si[done]];
-            pi[si[done]] = pj[sj[done]];
-            pj[sj[done]] = u;
+            const uint a = si[done], b = sj[done];
+            const uint2 u = pi[a], v = pj[b];
+            ccvt_enter(c, i, v, u);
+            ccvt_enter(c, j, u, v);
+            const uint t = mi[a];
+            mi[a] = mj[b];
+            mj[b] = t;
+            pi[a] = v;
+            pj[b] = u;
             ++done;
+        }
+        for (uint d = 0; d < done; ++d) {
+            ccvt_rehome(c, i, si[d], (int)ki[d], si + d + 1, done - d - 1);
+            ccvt_rehome(c, j, sj[d], (int)kj[d], sj + d + 1, done - d - 1);
         }
         total += done;
         if (done < CCVT_TOP)
             break;
     }
     if (total) {
-        touched[i] = 1;
-        touched[j] = 1;
-        ccvt_move(s + 2 * i, pi, p, reach2 + i);
-        ccvt_move(s + 2 * j, pj, p, reach2 + j);
+        c->touched[i] = 1;
+        c->touched[j] = 1;
+        ccvt_move(c, i);
+        ccvt_move(c, j);
     }
     return total;
 }
 
 /* The exchanges of one cell pair of a phase: (a, b) numbers the pair, (ox, oy) = (0, 0)
  * is phase 0 (the pairs inside cell (a, b)). Returns the number of exchanges. */
-inline uint ccvt_cell_pairs(const uint a, const uint b, const int ox, const int oy,
-                            const uint parity, const uint G, __global const uint *start,
-                            __global const uint *list, __global uint *rid, __global uint2 *rxy,
-                            const uint p, __global uint *s, __global long *rr,
-                            __global const uint *dd, __global uint *tt, const long near2)
+inline uint ccvt_cell_pairs(const ccvt_t *c, const uint a, const uint b, const int ox,
+                            const int oy, const uint parity, const uint G,
+                            __global const uint *start, __global const uint *list,
+                            const long near2)
 {
     uint total = 0;
     if (ox == 0 && oy == 0) {
-        const uint c = b * G + a;
-        for (uint qa = start[c]; qa < start[c + 1]; ++qa)
-            for (uint qb = qa + 1; qb < start[c + 1]; ++qb)
-                total += ccvt_pair(list[qa], list[qb], rid, rxy, p, s, rr, dd, tt, near2);
+        const uint cell = b * G + a;
+        for (uint qa = start[cell]; qa < start[cell + 1]; ++qa)
+            for (uint qb = qa + 1; qb < start[cell + 1]; ++qb)
+                total += ccvt_pair(c, list[qa], list[qb], near2);
     } else {
         const uint ax = ox != 0 ? 2 * a + parity : b;
         const uint ay = ox != 0 ? b : 2 * a + parity;
@@ -198,88 +577,94 @@ inline uint ccvt_cell_pairs(const uint a, const uint b, const int ox, const int 
         const uint ca = ay * G + ax, cb = by * G + bx;
         for (uint qa = start[ca]; qa < start[ca + 1]; ++qa)
             for (uint qb = start[cb]; qb < start[cb + 1]; ++qb)
-                total += ccvt_pair(list[qa], list[qb], rid, rxy, p, s, rr, dd, tt, near2);
+                total += ccvt_pair(c, list[qa], list[qb], near2);
     }
     return total;
 }
 
 /* Grid (G, G, r) for phase 0 (pairs inside a cell), (G/2, G, r) for a cell offset
  * (ox, oy) and a parity. swaps[r] counts the exchanges of the iteration. */
-__kernel void ccvt_swap(__global uint *ids, __global uint2 *xy, const uint n, const uint p,
-                        __global uint *sites,
+__kernel void ccvt_swap(__global uint *ids, __global uint2 *xy, __global uint *tids,
+                        __global uint2 *txy, const uint n, const uint p,
+                        __global uint *sites, __global long *meta, __global uint *bstart,
                         __global const uint *cell_start, __global const uint *cell_sites,
                         const uint G, const int ox, const int oy, const uint parity,
-                        __global const uint *active, __global long *reach2,
-                        __global const uint *dirty, __global uint *touched,
-                        __global uint *swaps, const long near2)
+                        __global const uint *active, __global const uint *dirty,
+                        __global uint *touched, __global uint *swaps, const long near2)
 {
     const uint a = get_global_id(0), b = get_global_id(1), r = get_global_id(2);
     const int internal = ox == 0 && oy == 0;
     if (a >= (internal ? G : G / 2) || b >= G || !active[r])
         return;
-    const uint total = ccvt_cell_pairs(
-        a, b, ox, oy, parity, G, cell_start + (size_t)r * (G * G + 1), cell_sites + (size_t)r * n,
-        ids + (size_t)r * n * p, xy + (size_t)r * n * p, p, sites + (size_t)r * n * 2,
-        reach2 + (size_t)r * n, dirty + (size_t)r * n, touched + (size_t)r * n, near2);
+    const size_t rn = (size_t)r * n, rnp = rn * p;
+    const ccvt_t c = ccvt_state(n, p, ids + rnp, xy + rnp, tids + rnp, txy + rnp,
+                                sites + 2 * rn, meta + rn * CCVT_META,
+                                bstart + rn * (CCVT_BUCKETS + 1), dirty + rn, touched + rn);
+    const uint total = ccvt_cell_pairs(&c, a, b, ox, oy, parity, G,
+                                       cell_start + (size_t)r * (G * G + 1), cell_sites + rn,
+                                       near2);
     if (total)
         atomic_add(swaps + r, total);
 }
 
-/* The centroid step of one site (index `site` over all realizations): to the rounded mean
- * of its members (unwrapped relative to the site, which never raises its energy:
- * vor_round_mean), then its energy, its reach (largest squared distance to a member) and
- * whether it changed (dirty). Only sites whose members changed in this iteration are
- * visited (all of them when `all`): the others already sit at their rounded mean. Returns
- * the change of the site's energy, which site_energy keeps. */
-inline long2 ccvt_centroid_site(const size_t site, __global uint *sites, const uint p,
-                                __global const uint2 *xy, __global long *reach2,
-                                __global uint *dirty, __global uint *touched,
+/* The end of an iteration for site i (of every site when `all`, the first time): a
+ * touched site already sits at its centroid and its energy is kept; a wide one, or one that
+ * drifted from its base by more than a tenth of the spacing (and
+ * every site the first time: to the centroid of the start) is moved and rebuilt from
+ * scratch. Then whether it changed (dirty). Returns the change of the site's energy,
+ * which site_energy keeps, as (low 32 bits, high bits). */
+inline long2 ccvt_centroid_site(const ccvt_t *c, const uint i, __global uint *dirty,
                                 __global long *site_energy, const uint all)
 {
-    if (!all && !touched[site]) {
-        dirty[site] = 0;
+    if (!all && !c->touched[i]) {
+        dirty[i] = 0;
         return (long2)(0, 0);
     }
-    __global uint *s = sites + site * 2;
-    __global const uint2 *q = xy + site * p;
+    __global long *m = c->meta + (size_t)i * CCVT_META;
+    __global uint *s = c->s + 2 * i;
     const uint x0 = s[0], y0 = s[1];
-    long sx = 0, sy = 0;
-    for (uint k = 0; k < p; ++k) {
-        sx += vor_delta(q[k].x, x0);
-        sy += vor_delta(q[k].y, y0);
+    int rebuild = all || m[CCVT_WIDE];
+    if (!rebuild) {
+        const ulong base = (ulong)m[CCVT_BASE];
+        rebuild = (long)abs(vor_delta(x0, (uint)(base & 0xFFFFFFFFUL)))
+                  + (long)abs(vor_delta(y0, (uint)(base >> 32))) >= c->drift;
     }
-    const uint x = (uint)((long)x0 + vor_round_mean(sx, (long)p)) & VOR_MASK;
-    const uint y = (uint)((long)y0 + vor_round_mean(sy, (long)p)) & VOR_MASK;
-    long e = 0, reach = 0;
-    for (uint k = 0; k < p; ++k) {
-        const long d2 = vor_d2(q[k].x, q[k].y, x, y);
-        e += d2;
-        reach = max(reach, d2);
+    if (rebuild) {
+        __global const uint2 *q = c->xy + (size_t)i * c->p;
+        long sx = 0, sy = 0;
+        for (uint t = 0; t < c->p; ++t) {
+            sx += vor_delta(q[t].x, x0);
+            sy += vor_delta(q[t].y, y0);
+        }
+        s[0] = (uint)((long)x0 + vor_round_mean(sx, (long)c->p)) & VOR_MASK;
+        s[1] = (uint)((long)y0 + vor_round_mean(sy, (long)c->p)) & VOR_MASK;
+        ccvt_rebuild(c, i);
     }
-    s[0] = x;
-    s[1] = y;
-    reach2[site] = reach;
-    dirty[site] = touched[site] || x != x0 || y != y0;
-    touched[site] = 0;
-    const long old = all ? 0 : site_energy[site];
-    site_energy[site] = e;
-    /* (low 32 bits, high bits) parts: the realization's total cannot overflow */
+    const long e = m[CCVT_ENERGY];
+    dirty[i] = c->touched[i] || s[0] != x0 || s[1] != y0;
+    c->touched[i] = 0;
+    const long old = all ? 0 : site_energy[i];
+    site_energy[i] = e;
     return (long2)((e & 0xFFFFFFFFL) - (old & 0xFFFFFFFFL), (e >> 32) - (old >> 32));
 }
 
-/* Grid (n, r): the centroid step of every site of the active realizations; energy[r]
- * holds their total energy as (low, high) sums, updated by the differences. */
-__kernel void ccvt_centroids(__global uint *sites, const uint n, const uint p,
-                             __global const uint2 *xy, __global const uint *active,
-                             __global long *reach2, __global uint *dirty,
+/* Grid (n, r): the end of an iteration for every site of the active realizations;
+ * energy[r] holds their total energy as (low, high) sums, updated by the differences. */
+__kernel void ccvt_centroids(__global uint *ids, __global uint2 *xy, __global uint *tids,
+                             __global uint2 *txy, __global uint *sites, const uint n,
+                             const uint p, __global long *meta, __global uint *bstart,
+                             __global const uint *active, __global uint *dirty,
                              __global uint *touched, __global long *site_energy,
                              __global long *energy, const uint all)
 {
     const uint i = get_global_id(0), r = get_global_id(1);
     if (i >= n || !active[r])
         return;
-    const long2 d = ccvt_centroid_site((size_t)r * n + i, sites, p, xy, reach2, dirty, touched,
-                                       site_energy, all);
+    const size_t rn = (size_t)r * n, rnp = rn * p;
+    const ccvt_t c = ccvt_state(n, p, ids + rnp, xy + rnp, tids + rnp, txy + rnp,
+                                sites + 2 * rn, meta + rn * CCVT_META,
+                                bstart + rn * (CCVT_BUCKETS + 1), dirty + rn, touched + rn);
+    const long2 d = ccvt_centroid_site(&c, i, dirty + rn, site_energy + rn, all);
     if (d.x)
         atom_add(energy + 2 * r, d.x);
     if (d.y)
@@ -291,9 +676,10 @@ __kernel void ccvt_centroids(__global uint *sites, const uint n, const uint p,
  * the results are identical; many realizations then cost one launch instead of a dozen
  * per iteration. history[r][t] = the total energy after iteration t as (low, high);
  * state[r] = (iterations run, converged). */
-__kernel void ccvt_solve(__global uint *ids, __global uint2 *xy, const uint n, const uint p,
-                         __global uint *sites, __global uint *cell_start,
-                         __global uint *cell_sites, const uint G, __global long *reach2,
+__kernel void ccvt_solve(__global uint *ids, __global uint2 *xy, __global uint *tids,
+                         __global uint2 *txy, const uint n, const uint p,
+                         __global uint *sites, __global long *meta, __global uint *bstart,
+                         __global uint *cell_start, __global uint *cell_sites, const uint G,
                          __global uint *dirty, __global uint *touched,
                          __global long *site_energy, const long near2, const uint iterations,
                          __global long *history, __global uint *state)
@@ -301,20 +687,20 @@ __kernel void ccvt_solve(__global uint *ids, __global uint2 *xy, const uint n, c
     const uint r = get_group_id(0), lid = get_local_id(0), L = get_local_size(0);
     __local long total[2];
     __local uint swaps;
+    const size_t rn = (size_t)r * n, rnp = rn * p;
     __global uint *start = cell_start + (size_t)r * (G * G + 1);
-    __global uint *list = cell_sites + (size_t)r * n;
-    __global uint *rid = ids + (size_t)r * n * p;
-    __global uint2 *rxy = xy + (size_t)r * n * p;
-    __global uint *s = sites + (size_t)r * n * 2;
-    __global long *rr = reach2 + (size_t)r * n;
-    __global uint *dd = dirty + (size_t)r * n;
-    __global uint *tt = touched + (size_t)r * n;
+    __global uint *list = cell_sites + rn;
+    __global uint *s = sites + 2 * rn;
+    __global uint *dd = dirty + rn;
+    __global long *se = site_energy + rn;
+    const ccvt_t c = ccvt_state(n, p, ids + rnp, xy + rnp, tids + rnp, txy + rnp, s,
+                                meta + rn * CCVT_META, bstart + rn * (CCVT_BUCKETS + 1), dd,
+                                touched + rn);
     if (lid == 0)
         total[0] = total[1] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
     for (uint i = lid; i < n; i += L) {
-        const long2 d = ccvt_centroid_site((size_t)r * n + i, sites, p, xy, reach2, dirty,
-                                           touched, site_energy, 1);
+        const long2 d = ccvt_centroid_site(&c, i, dd, se, 1);
         atom_add(total, d.x);
         atom_add(total + 1, d.y);
         dd[i] = 1;   /* every pair meets in the first iteration */
@@ -334,14 +720,13 @@ __kernel void ccvt_solve(__global uint *ids, __global uint2 *xy, const uint n, c
             const uint parity = phase == 0 ? 0 : (phase - 1) & 1;
             const uint A = phase == 0 ? G : G / 2;
             for (uint w = lid; w < A * G; w += L)
-                made += ccvt_cell_pairs(w % A, w / A, ox, oy, parity, G, start, list, rid, rxy,
-                                        p, s, rr, dd, tt, near2);
+                made += ccvt_cell_pairs(&c, w % A, w / A, ox, oy, parity, G, start, list,
+                                        near2);
             barrier(CLK_GLOBAL_MEM_FENCE);
         }
         atomic_add(&swaps, made);
         for (uint i = lid; i < n; i += L) {
-            const long2 d = ccvt_centroid_site((size_t)r * n + i, sites, p, xy, reach2, dirty,
-                                               touched, site_energy, 0);
+            const long2 d = ccvt_centroid_site(&c, i, dd, se, 0);
             if (d.x)
                 atom_add(total, d.x);
             if (d.y)
