@@ -1,4 +1,5 @@
-"""Minimum distance and relative radius: exact against brute force, known lattices, wrap."""
+"""Minimum distance and relative radius: exact against brute force, known lattices, wrap;
+N*E of known sets."""
 
 import math
 
@@ -9,6 +10,7 @@ from clsamp.errors import InvalidArgumentError
 from clsamp.point_metrics import (
     max_min_distance,
     min_distance,
+    normalized_energy,
     relative_radius,
     toroidal_distance2,
 )
@@ -101,3 +103,25 @@ def test_bad_points_are_refused(bad):
 def test_relative_radius_refuses_unknown_packing_dimension():
     with pytest.raises(InvalidArgumentError, match="dimensions"):
         relative_radius(np.full((3, 9), 0.5))
+
+
+def test_normalized_energy_of_known_sets():
+    # a square grid: each cell a square of area 1/n, mean squared distance to its centre
+    # 1/(6n), less the discreteness of the 64 x 64 density cells inside each square
+    g = (np.stack(np.meshgrid(np.arange(16), np.arange(16)), -1).reshape(-1, 2) + 0.5) / 16
+    assert normalized_energy(g) == pytest.approx((1 - 1 / 4096) / 6, rel=1e-12)
+    shifted = (g + np.array([0.3, 0.7])) % 1.0          # the torus has no preferred origin
+    assert normalized_energy(shifted) == pytest.approx(1 / 6, rel=1e-3)
+    # white noise: the expectation is 1/pi (Poisson process, nearest-point distance)
+    w = np.random.default_rng(3).random((16, 512, 2))
+    ne = normalized_energy(w)
+    assert ne.shape == (16,)
+    assert abs(ne.mean() - 1 / np.pi) < 4 * ne.std() / np.sqrt(len(ne))
+    assert np.array_equal(ne, normalized_energy(w, backend="numpy"))
+
+
+def test_normalized_energy_refuses_other_dimensions():
+    with pytest.raises(InvalidArgumentError, match="'points'"):
+        normalized_energy(np.random.default_rng(0).random((10, 3)))
+    with pytest.raises(InvalidArgumentError, match="'density'"):
+        normalized_energy(np.random.default_rng(0).random((10, 2)), density=0)
