@@ -168,6 +168,21 @@ inline void ccvt_look(const ccvt_t *c, const uint i, const long dx, const long d
     }
 }
 
+/* ccvt_look for E = -D, from the view along D: the rays are symmetric (ray k + 8 = -ray k),
+ * so the cone of sector k toward E is that of sector k + 8 toward D. */
+inline void ccvt_look_back(const ccvt_t *c, const uint j, const long ex, const long ey,
+                           const ccvt_view *front, ccvt_view *v)
+{
+    __global const long *m = c->meta + (size_t)j * CCVT_META;
+    const ulong base = (ulong)m[CCVT_BASE];
+    v->qd = (double)(vor_delta(c->s[2 * j], (uint)(base & 0xFFFFFFFFUL)) * ex
+                     + vor_delta(c->s[2 * j + 1], (uint)(base >> 32)) * ey);
+    v->dlen = front->dlen;
+    v->wide = m[CCVT_WIDE] != 0;
+    for (int k = 0; k < CCVT_SECTORS; ++k)
+        v->cone[k] = front->cone[(k + CCVT_SECTORS / 2) % CCVT_SECTORS];
+}
+
 /* An upper bound on u.D over the members of a bucket whose largest |w| is rho (with the
  * margin that covers the rounding of the doubles). */
 inline double ccvt_bound(const ccvt_t *c, const ccvt_view *v, const int k, const double rho)
@@ -266,8 +281,10 @@ inline uint ccvt_top(const ccvt_t *c, const uint i, const long dx, const long dy
                 continue;
             }
             long w2 = 0;
-            for (uint t = bs[k]; t < bs[k + 1]; ++t) {
-                const long ux = vor_delta(q[t].x, sx), uy = vor_delta(q[t].y, sy);
+            const uint first = bs[k], end = bs[k + 1];
+            for (uint t = first; t < end; ++t) {
+                const uint2 x = q[t];
+                const long ux = vor_delta(x.x, sx), uy = vor_delta(x.y, sy);
                 const long g = 2 * (ux * dx + uy * dy) - dd;
                 w2 = max(w2, (ux + qx) * (ux + qx) + (uy + qy) * (uy + qy));
                 if (g > floor)
@@ -511,7 +528,10 @@ inline uint ccvt_pair(const ccvt_t *c, const uint i, const uint j, const long ne
     uint total = 0;
     for (;;) {
         ccvt_look(c, i, dijx, dijy, &vi);
-        ccvt_look(c, j, djix, djiy, &vj);
+        if (djix == -dijx && djiy == -dijy)
+            ccvt_look_back(c, j, djix, djiy, &vi, &vj);
+        else
+            ccvt_look(c, j, djix, djiy, &vj);
         const double hi = ccvt_site_bound(c, i, &vi), hj = ccvt_site_bound(c, j, &vj);
         if (hi + hj <= (double)dd)
             break;
