@@ -166,11 +166,13 @@ def test_power_kernel_equals_reference():
         points = ccvt.density_points(5, np.arange(r), 777)
         spacing2 = voronoi.SIZE ** 2 // n
         weight = rng.integers(-spacing2, spacing2, (r, n))
-        for pts in (points, points[:1]):                    # per realization, and one shared set
-            a = ccvt._power_pass_device(pts, sites, weight, G)
-            b = ccvt.power_pass_reference(pts, sites, weight, G)
+        # per realization, one shared set, and large weights
+        for pts, wt in ((points, weight), (points[:1], weight), (points, weight << 20)):
+            a = ccvt._power_pass_device(pts, sites, wt, G)
+            b = ccvt.power_pass_reference(pts, sites, wt, G)
             for x, y in zip(a, b, strict=True):
                 assert np.array_equal(x, y)
+        b = ccvt.power_pass_reference(points[:1], sites, weight, G)
         owner, second, margin = b
         if sites is corner:
             assert np.any(owner == ccvt.NO_OWNER)
@@ -195,8 +197,8 @@ def test_start_weights_balance_the_cells():
     G = ccvt._start_grid_size(256)
     zero = np.zeros((2, 256), dtype=np.int64)
     before = ccvt._power_counts(ccvt.power_pass_reference(points, sites, zero, G)[0], 256)
-    w = ccvt.start_weights(sites, 256, G, ccvt._power_pass_device)
-    assert np.array_equal(w, ccvt.start_weights(sites, 256, G, ccvt.power_pass_reference))
+    w = ccvt.start_weights(sites, 256, G, ccvt._PowerPass(sites, G, "opencl"))
+    assert np.array_equal(w, ccvt.start_weights(sites, 256, G, ccvt._PowerPass(sites, G, "numpy")))
     after = ccvt._power_counts(ccvt._power_pass_device(points, sites, w, G)[0], 256)
     spread = [np.abs(c - 256).mean() / 256 for c in (before, after)]
     assert spread[0] > 0.3 and spread[1] < 0.08, spread      # measured: 0.42, 0.04

@@ -262,59 +262,97 @@ def power_pass_reference(points, sites, weight, G):
     margin : ndarray (r, M) of int64
         Power distance to ``second`` minus that to ``owner`` (``NO_SECOND`` if none).
     """
-    r, n, _ = sites.shape
-    M = points.shape[1]
-    owner = np.empty((r, M), dtype=np.uint32)
-    second = np.empty((r, M), dtype=np.uint32)
-    margin = np.empty((r, M), dtype=np.int64)
-    for k in range(r):
-        xy = sites[k].astype(np.int64)
-        table, _ = _start_table(xy, np.arange(n), G, n)
-        sx, sy = np.append(xy[:, 0], 0), np.append(xy[:, 1], 0)
-        w = np.append(np.asarray(weight[k], dtype=np.int64), 0)
-        pts = points[k if points.shape[0] > 1 else 0].astype(np.int64)
-        cell = voronoi.cell_of(pts[:, 1], G) * G + voronoi.cell_of(pts[:, 0], G)
-        width = max(1, START_CHUNK // table.shape[1])
-        for lo in range(0, M, width):
-            cand = table[cell[lo:lo + width]]
-            dx = ((pts[lo:lo + width, 0:1] - sx[cand] + voronoi.HALF) & voronoi.MASK) - voronoi.HALF
-            dy = ((pts[lo:lo + width, 1:2] - sy[cand] + voronoi.HALF) & voronoi.MASK) - voronoi.HALF
-            c = dx * dx + dy * dy - w[cand]
-            c[cand == n] = NO_SECOND
-            rows = np.arange(len(cand))
-            # rows are in ascending site order: the first minimum has the smallest index
-            b1 = np.argmin(c, axis=1)
-            c1 = c[rows, b1]
-            c[rows, b1] = NO_SECOND
-            b2 = np.argmin(c, axis=1)
-            c2 = c[rows, b2]
-            i1 = np.where(c1 == NO_SECOND, NO_OWNER, cand[rows, b1])
-            lone = c2 == NO_SECOND
-            owner[k, lo:lo + width] = i1
-            second[k, lo:lo + width] = np.where(lone, i1, cand[rows, b2])
-            margin[k, lo:lo + width] = np.where(lone, NO_SECOND, c2 - c1)
-    return owner, second, margin
+    return _PowerPass(sites, G, "numpy")(points, weight)
 
 
 def _power_pass_device(points, sites, weight, G):
     """:func:`power_pass_reference` by the ``ccvt_power`` kernel (the same integers)."""
-    import pyopencl.array as cla
-    q = runtime.queue()
-    r, n, _ = sites.shape
-    M = points.shape[1]
-    start, order = _start_grids(sites, G)
-    owner = cla.empty(q, (r, M), np.uint32)
-    second = cla.empty(q, (r, M), np.uint32)
-    margin = cla.empty(q, (r, M), np.int64)
-    if r and M:
-        kernel = runtime.kernel("ccvt_start.cl", "ccvt_power")
-        kernel(q, (M, r), None, cla.to_device(q, np.ascontiguousarray(points, dtype=np.uint32)).data,
-               np.uint32(M), np.uint32(M if points.shape[0] > 1 else 0),
-               cla.to_device(q, np.ascontiguousarray(sites, dtype=np.uint32)).data,
-               cla.to_device(q, np.ascontiguousarray(weight, dtype=np.int64)).data, np.uint32(n),
-               cla.to_device(q, start).data, cla.to_device(q, order).data, np.uint32(G),
-               owner.data, second.data, margin.data)
-    return owner.get(), second.get(), margin.get()
+    return _PowerPass(sites, G, "opencl")(points, weight)
+
+
+class _PowerPass:
+    """The power passes over one set of sites (:func:`power_pass_reference`), their grids
+    (and, in OpenCL, their buffers and the last point set's) prepared once."""
+
+    def __init__(self, sites, G, backend):
+        self.sites, self.G, self.backend = sites, G, backend
+        r, n, _ = sites.shape
+        if backend == "numpy":
+            self.tables = [_start_table(sites[k].astype(np.int64), np.arange(n), G, n)[0]
+                           for k in range(r)]
+            return
+        import pyopencl.array as cla
+        q = runtime.queue()
+        start, order = _start_grids(sites, G)
+        self.buffers = [cla.to_device(q, np.ascontiguousarray(a)) for a in
+                        (np.asarray(sites, dtype=np.uint32), start, order)]
+        self.points = (None, None)
+
+    def __call__(self, points, weight, owner_only=False):
+        """(owner, second, margin) of ``points`` under ``weight``; ``owner_only``: owner."""
+        if self.backend == "numpy":
+            out = self._reference(points, weight)
+        else:
+            out = self._device(points, weight, owner_only)
+        return out[:1] if owner_only else out
+
+    def _device(self, points, weight, owner_only):
+        import pyopencl.array as cla
+        q = runtime.queue()
+        r, n, _ = self.sites.shape
+        M = points.shape[1]
+        if self.points[0] is not points:            # the lattice serves every sweep
+            self.points = (points, cla.to_device(q, np.ascontiguousarray(points, dtype=np.uint32)))
+        owner = cla.empty(q, (r, M), np.uint32)
+        second = cla.empty(q, (r, M), np.uint32)
+        margin = cla.empty(q, (r, M), np.int64)
+        if r and M:
+            sites, start, order = self.buffers
+            kernel = runtime.kernel("ccvt_start.cl", "ccvt_power")
+            kernel(q, (M, r), None, self.points[1].data, np.uint32(M),
+                   np.uint32(M if points.shape[0] > 1 else 0), sites.data,
+                   cla.to_device(q, np.ascontiguousarray(weight, dtype=np.int64)).data,
+                   np.uint32(n), start.data, order.data, np.uint32(self.G),
+                   owner.data, second.data, margin.data)
+        if owner_only:
+            return (owner.get(),)
+        return owner.get(), second.get(), margin.get()
+
+    def _reference(self, points, weight):
+        sites = self.sites
+        r, n, _ = sites.shape
+        G = self.G
+        M = points.shape[1]
+        owner = np.empty((r, M), dtype=np.uint32)
+        second = np.empty((r, M), dtype=np.uint32)
+        margin = np.empty((r, M), dtype=np.int64)
+        for k in range(r):
+            xy = sites[k].astype(np.int64)
+            table = self.tables[k]
+            sx, sy = np.append(xy[:, 0], 0), np.append(xy[:, 1], 0)
+            w = np.append(np.asarray(weight[k], dtype=np.int64), 0)
+            pts = points[k if points.shape[0] > 1 else 0].astype(np.int64)
+            cell = voronoi.cell_of(pts[:, 1], G) * G + voronoi.cell_of(pts[:, 0], G)
+            width = max(1, START_CHUNK // table.shape[1])
+            for lo in range(0, M, width):
+                cand = table[cell[lo:lo + width]]
+                dx = ((pts[lo:lo + width, 0:1] - sx[cand] + voronoi.HALF) & voronoi.MASK) - voronoi.HALF
+                dy = ((pts[lo:lo + width, 1:2] - sy[cand] + voronoi.HALF) & voronoi.MASK) - voronoi.HALF
+                c = dx * dx + dy * dy - w[cand]
+                c[cand == n] = NO_SECOND
+                rows = np.arange(len(cand))
+                # rows are in ascending site order: the first minimum has the smallest index
+                b1 = np.argmin(c, axis=1)
+                c1 = c[rows, b1]
+                c[rows, b1] = NO_SECOND
+                b2 = np.argmin(c, axis=1)
+                c2 = c[rows, b2]
+                i1 = np.where(c1 == NO_SECOND, NO_OWNER, cand[rows, b1])
+                lone = c2 == NO_SECOND
+                owner[k, lo:lo + width] = i1
+                second[k, lo:lo + width] = np.where(lone, i1, cand[rows, b2])
+                margin[k, lo:lo + width] = np.where(lone, NO_SECOND, c2 - c1)
+        return owner, second, margin
 
 
 def _power_counts(owner, n):
@@ -344,17 +382,20 @@ def _nearest_site2(sites, G):
 
 def start_weights(sites, p, G, power):
     """Power weights (r, n) int64 under which the power cells of the sites hold nearly
-    equal shares of the unit torus: START_SWEEPS updates measured on a lattice of about
-    ``START_LATTICE``^2 points per site (``power`` is :func:`power_pass_reference` or its
-    kernel). Each update adds two parts. Large scale: cells whose sites are crowded are
-    too small, and a smooth weight field f with Laplacian 2 (c/c_mean - 1) (the excess
-    count density, Gaussian-smoothed over START_SMOOTH site spacings, solved by FFT on the
-    torus) moves every boundary so that the areas balance to first order (the power
-    diagram under a smooth f is the Voronoi diagram displaced by -grad f / 2); this is
-    what a purely local update would need about n iterations to spread. Small scale: each
-    site's own Newton step -(c_i - c_mean) / (dc_i/dw_i), times START_STEP, the
-    derivative counted from the lattice points whose margin to a neighbour is below
-    START_SLOPE. Host arithmetic shared by both backends."""
+    equal shares of the unit torus: START_SWEEPS updates measured on a lattice of up to
+    ``START_LATTICE``^2 points per site (never denser than p / 4; ``power``: a
+    :class:`_PowerPass` of the sites). Each update adds two parts. Large scale: cells
+    whose sites are crowded are too small, and a smooth weight field f with Laplacian
+    2 (c / c_mean - 1) (the excess count density, Gaussian-smoothed over START_SMOOTH
+    site spacings, solved by FFT on the torus) moves every boundary so that the areas
+    balance to first order (the power diagram under a smooth f is the Voronoi diagram
+    displaced by -grad f / 2); a purely local update would need about n iterations to
+    spread that. Small scale: each site's own Newton step -(c_i - c_mean) / (dc_i/dw_i),
+    times START_STEP, the derivative counted from the lattice points whose margin to a
+    neighbour is below START_SLOPE, and the step capped so that it moves the boundary
+    with the nearest other site by at most a quarter of their distance (a near-duplicate
+    pair needs tiny weight differences to share). Host arithmetic shared by both
+    backends."""
     r, n, _ = sites.shape
     # never denser than a quarter of the density itself
     side = max(1, min(START_LATTICE, math.isqrt(p // 4))) * max(1, math.isqrt(n))
@@ -378,12 +419,10 @@ def start_weights(sites, p, G, power):
     rows = np.arange(r)[:, None]
     cell = rows * K * K + (sites[..., 1].astype(np.int64) * K >> voronoi.BITS) * K \
         + (sites[..., 0].astype(np.int64) * K >> voronoi.BITS)
-    # a site's own step moves its boundary with its nearest neighbour by at most a quarter
-    # of their distance: a near-duplicate pair needs tiny weight differences to share
     cap = 0.5 * np.sqrt(_nearest_site2(sites, G) * spacing2)
     w = np.zeros((r, n))
     for _ in range(START_SWEEPS):
-        owner, second, margin = power(lattice, sites, np.rint(w).astype(np.int64), G)
+        owner, second, margin = power(lattice, np.rint(w).astype(np.int64))
         excess = _power_counts(owner, n) / per - 1.0
         near = (margin < tau) & (owner != NO_OWNER)
         ends = np.concatenate([(owner.astype(np.int64) + rows * n)[near],
@@ -455,7 +494,6 @@ def greedy_partition(sites, points, p, backend="opencl"):
     clustering", Algorithmica 20, 1998 (power diagrams with prescribed cell sizes).
     """
     check_choice(backend, "backend", ("opencl", "numpy"))
-    power = power_pass_reference if backend == "numpy" else _power_pass_device
     r, n, _ = sites.shape
     M = points.shape[1]
     S = r * n
@@ -468,7 +506,8 @@ def greedy_partition(sites, points, p, backend="opencl"):
     spread = np.flatnonzero(~crowded)
     if spread.size:
         sub = sites[spread]
-        best = power(points[spread], sub, start_weights(sub, p, G, power), G)[0]
+        power = _PowerPass(sub, G, backend)
+        best = power(points[spread], start_weights(sub, p, G, power), owner_only=True)[0]
         ids = spread[:, None] * M + np.arange(M)
         owner[ids] = np.where(best == NO_OWNER, -1, best.astype(np.int64) + spread[:, None] * n)
     mat, over = _members_matrix(owner, S, p)
