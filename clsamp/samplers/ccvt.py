@@ -141,6 +141,7 @@ START_OCCUPANCY = 2    # sites per cell of the start's grid: a 3 x 3 block offer
 START_CHUNK = 1 << 16  # candidate distances computed at once by the NumPy twin
 START_CROWD = 16       # more sites in one cell: the sites are clustered (kd_partition)
 START_LATTICE = 8      # the weights' proxy density: up to 8 x 8 lattice points per site
+START_SHARE = 8        # ... and never more than p / START_SHARE per site
 START_SWEEPS = 10      # weight updates on the proxy lattice
 START_STEP = 0.3       # fraction of each site's own (diagonal Newton) weight step
 START_SMOOTH = 1.0     # Gaussian width of the large-scale weight correction, in site spacings
@@ -383,7 +384,7 @@ def _nearest_site2(sites, G):
 def start_weights(sites, p, G, power):
     """Power weights (r, n) int64 under which the power cells of the sites hold nearly
     equal shares of the unit torus: START_SWEEPS updates measured on a lattice of up to
-    ``START_LATTICE``^2 points per site (never denser than p / 4; ``power``: a
+    ``START_LATTICE``^2 points per site (at most p / START_SHARE, at least 4; ``power``: a
     :class:`_PowerPass` of the sites). Each update adds two parts. Large scale: cells
     whose sites are crowded are too small, and a smooth weight field f with Laplacian
     2 (c / c_mean - 1) (the excess count density, Gaussian-smoothed over START_SMOOTH
@@ -397,8 +398,7 @@ def start_weights(sites, p, G, power):
     pair needs tiny weight differences to share). Host arithmetic shared by both
     backends."""
     r, n, _ = sites.shape
-    # never denser than a quarter of the density itself
-    side = max(1, min(START_LATTICE, math.isqrt(p // 4))) * max(1, math.isqrt(n))
+    side = max(2, min(START_LATTICE, math.isqrt(p // START_SHARE))) * max(1, math.isqrt(n))
     g = ((2 * np.arange(side, dtype=np.int64) + 1) << voronoi.BITS) // (2 * side)
     lattice = np.stack(np.meshgrid(g, g), axis=-1).reshape(1, -1, 2).astype(np.uint32)
     per = side * side / n
@@ -582,16 +582,19 @@ def _relay(sites, points, mat, room, left, start):
     near = np.where(far, own, near)
 
     def nearest_room(x, y, realization):
-        out = np.empty(len(x), dtype=np.int64)
-        for k in np.unique(realization):
-            sel = np.flatnonzero(realization == k)
-            ids = k * n + np.flatnonzero(room[k * n:(k + 1) * n] > 0)
-            d2 = voronoi.distance2(x[sel, None], y[sel, None], sx[ids], sy[ids])
-            out[sel] = ids[np.argmin(d2, axis=1)]      # ties: the smaller index
-        return out
+        # the sites with room of every realization, ascending, padded (all at once)
+        has = room.reshape(r, n) > 0
+        count = has.sum(axis=1)
+        width = max(1, int(count.max()))
+        ids = np.argsort(~has, axis=1, kind="stable")[:, :width] + (np.arange(r) * n)[:, None]
+        cand = ids[realization]
+        d2 = voronoi.distance2(x[:, None], y[:, None], sx[cand], sy[cand])
+        d2[np.arange(width)[None, :] >= count[realization][:, None]] = np.iinfo(np.int64).max
+        return cand[np.arange(len(x)), np.argmin(d2, axis=1)]   # ties: the smaller index
 
     carry = left.copy()
     realization = carry // M
+    target = np.full(S, -1, dtype=np.int64)         # each site's target, while it has room
     cur = np.asarray(start, dtype=np.int64).copy()
     lost = cur < 0
     if lost.any():                                  # no candidate at all: straight to room
@@ -616,7 +619,10 @@ def _relay(sites, points, mat, room, left, start):
         if g.size:
             a_all = cur[g]
             a, start_g, k = np.unique(a_all, return_index=True, return_counts=True)
-            z = nearest_room(sx[a], sy[a], a // n)
+            stale = (target[a] < 0) | (room[np.maximum(target[a], 0)] <= 0)
+            if stale.any():                             # a target is kept while it has room
+                target[a[stale]] = nearest_room(sx[a[stale]], sy[a[stale]], a[stale] // n)
+            z = target[a]
             nb = near[a]
             d2 = voronoi.distance2(sx[nb], sy[nb], sx[z, None], sy[z, None])
             b = nb[np.arange(len(a)), np.argmin(d2, axis=1)]
