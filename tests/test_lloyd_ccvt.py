@@ -221,13 +221,14 @@ def test_greedy_partition_backends_agree_and_are_deterministic():
 def test_greedy_partition_is_compact(seed, r, n, p):
     # excess is passed along to neighbouring sites, never to a far site with room: every
     # point stays within a few spacings of its site (the greedy start this replaced put
-    # its leftovers anywhere: 99% 7.9, max 19.6 spacings at 1024 x 1024; here at most 4.2)
+    # its leftovers anywhere: 99% 7.9, max 19.6 spacings at 1024 x 1024; here 99% 1.5 to
+    # 2.0, max 1.8 to 3.0)
     sites, points, members = _start(seed, r, n, p)
     for k in range(r):
         assert np.array_equal(np.sort(members[k].ravel()), np.arange(n * p))
         assert np.all(np.diff(members[k].astype(np.int64), axis=1) > 0)
     reach = _reach(sites, points, members)
-    assert np.quantile(reach, 0.99) < 2.5 and reach.max() < 6.0, (np.quantile(reach, 0.99), reach.max())
+    assert np.quantile(reach, 0.99) < 2.5 and reach.max() < 4.0, (np.quantile(reach, 0.99), reach.max())
 
 
 def test_relay_shifts_excess_along_neighbours():
