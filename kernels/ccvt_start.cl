@@ -1,5 +1,5 @@
 /* The starting partition of CCVT (clsamp/samplers/ccvt.py, greedy_partition): the power
- * diagram pass. NumPy twin: ccvt._power_pass_reference (the same integers).
+ * diagram pass. NumPy twin: ccvt.power_pass_reference (the same integers).
  *
  * Every density point finds, among the sites in the 3 x 3 cells of a G x G grid around it
  * (all n sites when G == 1), the two smallest power distances |x - s_i|^2 - w_i on the
