@@ -545,6 +545,21 @@ def _members_matrix(owner, S, p):
     return mat, np.sort(placed[~keep])
 
 
+def _distance2(ax, ay, bx, by):
+    """:func:`voronoi.distance2` of int64 coordinates, in fewer passes (the same values)."""
+    dx = ((ax - bx + voronoi.HALF) & voronoi.MASK) - voronoi.HALF
+    dy = ((ay - by + voronoi.HALF) & voronoi.MASK) - voronoi.HALF
+    return dx * dx + dy * dy
+
+
+def _runs(sorted_ids):
+    """Values, first positions and lengths of the runs of a sorted array (np.unique's)."""
+    if not len(sorted_ids):
+        return sorted_ids, sorted_ids, sorted_ids
+    first = np.flatnonzero(np.concatenate([[True], sorted_ids[1:] != sorted_ids[:-1]]))
+    return sorted_ids[first], first, np.diff(np.append(first, len(sorted_ids)))
+
+
 def _relay(sites, points, mat, room, left, start):
     """Places the carried points ``left`` (global ids) by passing excess along
     neighbouring sites (:func:`greedy_partition`, step 3).
@@ -597,22 +612,23 @@ def _relay(sites, points, mat, room, left, start):
         width = max(1, int(count.max()))
         ids = np.argsort(~has, axis=1, kind="stable")[:, :width] + (np.arange(r) * n)[:, None]
         cand = ids[realization]
-        d2 = voronoi.distance2(x[:, None], y[:, None], sx[cand], sy[cand])
+        d2 = _distance2(x[:, None], y[:, None], sx[cand], sy[cand])
         d2[np.arange(width)[None, :] >= count[realization][:, None]] = np.iinfo(np.int64).max
         return cand[np.arange(len(x)), np.argmin(d2, axis=1)]   # ties: the smaller index
 
     carry = left.copy()
     realization = carry // M
     target = np.full(S, -1, dtype=np.int64)         # each site's target, while it has room
+    wide = S * r * M < 1 << 62                      # (site, point) keys fit in one int64
     cur = np.asarray(start, dtype=np.int64).copy()
     lost = cur < 0
     if lost.any():                                  # no candidate at all: straight to room
         cur[lost] = nearest_room(px[carry[lost]], py[carry[lost]], realization[lost])
     while carry.size:
         # the carried points by site, in the order of the points: groups of one site
-        order = np.lexsort((carry, cur))
+        order = np.argsort(cur * (r * M) + carry) if wide else np.lexsort((carry, cur))
         carry, cur, realization = carry[order], cur[order], realization[order]
-        sites_at, first, size = np.unique(cur, return_index=True, return_counts=True)
+        sites_at, first, size = _runs(cur)
         rank = np.arange(len(carry)) - np.repeat(first, size)
         free = np.repeat(room[sites_at], size)
         settle = rank < free                        # a site with room keeps what it can hold
@@ -627,16 +643,15 @@ def _relay(sites, points, mat, room, left, start):
         nxt_carry, nxt_cur = [carry[wait]], [cur[wait]]
         if g.size:
             a_all = cur[g]
-            a, start_g, k = np.unique(a_all, return_index=True, return_counts=True)
+            a, _, k = _runs(a_all)
             stale = (target[a] < 0) | (room[np.maximum(target[a], 0)] <= 0)
             if stale.any():                             # a target is kept while it has room
                 target[a[stale]] = nearest_room(sx[a[stale]], sy[a[stale]], a[stale] // n)
             z = target[a]
             nb = near[a]
-            d2 = voronoi.distance2(sx[nb], sy[nb], sx[z, None], sy[z, None])
+            d2 = _distance2(sx[nb], sy[nb], sx[z, None], sy[z, None])
             b = nb[np.arange(len(a)), np.argmin(d2, axis=1)]
-            closer = voronoi.distance2(sx[b], sy[b], sx[z], sy[z]) \
-                < voronoi.distance2(sx[a], sy[a], sx[z], sy[z])
+            closer = _distance2(sx[b], sy[b], sx[z], sy[z]) < _distance2(sx[a], sy[a], sx[z], sy[z])
             # no neighbour nearer to the target (a gap in the sites): the nearest site that
             # is nearer to it, the target itself at worst
             stuck = np.flatnonzero(~closer)
