@@ -477,8 +477,9 @@ def greedy_partition(sites, points, p, backend="opencl"):
     The optimization from this start ends at about the N*E it reached from the greedy
     start (64 sets of 256 sites x 64 points, seeds 1 and 2: 0.17494 against 0.17493;
     eight of 128 x 256, seed 4: 0.1717 against 0.1715; one set of 1024 x 1024, seeds 1 to
-    4: 0.16829 against 0.16822, less than the spread of 0.0002 between seeds), in about
-    as many iterations (1024 x 1024: 260 against 248 on average).
+    8: 0.16835 against 0.16828, a paired difference of 0.00007 +- 0.00008 where seeds
+    spread by 0.0002), in about as many iterations (1024 x 1024: 237 against 251 on
+    average).
 
     Parameters
     ----------
