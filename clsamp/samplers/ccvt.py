@@ -2,6 +2,7 @@
 
 OpenCL: ``kernels/ccvt.cl`` (all realizations in one launch per step); NumPy reference:
 :func:`ccvt_reference` here (``backend="numpy"``), the same integers.
+The start's power pass: ``kernels/ccvt_start.cl``, twin :func:`power_pass_reference`.
 """
 
 import dataclasses
@@ -139,8 +140,17 @@ def density_points_device(seed, realizations, M, density="jittered"):
 
 
 START_OCCUPANCY = 2    # sites per cell of the start's grid: a 3 x 3 block offers about 18
-START_CHUNK = 1 << 16  # candidate distances computed at once (in cache, and bounded)
-START_CROWD = 16      # more sites in one cell: the sites are clustered (kd_partition)
+START_CHUNK = 1 << 16  # candidate distances computed at once by the NumPy twin
+START_CROWD = 16       # more sites in one cell: the sites are clustered (kd_partition)
+START_LATTICE = 8      # the weights' proxy density: up to 8 x 8 lattice points per site
+START_SHARE = 8        # ... and never more than p / START_SHARE per site
+START_SWEEPS = 10      # weight updates on the proxy lattice
+START_STEP = 0.3       # fraction of each site's own (diagonal Newton) weight step
+START_SMOOTH = 1.0     # Gaussian width of the large-scale weight correction, in site spacings
+START_SLOPE = 0.25     # margin, in squared site spacings, of the points that measure dc/dw
+RELAY_BATCH = 128      # carried points a site hands on per round (more wait a round)
+NO_OWNER = 0xFFFFFFFF  # a point with no candidate site (ccvt_power's owner then)
+NO_SECOND = (1 << 63) - 1
 
 
 def _start_table(xy, ids, G, pad):
@@ -164,106 +174,6 @@ def _start_table(xy, ids, G, pad):
     table[np.repeat(np.arange(G * G), lengths), col] = site
     table.sort(axis=1)                              # index order: argmin breaks ties by index
     return table, lengths
-
-
-def _keep_order(q, d2, s, sites_total):
-    """Order of the entries by (site, d2, point): composite keys where they fit in int64."""
-    qb = max(1, int(q.max()).bit_length())
-    if int(d2.max()).bit_length() + qb <= 63:
-        o = np.argsort((d2 << qb) | q)
-        by = s[o].astype(np.uint16 if sites_total <= 1 << 16 else np.int64)
-        return o[np.argsort(by, kind="stable")]
-    return np.lexsort((q, d2, s))
-
-
-def _square_delta(h, t):
-    """Squared toroidal differences (float64, exact) of x = h - HALF and the sites t."""
-    d = h - t
-    np.bitwise_and(d, voronoi.MASK, out=d)
-    d -= voronoi.HALF
-    d2 = d.astype(np.float64)
-    return np.multiply(d2, d2, out=d2)
-
-
-def _start_phase(px, py, sx, sy, cap, table, lengths, cell, left):
-    """Deferred acceptance of the points ``left`` (global ids) by the sites (global ids,
-    capacities ``cap``; the last site is the padding) over the candidate table rows
-    ``cell[left]``. Returns the owner of every point (-1: left over, or not in ``left``)."""
-    S = len(cap) - 1
-    thr_d = np.full(S + 1, np.inf)                  # key (d2, point) of a full site's worst point
-    thr_q = np.zeros(S + 1, dtype=np.int64)
-    thr_d[S] = -np.inf                              # the padding accepts nothing
-    owner = np.full(len(px), S, dtype=np.int64)
-    own_d = np.zeros(len(px), dtype=np.int64)
-    count = np.zeros(S + 1, dtype=np.int64)
-    hx = (px + voronoi.HALF).astype(np.int32)
-    hy = (py + voronoi.HALF).astype(np.int32)
-    tx = sx[table].astype(np.int32)                 # the candidates' coordinates, row by row
-    ty = sy[table].astype(np.int32)
-    active = left
-    while active.size:
-        # each active point proposes to its nearest candidate that would keep it
-        active = active[np.argsort(lengths[cell[active]].astype(np.uint16 if lengths.max() < 1 << 16
-                                                                 else np.int64), kind="stable")]
-        site = np.full(active.size, S, dtype=np.int64)
-        dist = np.zeros(active.size, dtype=np.int64)
-        width = max(1, START_CHUNK // max(1, int(lengths.max())))
-        full = bool((thr_d[:S] < np.inf).any())     # before any site fills, only padding is out
-        for lo in range(0, active.size, width):
-            q = active[lo:lo + width]
-            rows = cell[q]
-            L = max(1, int(lengths[rows].max()))
-            cand = table[rows, :L]
-            # toroidal differences, computed as (x - s + HALF) mod SIZE - HALF in int32
-            d2 = _square_delta(hx[q, None], tx[rows, :L])
-            d2 += _square_delta(hy[q, None], ty[rows, :L])   # exact: integers below 2^44
-            if full:
-                t = thr_d[cand]
-                ok = d2 < t
-                tie = d2 == t
-                if tie.any():
-                    ok |= tie & (q[:, None] < thr_q[cand])
-                d2[~ok] = np.inf
-            else:
-                d2[np.arange(L)[None, :] >= lengths[rows][:, None]] = np.inf
-            best = np.argmin(d2, axis=1)
-            bd = d2[np.arange(len(q)), best]
-            found = bd < np.inf
-            site[lo:lo + width][found] = cand[found, best[found]]
-            dist[lo:lo + width][found] = bd[found].astype(np.int64)
-        go = site < S
-        q, s, d = active[go], site[go], dist[go]
-        if not q.size:
-            break
-        new = np.bincount(s, minlength=S + 1)
-        over = (new > 0) & (count + new >= cap)     # the sites that fill up or overflow now
-        easy = ~over[s]
-        owner[q[easy]] = s[easy]
-        own_d[q[easy]] = d[easy]
-        count += np.bincount(s[easy], minlength=S + 1)
-        if not over.any():
-            break
-        # a site given more than its room keeps its nearest points, old or new
-        held = np.flatnonzero(over[owner])
-        aq = np.concatenate([held, q[~easy]])
-        as_ = np.concatenate([owner[held], s[~easy]])
-        ad = np.concatenate([own_d[held], d[~easy]])
-        o = _keep_order(aq, ad, as_, S + 1)
-        aq, as_, ad = aq[o], as_[o], ad[o]
-        idx = np.arange(len(aq))
-        first = np.ones(len(aq), dtype=bool)
-        first[1:] = as_[1:] != as_[:-1]
-        rank = idx - np.maximum.accumulate(np.where(first, idx, 0))
-        keep = rank < cap[as_]
-        owner[aq] = np.where(keep, as_, S)
-        own_d[aq[keep]] = ad[keep]
-        last = rank == cap[as_] - 1
-        thr_d[as_[last]] = ad[last]
-        thr_q[as_[last]] = aq[last]
-        count[over] = cap[over]
-        active = np.sort(aq[~keep])
-    owner[owner == S] = -1
-    return owner
 
 
 def kd_partition(sites, points, p):
@@ -314,29 +224,264 @@ def kd_partition(sites, points, p):
     return members
 
 
-def greedy_partition(sites, points, p):
-    """A seam-free starting ownership with exact capacities: every density point goes to
-    its nearest site that still has room, the pairs taken in order of increasing toroidal
-    distance (ties by point index, then site index).
+def _start_grid_size(n):
+    """Cells per axis of the start's candidate grid: about START_OCCUPANCY sites per cell,
+    and 1 (every site a candidate) below 4, where 3 x 3 cells would repeat."""
+    G = math.isqrt(n // START_OCCUPANCY)
+    return G if G >= 4 else 1
 
-    The greedy is computed as point-proposing deferred acceptance (Gale and Shapley
-    1962): each unplaced point proposes to its nearest candidate site that would keep it,
-    and a site offered more than its room keeps its nearest points, old or new. Points
-    and sites rank each other by one and the same order of the pairs, so the stable
-    assignment is unique and is the greedy one (the first pair of the order must be in
-    every stable assignment, else it blocks; by induction so must every pair the greedy
-    takes), and the rounds compute it in parallel.
-    The candidates of a point are the sites in the 3 x 3 cells of a grid of about
-    ``START_OCCUPANCY`` sites per cell around it; points that every candidate turns away
-    are placed the same way in a next phase, among the sites that still have room (on a
-    grid of those), and a phase that places none of them uses all of them. Unlike a
-    partition of the unit square (a k-d tree), this has no seam at x = 0 or y = 0, and no
-    preferred direction: cells are Voronoi cells trimmed to their nearest points, and
-    the optimization that follows does not inherit a cut along the axes (an axis-aligned
-    cut is a local optimum of the exchanges, and shows as a cross in the power spectrum).
-    Vectorized over realizations (disjoint sites, one problem). Sites crowded into one
-    cell (more than ``START_CROWD``: duplicates, clusters) would need about one round per
-    site sharing the spot, so such realizations take :func:`kd_partition`.
+
+def _start_grids(sites, G):
+    """:func:`voronoi.build_grid` of every realization, uint32 (r, G*G+1) and (r, n)."""
+    r, n, _ = sites.shape
+    start = np.empty((r, G * G + 1), dtype=np.uint32)
+    order = np.empty((r, n), dtype=np.uint32)
+    for k in range(r):
+        start[k], order[k] = voronoi.build_grid(sites[k], G)
+    return start, order
+
+
+def power_pass_reference(points, sites, weight, G):
+    """NumPy twin of the ``ccvt_power`` kernel (``kernels/ccvt_start.cl``).
+
+    For every point, the two smallest power distances ``|x - s_i|^2 - w_i`` (exact int64
+    on the integer torus) among the sites of the 3 x 3 cells of a G x G grid around it
+    (every site when G == 1), in the order (power distance, site index).
+
+    Parameters
+    ----------
+    points : ndarray (r, M, 2) or (1, M, 2)
+        Integer torus coordinates; one set of shape (1, M, 2) serves every realization.
+    sites : ndarray (r, n, 2)
+    weight : ndarray (r, n) of int64
+    G : int
+        1, or at least 4 (:func:`_start_grid_size`).
+
+    Returns
+    -------
+    owner, second : ndarray (r, M) of uint32
+        Site indices; ``owner`` is ``NO_OWNER`` where no site is a candidate, ``second``
+        equals ``owner`` where only one is.
+    margin : ndarray (r, M) of int64
+        Power distance to ``second`` minus that to ``owner`` (``NO_SECOND`` if none).
+    """
+    return _PowerPass(sites, G, "numpy")(points, weight)
+
+
+def _power_pass_device(points, sites, weight, G):
+    """:func:`power_pass_reference` by the ``ccvt_power`` kernel (the same integers)."""
+    return _PowerPass(sites, G, "opencl")(points, weight)
+
+
+class _PowerPass:
+    """The power passes over one set of sites (:func:`power_pass_reference`), their grids
+    (and, in OpenCL, their buffers and the last point set's) prepared once."""
+
+    def __init__(self, sites, G, backend):
+        self.sites, self.G, self.backend = sites, G, backend
+        r, n, _ = sites.shape
+        if backend == "numpy":
+            self.tables = [_start_table(sites[k].astype(np.int64), np.arange(n), G, n)[0]
+                           for k in range(r)]
+            return
+        import pyopencl.array as cla
+        q = runtime.queue()
+        start, order = _start_grids(sites, G)
+        self.buffers = [cla.to_device(q, np.ascontiguousarray(a)) for a in
+                        (np.asarray(sites, dtype=np.uint32), start, order)]
+        self.points = (None, None)
+
+    def __call__(self, points, weight, owner_only=False):
+        """(owner, second, margin) of ``points`` under ``weight``; ``owner_only``: owner."""
+        if self.backend == "numpy":
+            out = self._reference(points, weight)
+        else:
+            out = self._device(points, weight, owner_only)
+        return out[:1] if owner_only else out
+
+    def _device(self, points, weight, owner_only):
+        import pyopencl.array as cla
+        q = runtime.queue()
+        r, n, _ = self.sites.shape
+        M = points.shape[1]
+        if self.points[0] is not points:            # the lattice serves every sweep
+            self.points = (points, cla.to_device(q, np.ascontiguousarray(points, dtype=np.uint32)))
+        owner = cla.empty(q, (r, M), np.uint32)
+        second = cla.empty(q, (r, M), np.uint32)
+        margin = cla.empty(q, (r, M), np.int64)
+        if r and M:
+            sites, start, order = self.buffers
+            kernel = runtime.kernel("ccvt_start.cl", "ccvt_power")
+            kernel(q, (M, r), None, self.points[1].data, np.uint32(M),
+                   np.uint32(M if points.shape[0] > 1 else 0), sites.data,
+                   cla.to_device(q, np.ascontiguousarray(weight, dtype=np.int64)).data,
+                   np.uint32(n), start.data, order.data, np.uint32(self.G),
+                   owner.data, second.data, margin.data)
+        if owner_only:
+            return (owner.get(),)
+        return owner.get(), second.get(), margin.get()
+
+    def _reference(self, points, weight):
+        sites = self.sites
+        r, n, _ = sites.shape
+        G = self.G
+        M = points.shape[1]
+        owner = np.empty((r, M), dtype=np.uint32)
+        second = np.empty((r, M), dtype=np.uint32)
+        margin = np.empty((r, M), dtype=np.int64)
+        for k in range(r):
+            xy = sites[k].astype(np.int64)
+            table = self.tables[k]
+            sx, sy = np.append(xy[:, 0], 0), np.append(xy[:, 1], 0)
+            w = np.append(np.asarray(weight[k], dtype=np.int64), 0)
+            pts = points[k if points.shape[0] > 1 else 0].astype(np.int64)
+            cell = voronoi.cell_of(pts[:, 1], G) * G + voronoi.cell_of(pts[:, 0], G)
+            width = max(1, START_CHUNK // table.shape[1])
+            for lo in range(0, M, width):
+                cand = table[cell[lo:lo + width]]
+                dx = ((pts[lo:lo + width, 0:1] - sx[cand] + voronoi.HALF) & voronoi.MASK) - voronoi.HALF
+                dy = ((pts[lo:lo + width, 1:2] - sy[cand] + voronoi.HALF) & voronoi.MASK) - voronoi.HALF
+                c = dx * dx + dy * dy - w[cand]
+                c[cand == n] = NO_SECOND
+                rows = np.arange(len(cand))
+                # rows are in ascending site order: the first minimum has the smallest index
+                b1 = np.argmin(c, axis=1)
+                c1 = c[rows, b1]
+                c[rows, b1] = NO_SECOND
+                b2 = np.argmin(c, axis=1)
+                c2 = c[rows, b2]
+                i1 = np.where(c1 == NO_SECOND, NO_OWNER, cand[rows, b1])
+                lone = c2 == NO_SECOND
+                owner[k, lo:lo + width] = i1
+                second[k, lo:lo + width] = np.where(lone, i1, cand[rows, b2])
+                margin[k, lo:lo + width] = np.where(lone, NO_SECOND, c2 - c1)
+        return owner, second, margin
+
+
+def _power_counts(owner, n):
+    """Points per site (r, n) from a power pass's owners (points with none left out)."""
+    r = owner.shape[0]
+    flat = owner.astype(np.int64) + (np.arange(r) * n)[:, None]
+    flat = flat[owner != NO_OWNER]
+    return np.bincount(flat, minlength=r * n).reshape(r, n)
+
+
+def _nearest_site2(sites, G):
+    """Squared distance (r, n) from each site to its nearest other site among the 3 x 3
+    cells around it (every site when G == 1; SIZE^2 when it has none there)."""
+    r, n, _ = sites.shape
+    out = np.full((r, n), float(voronoi.SIZE) ** 2)
+    for k in range(r):
+        xy = sites[k].astype(np.int64)
+        table, _ = _start_table(xy, np.arange(n), G, n)
+        cell = voronoi.cell_of(xy[:, 1], G) * G + voronoi.cell_of(xy[:, 0], G)
+        nb = table[cell]
+        ext = np.append(xy, [[0, 0]], axis=0)
+        d2 = voronoi.distance2(xy[:, 0:1], xy[:, 1:2], ext[nb, 0], ext[nb, 1]).astype(np.float64)
+        d2[(nb == n) | (nb == np.arange(n)[:, None])] = np.inf
+        out[k] = np.minimum(d2.min(axis=1), out[k])
+    return out
+
+
+def start_weights(sites, p, G, power):
+    """Power weights (r, n) int64 under which the power cells of the sites hold nearly
+    equal shares of the unit torus: START_SWEEPS updates measured on a lattice of up to
+    ``START_LATTICE``^2 points per site (at most p / START_SHARE, at least 4; ``power``: a
+    :class:`_PowerPass` of the sites). Each update adds two parts. Large scale: cells
+    whose sites are crowded are too small, and a smooth weight field f with Laplacian
+    2 (c / c_mean - 1) (the excess count density, Gaussian-smoothed over START_SMOOTH
+    site spacings, solved by FFT on the torus) moves every boundary so that the areas
+    balance to first order (the power diagram under a smooth f is the Voronoi diagram
+    displaced by -grad f / 2); a purely local update would need about n iterations to
+    spread that. Small scale: each site's own Newton step -(c_i - c_mean) / (dc_i/dw_i),
+    times START_STEP, the derivative counted from the lattice points whose margin to a
+    neighbour is below START_SLOPE, and the step capped so that it moves the boundary
+    with the nearest other site by at most a quarter of their distance (a near-duplicate
+    pair needs tiny weight differences to share). Host arithmetic shared by both
+    backends."""
+    r, n, _ = sites.shape
+    side = max(2, min(START_LATTICE, math.isqrt(p // START_SHARE))) * max(1, math.isqrt(n))
+    g = ((2 * np.arange(side, dtype=np.int64) + 1) << voronoi.BITS) // (2 * side)
+    lattice = np.stack(np.meshgrid(g, g), axis=-1).reshape(1, -1, 2).astype(np.uint32)
+    per = side * side / n
+    unit2 = float(voronoi.SIZE) ** 2
+    spacing2 = unit2 / n
+    tau = START_SLOPE * spacing2
+    K = 1 << max(3, math.ceil(math.log2(max(1.0, math.sqrt(n)))))
+    freq = np.fft.fftfreq(K) * K
+    k2 = (2 * np.pi) ** 2 * (freq[:, None] ** 2 + freq[None, :] ** 2)
+    k2[0, 0] = 1.0
+    solve = 2.0 * np.exp(-0.5 * k2 * START_SMOOTH ** 2 / n) / k2
+    solve[0, 0] = 0.0
+    u = sites.astype(np.float64) * (K / voronoi.SIZE) - 0.5    # cell centres at (c + 1/2) / K
+    c0 = np.floor(u).astype(np.int64)
+    fx, fy = u[..., 0] - c0[..., 0], u[..., 1] - c0[..., 1]
+    x0, y0 = c0[..., 0] % K, c0[..., 1] % K
+    x1, y1 = (x0 + 1) % K, (y0 + 1) % K
+    rows = np.arange(r)[:, None]
+    cell = rows * K * K + (sites[..., 1].astype(np.int64) * K >> voronoi.BITS) * K \
+        + (sites[..., 0].astype(np.int64) * K >> voronoi.BITS)
+    cap = 0.5 * np.sqrt(_nearest_site2(sites, G) * spacing2)
+    w = np.zeros((r, n))
+    for _ in range(START_SWEEPS):
+        owner, second, margin = power(lattice, np.rint(w).astype(np.int64))
+        excess = _power_counts(owner, n) / per - 1.0
+        near = (margin < tau) & (owner != NO_OWNER)
+        ends = np.concatenate([(owner.astype(np.int64) + rows * n)[near],
+                               (second.astype(np.int64) + rows * n)[near]])
+        slope = np.bincount(ends, minlength=r * n).reshape(r, n) / (2.0 * tau * per)
+        slope = np.maximum(slope, 0.5 / spacing2)     # a site with no boundary points yet
+        density = np.bincount(cell.ravel(), excess.ravel(), r * K * K).reshape(r, K, K) * (K * K / n)
+        f = np.real(np.fft.ifft2(np.fft.fft2(density) * solve)) * unit2
+        smooth = (f[rows, y0, x0] * (1 - fx) * (1 - fy) + f[rows, y0, x1] * fx * (1 - fy)
+                  + f[rows, y1, x0] * (1 - fx) * fy + f[rows, y1, x1] * fx * fy)
+        w -= smooth + np.clip(START_STEP * excess / slope, -cap, cap)
+        w -= w.mean(axis=1, keepdims=True)
+    return np.rint(w).astype(np.int64)
+
+
+def greedy_partition(sites, points, p, backend="opencl"):
+    """The starting ownership of CCVT: every site owns exactly p density points, near it,
+    with no seam and no preferred direction on the torus.
+
+    Three steps, all deterministic (integers, and host arithmetic shared by the backends):
+
+    1. Power weights w (:func:`start_weights`): START_SWEEPS updates measured on a
+       lattice proxy of the density, so that the power cells
+       {x : |x - s_i|^2 - w_i <= |x - s_j|^2 - w_j for all j} hold nearly equal shares.
+       Random sites crowd in some places and leave gaps in others, so equal cells need
+       boundaries shifted over several site spacings; the weights shift them all at once
+       (at 1024 x 1024, seed 1, mean |count - p| falls from 42% of p for the Voronoi
+       cells to 3%, and the points over capacity from 21% to 1.4%).
+    2. Every point goes to its power-nearest site (the ``ccvt_power`` kernel, or
+       :func:`power_pass_reference` with ``backend="numpy"``: the same integers) among
+       the sites in the 3 x 3 cells of a grid of about ``START_OCCUPANCY`` sites per cell
+       around it (all sites when n < 32), ties to the smaller site index. A site given
+       more than p keeps its first p in index order; the rest, and points with no
+       candidate, are carried on.
+    3. Excess is passed along to neighbouring sites (:func:`_relay`): a site holding k
+       carried points hands on the k of its points (the carried ones included) that
+       lose least by moving, to its neighbour b (closer than NEAR / sqrt(n)) nearest to
+       the nearest site with room, until every carried point rests at a site with room.
+       Every hand-over moves a point one neighbour on, so the excess travels as a shift
+       of boundaries, never as a jump of a point to a far site (reach at 1024 x 1024,
+       seed 1, in units of 1 / sqrt(n): median 0.66, 99% 1.67, 99.9% 2.0, max 2.9; the
+       deferred-acceptance greedy this replaced, which placed the points all nearby
+       sites turned away at any site with room: 0.47, 7.9, 17.0, 19.6).
+
+    The cells are power cells trimmed at their boundaries: no cut along x = 0 or y = 0
+    and no axis-aligned structure (a k-d partition of the unit square leaves a cross in
+    the power spectrum that the optimization keeps). Vectorized over realizations.
+    Sites crowded into one cell of the grid (more than ``START_CROWD``: duplicates,
+    clusters) take :func:`kd_partition` instead: power weights cannot separate a pile of
+    coincident sites.
+
+    The optimization from this start ends at about the N*E it reached from the greedy
+    start (64 sets of 256 sites x 64 points, seeds 1 and 2: 0.17494 against 0.17493;
+    eight of 128 x 256, seed 4: 0.1717 against 0.1715; one set of 1024 x 1024, seeds 1 to
+    8: 0.16835 against 0.16828, a paired difference of 0.00007 +- 0.00008 where seeds
+    spread by 0.0002), in about as many iterations (1024 x 1024: 237 against 251 on
+    average).
 
     Parameters
     ----------
@@ -346,6 +491,8 @@ def greedy_partition(sites, points, p):
         Integer torus coordinates of the density points.
     p : int
         Capacity of every site.
+    backend : {"opencl", "numpy"}
+        Where the power passes run (the same result).
 
     Returns
     -------
@@ -354,61 +501,218 @@ def greedy_partition(sites, points, p):
 
     References
     ----------
-    D. Gale, L. S. Shapley, "College admissions and the stability of marriage",
-    Amer. Math. Monthly 69(1), 1962.
+    F. Aurenhammer, F. Hoffmann, B. Aronov, "Minkowski-type theorems and least-squares
+    clustering", Algorithmica 20, 1998 (power diagrams with prescribed cell sizes).
     """
+    check_choice(backend, "backend", ("opencl", "numpy"))
     r, n, _ = sites.shape
     M = points.shape[1]
     S = r * n
-    sx = np.append(sites[..., 0].ravel().astype(np.int64), 0)
-    sy = np.append(sites[..., 1].ravel().astype(np.int64), 0)
-    px = points[..., 0].ravel().astype(np.int64)
-    py = points[..., 1].ravel().astype(np.int64)
-    owner = np.repeat(np.arange(S), p)              # a placeholder where the greedy does not run
-    room = np.append(np.full(S, p, dtype=np.int64), 0)
-    # deferred acceptance needs about as many rounds as sites share a spot: crowded
-    # realizations (never random sites: 16 in a cell of mean 2 has odds ~1e-9) take the
-    # k-d partition instead
-    G = math.isqrt(n // START_OCCUPANCY)
+    owner = np.repeat(np.arange(S), p)              # a placeholder where kd_partition runs
+    G = _start_grid_size(n)
     crowded = np.zeros(r, dtype=bool)
     if G >= 4:
         cells = voronoi.cell_of(sites[..., 1], G) * G + voronoi.cell_of(sites[..., 0], G)
         crowded = np.array([np.bincount(c, minlength=G * G).max() > START_CROWD for c in cells])
-    room[:S].reshape(r, n)[crowded] = 0
-    left = np.flatnonzero(~np.repeat(crowded, M))
-    everything = np.zeros(r, dtype=bool)            # last phase placed none: all open sites
-    while left.size:
-        tables, lengths, cell = [], [], np.zeros(r * M, dtype=np.int64)
-        realization = left // M
-        bounds = np.searchsorted(realization, np.arange(r + 1))
-        base = 0
-        for k in np.flatnonzero(np.diff(bounds)):
-            ids = k * n + np.flatnonzero(room[k * n:(k + 1) * n] > 0)
-            G = math.isqrt(len(ids) // START_OCCUPANCY)
-            G = 1 if G < 4 or everything[k] else G
-            xy = np.stack([sx[ids], sy[ids]], axis=1)
-            t, length = _start_table(xy, ids, G, S)
-            q = left[bounds[k]:bounds[k + 1]]
-            cell[q] = base + (voronoi.cell_of(py[q], G) * G + voronoi.cell_of(px[q], G))
-            tables.append(t)
-            lengths.append(length)
-            base += len(t)
-        width = max(t.shape[1] for t in tables)
-        table = np.concatenate([np.pad(t, ((0, 0), (0, width - t.shape[1])), constant_values=S)
-                                for t in tables])
-        got = _start_phase(px, py, sx, sy, room, table, np.concatenate(lengths), cell, left)
-        placed = left[got[left] >= 0]
-        owner[placed] = got[placed]
-        room -= np.bincount(got[placed], minlength=S + 1)
-        everything = np.bincount(realization, minlength=r) > 0
-        everything &= np.bincount(placed // M, minlength=r) == 0
-        left = left[got[left] < 0]
-    # points ascending within each site (a radix sort where the site ids fit in 16 bits)
-    order = np.argsort(owner.astype(np.uint16) if S <= 1 << 16 else owner, kind="stable")
-    members = (order.reshape(r, n, p) - (np.arange(r) * M)[:, None, None]).astype(np.uint32)
+    spread = np.flatnonzero(~crowded)
+    if spread.size:
+        sub = sites[spread]
+        power = _PowerPass(sub, G, backend)
+        best = power(points[spread], start_weights(sub, p, G, power), owner_only=True)[0]
+        ids = spread[:, None] * M + np.arange(M)
+        owner[ids] = np.where(best == NO_OWNER, -1, best.astype(np.int64) + spread[:, None] * n)
+    mat, over = _members_matrix(owner, S, p)
+    if spread.size:
+        left = np.union1d(np.flatnonzero(owner < 0), over)
+        _relay(sites, points, mat, (mat < 0).sum(axis=1), left, owner[left])
+    members = (mat.reshape(r, n, p) - (np.arange(r) * M)[:, None, None]).astype(np.uint32)
     if crowded.any():
         members[crowded] = kd_partition(sites[crowded], points[crowded], p)
     return members
+
+
+def _members_matrix(owner, S, p):
+    """Owners (-1: none yet) as a (S, p) matrix of point ids, ascending in each row, rows
+    of sites with room ending in -1. A site given more than p keeps its first p (in id
+    order). Returns (matrix, the ids it could not keep, ascending)."""
+    key = np.where(owner < 0, S, owner)
+    # a radix sort where the site ids fit in 16 bits
+    order = np.argsort(key.astype(np.uint16) if S < 1 << 16 else key, kind="stable")
+    count = np.bincount(key, minlength=S + 1)[:S]
+    placed = order[:count.sum()]
+    site = key[placed]
+    rank = np.arange(len(placed)) - np.repeat(np.cumsum(count) - count, count)
+    keep = rank < p
+    mat = np.full((S, p), -1, dtype=np.int64)
+    mat[site[keep], rank[keep]] = placed[keep]
+    return mat, np.sort(placed[~keep])
+
+
+def _distance2(ax, ay, bx, by):
+    """:func:`voronoi.distance2` of int64 coordinates, in fewer passes (the same values)."""
+    dx = ((ax - bx + voronoi.HALF) & voronoi.MASK) - voronoi.HALF
+    dy = ((ay - by + voronoi.HALF) & voronoi.MASK) - voronoi.HALF
+    return dx * dx + dy * dy
+
+
+def _runs(sorted_ids):
+    """Values, first positions and lengths of the runs of a sorted array (np.unique's)."""
+    if not len(sorted_ids):
+        return sorted_ids, sorted_ids, sorted_ids
+    first = np.flatnonzero(np.concatenate([[True], sorted_ids[1:] != sorted_ids[:-1]]))
+    return sorted_ids[first], first, np.diff(np.append(first, len(sorted_ids)))
+
+
+def _relay(sites, points, mat, room, left, start):
+    """Places the carried points ``left`` (global ids) by passing excess along
+    neighbouring sites (:func:`greedy_partition`, step 3).
+
+    ``mat`` (S, p) holds the point ids of every site (-1: room), ``room`` its free slots;
+    a carried point starts at ``start`` (its power owner; -1: none, then at the site with
+    room nearest to it). Each round, a site a holding carried points fills its room with
+    them (in id order); if k remain (at most RELAY_BATCH; more wait a round), it picks
+    its target, the site with room nearest to it (ties: smaller index), and its next hop
+    b: of its neighbours (sites closer than NEAR / sqrt(n), the optimizer's pairs), the
+    one nearest to the target, or, where none is nearer to it than a (a gap in the
+    sites), the site nearest to a of those nearer to the target. Of its p points and the
+    k carried, the k with the smallest gain |u - D|^2 - |u|^2 of moving to b (u, D: the
+    toroidal offsets of the point and of s_b from s_a; ties: the earlier slot, the
+    carried last) are carried on to b, and the carried ones not chosen take the freed
+    slots. The distance to the target falls with every hop and room is never lost, so
+    every point comes to rest; the capacities stay
+    exact at every step. Updates ``mat`` (rows left ascending) and ``room`` in place."""
+    if not left.size:
+        return
+    r, n, _ = sites.shape
+    M = points.shape[1]
+    S, p = mat.shape
+    sx = sites[..., 0].ravel().astype(np.int64)
+    sy = sites[..., 1].ravel().astype(np.int64)
+    px = points[..., 0].ravel().astype(np.int64)
+    py = points[..., 1].ravel().astype(np.int64)
+    # neighbours: the sites of the 3 x 3 cells around each site's cell
+    G = _start_grid_size(n)
+    near = []
+    for k in range(r):
+        xy = np.stack([sx[k * n:(k + 1) * n], sy[k * n:(k + 1) * n]], axis=1)
+        table, _ = _start_table(xy, k * n + np.arange(n), G, -1)
+        cell = voronoi.cell_of(xy[:, 1], G) * G + voronoi.cell_of(xy[:, 0], G) if G > 1 \
+            else np.zeros(n, dtype=np.int64)
+        near.append(table[cell])
+    width = max(t.shape[1] for t in near)
+    near = np.concatenate([np.pad(t, ((0, 0), (0, width - t.shape[1])), constant_values=-1)
+                           for t in near])
+    own = np.arange(S)[:, None]
+    near = np.where(near < 0, own, near)              # padding: the site itself
+    # neighbours as the optimizer's pairs: closer than NEAR / sqrt(n)
+    far = voronoi.distance2(sx[near], sy[near], sx[own], sy[own]) >= ccvt_near2(n)
+    near = np.where(far, own, near)
+
+    def nearest_room(x, y, realization):
+        # the sites with room of every realization, ascending, padded (all at once)
+        has = room.reshape(r, n) > 0
+        count = has.sum(axis=1)
+        width = max(1, int(count.max()))
+        ids = np.argsort(~has, axis=1, kind="stable")[:, :width] + (np.arange(r) * n)[:, None]
+        cand = ids[realization]
+        d2 = _distance2(x[:, None], y[:, None], sx[cand], sy[cand])
+        d2[np.arange(width)[None, :] >= count[realization][:, None]] = np.iinfo(np.int64).max
+        return cand[np.arange(len(x)), np.argmin(d2, axis=1)]   # ties: the smaller index
+
+    carry = left.copy()
+    realization = carry // M
+    target = np.full(S, -1, dtype=np.int64)         # each site's target, while it has room
+    wide = S * r * M < 1 << 62                      # (site, point) keys fit in one int64
+    cur = np.asarray(start, dtype=np.int64).copy()
+    lost = cur < 0
+    if lost.any():                                  # no candidate at all: straight to room
+        cur[lost] = nearest_room(px[carry[lost]], py[carry[lost]], realization[lost])
+    while carry.size:
+        # the carried points by site, in the order of the points: groups of one site
+        order = np.argsort(cur * (r * M) + carry) if wide else np.lexsort((carry, cur))
+        carry, cur, realization = carry[order], cur[order], realization[order]
+        sites_at, first, size = _runs(cur)
+        rank = np.arange(len(carry)) - np.repeat(first, size)
+        free = np.repeat(room[sites_at], size)
+        settle = rank < free                        # a site with room keeps what it can hold
+        if settle.any():
+            a = cur[settle]
+            mat[a, p - free[settle] + rank[settle]] = carry[settle]
+            room[sites_at] -= np.minimum(size, room[sites_at])
+        # the rest hand on at most RELAY_BATCH a round (the others wait their turn)
+        hand = ~settle & (rank < free + RELAY_BATCH)
+        wait = ~settle & ~hand
+        g = np.flatnonzero(hand)
+        nxt_carry, nxt_cur = [carry[wait]], [cur[wait]]
+        if g.size:
+            a_all = cur[g]
+            a, _, k = _runs(a_all)
+            stale = (target[a] < 0) | (room[np.maximum(target[a], 0)] <= 0)
+            if stale.any():                             # a target is kept while it has room
+                target[a[stale]] = nearest_room(sx[a[stale]], sy[a[stale]], a[stale] // n)
+            z = target[a]
+            nb = near[a]
+            d2 = _distance2(sx[nb], sy[nb], sx[z, None], sy[z, None])
+            b = nb[np.arange(len(a)), np.argmin(d2, axis=1)]
+            closer = _distance2(sx[b], sy[b], sx[z], sy[z]) < _distance2(sx[a], sy[a], sx[z], sy[z])
+            # no neighbour nearer to the target (a gap in the sites): the nearest site that
+            # is nearer to it, the target itself at worst
+            stuck = np.flatnonzero(~closer)
+            b[stuck] = z[stuck]
+            step = max(1, (1 << 22) // n)
+            for lo in range(0, len(stuck), step):
+                q = stuck[lo:lo + step]
+                every = (a[q] // n * n)[:, None] + np.arange(n)[None, :]
+                toward = voronoi.distance2(sx[every], sy[every], sx[z[q], None], sy[z[q], None]) \
+                    < voronoi.distance2(sx[a[q]], sy[a[q]], sx[z[q]], sy[z[q]])[:, None]
+                d2 = voronoi.distance2(sx[every], sy[every], sx[a[q], None], sy[a[q], None])
+                d2[~toward] = np.iinfo(np.int64).max
+                pick = np.argmin(d2, axis=1)
+                found = toward[np.arange(len(q)), pick]
+                b[q[found]] = every[np.arange(len(q)), pick][found]
+            kmax = int(k.max())
+            # candidates: the site's points, then the carried ones (padding: -1)
+            col = np.arange(kmax)
+            have = col[None, :] < k[:, None]
+            extra = np.full((len(a), kmax), -1, dtype=np.int64)
+            extra[have] = carry[g]                  # g is grouped by site, ids ascending
+            cand = np.concatenate([mat[a], extra], axis=1)
+            safe = np.maximum(cand, 0)
+            # gain |u - D|^2 - |u|^2 = |D|^2 - 2 u.D of handing y to b (u, D: the toroidal
+            # offsets of y and s_b from s_a): in the order of -u.D, ties to the earlier slot
+            dx = (((sx[b] - sx[a] + voronoi.HALF) & voronoi.MASK) - voronoi.HALF)[:, None]
+            dy = (((sy[b] - sy[a] + voronoi.HALF) & voronoi.MASK) - voronoi.HALF)[:, None]
+            ux = ((px[safe] - sx[a, None] + voronoi.HALF) & voronoi.MASK) - voronoi.HALF
+            uy = ((py[safe] - sy[a, None] + voronoi.HALF) & voronoi.MASK) - voronoi.HALF
+            gain = -(ux * dx + uy * dy)
+            width = cand.shape[1]
+            bits = width.bit_length()
+            top = np.iinfo(np.int64).max
+            if voronoi.BITS * 2 + 2 + bits <= 62:
+                key = np.where(cand < 0, top, (gain << bits) | np.arange(width)[None, :])
+            else:                                   # huge p: ranks of (gain, slot) instead
+                key = np.empty_like(gain)
+                rank_of = np.lexsort((np.broadcast_to(np.arange(width), gain.shape).ravel(),
+                                      np.where(cand < 0, top, gain).ravel(),
+                                      np.repeat(np.arange(len(a)), width)))
+                key.ravel()[rank_of] = np.arange(gain.size)
+            chosen = np.argpartition(key, kmax - 1, axis=1)[:, :kmax] if kmax < width \
+                else np.broadcast_to(np.arange(width), key.shape).copy()
+            chosen = np.take_along_axis(chosen, np.argsort(
+                np.take_along_axis(key, chosen, axis=1), axis=1), axis=1)
+            moved = np.take_along_axis(cand, chosen, axis=1)
+            picked = np.zeros(cand.shape, dtype=bool)
+            np.put_along_axis(picked, chosen, have, axis=1)
+            # the carried points not handed on take the slots of the site's points that are
+            row, slot = np.nonzero(picked[:, :p])
+            mat[a[row], slot] = extra[~picked[:, p:] & have]
+            nxt_carry.append(moved[have])
+            nxt_cur.append(np.repeat(b, k))
+        carry = np.concatenate(nxt_carry)
+        cur = np.concatenate(nxt_cur)
+        realization = carry // M
+    changed = np.flatnonzero((np.diff(mat, axis=1) < 0).any(axis=1))
+    mat[changed] = np.sort(mat[changed], axis=1)
 
 
 def _centroids_reference(sites, points, members, site_energy, which):
@@ -683,7 +987,7 @@ def _run(sites, realizations, p, iterations, seed, backend, callback=None, densi
     for lo, hi in runtime.chunk_ranges(r, 32 * M + (64 + 8 * CCVT_META) * n):
         make = density_points if backend == "numpy" else density_points_device
         points = make(seed, realizations[lo:hi], M, density)
-        members = greedy_partition(sites[lo:hi], points, p)
+        members = greedy_partition(sites[lo:hi], points, p, backend)
         run = ccvt_reference if backend == "numpy" else _ccvt_device
         results.append((points,) + run(sites[lo:hi], points, members, iterations, callback))
     length = max(len(e) for part in results for e in part[2])
@@ -746,11 +1050,16 @@ class CCVTSampler(voronoi.VoronoiSampler):
     -----
     Balzer, Schloemer and Deussen minimize the energy E = mean over density points of
     the squared toroidal distance to the site owning them, under the constraint that
-    every site owns the same number of points. The start gives every density point to
-    its nearest random starting site that still has room, pairs in order of increasing
-    toroidal distance (:func:`greedy_partition`: exact in capacity and, unlike a
-    partition of the unit square, without seams on the axes; the sites then move to its
-    centroids). Each iteration then
+    every site owns the same number of points. The start (:func:`greedy_partition`)
+    gives every density point to its nearest random starting site in the power distance
+    |x - s_i|^2 - w_i, the weights balancing the cells' areas (measured on a lattice
+    proxy of the density: a smooth correction, solved by FFT, for the large-scale
+    crowding of random sites, and a damped Newton step per site), then passes the excess
+    of overfull sites along neighbouring sites to the nearest ones with room. It is
+    exact in capacity, compact (at 1024 x 1024, 99% of the points lie within 1.7 site
+    spacings of their site and none beyond about 3) and, unlike a partition of the unit
+    square, without seams on the axes; the sites then move to its centroids. Each
+    iteration then
     (1) exchanges points between neighbouring sites i, j: the candidates of each are
     ordered by the gain of moving to the other site, and pairs are exchanged in order
     while the two gains sum to more than zero (the paper's heap-based swap, here in
@@ -809,7 +1118,7 @@ class CCVTSampler(voronoi.VoronoiSampler):
     i.i.d. points and 2.33e-4 for Poisson disk. The axis-aligned spectral peaks that an
     earlier version showed came from the k-d start's seams, not from the density: with
     the greedy start the power on the axes equals the power beside them (0.88 against
-    0.93 at 256 sites, 32 sets).
+    0.93 at 256 sites, 32 sets; 0.88 against 0.90 from the power start).
     ``density="random"`` keeps Balzer et al.'s i.i.d. density.
 
     ``normalized_energy`` is N*E over the density points: 0.160375 for the hexagonal
