@@ -848,6 +848,7 @@ def _ccvt_device(sites, points, members, iterations, callback=None, fused=None):
     a single large realization spread over the whole device. Both give the same bits. The
     members come back as sets: the kernels keep each site's slots grouped by bucket.
     """
+    import pyopencl as cl
     import pyopencl.array as cla
     runtime.require_fp64()
     q = runtime.queue()
@@ -870,32 +871,40 @@ def _ccvt_device(sites, points, members, iterations, callback=None, fused=None):
     energy = cla.zeros(q, (r, 2), np.int64)
     site_energy = cla.zeros(q, (r, n), np.int64)
     swaps = cla.zeros(q, (r,), np.uint32)
-    build = runtime.kernel("ccvt.cl", "voronoi_build_grid")
-    swap = runtime.kernel("ccvt.cl", "ccvt_swap")
-    centroids = runtime.kernel("ccvt.cl", "ccvt_centroids")
-
-    def centroid_step(everything):
-        centroids(q, (n, r), None, *slots, b["sites"].data, u32(n), u32(p), b["meta"].data,
-                  b["bstart"].data, active.data, dirty.data, touched.data, site_energy.data,
-                  energy.data, u32(everything))
-
-    centroid_step(True)      # the sites to the centroids of the starting partition
+    # every launch of the loop gets its arguments once, here: an iteration is a dozen
+    # launches, and setting twenty arguments each time cost more than some of them run
+    prog = runtime.program("ccvt.cl")
+    build = cl.Kernel(prog, "voronoi_build_grid")
+    build.set_args(b["sites"].data, u32(n), u32(G), cell_start.data, cell_sites.data, u32(r))
+    phases = []
+    for ox, oy, parity in PHASES:
+        k = cl.Kernel(prog, "ccvt_swap")
+        k.set_args(*slots, u32(n), u32(p), b["sites"].data, b["meta"].data, b["bstart"].data,
+                   cell_start.data, cell_sites.data, u32(G), np.int32(ox), np.int32(oy),
+                   u32(parity), active.data, dirty.data, touched.data, swaps.data,
+                   np.int64(near2))
+        phases.append((k, (G if ox == 0 and oy == 0 else G // 2, G, r)))
+    centroids = cl.Kernel(prog, "ccvt_centroids")
+    centroids.set_args(*slots, b["sites"].data, u32(n), u32(p), b["meta"].data,
+                       b["bstart"].data, active.data, dirty.data, touched.data,
+                       site_energy.data, energy.data, u32(1))
+    cl.enqueue_nd_range_kernel(q, centroids, (n, r), None)   # the sites to the start's centroids
+    centroids.set_arg(14, u32(0))
     dirty.fill(1)        # every pair meets in the first iteration
+    made = np.zeros(r, dtype=np.uint32)
+    total = np.zeros((r, 2), dtype=np.int64)
+    zero = np.zeros(1, dtype=np.uint32)
     energies = [[] for _ in range(r)]
     converged = np.zeros(r, dtype=bool)
     for _ in range(iterations):
-        build(q, (r,), None, b["sites"].data, u32(n), u32(G), cell_start.data, cell_sites.data,
-              u32(r))
-        swaps.fill(0)
-        for ox, oy, parity in PHASES:
-            size = (G if ox == 0 and oy == 0 else G // 2, G, r)
-            swap(q, size, None, *slots, u32(n), u32(p), b["sites"].data, b["meta"].data,
-                 b["bstart"].data, cell_start.data, cell_sites.data, u32(G), np.int32(ox),
-                 np.int32(oy), u32(parity), active.data, dirty.data, touched.data, swaps.data,
-                 np.int64(near2))
-        centroid_step(False)
-        made = swaps.get()
-        totals = voronoi.exact_total(*energy.get().T)
+        cl.enqueue_nd_range_kernel(q, build, (r,), None)
+        cl.enqueue_fill_buffer(q, swaps.data, zero, 0, swaps.nbytes)
+        for k, size in phases:
+            cl.enqueue_nd_range_kernel(q, k, size, None)
+        cl.enqueue_nd_range_kernel(q, centroids, (n, r), None)
+        cl.enqueue_copy(q, made, swaps.data)
+        cl.enqueue_copy(q, total, energy.data)
+        totals = voronoi.exact_total(*total.T)
         for k in np.flatnonzero(active_host):
             energies[k].append(totals[k])
         if callback is not None:
