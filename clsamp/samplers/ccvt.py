@@ -839,6 +839,11 @@ def _ccvt_buffers(q, sites, points, members):
                 bstart=cla.zeros(q, (r, n, CCVT_BUCKETS + 1), np.uint32))
 
 
+def _divisor(x, most):
+    """The largest divisor of x that is at most ``most``."""
+    return max(d for d in range(1, most + 1) if x % d == 0)
+
+
 def _ccvt_device(sites, points, members, iterations, callback=None, fused=None):
     """OpenCL CCVT: integer sites (r, n, 2), points (r, M, 2), members (r, n, p).
 
@@ -872,7 +877,10 @@ def _ccvt_device(sites, points, members, iterations, callback=None, fused=None):
     site_energy = cla.zeros(q, (r, n), np.int64)
     swaps = cla.zeros(q, (r,), np.uint32)
     # every launch of the loop gets its arguments once, here: an iteration is a dozen
-    # launches, and setting twenty arguments each time cost more than some of them run
+    # launches, and setting twenty arguments each time cost more than some of them run.
+    # The phases run in work-groups of at most 4 x 4 cell pairs, so that the uneven work
+    # of the pairs spreads over the compute units (one group per launch keeps it on one
+    # core: 1.8-2.2 s at 1024 x 1024 against 1.15-1.35 s; results are the same)
     prog = runtime.program("ccvt.cl")
     build = cl.Kernel(prog, "voronoi_build_grid")
     build.set_args(b["sites"].data, u32(n), u32(G), cell_start.data, cell_sites.data, u32(r))
@@ -883,7 +891,8 @@ def _ccvt_device(sites, points, members, iterations, callback=None, fused=None):
                    cell_start.data, cell_sites.data, u32(G), np.int32(ox), np.int32(oy),
                    u32(parity), active.data, dirty.data, touched.data, swaps.data,
                    np.int64(near2))
-        phases.append((k, (G if ox == 0 and oy == 0 else G // 2, G, r)))
+        size = (G if ox == 0 and oy == 0 else G // 2, G, r)
+        phases.append((k, size, (_divisor(size[0], 4), _divisor(size[1], 4), 1)))
     centroids = cl.Kernel(prog, "ccvt_centroids")
     centroids.set_args(*slots, b["sites"].data, u32(n), u32(p), b["meta"].data,
                        b["bstart"].data, active.data, dirty.data, touched.data,
@@ -899,8 +908,8 @@ def _ccvt_device(sites, points, members, iterations, callback=None, fused=None):
     for _ in range(iterations):
         cl.enqueue_nd_range_kernel(q, build, (r,), None)
         cl.enqueue_fill_buffer(q, swaps.data, zero, 0, swaps.nbytes)
-        for k, size in phases:
-            cl.enqueue_nd_range_kernel(q, k, size, None)
+        for k, size, local in phases:
+            cl.enqueue_nd_range_kernel(q, k, size, local)
         cl.enqueue_nd_range_kernel(q, centroids, (n, r), None)
         cl.enqueue_copy(q, made, swaps.data)
         cl.enqueue_copy(q, total, energy.data)
