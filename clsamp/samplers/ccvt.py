@@ -619,6 +619,23 @@ def _relay(sites, points, mat, room, left, start):
         d2[np.arange(width)[None, :] >= count[realization][:, None]] = np.iinfo(np.int64).max
         return cand[np.arange(len(x)), np.argmin(d2, axis=1)]   # ties: the smaller index
 
+    # a site's 3 x 3 cells hold every site within one cell width of it, so a room found
+    # among its neighbours nearer than that (or than NEAR / sqrt(n) with one cell) is the
+    # nearest room of all, ties included (rows ascending); the rest search everything
+    reach2 = ccvt_near2(n) if G == 1 else (voronoi.SIZE // G) ** 2
+
+    def nearest_room_of_sites(a):
+        nb = near[a]
+        d2 = _distance2(sx[nb], sy[nb], sx[a, None], sy[a, None])
+        d2[room[nb] <= 0] = np.iinfo(np.int64).max
+        pick = np.argmin(d2, axis=1)
+        rows = np.arange(len(a))
+        out = nb[rows, pick]
+        miss = d2[rows, pick] >= reach2
+        if miss.any():
+            out[miss] = nearest_room(sx[a[miss]], sy[a[miss]], a[miss] // n)
+        return out
+
     carry = left.copy()
     realization = carry // M
     target = np.full(S, -1, dtype=np.int64)         # each site's target, while it has room
@@ -649,7 +666,7 @@ def _relay(sites, points, mat, room, left, start):
             a, _, k = _runs(a_all)
             stale = (target[a] < 0) | (room[np.maximum(target[a], 0)] <= 0)
             if stale.any():                             # a target is kept while it has room
-                target[a[stale]] = nearest_room(sx[a[stale]], sy[a[stale]], a[stale] // n)
+                target[a[stale]] = nearest_room_of_sites(a[stale])
             z = target[a]
             nb = near[a]
             d2 = _distance2(sx[nb], sy[nb], sx[z, None], sy[z, None])
