@@ -11,8 +11,9 @@ Cases (``--quick`` in brackets):
   the sites, nearest-site query, centroids unwrapped relative to the site); both from
   the same starting sites, N*E after 10 iterations of each.
 * CCVT until no exchange improves: 1024 sites x 1024 points per site, then 256 x 1024
-  and 4096 x 256 for the growth with n [256 x 64, 1024 x 64, 4096 x 16]: seconds (all of
-  it: density, start, optimization; the start's share named), iterations, N*E and rho.
+  and 4096 x 256 (Balzer's other two cases), and 256, 1024, 4096 sites x 256 for the
+  growth with n at one p [256 x 64, 1024 x 64, 4096 x 16]: seconds (all of it: density,
+  start, optimization; the start's share named), iterations, N*E and rho.
   Balzer's code, built on the project machine, took 4.9 s for 1024 x 1024 (N*E 0.1677,
   rho 0.710), 1.0 s for 256 x 1024, 4.5 s for 4096 x 256.
 
@@ -66,7 +67,7 @@ def run(devices, quick):
         lambda: ckdtree_lloyd(voronoi.to_unit(start[0]), g, 11), repeats=3)
     t_kd = max(t_kd11 - t_kd1, 1e-9) / 10
     ccvt_cases = ([(256, 64), (1024, 64), (4096, 16)] if quick
-                  else [(1024, 1024), (256, 1024), (4096, 256)])
+                  else [(1024, 1024), (256, 1024), (4096, 256), (256, 256), (1024, 256)])
     for device in devices:
         on_device(device)
         dev = short_name(device)
@@ -87,7 +88,7 @@ def run(devices, quick):
                                points_per_site=16, iterations=5)          # build the kernels
             seconds, res = timed(lambda: ccvt.ccvt_optimize(  # noqa: B023
                 voronoi.to_unit(sites), points_per_site=p, iterations=2000, seed=1),  # noqa: B023
-                repeats=1, warmup=1 if quick else 0)
+                repeats=1 if quick else 3, warmup=1)
             points = ccvt.density_points_device(1, np.arange(1), n * p)
             start, _ = timed(lambda: ccvt.greedy_partition(sites, points, p),  # noqa: B023
                              repeats=1, warmup=0)
