@@ -1167,9 +1167,9 @@ class CCVTSampler(voronoi.VoronoiSampler):
 
     Cost: iterations until convergence grow with ``points_per_site`` (about 150 to 320 at
     1024 per site, 10 to 25 at 64); at the default 1024 per site a 1024-point set takes
-    about 2.5 s here (PoCL, 2 cores: the start about 0.5 s, then about 6 ms an
-    iteration, a third of it the launches of the nine phases), against 7 s before the
-    buckets and the power start.
+    about 1.7 to 2 s here (PoCL, 2 cores: the start about 0.45 s, then about 4 ms an
+    iteration), against 7 s before the buckets and the power start; time grows about
+    linearly with n at a given ``points_per_site`` (``benchmarks/bench_voronoi.py``).
 
     References
     ----------
