@@ -90,7 +90,7 @@ def run(devices, quick):
                 voronoi.to_unit(sites), points_per_site=p, iterations=2000, seed=1),  # noqa: B023
                 repeats=1 if quick else 3, warmup=1)
             points = ccvt.density_points_device(1, np.arange(1), n * p)
-            start, _ = timed(lambda: ccvt.greedy_partition(sites, points, p),  # noqa: B023
+            start, _ = timed(lambda: ccvt.start_partition(sites, points, p),  # noqa: B023
                              repeats=1, warmup=0)
             capacity = n * res.energy_history[0, -1]
             ne = point_metrics.normalized_energy(res.points[0])

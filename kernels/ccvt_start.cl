@@ -1,4 +1,4 @@
-/* The starting partition of CCVT (clsamp/samplers/ccvt.py, greedy_partition): the power
+/* The starting partition of CCVT (clsamp/samplers/ccvt.py, start_partition): the power
  * diagram pass. NumPy twin: ccvt.power_pass_reference (the same integers).
  *
  * Every density point finds, among the sites in the 3 x 3 cells of a G x G grid around it

@@ -154,7 +154,7 @@ NO_SECOND = (1 << 63) - 1
 
 
 def _start_table(xy, ids, G, pad):
-    """Candidate table of one realization for :func:`greedy_partition`: row c lists the
+    """Candidate table of one realization for :func:`start_partition`: row c lists the
     sites (global ids, ascending, padded with ``pad``) of the 3 x 3 cells of a G x G grid
     around cell c, or all the sites when G == 1. Returns (table, lengths)."""
     if G == 1:
@@ -177,7 +177,7 @@ def _start_table(xy, ids, G, pad):
 
 
 def kd_partition(sites, points, p):
-    """The starting ownership where sites are too crowded for :func:`greedy_partition`
+    """The starting ownership where sites are too crowded for :func:`start_partition`
     (duplicates, tight clusters): exact capacities that follow the sites, from a
     principal-axis k-d tree. It cuts the unit square, not the torus, so its cells meet
     seams on x = 0 and y = 0; that is why it is not the start for spread-out sites.
@@ -440,7 +440,7 @@ def start_weights(sites, p, G, power):
     return np.rint(w).astype(np.int64)
 
 
-def greedy_partition(sites, points, p, backend="opencl"):
+def start_partition(sites, points, p, backend="opencl"):
     """The starting ownership of CCVT: every site owns exactly p density points, near it,
     with no seam and no preferred direction on the torus.
 
@@ -565,7 +565,7 @@ def _runs(sorted_ids):
 
 def _relay(sites, points, mat, room, left, start):
     """Places the carried points ``left`` (global ids) by passing excess along
-    neighbouring sites (:func:`greedy_partition`, step 3).
+    neighbouring sites (:func:`start_partition`, step 3).
 
     ``mat`` (S, p) holds the point ids of every site (-1: room), ``room`` its free slots;
     a carried point starts at ``start`` (its power owner; -1: none, then at the site with
@@ -1022,7 +1022,7 @@ def _run(sites, realizations, p, iterations, seed, backend, callback=None, densi
     for lo, hi in runtime.chunk_ranges(r, 32 * M + (64 + 8 * CCVT_META) * n):
         make = density_points if backend == "numpy" else density_points_device
         points = make(seed, realizations[lo:hi], M, density)
-        members = greedy_partition(sites[lo:hi], points, p, backend)
+        members = start_partition(sites[lo:hi], points, p, backend)
         run = ccvt_reference if backend == "numpy" else _ccvt_device
         results.append((points,) + run(sites[lo:hi], points, members, iterations, callback))
     length = max(len(e) for part in results for e in part[2])
@@ -1085,7 +1085,7 @@ class CCVTSampler(voronoi.VoronoiSampler):
     -----
     Balzer, Schloemer and Deussen minimize the energy E = mean over density points of
     the squared toroidal distance to the site owning them, under the constraint that
-    every site owns the same number of points. The start (:func:`greedy_partition`)
+    every site owns the same number of points. The start (:func:`start_partition`)
     gives every density point to its nearest random starting site in the power distance
     |x - s_i|^2 - w_i, the weights balancing the cells' areas (measured on a lattice
     proxy of the density: a smooth correction, solved by FFT, for the large-scale
