@@ -406,6 +406,7 @@ inline void ccvt_rebuild(const ccvt_t *c, const uint i)
         count[k] = bs[k];
         m[CCVT_RHO + k] = as_long(sqrt((double)top[k]) * (1.0 + 1e-12) + 1.0);
     }
+    bs[CCVT_BUCKETS] = at;
     for (int sector = 0; sector < CCVT_SECTORS; ++sector) {
         double most = -1.0;
         for (int band = 0; band < CCVT_BANDS; ++band) {
@@ -415,7 +416,6 @@ inline void ccvt_rebuild(const ccvt_t *c, const uint i)
         }
         m[CCVT_RHOSEC + sector] = as_long(most);
     }
-    bs[CCVT_BUCKETS] = at;
     for (uint t = 0; t < p; ++t) {
         const long ux = vor_delta(q[t].x, sx), uy = vor_delta(q[t].y, sy);
         const uint to = count[ccvt_bucket(c, ux, uy, ux * ux + uy * uy)]++;
