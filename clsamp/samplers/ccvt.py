@@ -339,8 +339,8 @@ class _PowerPass:
             width = max(1, START_CHUNK // table.shape[1])
             for lo in range(0, M, width):
                 cand = table[cell[lo:lo + width]]
-                dx = ((pts[lo:lo + width, 0:1] - sx[cand] + voronoi.HALF) & voronoi.MASK) - voronoi.HALF
-                dy = ((pts[lo:lo + width, 1:2] - sy[cand] + voronoi.HALF) & voronoi.MASK) - voronoi.HALF
+                dx = voronoi.delta(pts[lo:lo + width, 0:1], sx[cand])
+                dy = voronoi.delta(pts[lo:lo + width, 1:2], sy[cand])
                 c = dx * dx + dy * dy - w[cand]
                 c[cand == n] = NO_SECOND
                 rows = np.arange(len(cand))
@@ -548,13 +548,6 @@ def _members_matrix(owner, S, p):
     return mat, np.sort(placed[~keep])
 
 
-def _distance2(ax, ay, bx, by):
-    """:func:`voronoi.distance2` of int64 coordinates, in fewer passes (the same values)."""
-    dx = ((ax - bx + voronoi.HALF) & voronoi.MASK) - voronoi.HALF
-    dy = ((ay - by + voronoi.HALF) & voronoi.MASK) - voronoi.HALF
-    return dx * dx + dy * dy
-
-
 def _runs(sorted_ids):
     """Values, first positions and lengths of the runs of a sorted array (np.unique's)."""
     if not len(sorted_ids):
@@ -615,7 +608,7 @@ def _relay(sites, points, mat, room, left, start):
         width = max(1, int(count.max()))
         ids = np.argsort(~has, axis=1, kind="stable")[:, :width] + (np.arange(r) * n)[:, None]
         cand = ids[realization]
-        d2 = _distance2(x[:, None], y[:, None], sx[cand], sy[cand])
+        d2 = voronoi.distance2(x[:, None], y[:, None], sx[cand], sy[cand])
         d2[np.arange(width)[None, :] >= count[realization][:, None]] = np.iinfo(np.int64).max
         return cand[np.arange(len(x)), np.argmin(d2, axis=1)]   # ties: the smaller index
 
@@ -626,7 +619,7 @@ def _relay(sites, points, mat, room, left, start):
 
     def nearest_room_of_sites(a):
         nb = near[a]
-        d2 = _distance2(sx[nb], sy[nb], sx[a, None], sy[a, None])
+        d2 = voronoi.distance2(sx[nb], sy[nb], sx[a, None], sy[a, None])
         d2[room[nb] <= 0] = np.iinfo(np.int64).max
         pick = np.argmin(d2, axis=1)
         rows = np.arange(len(a))
@@ -669,9 +662,10 @@ def _relay(sites, points, mat, room, left, start):
                 target[a[stale]] = nearest_room_of_sites(a[stale])
             z = target[a]
             nb = near[a]
-            d2 = _distance2(sx[nb], sy[nb], sx[z, None], sy[z, None])
+            d2 = voronoi.distance2(sx[nb], sy[nb], sx[z, None], sy[z, None])
             b = nb[np.arange(len(a)), np.argmin(d2, axis=1)]
-            closer = _distance2(sx[b], sy[b], sx[z], sy[z]) < _distance2(sx[a], sy[a], sx[z], sy[z])
+            closer = (voronoi.distance2(sx[b], sy[b], sx[z], sy[z])
+                      < voronoi.distance2(sx[a], sy[a], sx[z], sy[z]))
             # no neighbour nearer to the target (a gap in the sites): the nearest site that
             # is nearer to it, the target itself at worst
             stuck = np.flatnonzero(~closer)
@@ -697,10 +691,10 @@ def _relay(sites, points, mat, room, left, start):
             safe = np.maximum(cand, 0)
             # gain |u - D|^2 - |u|^2 = |D|^2 - 2 u.D of handing y to b (u, D: the toroidal
             # offsets of y and s_b from s_a): in the order of -u.D, ties to the earlier slot
-            dx = (((sx[b] - sx[a] + voronoi.HALF) & voronoi.MASK) - voronoi.HALF)[:, None]
-            dy = (((sy[b] - sy[a] + voronoi.HALF) & voronoi.MASK) - voronoi.HALF)[:, None]
-            ux = ((px[safe] - sx[a, None] + voronoi.HALF) & voronoi.MASK) - voronoi.HALF
-            uy = ((py[safe] - sy[a, None] + voronoi.HALF) & voronoi.MASK) - voronoi.HALF
+            dx = voronoi.delta(sx[b], sx[a])[:, None]
+            dy = voronoi.delta(sy[b], sy[a])[:, None]
+            ux = voronoi.delta(px[safe], sx[a, None])
+            uy = voronoi.delta(py[safe], sy[a, None])
             gain = -(ux * dx + uy * dy)
             width = cand.shape[1]
             bits = width.bit_length()

@@ -38,9 +38,13 @@ def to_unit(coords):
 
 
 def delta(a, b):
-    """a - b on the integer torus, in [-2^(BITS-1), 2^(BITS-1)), as int64 (``vor_delta``)."""
-    d = (np.asarray(a, dtype=np.int64) - np.asarray(b, dtype=np.int64)) & MASK
-    return np.where(d >= HALF, d - SIZE, d)
+    """a - b on the integer torus, in [-2^(BITS-1), 2^(BITS-1)), as int64 (``vor_delta``):
+    ((a - b + HALF) mod SIZE) - HALF, in three passes over the arrays."""
+    d = np.asarray(a, dtype=np.int64) - np.asarray(b, dtype=np.int64)
+    d += HALF
+    d &= MASK
+    d -= HALF
+    return d
 
 
 def distance2(ax, ay, bx, by):
