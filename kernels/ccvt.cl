@@ -134,6 +134,36 @@ inline long ccvt_ceil_sqrt(const long d2)
     return (long)sqrt((double)d2) + 1;
 }
 
+/* The base of a site's record: where it was when its buckets were built. */
+inline uint2 ccvt_base(__global const long *m)
+{
+    const ulong b = (ulong)m[CCVT_BASE];
+    return (uint2)((uint)(b & 0xFFFFFFFFUL), (uint)(b >> 32));
+}
+
+/* Q: how far site i has moved since its buckets were built. */
+inline long2 ccvt_drift(const ccvt_t *c, const uint i)
+{
+    const uint2 b = ccvt_base(c->meta + (size_t)i * CCVT_META);
+    return (long2)(vor_delta(c->s[2 * i], b.x), vor_delta(c->s[2 * i + 1], b.y));
+}
+
+/* Site i to the rounded periodic mean of its members computed from scratch, unwrapped
+ * relative to it (never raises its energy: vor_round_mean), as the NumPy reference does. */
+inline void ccvt_recenter(const ccvt_t *c, const uint i)
+{
+    __global uint *s = c->s + 2 * i;
+    __global const uint2 *q = c->xy + (size_t)i * c->p;
+    const uint x0 = s[0], y0 = s[1];
+    long sx = 0, sy = 0;
+    for (uint t = 0; t < c->p; ++t) {
+        sx += vor_delta(q[t].x, x0);
+        sy += vor_delta(q[t].y, y0);
+    }
+    s[0] = (uint)((long)x0 + vor_round_mean(sx, (long)c->p)) & VOR_MASK;
+    s[1] = (uint)((long)y0 + vor_round_mean(sy, (long)c->p)) & VOR_MASK;
+}
+
 /* The view of a site from a direction D: for each sector k, the largest e.D over the unit
  * vectors e between rays k and k + 1 (|D| when D lies between them, else that of the
  * nearer ray), and Q.D with Q the site's drift from its base. A bucket's members w = u + Q
@@ -145,15 +175,20 @@ typedef struct {
     int wide;
 } ccvt_view;
 
+/* The parts of a view that belong to the site: Q.D and whether it is wide. */
+inline void ccvt_look_site(const ccvt_t *c, const uint i, const long dx, const long dy,
+                           ccvt_view *v)
+{
+    const long2 q = ccvt_drift(c, i);
+    v->qd = (double)(q.x * dx + q.y * dy);
+    v->wide = c->meta[(size_t)i * CCVT_META + CCVT_WIDE] != 0;
+}
+
 inline void ccvt_look(const ccvt_t *c, const uint i, const long dx, const long dy,
                       ccvt_view *v)
 {
-    __global const long *m = c->meta + (size_t)i * CCVT_META;
-    const ulong base = (ulong)m[CCVT_BASE];
-    v->qd = (double)(vor_delta(c->s[2 * i], (uint)(base & 0xFFFFFFFFUL)) * dx
-                     + vor_delta(c->s[2 * i + 1], (uint)(base >> 32)) * dy);
+    ccvt_look_site(c, i, dx, dy, v);
     v->dlen = sqrt((double)(dx * dx + dy * dy));
-    v->wide = m[CCVT_WIDE] != 0;
     double dot = 0.0;
     int left = 0;
     for (int k = 0; k <= CCVT_SECTORS; ++k) {
@@ -173,12 +208,8 @@ inline void ccvt_look(const ccvt_t *c, const uint i, const long dx, const long d
 inline void ccvt_look_back(const ccvt_t *c, const uint j, const long ex, const long ey,
                            const ccvt_view *front, ccvt_view *v)
 {
-    __global const long *m = c->meta + (size_t)j * CCVT_META;
-    const ulong base = (ulong)m[CCVT_BASE];
-    v->qd = (double)(vor_delta(c->s[2 * j], (uint)(base & 0xFFFFFFFFUL)) * ex
-                     + vor_delta(c->s[2 * j + 1], (uint)(base >> 32)) * ey);
+    ccvt_look_site(c, j, ex, ey, v);
     v->dlen = front->dlen;
-    v->wide = m[CCVT_WIDE] != 0;
     for (int k = 0; k < CCVT_SECTORS; ++k)
         v->cone[k] = front->cone[(k + CCVT_SECTORS / 2) % CCVT_SECTORS];
 }
@@ -258,11 +289,10 @@ inline uint ccvt_top(const ccvt_t *c, const uint i, const long dx, const long dy
     __global const uint2 *q = c->xy + (size_t)i * c->p;
     __global long *m = c->meta + (size_t)i * CCVT_META;
     const uint sx = c->s[2 * i], sy = c->s[2 * i + 1];
-    const ulong base = (ulong)m[CCVT_BASE];
     /* w = u + Q: a bucket that is read anyway gets its exact largest |w| back (arrivals
      * only ever raise it, departures leave it high) */
-    const long qx = vor_delta(sx, (uint)(base & 0xFFFFFFFFUL));
-    const long qy = vor_delta(sy, (uint)(base >> 32));
+    const long2 drift = ccvt_drift(c, i);
+    const long qx = drift.x, qy = drift.y;
     uint count = 0;
     for (int sector = 0; sector < CCVT_SECTORS; ++sector) {
         const double top = as_double(m[CCVT_RHOSEC + sector]);
@@ -345,9 +375,8 @@ inline void ccvt_rehome(const ccvt_t *c, const uint i, uint t, int from, uint *p
     __global uint *bs = c->bstart + (size_t)i * (CCVT_BUCKETS + 1);
     __global uint *ids = c->ids + (size_t)i * c->p;
     __global uint2 *q = c->xy + (size_t)i * c->p;
-    const ulong base = (ulong)m[CCVT_BASE];
-    const long wx = vor_delta(q[t].x, (uint)(base & 0xFFFFFFFFUL));
-    const long wy = vor_delta(q[t].y, (uint)(base >> 32));
+    const uint2 base = ccvt_base(m);
+    const long wx = vor_delta(q[t].x, base.x), wy = vor_delta(q[t].y, base.y);
     const long w2 = wx * wx + wy * wy;
     const int to = ccvt_bucket(c, wx, wy, w2);
     const double w = sqrt((double)w2) * (1.0 + 1e-12) + 1.0;
@@ -431,13 +460,12 @@ inline void ccvt_rebuild(const ccvt_t *c, const uint i)
     m[CCVT_ENERGY] = e;
     m[CCVT_REACH] = ccvt_ceil_sqrt(far);
     m[CCVT_FAR] = as_long(sqrt((double)far) * (1.0 + 1e-12) + 1.0);
-    m[CCVT_BASE] = (long)((ulong)sx | ((ulong)sy << 32));
+    m[CCVT_BASE] = (long)((ulong)sx | ((ulong)sy << 32));   /* read by ccvt_base */
     m[CCVT_WIDE] = m[CCVT_REACH] >= CCVT_LIMIT;
 }
 
-/* Site i to the rounded periodic mean of its members, unwrapped relative to it (never
- * raises its energy: vor_round_mean), as the NumPy reference computes it. From the kept
- * sums (moving by q changes them by -p q and -2 q.sum + p |q|^2, exactly, since no offset
+/* Site i to the rounded periodic mean of its members (the value ccvt_recenter gives),
+ * from the kept sums (moving by q changes them by -p q and -2 q.sum + p |q|^2, exactly, since no offset
  * wraps while the reach stays below CCVT_LIMIT); a wide site from scratch. */
 inline void ccvt_move(const ccvt_t *c, const uint i)
 {
@@ -446,19 +474,10 @@ inline void ccvt_move(const ccvt_t *c, const uint i)
     const long p = c->p;
     if (m[CCVT_WIDE]) {
         __global const uint2 *q = c->xy + (size_t)i * c->p;
-        const uint x0 = s[0], y0 = s[1];
-        long sx = 0, sy = 0;
-        for (uint t = 0; t < c->p; ++t) {
-            sx += vor_delta(q[t].x, x0);
-            sy += vor_delta(q[t].y, y0);
-        }
-        const uint x = (uint)((long)x0 + vor_round_mean(sx, p)) & VOR_MASK;
-        const uint y = (uint)((long)y0 + vor_round_mean(sy, p)) & VOR_MASK;
+        ccvt_recenter(c, i);
         long far = 0;
         for (uint t = 0; t < c->p; ++t)
-            far = max(far, vor_d2(q[t].x, q[t].y, x, y));
-        s[0] = x;
-        s[1] = y;
+            far = max(far, vor_d2(q[t].x, q[t].y, s[0], s[1]));
         m[CCVT_REACH] = ccvt_ceil_sqrt(far);   /* the sums wait for the rebuild */
         return;
     }
@@ -480,11 +499,9 @@ inline double ccvt_reach(const ccvt_t *c, const uint i)
     __global const long *m = c->meta + (size_t)i * CCVT_META;
     if (m[CCVT_WIDE])
         return (double)m[CCVT_REACH];
-    const ulong base = (ulong)m[CCVT_BASE];
-    const long qx = vor_delta(c->s[2 * i], (uint)(base & 0xFFFFFFFFUL));
-    const long qy = vor_delta(c->s[2 * i + 1], (uint)(base >> 32));
+    const long2 q = ccvt_drift(c, i);
     return fmin((double)m[CCVT_REACH],
-                as_double(m[CCVT_FAR]) + (double)((long)abs(qx) + (long)abs(qy)));
+                as_double(m[CCVT_FAR]) + (double)((long)abs(q.x) + (long)abs(q.y)));
 }
 
 /* Balzer's pairwise swap for sites i and j: their best candidates toward each other,
@@ -645,19 +662,11 @@ inline long2 ccvt_centroid_site(const ccvt_t *c, const uint i, __global uint *di
     const uint x0 = s[0], y0 = s[1];
     int rebuild = all || m[CCVT_WIDE];
     if (!rebuild) {
-        const ulong base = (ulong)m[CCVT_BASE];
-        rebuild = (long)abs(vor_delta(x0, (uint)(base & 0xFFFFFFFFUL)))
-                  + (long)abs(vor_delta(y0, (uint)(base >> 32))) >= c->drift;
+        const long2 q = ccvt_drift(c, i);
+        rebuild = (long)abs(q.x) + (long)abs(q.y) >= c->drift;
     }
     if (rebuild) {
-        __global const uint2 *q = c->xy + (size_t)i * c->p;
-        long sx = 0, sy = 0;
-        for (uint t = 0; t < c->p; ++t) {
-            sx += vor_delta(q[t].x, x0);
-            sy += vor_delta(q[t].y, y0);
-        }
-        s[0] = (uint)((long)x0 + vor_round_mean(sx, (long)c->p)) & VOR_MASK;
-        s[1] = (uint)((long)y0 + vor_round_mean(sy, (long)c->p)) & VOR_MASK;
+        ccvt_recenter(c, i);
         ccvt_rebuild(c, i);
     }
     const long e = m[CCVT_ENERGY];
