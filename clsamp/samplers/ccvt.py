@@ -726,9 +726,9 @@ def _relay(sites, points, mat, room, left, start):
     mat[changed] = np.sort(mat[changed], axis=1)
 
 
-def _centroids_reference(sites, points, members, site_energy, which):
-    """One realization's centroid step for the sites ``which`` (``ccvt_centroids``): moves
-    them, refreshes their entries of site_energy, returns the total energy (int)."""
+def _recenter_reference(sites, points, members, which):
+    """The sites ``which`` of one realization to the rounded periodic means of their
+    members, unwrapped relative to each site (``ccvt_recenter``), in place."""
     px = points[members[which], 0].astype(np.int64)
     py = points[members[which], 1].astype(np.int64)
     p = members.shape[1]
@@ -736,7 +736,16 @@ def _centroids_reference(sites, points, members, site_energy, which):
     x = (s[:, 0] + voronoi.round_mean(voronoi.delta(px, s[:, 0:1]).sum(1), p)) & voronoi.MASK
     y = (s[:, 1] + voronoi.round_mean(voronoi.delta(py, s[:, 1:2]).sum(1), p)) & voronoi.MASK
     sites[which] = np.stack([x, y], axis=1)
-    site_energy[which] = voronoi.distance2(px, py, x[:, None], y[:, None]).sum(axis=1)
+
+
+def _centroids_reference(sites, points, members, site_energy, which):
+    """One realization's centroid step for the sites ``which`` (``ccvt_centroids``): moves
+    them, refreshes their entries of site_energy, returns the total energy (int)."""
+    _recenter_reference(sites, points, members, which)
+    px = points[members[which], 0].astype(np.int64)
+    py = points[members[which], 1].astype(np.int64)
+    s = sites[which]
+    site_energy[which] = voronoi.distance2(px, py, s[:, 0:1], s[:, 1:2]).sum(axis=1)
     return voronoi.split_total(site_energy)
 
 
@@ -775,7 +784,6 @@ def _sweep_reference(sites, points, members, G, touched):
         return order[start[c]:start[c + 1]]
 
     near2 = ccvt_near2(len(sites))
-    p = members.shape[1]
 
     def pair(i, j):
         if voronoi.distance2(sites[i, 0], sites[i, 1], sites[j, 0], sites[j, 1]) >= near2:
@@ -783,10 +791,7 @@ def _sweep_reference(sites, points, members, G, touched):
         made = _pair_reference(members[i], members[j], points, sites[i], sites[j])
         if made:
             touched[i] = touched[j] = True
-            for k in (i, j):
-                for axis in (0, 1):
-                    u = voronoi.delta(points[members[k], axis], sites[k, axis]).sum()
-                    sites[k, axis] = (sites[k, axis] + voronoi.round_mean(u, p)) & voronoi.MASK
+            _recenter_reference(sites, points, members, [i, j])
         return made
 
     total = 0
