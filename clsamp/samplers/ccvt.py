@@ -17,8 +17,9 @@ from . import voronoi
 from .base import register
 
 CCVT_TOP = 16          # candidates per site and round (CCVT_TOP in kernels/ccvt.cl)
+CCVT_SECTORS = 16      # angular sectors of a site's buckets (CCVT_SECTORS in kernels/ccvt.cl)
 CCVT_BUCKETS = 64      # buckets per site: 16 sectors x 4 bands (CCVT_BUCKETS in kernels/ccvt.cl)
-CCVT_META = 7 + CCVT_BUCKETS + 16   # int64 record per site (CCVT_META in kernels/ccvt.cl)
+CCVT_META = 7 + CCVT_BUCKETS + CCVT_SECTORS   # int64 record per site (CCVT_META in ccvt.cl)
 MAX_POINTS_PER_SITE = voronoi.MAX_CELL_POINTS
 # The swap phases of one iteration: (ox, oy, parity); (0, 0) pairs the sites inside a cell.
 PHASES = ((0, 0, 0),) + tuple((ox, oy, parity) for ox, oy in ((1, 0), (0, 1), (1, 1), (1, -1))
