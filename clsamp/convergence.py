@@ -513,6 +513,15 @@ def _panels(results):
     return fig, list(zip(axes[0], groups, groups.values(), strict=True))
 
 
+def _label(ax, xlabel, title):
+    """The labels, grid and legend every panel has (MSE up the side)."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("MSE")
+    ax.set_title(title)
+    ax.grid(True, which="both", alpha=0.2)
+    ax.legend(fontsize=7)
+
+
 def convergence_plot(results, path):
     """MSE against N (log-log), one panel per integrand, with the theory slopes drawn.
 
@@ -538,11 +547,7 @@ def convergence_plot(results, path):
                           color=line[0].get_color(), linewidth=0.9, alpha=0.7)
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel("N (samples)")
-        ax.set_ylabel("MSE")
-        ax.set_title(f"{name}: MSE against N (dashed: theory)")
-        ax.grid(True, which="both", alpha=0.2)
-        ax.legend(fontsize=7)
+        _label(ax, "N (samples)", f"{name}: MSE against N (dashed: theory)")
     fig.tight_layout()
     return io.save_figure(path, fig)
 
@@ -560,11 +565,7 @@ def pareto_plot(results, path):
         if front:
             ax.step([p["seconds"] for p in front], [p["mse"] for p in front], "k-", where="post",
                     linewidth=1.5, alpha=0.6, label="front")
-        ax.set_xlabel("seconds per estimate (generation included)")
-        ax.set_ylabel("MSE")
-        ax.set_title(f"{name}: accuracy against time")
-        ax.grid(True, which="both", alpha=0.2)
-        ax.legend(fontsize=7)
+        _label(ax, "seconds per estimate (generation included)", f"{name}: accuracy against time")
     fig.tight_layout()
     return io.save_figure(path, fig)
 
