@@ -20,6 +20,13 @@
 
 #define CCVT_TOP 16   /* candidates per site and round (clsamp.samplers.ccvt.CCVT_TOP) */
 
+/* max, min and |x| as plain comparisons: PoCL calls its builtins for them out of line, a
+ * call per use in the loops below (no argument here is ever NaN) */
+inline double ccvt_fmax(const double a, const double b) { return a > b ? a : b; }
+inline double ccvt_fmin(const double a, const double b) { return a < b ? a : b; }
+inline double ccvt_fabs(const double a) { return a < 0.0 ? -a : a; }
+inline long ccvt_max(const long a, const long b) { return a > b ? a : b; }
+
 /* Buckets. The members of a site are kept grouped in CCVT_BUCKETS buckets: 16 angular
  * sectors times 4 radial bands of their offset w from the site's `base` (its position
  * when the buckets were last built), each with the largest |w| in it; a point that
@@ -102,7 +109,7 @@ inline ccvt_t ccvt_state(const uint n, const uint p, __global uint *ids, __globa
     c.drift = (long)(0.1 * sqrt(unit));
     for (int b = 0; b < CCVT_BANDS - 1; ++b) {
         c.edge[b] = (long)(f[b] * f[b] * unit);
-        c.lo[b + 1] = max(0.0, sqrt((double)c.edge[b]) * (1.0 - 1e-12) - 1.0);
+        c.lo[b + 1] = ccvt_fmax(0.0, sqrt((double)c.edge[b]) * (1.0 - 1e-12) - 1.0);
     }
     return c;
 }
@@ -197,7 +204,7 @@ inline void ccvt_look(const ccvt_t *c, const uint i, const long dx, const long d
         const double d = (double)(ax * dx + ay * dy) * CCVT_RAY_INV[r];
         const int l = ax * dy - ay * dx >= 0;
         if (k > 0)
-            v->cone[k - 1] = left && !l ? v->dlen : fmax(dot, d);
+            v->cone[k - 1] = left && !l ? v->dlen : ccvt_fmax(dot, d);
         dot = d;
         left = l;
     }
@@ -220,14 +227,14 @@ inline double ccvt_bound(const ccvt_t *c, const ccvt_view *v, const int k, const
 {
     const double e = v->cone[k / CCVT_BANDS];
     const double b = (e >= 0.0 ? rho : c->lo[k % CCVT_BANDS]) * e - v->qd;
-    return b + 1e-9 * (fabs(b) + fabs(v->qd) + rho * v->dlen) + 64.0;
+    return b + 1e-9 * (ccvt_fabs(b) + ccvt_fabs(v->qd) + rho * v->dlen) + 64.0;
 }
 
 /* An upper bound on u.D over the members of a sector whose largest |w| is rho. */
 inline double ccvt_sector_bound(const ccvt_view *v, const int sector, const double rho)
 {
-    const double b = rho * fmax(v->cone[sector], 0.0) - v->qd;
-    return b + 1e-9 * (fabs(b) + fabs(v->qd) + rho * v->dlen) + 64.0;
+    const double b = rho * ccvt_fmax(v->cone[sector], 0.0) - v->qd;
+    return b + 1e-9 * (ccvt_fabs(b) + ccvt_fabs(v->qd) + rho * v->dlen) + 64.0;
 }
 
 /* An upper bound on max u.D over all members of site i: per sector, the largest |w| of
@@ -241,33 +248,33 @@ inline double ccvt_site_bound(const ccvt_t *c, const uint i, const ccvt_view *v)
     for (int k = 0; k < CCVT_SECTORS; ++k) {
         const double rho = as_double(m[CCVT_RHOSEC + k]);
         if (rho >= 0.0)
-            b = fmax(b, ccvt_sector_bound(v, k, rho));
+            b = ccvt_fmax(b, ccvt_sector_bound(v, k, rho));
     }
     return b;
 }
 
-/* Order of the candidates: larger gain first, then the smaller point index. */
-inline int ccvt_before(const long g, const uint idx, const long g2, const uint idx2)
+/* Order of the candidates, members of one site in slots k and k2: larger gain first, then
+ * the smaller point index (read only on a tie). */
+inline int ccvt_before(const long g, const uint k, const long g2, const uint k2,
+                       __global const uint *ids)
 {
-    return g > g2 || (g == g2 && idx < idx2);
+    return g > g2 || (g == g2 && ids[k] < ids[k2]);
 }
 
-inline void ccvt_insert(const long g, const uint k, const uint j, const uint bucket, uint *c,
-                        long *gain, uint *slot, uint *index, uint *bk)
+inline void ccvt_insert(const long g, const uint k, const uint bucket, uint *c, long *gain,
+                        uint *slot, uint *bk, __global const uint *ids)
 {
-    if (*c == CCVT_TOP && !ccvt_before(g, j, gain[CCVT_TOP - 1], index[CCVT_TOP - 1]))
+    if (*c == CCVT_TOP && !ccvt_before(g, k, gain[CCVT_TOP - 1], slot[CCVT_TOP - 1], ids))
         return;
     uint q = *c < CCVT_TOP ? (*c)++ : CCVT_TOP - 1;
-    while (q > 0 && ccvt_before(g, j, gain[q - 1], index[q - 1])) {
+    while (q > 0 && ccvt_before(g, k, gain[q - 1], slot[q - 1], ids)) {
         gain[q] = gain[q - 1];
         slot[q] = slot[q - 1];
-        index[q] = index[q - 1];
         bk[q] = bk[q - 1];
         --q;
     }
     gain[q] = g;
     slot[q] = k;
-    index[q] = j;
     bk[q] = bucket;
 }
 
@@ -282,7 +289,7 @@ inline void ccvt_insert(const long g, const uint k, const uint j, const uint buc
  * much as they say. */
 inline uint ccvt_top(const ccvt_t *c, const uint i, const long dx, const long dy, const long dd,
                      const ccvt_view *v, const double thr, const long floor, long *gain,
-                     uint *slot, uint *index, uint *bk)
+                     uint *slot, uint *bk)
 {
     __global const uint *bs = c->bstart + (size_t)i * (CCVT_BUCKETS + 1);
     __global const uint *ids = c->ids + (size_t)i * c->p;
@@ -294,21 +301,36 @@ inline uint ccvt_top(const ccvt_t *c, const uint i, const long dx, const long dy
     const long2 drift = ccvt_drift(c, i);
     const long qx = drift.x, qy = drift.y;
     uint count = 0;
-    for (int sector = 0; sector < CCVT_SECTORS; ++sector) {
+    /* once CCVT_TOP candidates are in, a bucket whose bound is below half (dd + the last
+     * one's gain) can only hold points that gain less: it is not read either */
+    double cut = -INFINITY;
+    long low = floor;
+    /* the sectors nearest the direction of D first (the best candidates lie there, so
+     * the list fills with them early and the rest are mostly skipped or rejected) */
+    const int facing = ccvt_sector(dx, dy);
+    for (int turn = 0; turn < CCVT_SECTORS; ++turn) {
+        const int step = (turn + 1) / 2;   /* facing, facing + 1, facing - 1, facing + 2, ... */
+        const int sector = (facing + (turn & 1 ? step : CCVT_SECTORS - step)) % CCVT_SECTORS;
         const double top = as_double(m[CCVT_RHOSEC + sector]);
         if (top < 0.0)
             continue;   /* no members */
-        if (!v->wide && !(ccvt_sector_bound(v, sector, top) > thr))
-            continue;
+        if (!v->wide) {
+            const double b = ccvt_sector_bound(v, sector, top);
+            if (!(b > thr) || b < cut)
+                continue;
+        }
         double most = -1.0;
         for (int band = CCVT_BANDS - 1; band >= 0; --band) {
             const int k = sector * CCVT_BANDS + band;
             if (bs[k] == bs[k + 1])
                 continue;
             const double rho = as_double(m[CCVT_RHO + k]);
-            if (!v->wide && !(ccvt_bound(c, v, k, rho) > thr)) {
-                most = fmax(most, rho);
-                continue;
+            if (!v->wide) {
+                const double b = ccvt_bound(c, v, k, rho);
+                if (!(b > thr) || b < cut) {
+                    most = ccvt_fmax(most, rho);
+                    continue;
+                }
             }
             long w2 = 0;
             const uint first = bs[k], end = bs[k + 1];
@@ -316,14 +338,20 @@ inline uint ccvt_top(const ccvt_t *c, const uint i, const long dx, const long dy
                 const uint2 x = q[t];
                 const long ux = vor_delta(x.x, sx), uy = vor_delta(x.y, sy);
                 const long g = 2 * (ux * dx + uy * dy) - dd;
-                w2 = max(w2, (ux + qx) * (ux + qx) + (uy + qy) * (uy + qy));
-                if (g > floor)
-                    ccvt_insert(g, t, ids[t], (uint)k, &count, gain, slot, index, bk);
+                const long r2 = (ux + qx) * (ux + qx) + (uy + qy) * (uy + qy);
+                w2 = ccvt_max(w2, r2);
+                if (g > low) {
+                    ccvt_insert(g, t, (uint)k, &count, gain, slot, bk, ids);
+                    if (count == CCVT_TOP)   /* a point below the last one cannot enter */
+                        low = ccvt_max(low, gain[CCVT_TOP - 1] - 1);
+                }
             }
+            if (count == CCVT_TOP)
+                cut = 0.5 * (double)(dd + gain[CCVT_TOP - 1]);
             const double exact = sqrt((double)w2) * (1.0 + 1e-12) + 1.0;
             if (!v->wide)
                 m[CCVT_RHO + k] = as_long(exact);
-            most = fmax(most, exact);
+            most = ccvt_fmax(most, exact);
         }
         if (!v->wide)
             m[CCVT_RHOSEC + sector] = as_long(most);
@@ -343,7 +371,7 @@ inline void ccvt_enter(const ccvt_t *c, const uint i, const uint2 in, const uint
     m[CCVT_SUMX] += ux - vx;
     m[CCVT_SUMY] += uy - vy;
     m[CCVT_ENERGY] += u2 - (vx * vx + vy * vy);
-    m[CCVT_REACH] = max(m[CCVT_REACH], ccvt_ceil_sqrt(u2));
+    m[CCVT_REACH] = ccvt_max(m[CCVT_REACH], ccvt_ceil_sqrt(u2));
     if (m[CCVT_REACH] >= CCVT_LIMIT)
         m[CCVT_WIDE] = 1;
 }
@@ -380,10 +408,10 @@ inline void ccvt_rehome(const ccvt_t *c, const uint i, uint t, int from, uint *p
     const long w2 = wx * wx + wy * wy;
     const int to = ccvt_bucket(c, wx, wy, w2);
     const double w = sqrt((double)w2) * (1.0 + 1e-12) + 1.0;
-    m[CCVT_RHO + to] = as_long(fmax(as_double(m[CCVT_RHO + to]), w));
-    m[CCVT_RHOSEC + to / CCVT_BANDS] = as_long(fmax(as_double(m[CCVT_RHOSEC + to / CCVT_BANDS]),
-                                                    w));
-    m[CCVT_FAR] = as_long(fmax(as_double(m[CCVT_FAR]), w));
+    const int top = CCVT_RHOSEC + to / CCVT_BANDS;   /* its sector's largest |w| */
+    m[CCVT_RHO + to] = as_long(ccvt_fmax(as_double(m[CCVT_RHO + to]), w));
+    m[top] = as_long(ccvt_fmax(as_double(m[top]), w));
+    m[CCVT_FAR] = as_long(ccvt_fmax(as_double(m[CCVT_FAR]), w));
     for (; from < to; ++from) {
         const uint last = bs[from + 1] - 1;
         ccvt_slot_swap(ids, q, t, last, pend, np);
@@ -423,10 +451,10 @@ inline void ccvt_rebuild(const ccvt_t *c, const uint i)
         sumx += ux;
         sumy += uy;
         e += d2;
-        far = max(far, d2);
+        far = ccvt_max(far, d2);
         const int k = ccvt_bucket(c, ux, uy, d2);
         count[k] += 1;
-        top[k] = max(top[k], d2);
+        top[k] = ccvt_max(top[k], d2);
     }
     uint at = 0;
     for (int k = 0; k < CCVT_BUCKETS; ++k) {
@@ -441,7 +469,7 @@ inline void ccvt_rebuild(const ccvt_t *c, const uint i)
         for (int band = 0; band < CCVT_BANDS; ++band) {
             const int k = sector * CCVT_BANDS + band;
             if (bs[k] != bs[k + 1])
-                most = fmax(most, as_double(m[CCVT_RHO + k]));
+                most = ccvt_fmax(most, as_double(m[CCVT_RHO + k]));
         }
         m[CCVT_RHOSEC + sector] = as_long(most);
     }
@@ -477,7 +505,7 @@ inline void ccvt_move(const ccvt_t *c, const uint i)
         ccvt_recenter(c, i);
         long far = 0;
         for (uint t = 0; t < c->p; ++t)
-            far = max(far, vor_d2(q[t].x, q[t].y, s[0], s[1]));
+            far = ccvt_max(far, vor_d2(q[t].x, q[t].y, s[0], s[1]));
         m[CCVT_REACH] = ccvt_ceil_sqrt(far);   /* the sums wait for the rebuild */
         return;
     }
@@ -500,8 +528,8 @@ inline double ccvt_reach(const ccvt_t *c, const uint i)
     if (m[CCVT_WIDE])
         return (double)m[CCVT_REACH];
     const long2 q = ccvt_drift(c, i);
-    return fmin((double)m[CCVT_REACH],
-                as_double(m[CCVT_FAR]) + (double)((long)abs(q.x) + (long)abs(q.y)));
+    return ccvt_fmin((double)m[CCVT_REACH],
+                     as_double(m[CCVT_FAR]) + (double)((long)abs(q.x) + (long)abs(q.y)));
 }
 
 /* Balzer's pairwise swap for sites i and j: their best candidates toward each other,
@@ -541,7 +569,7 @@ inline uint ccvt_pair(const ccvt_t *c, const uint i, const uint j, const long ne
     __global uint2 *pj = c->xy + (size_t)j * c->p;
     ccvt_view vi, vj;
     long gi[CCVT_TOP], gj[CCVT_TOP];
-    uint si[CCVT_TOP], sj[CCVT_TOP], xi[CCVT_TOP], xj[CCVT_TOP], ki[CCVT_TOP], kj[CCVT_TOP];
+    uint si[CCVT_TOP], sj[CCVT_TOP], ki[CCVT_TOP], kj[CCVT_TOP];
     uint total = 0;
     for (;;) {
         ccvt_look(c, i, dijx, dijy, &vi);
@@ -557,11 +585,11 @@ inline uint ccvt_pair(const ccvt_t *c, const uint i, const uint j, const long ne
         const double low = (double)dd - 2.0 * hj;
         const long floor_i = low > -4e18 ? (long)floor(low) - 1 : LONG_MIN;
         const uint ci = ccvt_top(c, i, dijx, dijy, dd, &vi, 0.5 * (double)(dd + floor_i),
-                                 floor_i, gi, si, xi, ki);
+                                 floor_i, gi, si, ki);
         if (ci == 0)
             break;
         const uint cj = ccvt_top(c, j, djix, djiy, dd, &vj, 0.5 * (double)(dd - gi[0]),
-                                 -gi[0], gj, sj, xj, kj);
+                                 -gi[0], gj, sj, kj);
         const uint k = min(ci, cj);
         uint done = 0;
         while (done < k && gi[done] + gj[done] > 0) {
