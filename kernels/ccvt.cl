@@ -706,13 +706,15 @@ inline long2 ccvt_centroid_site(const ccvt_t *c, const uint i, __global uint *di
 }
 
 /* Grid (n, r): the end of an iteration for every site of the active realizations;
- * energy[r] holds their total energy as (low, high) sums, updated by the differences. */
+ * status[r] = (low, high, swaps): their total energy as (low, high) sums, updated by the
+ * differences, and the exchanges of the iteration, moved there from swaps[r] (which starts
+ * the next iteration at 0), so that one read tells the host both. */
 __kernel void ccvt_centroids(__global uint *ids, __global uint2 *xy, __global uint *tids,
                              __global uint2 *txy, __global uint *sites, const uint n,
                              const uint p, __global long *meta, __global uint *bstart,
                              __global const uint *active, __global uint *dirty,
                              __global uint *touched, __global long *site_energy,
-                             __global long *energy, const uint all)
+                             __global long *status, __global uint *swaps, const uint all)
 {
     const uint i = get_global_id(0), r = get_global_id(1);
     if (i >= n || !active[r])
@@ -723,27 +725,37 @@ __kernel void ccvt_centroids(__global uint *ids, __global uint2 *xy, __global ui
                                 bstart + rn * (CCVT_BUCKETS + 1), dirty + rn, touched + rn);
     const long2 d = ccvt_centroid_site(&c, i, dirty + rn, site_energy + rn, all);
     if (d.x)
-        atom_add(energy + 2 * r, d.x);
+        atom_add(status + 3 * r, d.x);
     if (d.y)
-        atom_add(energy + 2 * r + 1, d.y);
+        atom_add(status + 3 * r + 1, d.y);
+    if (i == 0) {
+        status[3 * r + 2] = swaps[r];
+        swaps[r] = 0;
+    }
 }
 
 /* The whole optimization of a realization in one work-group (group r = realization r):
  * the same steps as the launches above, in the same order, with barriers between them, so
  * the results are identical; many realizations then cost one launch instead of a dozen
- * per iteration. history[r][t] = the total energy after iteration t as (low, high);
- * state[r] = (iterations run, converged). */
+ * per iteration. With `resume` it goes on from where those launches left the active
+ * realizations (their status holds the energy; the others are left alone), without the
+ * first move of the sites to their centroids: the tail of a run, where the few exchanges
+ * left cost less than the launches. history[r][t] = the total energy after iteration t
+ * as (low, high); state[r] = (iterations run, converged). */
 __kernel void ccvt_solve(__global uint *ids, __global uint2 *xy, __global uint *tids,
                          __global uint2 *txy, const uint n, const uint p,
                          __global uint *sites, __global long *meta, __global uint *bstart,
                          __global uint *cell_start, __global uint *cell_sites, const uint G,
                          __global uint *dirty, __global uint *touched,
                          __global long *site_energy, const long near2, const uint iterations,
-                         __global long *history, __global uint *state)
+                         const uint resume, __global const uint *active,
+                         __global long *status, __global long *history, __global uint *state)
 {
     const uint r = get_group_id(0), lid = get_local_id(0), L = get_local_size(0);
     __local long total[2];
     __local uint swaps;
+    if (!active[r])
+        return;
     const size_t rn = (size_t)r * n, rnp = rn * p;
     __global uint *start = cell_start + (size_t)r * (G * G + 1);
     __global uint *list = cell_sites + rn;
@@ -753,14 +765,18 @@ __kernel void ccvt_solve(__global uint *ids, __global uint2 *xy, __global uint *
     const ccvt_t c = ccvt_state(n, p, ids + rnp, xy + rnp, tids + rnp, txy + rnp, s,
                                 meta + rn * CCVT_META, bstart + rn * (CCVT_BUCKETS + 1), dd,
                                 touched + rn);
-    if (lid == 0)
-        total[0] = total[1] = 0;
+    if (lid == 0) {
+        total[0] = resume ? status[3 * r] : 0;
+        total[1] = resume ? status[3 * r + 1] : 0;
+    }
     barrier(CLK_LOCAL_MEM_FENCE);
-    for (uint i = lid; i < n; i += L) {
-        const long2 d = ccvt_centroid_site(&c, i, dd, se, 1);
-        atom_add(total, d.x);
-        atom_add(total + 1, d.y);
-        dd[i] = 1;   /* every pair meets in the first iteration */
+    if (!resume) {
+        for (uint i = lid; i < n; i += L) {
+            const long2 d = ccvt_centroid_site(&c, i, dd, se, 1);
+            atom_add(total, d.x);
+            atom_add(total + 1, d.y);
+            dd[i] = 1;   /* every pair meets in the first iteration */
+        }
     }
     uint done = 0, t = 0;
     for (; t < iterations && !done; ++t) {
@@ -799,8 +815,11 @@ __kernel void ccvt_solve(__global uint *ids, __global uint2 *xy, __global uint *
     if (lid == 0) {
         state[2 * r] = t;
         state[2 * r + 1] = done;
+        status[3 * r] = total[0];
+        status[3 * r + 1] = total[1];
     }
 }
+
 
 /* Grid (M, r): the density, point j of realization realization0 + r from words 4, 5 (Philox
  * block 1) of (key, stream, realization, j), top VOR_BITS bits each; the NumPy twin is

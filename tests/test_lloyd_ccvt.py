@@ -302,6 +302,25 @@ def test_ccvt_one_workgroup_per_realization_equals_launch_per_step():
     assert c[1][0] == b[1][0][:3]
 
 
+def test_ccvt_tail_in_one_launch_equals_launch_per_step():
+    # the stepwise launches hand the realizations still running to one ccvt_solve launch
+    # once an iteration makes few exchanges: from the first iteration on (tail=n), at
+    # the default share, or never (tail=-1), the same bits; also when the cap stops it
+    sites, points, members = _start(7, 3, 45, 20)
+    b = ccvt._ccvt_device(sites, points, members, 50, fused=False, tail=-1)
+    assert b[3].all()
+    for tail in (45, None, 2):
+        a = ccvt._ccvt_device(sites, points, members, 50, fused=False, tail=tail)
+        assert np.array_equal(a[0], b[0])
+        assert a[1] == b[1]
+        assert np.array_equal(a[2], b[2])
+        assert np.array_equal(a[3], b[3])
+    n = min(len(e) for e in b[1]) - 1
+    c = ccvt._ccvt_device(sites, points, members, n, fused=False, tail=45)
+    assert [len(e) for e in c[1]] == [n] * 3 and not c[3].any()
+    assert [e[:n] for e in b[1]] == c[1]
+
+
 def test_ccvt_capacities_exact_after_every_iteration_and_energy_never_rises():
     sites, points, members = _start(8, 2, 40, 16)
     seen = []

@@ -22,6 +22,7 @@ CCVT_BUCKETS = 64      # buckets per site: 16 sectors x 4 bands (CCVT_BUCKETS in
 CCVT_META = 7 + CCVT_BUCKETS + CCVT_SECTORS   # int64 record per site (CCVT_META in ccvt.cl)
 MAX_POINTS_PER_SITE = voronoi.MAX_CELL_POINTS
 # The swap phases of one iteration: (ox, oy, parity); (0, 0) pairs the sites inside a cell.
+TAIL_SHARE = 8    # the last iterations, from n / TAIL_SHARE exchanges or fewer, in one launch
 PHASES = ((0, 0, 0),) + tuple((ox, oy, parity) for ox, oy in ((1, 0), (0, 1), (1, 1), (1, -1))
                               for parity in (0, 1))
 
@@ -861,14 +862,18 @@ def _divisor(x, most):
     return max(d for d in range(1, most + 1) if x % d == 0)
 
 
-def _ccvt_device(sites, points, members, iterations, callback=None, fused=None):
+def _ccvt_device(sites, points, members, iterations, callback=None, fused=None, tail=None):
     """OpenCL CCVT: integer sites (r, n, 2), points (r, M, 2), members (r, n, p).
 
     With ``fused`` (default: when there are at least twice as many realizations as compute
     units and no callback) each realization runs whole in one work-group (``ccvt_solve``,
     one launch); otherwise every step is its own launch over all realizations, which keeps
-    a single large realization spread over the whole device. Both give the same bits. The
-    members come back as sets: the kernels keep each site's slots grouped by bucket.
+    a single large realization spread over the whole device, until the iteration's
+    exchanges fall to ``tail`` or fewer in every realization still running (default
+    n / TAIL_SHARE; -1: never, and never with a callback): then ``ccvt_solve`` takes
+    the rest in one launch, since a dozen launches cost more than the few exchanges left.
+    All of these give the same bits. The members come back as sets: the kernels keep
+    each site's slots grouped by bucket.
     """
     import pyopencl as cl
     import pyopencl.array as cla
@@ -877,21 +882,25 @@ def _ccvt_device(sites, points, members, iterations, callback=None, fused=None):
     r, n, p = members.shape
     if fused is None:
         fused = callback is None and r >= 2 * runtime.current_device().compute_units
-    if fused:
-        return _ccvt_solve_device(sites, points, members, iterations)
+    if tail is None:
+        tail = n // TAIL_SHARE
+    if callback is not None:
+        tail = -1
     G = ccvt_grid_size(n)
     near2 = ccvt_near2(n)
     u32 = np.uint32
     b = _ccvt_buffers(q, sites, points, members)
-    slots = (b["ids"].data, b["xy"].data, b["tids"].data, b["txy"].data)
-    cell_start = cla.empty(q, (r, G * G + 1), np.uint32)
-    cell_sites = cla.empty(q, (r, n), np.uint32)
+    b.update(cell_start=cla.empty(q, (r, G * G + 1), np.uint32),
+             cell_sites=cla.empty(q, (r, n), np.uint32),
+             dirty=cla.zeros(q, (r, n), np.uint32), touched=cla.zeros(q, (r, n), np.uint32),
+             site_energy=cla.zeros(q, (r, n), np.int64),
+             status=cla.zeros(q, (r, 3), np.int64))
     active_host = np.ones(r, dtype=np.uint32)
     active = cla.to_device(q, active_host)
-    dirty = cla.zeros(q, (r, n), np.uint32)
-    touched = cla.zeros(q, (r, n), np.uint32)
-    energy = cla.zeros(q, (r, 2), np.int64)
-    site_energy = cla.zeros(q, (r, n), np.int64)
+    energies = [[] for _ in range(r)]
+    if fused:
+        return _ccvt_solve_device(b, n, p, iterations, active, 0, energies)
+    slots = (b["ids"].data, b["xy"].data, b["tids"].data, b["txy"].data)
     swaps = cla.zeros(q, (r,), np.uint32)
     # every launch of the loop gets its arguments once, here: an iteration is a dozen
     # launches, and setting twenty arguments each time cost more than some of them run.
@@ -900,41 +909,39 @@ def _ccvt_device(sites, points, members, iterations, callback=None, fused=None):
     # core: 1.8-2.2 s at 1024 x 1024 against 1.15-1.35 s; results are the same)
     prog = runtime.program("ccvt.cl")
     build = cl.Kernel(prog, "voronoi_build_grid")
-    build.set_args(b["sites"].data, u32(n), u32(G), cell_start.data, cell_sites.data, u32(r))
+    build.set_args(b["sites"].data, u32(n), u32(G), b["cell_start"].data,
+                   b["cell_sites"].data, u32(r))
     phases = []
     for ox, oy, parity in PHASES:
         k = cl.Kernel(prog, "ccvt_swap")
         k.set_args(*slots, u32(n), u32(p), b["sites"].data, b["meta"].data, b["bstart"].data,
-                   cell_start.data, cell_sites.data, u32(G), np.int32(ox), np.int32(oy),
-                   u32(parity), active.data, dirty.data, touched.data, swaps.data,
-                   np.int64(near2))
+                   b["cell_start"].data, b["cell_sites"].data, u32(G), np.int32(ox),
+                   np.int32(oy), u32(parity), active.data, b["dirty"].data,
+                   b["touched"].data, swaps.data, np.int64(near2))
         size = (G if ox == 0 and oy == 0 else G // 2, G, r)
         phases.append((k, size, (_divisor(size[0], 4), _divisor(size[1], 4), 1)))
     centroids = cl.Kernel(prog, "ccvt_centroids")
     centroids.set_args(*slots, b["sites"].data, u32(n), u32(p), b["meta"].data,
-                       b["bstart"].data, active.data, dirty.data, touched.data,
-                       site_energy.data, energy.data, u32(1))
+                       b["bstart"].data, active.data, b["dirty"].data, b["touched"].data,
+                       b["site_energy"].data, b["status"].data, swaps.data, u32(1))
     cl.enqueue_nd_range_kernel(q, centroids, (n, r), None)   # the sites to the start's centroids
-    centroids.set_arg(14, u32(0))
-    dirty.fill(1)        # every pair meets in the first iteration
-    made = np.zeros(r, dtype=np.uint32)
-    total = np.zeros((r, 2), dtype=np.int64)
-    zero = np.zeros(1, dtype=np.uint32)
-    energies = [[] for _ in range(r)]
+    centroids.set_arg(15, u32(0))
+    b["dirty"].fill(1)        # every pair meets in the first iteration
+    status = np.zeros((r, 3), dtype=np.int64)
     converged = np.zeros(r, dtype=bool)
-    for _ in range(iterations):
+    for t in range(iterations):
         cl.enqueue_nd_range_kernel(q, build, (r,), None)
-        cl.enqueue_fill_buffer(q, swaps.data, zero, 0, swaps.nbytes)
         for k, size, local in phases:
             cl.enqueue_nd_range_kernel(q, k, size, local)
         cl.enqueue_nd_range_kernel(q, centroids, (n, r), None)
-        cl.enqueue_copy(q, made, swaps.data)
-        cl.enqueue_copy(q, total, energy.data)
-        totals = voronoi.exact_total(*total.T)
-        for k in np.flatnonzero(active_host):
+        cl.enqueue_copy(q, status, b["status"].data)
+        totals = voronoi.exact_total(status[:, 0], status[:, 1])
+        running = np.flatnonzero(active_host)
+        for k in running:
             energies[k].append(totals[k])
         if callback is not None:
             callback(b["ids"].get(), b["sites"].get())
+        made = status[:, 2]
         done = (active_host == 1) & (made == 0)
         if done.any():
             converged |= done
@@ -942,32 +949,36 @@ def _ccvt_device(sites, points, members, iterations, callback=None, fused=None):
             if not active_host.any():
                 break
             active.set(active_host)
+        if t + 1 < iterations and made[active_host == 1].max() <= tail:
+            _, _, _, tail_converged = _ccvt_solve_device(b, n, p, iterations - t - 1, active,
+                                                         1, energies)
+            converged |= tail_converged & (active_host == 1)
+            break
     return b["sites"].get(), energies, b["ids"].get(), converged
 
 
-def _ccvt_solve_device(sites, points, members, iterations):
-    """``ccvt_solve``: one work-group per realization, one launch for everything."""
+def _ccvt_solve_device(b, n, p, iterations, active, resume, energies):
+    """``ccvt_solve`` over the buffers ``b`` of :func:`_ccvt_device`: one work-group per
+    active realization, one launch for ``iterations`` at most; from the start, or with
+    ``resume`` from where the stepwise launches left them. Appends each iteration's
+    energy to ``energies`` and returns (sites, energies, members, converged)."""
     import pyopencl.array as cla
     q = runtime.queue()
-    r, n, p = members.shape
+    r = b["ids"].shape[0]
     G = ccvt_grid_size(n)
-    b = _ccvt_buffers(q, sites, points, members)
-    cell_start = cla.empty(q, (r, G * G + 1), np.uint32)
-    cell_sites = cla.empty(q, (r, n), np.uint32)
-    dirty = cla.zeros(q, (r, n), np.uint32)
-    touched = cla.zeros(q, (r, n), np.uint32)
-    site_energy = cla.zeros(q, (r, n), np.int64)
     history = cla.zeros(q, (r, iterations, 2), np.int64)
     state = cla.zeros(q, (r, 2), np.uint32)
     local = runtime.local_size(64)
     solve = runtime.kernel("ccvt.cl", "ccvt_solve")
     solve(q, (local * r,), (local,), b["ids"].data, b["xy"].data, b["tids"].data,
           b["txy"].data, np.uint32(n), np.uint32(p), b["sites"].data, b["meta"].data,
-          b["bstart"].data, cell_start.data, cell_sites.data, np.uint32(G), dirty.data,
-          touched.data, site_energy.data, np.int64(ccvt_near2(n)), np.uint32(iterations),
-          history.data, state.data)
+          b["bstart"].data, b["cell_start"].data, b["cell_sites"].data, np.uint32(G),
+          b["dirty"].data, b["touched"].data, b["site_energy"].data,
+          np.int64(ccvt_near2(n)), np.uint32(iterations), np.uint32(resume), active.data,
+          b["status"].data, history.data, state.data)
     h, st = history.get(), state.get()
-    energies = [voronoi.exact_total(h[k, :st[k, 0], 0], h[k, :st[k, 0], 1]) for k in range(r)]
+    for k in np.flatnonzero(active.get()):
+        energies[k].extend(voronoi.exact_total(h[k, :st[k, 0], 0], h[k, :st[k, 0], 1]))
     return b["sites"].get(), energies, b["ids"].get(), st[:, 1].astype(bool)
 
 
