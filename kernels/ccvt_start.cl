@@ -56,10 +56,13 @@ __kernel void ccvt_power(__global const uint2 *points, const uint M, const uint 
         __global const uint *start = cell_start + (size_t)r * (G * G + 1);
         __global const uint *list = cell_sites + (size_t)r * n;
         const uint cx = vor_cell(x.x, G), cy = vor_cell(x.y, G);
-        for (int oy = -1; oy <= 1; ++oy) {
-            const uint row = ((cy + G + oy) % G) * G;
-            for (int ox = -1; ox <= 1; ++ox) {
-                const uint c = row + (cx + G + ox) % G;
+        /* the neighbouring cells, wrapped without a division (G >= 4) */
+        const uint xs[3] = {cx == 0 ? G - 1 : cx - 1, cx, cx == G - 1 ? 0 : cx + 1};
+        const uint ys[3] = {cy == 0 ? G - 1 : cy - 1, cy, cy == G - 1 ? 0 : cy + 1};
+        for (int oy = 0; oy < 3; ++oy) {
+            const uint row = ys[oy] * G;
+            for (int ox = 0; ox < 3; ++ox) {
+                const uint c = row + xs[ox];
                 for (uint t = start[c]; t < start[c + 1]; ++t)
                     start_visit(list[t], x.x, x.y, s, w, &c1, &i1, &c2, &i2);
             }
