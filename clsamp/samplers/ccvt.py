@@ -233,16 +233,6 @@ def _start_grid_size(n):
     return G if G >= 4 else 1
 
 
-def _start_grids(sites, G):
-    """:func:`voronoi.build_grid` of every realization, uint32 (r, G*G+1) and (r, n)."""
-    r, n, _ = sites.shape
-    start = np.empty((r, G * G + 1), dtype=np.uint32)
-    order = np.empty((r, n), dtype=np.uint32)
-    for k in range(r):
-        start[k], order[k] = voronoi.build_grid(sites[k], G)
-    return start, order
-
-
 def power_pass_reference(points, sites, weight, G):
     """NumPy twin of the ``ccvt_power`` kernel (``kernels/ccvt_start.cl``).
 
@@ -276,21 +266,28 @@ def _power_pass_device(points, sites, weight, G):
 
 
 class _PowerPass:
-    """The power passes over one set of sites (:func:`power_pass_reference`), their grids
-    (and, in OpenCL, their buffers and the last point set's) prepared once."""
+    """The power passes over one set of sites (:func:`power_pass_reference`), their
+    candidate tables (and, in OpenCL, their buffers and the last point set's) prepared
+    once."""
 
     def __init__(self, sites, G, backend):
         self.sites, self.G, self.backend = sites, G, backend
         r, n, _ = sites.shape
+        self.tables = [_start_table(sites[k].astype(np.int64), np.arange(n), G, n)[0]
+                       for k in range(r)]
         if backend == "numpy":
-            self.tables = [_start_table(sites[k].astype(np.int64), np.arange(n), G, n)[0]
-                           for k in range(r)]
             return
         import pyopencl.array as cla
         q = runtime.queue()
-        start, order = _start_grids(sites, G)
+        # every realization's table padded to one width W, as (r, cells, W)
+        W = max(t.shape[1] for t in self.tables) if r else 1
+        self.table = np.stack([np.pad(t, ((0, 0), (0, W - t.shape[1])), constant_values=n)
+                               for t in self.tables]) if r else np.zeros((0, 1, 1), np.int64)
+        padded = np.concatenate([np.asarray(sites, dtype=np.uint32),
+                                 np.zeros((r, 1, 2), dtype=np.uint32)], axis=1)
+        xy = padded[np.arange(r)[:, None, None], self.table]
         self.buffers = [cla.to_device(q, np.ascontiguousarray(a)) for a in
-                        (np.asarray(sites, dtype=np.uint32), start, order)]
+                        (self.table.astype(np.uint32), xy)]
         self.points = (None, None)
 
     def __call__(self, points, weight, owner_only=False):
@@ -312,12 +309,14 @@ class _PowerPass:
         second = cla.empty(q, (r, M), np.uint32)
         margin = cla.empty(q, (r, M), np.int64)
         if r and M:
-            sites, start, order = self.buffers
+            ids, xy = self.buffers
+            w = np.concatenate([np.asarray(weight, dtype=np.int64), np.zeros((r, 1), np.int64)],
+                               axis=1)[np.arange(r)[:, None, None], self.table]
             kernel = runtime.kernel("ccvt_start.cl", "ccvt_power")
             kernel(q, (M, r), None, self.points[1].data, np.uint32(M),
-                   np.uint32(M if points.shape[0] > 1 else 0), sites.data,
-                   cla.to_device(q, np.ascontiguousarray(weight, dtype=np.int64)).data,
-                   np.uint32(n), start.data, order.data, np.uint32(self.G),
+                   np.uint32(M if points.shape[0] > 1 else 0), ids.data, xy.data,
+                   cla.to_device(q, np.ascontiguousarray(w)).data, np.uint32(n),
+                   np.uint32(self.G), np.uint32(self.table.shape[2]),
                    owner.data, second.data, margin.data)
         if owner_only:
             return (owner.get(),)
