@@ -537,16 +537,21 @@ def _members_matrix(owner, S, p):
     of sites with room ending in -1. A site given more than p keeps its first p (in id
     order). Returns (matrix, the ids it could not keep, ascending)."""
     key = np.where(owner < 0, S, owner)
-    # a radix sort where the site ids fit in 16 bits
+    # a radix sort where the site ids fit in 16 bits; each site's ids are then one run of
+    # `order`, ascending, and a row is the first p of its run, gathered in one go
     order = np.argsort(key.astype(np.uint16) if S < 1 << 16 else key, kind="stable")
     count = np.bincount(key, minlength=S + 1)[:S]
-    placed = order[:count.sum()]
-    site = key[placed]
-    rank = np.arange(len(placed)) - np.repeat(np.cumsum(count) - count, count)
-    keep = rank < p
-    mat = np.full((S, p), -1, dtype=np.int64)
-    mat[site[keep], rank[keep]] = placed[keep]
-    return mat, np.sort(placed[~keep])
+    start = np.cumsum(count) - count
+    take = np.minimum(count, p)
+    col = np.arange(p)
+    mat = order[np.minimum(start[:, None] + col, max(len(order) - 1, 0))]
+    mat = np.where(col < take[:, None], mat, -1)
+    extra = count - take
+    over = np.flatnonzero(extra)
+    ends = np.cumsum(extra[over])
+    pos = np.repeat(start[over] + p - ends + extra[over], extra[over]) + np.arange(ends[-1] if
+                                                                              over.size else 0)
+    return mat, np.sort(order[pos])
 
 
 def _runs(sorted_ids):
