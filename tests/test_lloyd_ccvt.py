@@ -204,6 +204,35 @@ def test_start_weights_balance_the_cells():
     assert spread[0] > 0.3 and spread[1] < 0.08, spread      # measured: 0.42, 0.04
 
 
+def test_start_sites_relax_the_sites_and_both_backends_agree():
+    # random sites crowd in places: on the weights' lattice, a few capacity-constrained
+    # Lloyd steps spread them (relative radius 0.11 and 0.07 -> 0.71, measured), four
+    # duplicates included; the same integers with both backends; a crowded realization
+    # stays where it is
+    sites = voronoi.initial_sites(6, np.arange(3), 90)
+    sites[2] = 1234567                                        # crowded: left alone
+    sites[1, :3] = sites[1, 3]                                # duplicates of site 3
+    a, wa = ccvt.start_sites(sites, 64)
+    b, wb = ccvt.start_sites(sites, 64, backend="numpy")
+    assert np.array_equal(a, b) and np.array_equal(wa, wb)
+    assert a.dtype == np.uint32 and wa.dtype == np.int64 and wa.shape == (3, 90)
+    assert np.array_equal(a[2], sites[2]) and not wa[2].any()
+    for k in range(2):
+        before = point_metrics.relative_radius(voronoi.to_unit(sites[k, 3:]))
+        after = point_metrics.relative_radius(voronoi.to_unit(a[k]))
+        assert before < 0.3 and after > 0.55, (before, after)
+    for k in range(2):                                        # realizations do not interact
+        one, _ = ccvt.start_sites(sites[k:k + 1], 64)
+        assert np.array_equal(one[0], a[k])
+    # the weights that come back balance the cells of the sites that come back
+    G = ccvt._start_grid_size(90)
+    points = ccvt.density_points(6, np.arange(1), 90 * 64)
+    counts = ccvt._power_counts(ccvt._power_pass_device(points, a[:1], wa[:1], G)[0], 90)
+    assert np.abs(counts - 64).mean() / 64 < 0.1
+    with pytest.raises(InvalidArgumentError, match="backend"):
+        ccvt.start_sites(sites, 64, backend="cuda")
+
+
 def test_start_partition_backends_agree_and_are_deterministic():
     sites = voronoi.initial_sites(6, np.arange(3), 90)
     sites[2] = 1234567                                       # crowded: kd_partition
