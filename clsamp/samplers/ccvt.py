@@ -371,14 +371,15 @@ def _power_counts(owner, n):
     return np.bincount(flat, minlength=r * n).reshape(r, n)
 
 
-def _nearest_site2(sites, G):
+def _nearest_site2(sites, G, tables=None):
     """Squared distance (r, n) from each site to its nearest other site among the 3 x 3
-    cells around it (every site when G == 1; SIZE^2 when it has none there)."""
+    cells around it (every site when G == 1; SIZE^2 when it has none there); ``tables``:
+    the sites' :func:`_start_table` rows, when already built."""
     r, n, _ = sites.shape
     out = np.full((r, n), float(voronoi.SIZE) ** 2)
     for k in range(r):
         xy = sites[k].astype(np.int64)
-        table, _ = _start_table(xy, np.arange(n), G, n)
+        table = _start_table(xy, np.arange(n), G, n)[0] if tables is None else tables[k]
         cell = voronoi.cell_of(xy[:, 1], G) * G + voronoi.cell_of(xy[:, 0], G)
         nb = table[cell]
         ext = np.append(xy, [[0, 0]], axis=0)
@@ -436,7 +437,7 @@ def start_weights(sites, p, G, power, weight=None, sweeps=START_SWEEPS, with_own
     rows = np.arange(r)[:, None]
     cell = rows * K * K + (sites[..., 1].astype(np.int64) * K >> voronoi.BITS) * K \
         + (sites[..., 0].astype(np.int64) * K >> voronoi.BITS)
-    cap = 0.5 * np.sqrt(_nearest_site2(sites, G) * spacing2)
+    cap = 0.5 * np.sqrt(_nearest_site2(sites, G, power.tables) * spacing2)
     w = np.zeros((r, n)) if weight is None else np.asarray(weight, dtype=np.float64).copy()
     for _ in range(sweeps):
         owner, second, margin = power(lattice, np.rint(w).astype(np.int64))
