@@ -821,6 +821,18 @@ __kernel void ccvt_solve(__global uint *ids, __global uint2 *xy, __global uint *
 }
 
 
+/* Grid (n * p, r): every slot gets its point's coordinates (xy[r][t] = points[r][ids[r][t]],
+ * points M = n * p a realization), so the optimization streams instead of gathering. */
+__kernel void ccvt_gather(__global const uint2 *points, __global const uint *ids,
+                          __global uint2 *xy, const uint M)
+{
+    const uint t = get_global_id(0), r = get_global_id(1);
+    if (t >= M)
+        return;
+    const size_t at = (size_t)r * M + t;
+    xy[at] = points[(size_t)r * M + ids[at]];
+}
+
 /* Grid (M, r): the density, point j of realization realization0 + r from words 4, 5 (Philox
  * block 1) of (key, stream, realization, j), top VOR_BITS bits each; the NumPy twin is
  * clsamp.samplers.ccvt.density_points. */

@@ -955,11 +955,16 @@ def _ccvt_buffers(q, sites, points, members):
     scratch slots of the rebuilds, the sites, the per-site records and bucket ranges."""
     import pyopencl.array as cla
     r, n, p = members.shape
-    members = np.ascontiguousarray(members, dtype=np.uint32)
-    # each slot carries its point's coordinates, so the kernels stream instead of gathering
-    xy = np.ascontiguousarray(np.asarray(points, dtype=np.uint32)[np.arange(r)[:, None, None],
-                                                                  members])
-    return dict(ids=cla.to_device(q, members), xy=cla.to_device(q, xy),
+    ids = cla.to_device(q, np.ascontiguousarray(members, dtype=np.uint32))
+    # each slot carries its point's coordinates (ccvt_gather), so the kernels stream
+    # instead of gathering
+    xy = cla.empty(q, (r, n, p, 2), np.uint32)
+    if r and n * p:
+        runtime.kernel("ccvt.cl", "ccvt_gather")(
+            q, (n * p, r), None,
+            cla.to_device(q, np.ascontiguousarray(points, dtype=np.uint32)).data, ids.data,
+            xy.data, np.uint32(n * p))
+    return dict(ids=ids, xy=xy,
                 tids=cla.empty(q, (r, n, p), np.uint32), txy=cla.empty(q, (r, n, p, 2), np.uint32),
                 sites=cla.to_device(q, np.ascontiguousarray(sites, dtype=np.uint32)),
                 meta=cla.zeros(q, (r, n, CCVT_META), np.int64),
@@ -969,6 +974,21 @@ def _ccvt_buffers(q, sites, points, members):
 def _divisor(x, most):
     """The largest divisor of x that is at most ``most``."""
     return max(d for d in range(1, most + 1) if x % d == 0)
+
+
+_KERNELS = {}   # program -> the stepwise loop's kernel objects (creating one costs 0.5 ms)
+
+
+def _ccvt_kernels():
+    """The kernel objects of the stepwise loop, one per phase (each keeps its own
+    arguments), made once per program: (build, swap phases, centroids)."""
+    import pyopencl as cl
+    prog = runtime.program("ccvt.cl")
+    if prog not in _KERNELS:
+        _KERNELS[prog] = (cl.Kernel(prog, "voronoi_build_grid"),
+                          [cl.Kernel(prog, "ccvt_swap") for _ in PHASES],
+                          cl.Kernel(prog, "ccvt_centroids"))
+    return _KERNELS[prog]
 
 
 def _ccvt_device(sites, points, members, iterations, callback=None, fused=None, tail=None):
@@ -1016,20 +1036,17 @@ def _ccvt_device(sites, points, members, iterations, callback=None, fused=None, 
     # The phases run in work-groups of at most 4 x 4 cell pairs, so that the uneven work
     # of the pairs spreads over the compute units (one group per launch keeps it on one
     # core: 1.8-2.2 s at 1024 x 1024 against 1.15-1.35 s; results are the same)
-    prog = runtime.program("ccvt.cl")
-    build = cl.Kernel(prog, "voronoi_build_grid")
+    build, swap, centroids = _ccvt_kernels()
     build.set_args(b["sites"].data, u32(n), u32(G), b["cell_start"].data,
                    b["cell_sites"].data, u32(r))
     phases = []
-    for ox, oy, parity in PHASES:
-        k = cl.Kernel(prog, "ccvt_swap")
+    for k, (ox, oy, parity) in zip(swap, PHASES, strict=True):
         k.set_args(*slots, u32(n), u32(p), b["sites"].data, b["meta"].data, b["bstart"].data,
                    b["cell_start"].data, b["cell_sites"].data, u32(G), np.int32(ox),
                    np.int32(oy), u32(parity), active.data, b["dirty"].data,
                    b["touched"].data, swaps.data, np.int64(near2))
         size = (G if ox == 0 and oy == 0 else G // 2, G, r)
         phases.append((k, size, (_divisor(size[0], 4), _divisor(size[1], 4), 1)))
-    centroids = cl.Kernel(prog, "ccvt_centroids")
     centroids.set_args(*slots, b["sites"].data, u32(n), u32(p), b["meta"].data,
                        b["bstart"].data, active.data, b["dirty"].data, b["touched"].data,
                        b["site_energy"].data, b["status"].data, swaps.data, u32(1))
