@@ -13,8 +13,9 @@ Cases (``--quick`` in brackets):
 * CCVT until no exchange improves: 1024 sites x 1024 points per site, then 256 x 1024
   and 4096 x 256 (Balzer's other two cases), and 256, 1024, 4096 sites x 256 for the
   growth with n at one p [256 x 64, 1024 x 64, 4096 x 16]: seconds (all of it: density,
-  start, optimization; the start's share named: the relaxed sites and the partition),
-  iterations, N*E and rho.
+  start, optimization; the start's share named), iterations, N*E and rho. Balzer's three
+  cases again with ``relax=8`` (the sites relaxed before the partition: faster and lower
+  in energy, but more regular; see :class:`clsamp.samplers.ccvt.CCVTSampler`).
   Balzer's code, built on the project machine, took 4.9 s for 1024 x 1024 (N*E 0.1677,
   rho 0.710), 1.0 s for 256 x 1024, 4.5 s for 4096 x 256.
 
@@ -58,9 +59,10 @@ def ckdtree_lloyd(sites, g, iterations):
     return sites, energies[1:]
 
 
-def ccvt_start(sites, points, p):
-    """The whole start of a CCVT run: the sites relaxed, then the exact partition."""
-    relaxed, weight = ccvt.start_sites(sites, p)
+def ccvt_start(sites, points, p, relax):
+    """The whole start of a CCVT run: the sites relaxed (``relax`` steps), then the exact
+    partition."""
+    relaxed, weight = ccvt.start_sites(sites, p, steps=relax)
     return ccvt.start_partition(relaxed, points, p, "opencl", weight)
 
 
@@ -73,8 +75,10 @@ def run(devices, quick):
     t_kd11, (kd_sites, e_kd10) = timed(
         lambda: ckdtree_lloyd(voronoi.to_unit(start[0]), g, 11), repeats=3)
     t_kd = max(t_kd11 - t_kd1, 1e-9) / 10
-    ccvt_cases = ([(256, 64), (1024, 64), (4096, 16)] if quick
-                  else [(1024, 1024), (256, 1024), (4096, 256), (256, 256), (1024, 256)])
+    cases = ([(256, 64), (1024, 64), (4096, 16)] if quick
+             else [(1024, 1024), (256, 1024), (4096, 256), (256, 256), (1024, 256)])
+    # the default start, then Balzer's three cases from relaxed sites
+    ccvt_cases = [(n, p, 0) for n, p in cases] + [(n, p, ccvt.RELAX_STEPS) for n, p in cases[:3]]
     for device in devices:
         on_device(device)
         dev = short_name(device)
@@ -89,21 +93,21 @@ def run(devices, quick):
                         f"after 1: {ne[0]:.5f} ({n_lloyd * e_kd[0]:.5f}); set N*E after "
                         f"11: {point_metrics.normalized_energy(res.points[0]):.5f} "
                         f"(cKDTree {point_metrics.normalized_energy(kd_sites):.5f})"))
-        for n, p in ccvt_cases:
+        for n, p, relax in ccvt_cases:
             sites = voronoi.initial_sites(1, np.arange(1), n)
             ccvt.ccvt_optimize(voronoi.to_unit(voronoi.initial_sites(2, np.arange(1), 16)),
                                points_per_site=16, iterations=5)          # build the kernels
             seconds, res = timed(lambda: ccvt.ccvt_optimize(  # noqa: B023
-                voronoi.to_unit(sites), points_per_site=p, iterations=2000, seed=1),  # noqa: B023
-                repeats=1 if quick else 3, warmup=1)
+                voronoi.to_unit(sites), points_per_site=p, iterations=2000, seed=1,  # noqa: B023
+                relax=relax), repeats=1 if quick else 3, warmup=1)  # noqa: B023
             points = ccvt.density_points_device(1, np.arange(1), n * p)
-            start, _ = timed(lambda: ccvt_start(sites, points, p), repeats=1,  # noqa: B023
-                             warmup=0)
+            start, _ = timed(lambda: ccvt_start(sites, points, p, relax),  # noqa: B023
+                             repeats=1, warmup=0)
             capacity = n * res.energy_history[0, -1]
             ne = point_metrics.normalized_energy(res.points[0])
             rho = point_metrics.relative_radius(res.points[0])
             peer = BALZER.get((n, p))
-            rows.append(Row("ccvt", f"{n} x {p}", dev, seconds,
+            rows.append(Row(f"ccvt relax={relax}" if relax else "ccvt", f"{n} x {p}", dev, seconds,
                             "Balzer et al. (published here)" if peer else "", peer,
                             f"{int(res.iterations[0])} iterations, "
                             f"{'converged' if res.converged[0] else 'NOT converged'}, "
@@ -112,7 +116,7 @@ def run(devices, quick):
                             f"{seconds / (n * p) * 1e9:.0f} ns per density point",
                             extra={"iterations": int(res.iterations[0]), "ne": float(ne),
                                    "capacity_ne": float(capacity), "rho": float(rho),
-                                   "start_seconds": start}))
+                                   "start_seconds": start, "relax": relax}))
     return rows
 
 

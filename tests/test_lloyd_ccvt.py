@@ -212,8 +212,8 @@ def test_start_sites_relax_the_sites_and_both_backends_agree():
     sites = voronoi.initial_sites(6, np.arange(3), 90)
     sites[2] = 1234567                                        # crowded: left alone
     sites[1, :3] = sites[1, 3]                                # duplicates of site 3
-    a, wa = ccvt.start_sites(sites, 64)
-    b, wb = ccvt.start_sites(sites, 64, backend="numpy")
+    a, wa = ccvt.start_sites(sites, 64, steps=8)
+    b, wb = ccvt.start_sites(sites, 64, backend="numpy", steps=8)
     assert np.array_equal(a, b) and np.array_equal(wa, wb)
     assert a.dtype == np.uint32 and wa.dtype == np.int64 and wa.shape == (3, 90)
     assert np.array_equal(a[2], sites[2]) and not wa[2].any()
@@ -222,8 +222,10 @@ def test_start_sites_relax_the_sites_and_both_backends_agree():
         after = point_metrics.relative_radius(voronoi.to_unit(a[k]))
         assert before < 0.3 and after > 0.55, (before, after)
     for k in range(2):                                        # realizations do not interact
-        one, _ = ccvt.start_sites(sites[k:k + 1], 64)
+        one, _ = ccvt.start_sites(sites[k:k + 1], 64, steps=8)
         assert np.array_equal(one[0], a[k])
+    same, none = ccvt.start_sites(sites, 64, steps=0)             # no relaxation
+    assert np.array_equal(same, sites) and none is None
     # the weights that come back balance the cells of the sites that come back
     G = ccvt._start_grid_size(90)
     points = ccvt.density_points(6, np.arange(1), 90 * 64)
@@ -231,6 +233,34 @@ def test_start_sites_relax_the_sites_and_both_backends_agree():
     assert np.abs(counts - 64).mean() / 64 < 0.1
     with pytest.raises(InvalidArgumentError, match="backend"):
         ccvt.start_sites(sites, 64, backend="cuda")
+
+
+def test_ccvt_relax_starts_from_relaxed_sites():
+    # relax=k runs start_sites(k) before the partition: the same set as the optimization
+    # from those sites and weights, a lower energy than from the random sites here, the
+    # same bits with both backends; bad values are refused by name
+    sites = voronoi.initial_sites(2, np.arange(2), 64)
+    unit = voronoi.to_unit(sites)
+    a = ccvt.ccvt_optimize(unit, points_per_site=32, iterations=500, seed=2, relax=6)
+    b = ccvt.ccvt_optimize(unit, points_per_site=32, iterations=500, seed=2, relax=6,
+                           backend="numpy")
+    assert np.array_equal(a.points, b.points)
+    assert np.array_equal(a.energy_history, b.energy_history)
+    start, weight = ccvt.start_sites(sites, 32, steps=6)
+    points = ccvt.density_points(2, np.arange(2), 64 * 32)
+    members = ccvt.start_partition(start, points, 32, weight=weight)
+    ref = ccvt.ccvt_reference(start, points, members, 500)
+    assert np.array_equal(voronoi.to_unit(ref[0]), a.points)
+    plain = ccvt.ccvt_optimize(unit, points_per_site=32, iterations=500, seed=2)
+    assert a.converged.all() and plain.converged.all()
+    assert np.all(a.energy_history[:, -1] < plain.energy_history[:, -1])
+    s = clsamp.make_sampler("ccvt", seed=2, points_per_site=32, relax=6)
+    assert np.array_equal(s.sample(64, realizations=2), a.points)
+    for bad in (-1, 1.5, ccvt.MAX_RELAX + 1):
+        with pytest.raises(InvalidArgumentError, match="relax"):
+            clsamp.make_sampler("ccvt", relax=bad)
+        with pytest.raises(InvalidArgumentError, match="relax"):
+            ccvt.ccvt_optimize(unit, relax=bad)
 
 
 def test_start_partition_backends_agree_and_are_deterministic():
