@@ -1224,8 +1224,8 @@ class CCVTSampler(voronoi.VoronoiSampler):
         a coarse lattice proxy of the density before the optimization
         (:func:`start_sites`), default 0: Balzer et al.'s random start. Relaxed sites
         leave the optimization far less to do and end at a lower energy, but more
-        regular: at 1024 sites x 1024 points, ``relax=8`` takes about 114 iterations
-        instead of 311 and half the time, capacity N*E 0.1662 against 0.1682, while the
+        regular: at 1024 sites x 1024 points, ``relax=8`` takes 114 iterations instead
+        of 311 and half the time, capacity N*E 0.1662 against 0.1682, while the
         radial mean of the spectrum peaks at 2.9 instead of 2.1 and rows of hexagonal
         order appear, the structure CCVT exists to avoid. At most MAX_RELAX (64).
 
@@ -1247,21 +1247,19 @@ class CCVTSampler(voronoi.VoronoiSampler):
     -----
     Balzer, Schloemer and Deussen minimize the energy E = mean over density points of
     the squared toroidal distance to the site owning them, under the constraint that
-    every site owns the same number of points. The start first relaxes the random
-    sites (:func:`start_sites`: eight capacity-constrained Lloyd steps on a lattice proxy
-    of the density, which leave the optimization a half to a third of the iterations
-    and a lower energy), then (:func:`start_partition`) gives every density point to its
-    nearest site in the power distance |x - s_i|^2 - w_i, the weights balancing the
-    cells' areas (measured on a lattice proxy of the density: a smooth correction,
-    solved by FFT, for the large-scale
+    every site owns the same number of points. The start (:func:`start_partition`;
+    with ``relax``, after :func:`start_sites` has moved the random sites) gives every
+    density point to its nearest site in the power distance |x - s_i|^2 - w_i, the
+    weights balancing the cells' areas (measured on a lattice proxy of the density: a
+    smooth correction, solved by FFT, for the large-scale
     crowding of random sites, and a damped Newton step per site), then passes the excess
     of overfull sites along neighbouring sites to the nearest ones with room. It is
-    exact in capacity, compact (at 1024 x 1024, seed 1, 99% of the points lie within
-    0.67 site spacings of their relaxed site and none beyond 2.0) and, unlike a partition
-    of the unit square, without seams on the axes; the sites then move to its centroids. Each
-    iteration then
-    (1) exchanges points between neighbouring sites i, j: the candidates of each are
-    ordered by the gain of moving to the other site, and pairs are exchanged in order
+    exact in capacity, compact (at 1024 x 1024, 99% of the points lie within 1.7 site
+    spacings of their site and none beyond about 3; from relaxed sites 0.67 and 2.0)
+    and, unlike a partition of the unit square, without seams on the axes; the sites
+    then move to its centroids. Each iteration then (1) exchanges points between
+    neighbouring sites i, j: the candidates of each are ordered by the gain of moving to
+    the other site, and pairs are exchanged in order
     while the two gains sum to more than zero (the paper's heap-based swap, here in
     rounds of the 16 best candidates a side), and a pair that exchanged moves both its
     sites to the periodic centroids of their points at once, before the next pair (as
@@ -1334,8 +1332,9 @@ class CCVTSampler(voronoi.VoronoiSampler):
 
     Cost: iterations until convergence grow with ``points_per_site`` (about 150 to 320 at
     1024 per site, 10 to 25 at 64); at the default 1024 per site a 1024-point set takes
-    about 1.7 to 2 s here (PoCL, 2 cores: the start about 0.45 s, then about 4 ms an
-    iteration), against 7 s before the buckets and the power start; time grows about
+    about 1.5 s here (PoCL, 2 cores: the start about 0.35 s, then 3 to 4 ms an iteration
+    while many exchanges are left, under 1 ms at the end), against 7 s before the
+    buckets and the power start, and about 0.75 s with ``relax=8``; time grows about
     linearly with n at a given ``points_per_site`` (``benchmarks/bench_voronoi.py``).
 
     References
