@@ -820,7 +820,6 @@ __kernel void ccvt_solve(__global uint *ids, __global uint2 *xy, __global uint *
     }
 }
 
-
 /* Grid (n * p, r): every slot gets its point's coordinates (xy[r][t] = points[r][ids[r][t]],
  * points M = n * p a realization), so the optimization streams instead of gathering. */
 __kernel void ccvt_gather(__global const uint2 *points, __global const uint *ids,

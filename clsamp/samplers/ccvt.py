@@ -21,8 +21,8 @@ CCVT_SECTORS = 16      # angular sectors of a site's buckets (CCVT_SECTORS in ke
 CCVT_BUCKETS = 64      # buckets per site: 16 sectors x 4 bands (CCVT_BUCKETS in kernels/ccvt.cl)
 CCVT_META = 7 + CCVT_BUCKETS + CCVT_SECTORS   # int64 record per site (CCVT_META in ccvt.cl)
 MAX_POINTS_PER_SITE = voronoi.MAX_CELL_POINTS
-# The swap phases of one iteration: (ox, oy, parity); (0, 0) pairs the sites inside a cell.
 TAIL_SHARE = 8    # the last iterations, from n / TAIL_SHARE exchanges or fewer, in one launch
+# The swap phases of one iteration: (ox, oy, parity); (0, 0) pairs the sites inside a cell.
 PHASES = ((0, 0, 0),) + tuple((ox, oy, parity) for ox, oy in ((1, 0), (0, 1), (1, 1), (1, -1))
                               for parity in (0, 1))
 
@@ -419,6 +419,8 @@ def start_weights(sites, p, G, power, weight=None, sweeps=START_SWEEPS, with_own
     pair needs tiny weight differences to share). Host arithmetic shared by both
     backends."""
     r, n, _ = sites.shape
+    if with_owner and sweeps < 1:
+        raise ValueError("start_weights: with_owner needs at least one sweep")
     lattice = _start_lattice(n, p)
     per = lattice.shape[1] / n
     unit2 = float(voronoi.SIZE) ** 2
@@ -477,8 +479,8 @@ def start_sites(sites, p, backend="opencl", steps=RELAX_STEPS):
     radial mean of the expected spectrum (8 sets of 1024 sites x 256 points, seed 1)
     peaks at 2.89 instead of 2.09 and dips to 0.43 instead of 0.59 beyond the peak; the
     sets show rows of hexagonal order, the structure Lloyd's method settles into and
-    CCVT exists to avoid. 2 steps leave the spectrum as it was (peak 2.10) and the
-    iterations too (271 against 267); 4 steps: peak 2.32, 190 iterations. The
+    CCVT exists to avoid. 2 steps leave the spectrum as it was (peak 2.13) and the
+    iterations too (271 against 267); 4 steps: peak 2.40, 190 iterations. The
     over-relaxed step (plain steps go all the way) does more per step: seeds 1 to 9 at 8
     steps, 119 iterations on average against 158, capacity N*E 0.16637 against 0.16717.
 
