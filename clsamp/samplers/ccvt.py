@@ -1120,7 +1120,7 @@ def _ccvt_solve_device(b, n, p, iterations, active, resume, energies):
     return b["sites"].get(), energies, b["ids"].get(), st[:, 1].astype(bool)
 
 
-def ccvt_optimize(sites, points_per_site=1024, iterations=200, seed=0, backend="opencl",
+def ccvt_optimize(sites, points_per_site=1024, iterations=1000, seed=0, backend="opencl",
                   callback=None, density="jittered", relax=0):
     """CCVT from given starting sites on the unit torus.
 
@@ -1212,8 +1212,9 @@ class CCVTSampler(voronoi.VoronoiSampler):
         Capacity of every site, default 1024: M = n * points_per_site density points are
         drawn and each site owns exactly that many at every moment.
     iterations : int
-        Cap on the iterations (default 200); each realization stops at the first
-        iteration in which no exchange lowers the energy.
+        Cap on the iterations (default 1000, above the 150 to 350 that 1024 points per
+        site take); each realization stops at the first iteration in which no exchange
+        lowers the energy.
     backend : {"opencl", "numpy"}
     density : {"jittered", "random"}
         How the M density points are drawn. ``"jittered"`` (default): one uniform point
@@ -1358,7 +1359,7 @@ class CCVTSampler(voronoi.VoronoiSampler):
     True
     """
 
-    def __init__(self, d=2, seed=0, points_per_site=1024, iterations=200, backend="opencl",
+    def __init__(self, d=2, seed=0, points_per_site=1024, iterations=1000, backend="opencl",
                  density="jittered", relax=0):
         super().__init__(d=d, seed=seed, backend=backend)
         self.points_per_site = check_positive_int(points_per_site, "points_per_site",
