@@ -1212,7 +1212,7 @@ class CCVTSampler(voronoi.VoronoiSampler):
         Capacity of every site, default 1024: M = n * points_per_site density points are
         drawn and each site owns exactly that many at every moment.
     iterations : int
-        Cap on the iterations (default 1000, above the 150 to 350 that 1024 points per
+        Cap on the iterations (default 1000, above the 150 to 320 that 1024 points per
         site take); each realization stops at the first iteration in which no exchange
         lowers the energy.
     backend : {"opencl", "numpy"}
