@@ -1040,7 +1040,8 @@ def _ccvt_device(sites, points, members, iterations, callback=None, fused=None, 
     active = cla.to_device(q, active_host)
     energies = [[] for _ in range(r)]
     if fused:
-        return _ccvt_solve_device(b, n, p, iterations, active, 0, energies)
+        converged = _ccvt_solve_device(b, n, p, iterations, active, np.arange(r), 0, energies)
+        return b["sites"].get(), energies, b["ids"].get(), converged
     slots = (b["ids"].data, b["xy"].data, b["tids"].data, b["txy"].data)
     swaps = cla.zeros(q, (r,), np.uint32)
     # every launch of the loop gets its arguments once, here: an iteration is a dozen
@@ -1088,18 +1089,19 @@ def _ccvt_device(sites, points, members, iterations, callback=None, fused=None, 
                 break
             active.set(active_host)
         if t + 1 < iterations and made[active_host == 1].max() <= tail:
-            _, _, _, tail_converged = _ccvt_solve_device(b, n, p, iterations - t - 1, active,
-                                                         1, energies)
+            tail_converged = _ccvt_solve_device(b, n, p, iterations - t - 1, active,
+                                                np.flatnonzero(active_host), 1, energies)
             converged |= tail_converged & (active_host == 1)
             break
     return b["sites"].get(), energies, b["ids"].get(), converged
 
 
-def _ccvt_solve_device(b, n, p, iterations, active, resume, energies):
+def _ccvt_solve_device(b, n, p, iterations, active, running, resume, energies):
     """``ccvt_solve`` over the buffers ``b`` of :func:`_ccvt_device`: one work-group per
-    active realization, one launch for ``iterations`` at most; from the start, or with
-    ``resume`` from where the stepwise launches left them. Appends each iteration's
-    energy to ``energies`` and returns (sites, energies, members, converged)."""
+    active realization (``active`` on the device, ``running`` their indices), one launch
+    for ``iterations`` at most; from the start, or with ``resume`` from where the
+    stepwise launches left them. Appends each iteration's energy to ``energies`` and
+    returns which realizations converged (the sites and members stay on the device)."""
     import pyopencl.array as cla
     q = runtime.queue()
     r = b["ids"].shape[0]
@@ -1115,9 +1117,9 @@ def _ccvt_solve_device(b, n, p, iterations, active, resume, energies):
           np.int64(ccvt_near2(n)), np.uint32(iterations), np.uint32(resume), active.data,
           b["status"].data, history.data, state.data)
     h, st = history.get(), state.get()
-    for k in np.flatnonzero(active.get()):
+    for k in running:
         energies[k].extend(voronoi.exact_total(h[k, :st[k, 0], 0], h[k, :st[k, 0], 1]))
-    return b["sites"].get(), energies, b["ids"].get(), st[:, 1].astype(bool)
+    return st[:, 1].astype(bool)
 
 
 def ccvt_optimize(sites, points_per_site=1024, iterations=1000, seed=0, backend="opencl",
