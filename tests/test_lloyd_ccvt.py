@@ -348,6 +348,19 @@ def test_ccvt_kernel_equals_reference_through_the_buckets():
     assert np.array_equal(np.sort(a[2]), np.sort(b[2]))
 
 
+def test_ccvt_prefetch_changes_no_result(monkeypatch):
+    # CPU devices build ccvt.cl with CCVT_PREFETCH (software prefetch); other devices build
+    # it without: both programs give the same bits, stepwise and in one launch
+    sites, points, members = _start(9, 2, 144, 24)
+    with_prefetch = [ccvt._ccvt_device(sites, points, members, 10, fused=f) for f in (False, True)]
+    monkeypatch.setattr(ccvt, "_defines", lambda: {})
+    for fused, a in zip((False, True), with_prefetch, strict=True):
+        b = ccvt._ccvt_device(sites, points, members, 10, fused=fused)
+        assert np.array_equal(a[0], b[0])
+        assert a[1] == b[1]
+        assert np.array_equal(a[2], b[2])
+
+
 def test_ccvt_one_workgroup_per_realization_equals_launch_per_step():
     sites, points, members = _start(7, 3, 45, 20)
     a = ccvt._ccvt_device(sites, points, members, 50, fused=True)

@@ -131,11 +131,11 @@ def density_points_device(seed, realizations, M, density="jittered"):
         return out.get()
     key = (*runtime.key_args(seed), np.uint32(philox.Stream.INIT))
     if density == "random":
-        kernel = runtime.kernel("ccvt.cl", "ccvt_density")
+        kernel = runtime.kernel("ccvt.cl", "ccvt_density", _defines())
         kernel(runtime.queue(), (M, r), None, out.data, np.uint32(M),
                np.uint32(realizations[0]), *key)
     else:
-        kernel = runtime.kernel("ccvt.cl", "ccvt_density_jittered")
+        kernel = runtime.kernel("ccvt.cl", "ccvt_density_jittered", _defines())
         kernel(runtime.queue(), (M, r), None, out.data, np.uint32(M),
                np.uint32(density_rows(M)), np.uint32(realizations[0]), *key)
     return out.get()
@@ -972,7 +972,7 @@ def _ccvt_buffers(q, sites, points, members):
     # instead of gathering
     xy = cla.empty(q, (r, n, p, 2), np.uint32)
     if r and n * p:
-        runtime.kernel("ccvt.cl", "ccvt_gather")(
+        runtime.kernel("ccvt.cl", "ccvt_gather", _defines())(
             q, (n * p, r), None,
             cla.to_device(q, np.ascontiguousarray(points, dtype=np.uint32)).data, ids.data,
             xy.data, np.uint32(n * p))
@@ -981,6 +981,13 @@ def _ccvt_buffers(q, sites, points, members):
                 sites=cla.to_device(q, np.ascontiguousarray(sites, dtype=np.uint32)),
                 meta=cla.zeros(q, (r, n, CCVT_META), np.int64),
                 bstart=cla.zeros(q, (r, n, CCVT_BUCKETS + 1), np.uint32))
+
+
+def _defines():
+    """Build options of ``kernels/ccvt.cl`` on the current device: CCVT_PREFETCH (software
+    prefetch of the records and points a pair reads) on CPU devices, where the scans wait
+    on memory; it never changes a result."""
+    return {"CCVT_PREFETCH": runtime.current_device().type == "cpu"}
 
 
 def _divisor(x, most):
@@ -995,7 +1002,7 @@ def _ccvt_kernels():
     """The kernel objects of the stepwise loop, one per phase (each keeps its own
     arguments), made once per program: (build, swap phases, centroids)."""
     import pyopencl as cl
-    prog = runtime.program("ccvt.cl")
+    prog = runtime.program("ccvt.cl", _defines())
     if prog not in _KERNELS:
         _KERNELS[prog] = (cl.Kernel(prog, "voronoi_build_grid"),
                           [cl.Kernel(prog, "ccvt_swap") for _ in PHASES],
@@ -1109,7 +1116,7 @@ def _ccvt_solve_device(b, n, p, iterations, active, running, resume, energies):
     history = cla.zeros(q, (r, iterations, 2), np.int64)
     state = cla.zeros(q, (r, 2), np.uint32)
     local = runtime.local_size(64)
-    solve = runtime.kernel("ccvt.cl", "ccvt_solve")
+    solve = runtime.kernel("ccvt.cl", "ccvt_solve", _defines())
     solve(q, (local * r,), (local,), b["ids"].data, b["xy"].data, b["tids"].data,
           b["txy"].data, np.uint32(n), np.uint32(p), b["sites"].data, b["meta"].data,
           b["bstart"].data, b["cell_start"].data, b["cell_sites"].data, np.uint32(G),
