@@ -10,11 +10,6 @@
 
 #define START_NO_SECOND 0x7FFFFFFFFFFFFFFFL   /* margin when a point has one candidate */
 
-inline int start_before(const long c, const uint i, const long c2, const uint i2)
-{
-    return c < c2 || (c == c2 && i < i2);
-}
-
 /* Global size (M, r). points: realization r's M points start at r * stride (stride 0:
  * one set for all). The candidates of a point in cell c of realization r (G == 1: one
  * cell, every site) are W entries from (r * G * G + c) * W: the sites' indices (cand_id,
@@ -42,15 +37,14 @@ __kernel void ccvt_power(__global const uint2 *points, const uint M, const uint 
             break;   /* the padding: the rest of the row is padding too */
         const uint2 s = cand_xy[row + t];
         const long c = vor_d2(x.x, x.y, s.x, s.y) - cand_w[row + t];
-        if (start_before(c, i, c1, i1)) {
-            c2 = c1;
-            i2 = i1;
-            c1 = c;
-            i1 = i;
-        } else if (start_before(c, i, c2, i2)) {
-            c2 = c;
-            i2 = i;
-        }
+        /* the row is in ascending index order, so "before" in (power distance, index) is a
+         * strictly smaller distance; selects, not branches (which way a point's comparisons
+         * go is a coin toss the branch predictor loses) */
+        const int nearer1 = c < c1, nearer2 = c < c2;
+        c2 = nearer1 ? c1 : (nearer2 ? c : c2);
+        i2 = nearer1 ? i1 : (nearer2 ? i : i2);
+        c1 = nearer1 ? c : c1;
+        i1 = nearer1 ? i : i1;
     }
     owner[at] = i1;
     second[at] = i2 == 0xFFFFFFFFu ? i1 : i2;
