@@ -74,11 +74,11 @@ def machine_gauge():
     now (GAUGE_PUBLISHED when the issue timed it).
 
     A row whose peer is a published figure, not code run in the same process, compares
-    like with like only if the machine runs at the speed it ran at then. The project's VM
-    does not: this gauge took 3.1 to 3.3 s in one hour and about 4.9 s in another, and
-    every timing here moved with it. gauge / GAUGE_PUBLISHED scales the published figure
-    to the machine's speed now; it is an estimate (a single-threaded Python and NumPy
-    workload standing in for the peer's C++), so rows give it beside the plain ratio."""
+    like with like only while the machine runs at the speed it ran at then. The project's
+    VM does not always: on one afternoon this gauge took 3.1 to 3.3 s in one hour and 4.0
+    to 5.3 s in the next, and a 1024 x 1024 CCVT 0.77 to 0.86 s and then 0.99 to 1.14 s.
+    The two did not slow by the same factor, so the gauge says when a ratio to a published
+    figure is fair (near GAUGE_PUBLISHED); it is no conversion factor."""
     from scipy.stats import qmc
     engine = qmc.PoissonDisk(d=2, radius=GAUGE_RADIUS, seed=1)
     t0 = time.perf_counter()
