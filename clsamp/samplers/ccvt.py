@@ -1237,7 +1237,7 @@ class CCVTSampler(voronoi.VoronoiSampler):
         (:func:`start_sites`), default 0: Balzer et al.'s random start. Relaxed sites
         leave the optimization far less to do and end at a lower energy, but more
         regular: at 1024 sites x 1024 points, ``relax=8`` takes 114 iterations instead
-        of 311 and half the time, capacity N*E 0.1662 against 0.1682, while the
+        of 311 and 50 to 60% of the time, capacity N*E 0.1662 against 0.1682, while the
         radial mean of the spectrum peaks at 2.9 instead of 2.1 and rows of hexagonal
         order appear, the structure CCVT exists to avoid. At most MAX_RELAX (64).
 
@@ -1343,11 +1343,14 @@ class CCVTSampler(voronoi.VoronoiSampler):
     sampler; it is never higher (1024 x 1024, seed 1: 0.1672 against 0.1682).
 
     Cost: iterations until convergence grow with ``points_per_site`` (about 150 to 320 at
-    1024 per site, 10 to 25 at 64); at the default 1024 per site a 1024-point set takes
-    about 1.5 s here (PoCL, 2 cores: the start about 0.35 s, then 3 to 4 ms an iteration
-    while many exchanges are left, under 1 ms at the end), against 7 s before the
-    buckets and the power start, and about 0.75 s with ``relax=8``; time grows about
-    linearly with n at a given ``points_per_site`` (``benchmarks/bench_voronoi.py``).
+    1024 per site, 237 on average over seeds 1 to 8, 10 to 25 at 64); at the default 1024
+    per site a 1024-point set (seed 1: 311 iterations) takes 0.8 to 0.9 s here while the
+    machine runs at the speed at which Balzer et al.'s code took 4.9 s, and 1.0 to 1.15 s
+    while it is loaded (PoCL, 2 cores: the start 0.25 to 0.3 s, then a few ms an
+    iteration while many exchanges are left, under 1 ms at the end), against 7 s before
+    the buckets and the power start, and 0.45 to 0.7 s with ``relax=8``; time grows about
+    linearly with n at a given ``points_per_site`` (``benchmarks/bench_voronoi.py``, which
+    times the machine gauge beside it).
 
     References
     ----------
