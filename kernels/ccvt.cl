@@ -27,7 +27,7 @@
  * busier the machine). OpenCL's own prefetch() compiles to nothing in PoCL. A prefetch
  * never changes a result; without CCVT_PREFETCH the loops that only prefetch are dead
  * code. */
-#ifdef CCVT_PREFETCH
+#if defined(CCVT_PREFETCH) && defined(__clang__)   /* a clang builtin */
 #define ccvt_prefetch(p) __builtin_prefetch(p)
 #else
 #define ccvt_prefetch(p) ((void)(p))
