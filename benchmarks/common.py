@@ -75,10 +75,10 @@ def machine_gauge():
 
     A row whose peer is a published figure, not code run in the same process, compares
     like with like only while the machine runs at the speed it ran at then. The project's
-    VM does not always: on one afternoon this gauge took 3.1 to 3.3 s in one hour and 4.0
-    to 5.3 s in the next, and a 1024 x 1024 CCVT 0.77 to 0.86 s and then 0.99 to 1.14 s.
-    The two did not slow by the same factor, so the gauge says when a ratio to a published
-    figure is fair (near GAUGE_PUBLISHED); it is no conversion factor."""
+    VM does not always: on one evening this gauge took 3.1 to 3.3 s for a while and 4.0
+    to 5.9 s for the next 90 minutes, and a 1024 x 1024 CCVT 0.77 to 0.86 s and then 0.99
+    to 1.46 s. The two did not slow by the same factor, so the gauge says when a ratio to a
+    published figure is fair (near GAUGE_PUBLISHED); it is no conversion factor."""
     from scipy.stats import qmc
     engine = qmc.PoissonDisk(d=2, radius=GAUGE_RADIUS, seed=1)
     t0 = time.perf_counter()

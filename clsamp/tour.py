@@ -196,7 +196,7 @@ def _plot_points(ax, points, title):
 
 def tour_sampler_params(name, quick):
     """Parameters the tour gives each sampler (optimizers are kept to tour-sized budgets:
-    CCVT's default of 1024 density points per site costs about 0.8 to 1.15 s per 1024-point
+    CCVT's default of 1024 density points per site costs about 0.8 to 1.5 s per 1024-point
     set here, depending on the machine's load)."""
     params = dict(dict(TOUR_SAMPLERS).get(name, {}))
     if name == "ccvt":

@@ -1345,10 +1345,10 @@ class CCVTSampler(voronoi.VoronoiSampler):
     Cost: iterations until convergence grow with ``points_per_site`` (about 150 to 320 at
     1024 per site, 237 on average over seeds 1 to 8, 10 to 25 at 64); at the default 1024
     per site a 1024-point set (seed 1: 311 iterations) takes 0.8 to 0.9 s here while the
-    machine runs at the speed at which Balzer et al.'s code took 4.9 s, and 1.0 to 1.15 s
-    while it is loaded (PoCL, 2 cores: the start 0.25 to 0.3 s, then a few ms an
+    machine runs at the speed at which Balzer et al.'s code took 4.9 s, and 1.0 to 1.5 s
+    while it is loaded (PoCL, 2 cores: the start 0.23 to 0.46 s, then a few ms an
     iteration while many exchanges are left, under 1 ms at the end), against 7 s before
-    the buckets and the power start, and 0.45 to 0.7 s with ``relax=8``; time grows about
+    the buckets and the power start, and 0.43 to 0.73 s with ``relax=8``; time grows about
     linearly with n at a given ``points_per_site`` (``benchmarks/bench_voronoi.py``, which
     times the machine gauge beside it).
 
