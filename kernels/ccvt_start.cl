@@ -3,9 +3,10 @@
  *
  * Every density point finds, among the sites in the 3 x 3 cells of a G x G grid around it
  * (all n sites when G == 1; the host lists them per cell), the two smallest power
- * distances |x - s_i|^2 - w_i on the integer torus of voronoi.h, in the order (power distance, site index): the owner, the
- * runner-up and their difference (the margin, >= 0). Exact int64: the result does not
- * depend on the order in which the candidates are visited, hence not on the device. */
+ * distances |x - s_i|^2 - w_i on the integer torus of voronoi.h, in the order (power
+ * distance, site index): the owner, the runner-up and their difference (the margin,
+ * >= 0). Exact int64: the result does not depend on the order in which the candidates are
+ * visited, hence not on the device. */
 #include "voronoi.h"
 
 #define START_NO_SECOND 0x7FFFFFFFFFFFFFFFL   /* margin when a point has one candidate */

@@ -627,7 +627,8 @@ def start_partition(sites, points, p, backend="opencl", weight=None):
     crowded = _crowded(sites, G)
     spread = np.flatnonzero(~crowded)
     owner = np.empty((r, M), dtype=np.int64)
-    owner[crowded] = np.repeat(np.arange(n), p)     # a placeholder where kd_partition runs
+    if crowded.any():
+        owner[crowded] = np.repeat(np.arange(n), p)     # a placeholder where kd_partition runs
     if spread.size:
         sub = sites[spread]
         power = _PowerPass(sub, G, backend)
