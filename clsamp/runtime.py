@@ -267,6 +267,12 @@ def program(file, defines=None, options=()):
             raise BuildError(
                 f"OpenCL build of kernels/{file} failed on {device.name} "
                 f"({device.platform}) with options {' '.join(key[2]) or '(none)'}:\n{error}") from None
+        if not built.kernel_names:
+            raise BuildError(
+                f"OpenCL build of kernels/{file} on {device.name} ({device.platform}) with options "
+                f"{' '.join(key[2]) or '(none)'} gave a program without kernels (a broken binary "
+                "from the driver's cache?); clearing ~/.cache/pocl or setting POCL_KERNEL_CACHE=0 "
+                "builds it afresh")
         _build_count += 1
         _programs[key] = built
         return built

@@ -366,7 +366,7 @@ def _direct(batch, resolution, backend, progress):
 
 # -- fast: parameters, kernel transform ---------------------------------------------------
 SIGMAS = (1.25, 1.5, 2.0)     # oversampling factors the fast path chooses from
-MAX_WIDTH = 16                # nufft.cl evaluates a point's weights as one double16
+MAX_WIDTH = 16                # nufft.cl holds a point's weights on one axis in 16 doubles
 
 
 @functools.cache

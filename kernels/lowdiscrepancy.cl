@@ -25,11 +25,13 @@
 #define LD_BLOCK 32
 #endif
 
-/* Vector types of width LD_WIDTH (2, 4 or 8): Sobol works on LD_WIDTH dimensions at once,
+/* Vector types of width LD_WIDTH (2 or 4): Sobol works on LD_WIDTH dimensions at once,
  * which PoCL turns into SIMD instructions (it does not vectorize across work-items when a
- * kernel has an inner loop, POCL_NOTES.md). */
+ * kernel has an inner loop). No wider: a double8 handed to a built-in (vload8, vstore8)
+ * crosses an ABI that PoCL's AVX-512 library and kernels compiled without AVX-512 disagree
+ * on (see docs/design.md, "Kernels"). */
 #ifndef LD_WIDTH
-#define LD_WIDTH 8
+#define LD_WIDTH 4
 #endif
 #define LD_CAT(a, b) a##b
 #define LD_XCAT(a, b) LD_CAT(a, b)

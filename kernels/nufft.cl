@@ -7,18 +7,22 @@
  */
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 
-/* The WIDTH weights of one axis, phi((i0 + l - t) 2 / WIDTH) for l = 0..15 (lanes >= WIDTH are
- * 0), phi the exponential of semicircle kernel exp(beta (sqrt(1 - z^2) - 1)) (Barnett, Magland,
- * af Klinteberg 2019). One double16 expression: PoCL ran scalar double exp about 10x slower
- * than its vector form. Returns i0 = ceil(t - WIDTH / 2), the first node. */
-inline int axis_weights(const double t, const double beta, double16 *w)
+/* The WIDTH weights of one axis, phi((i0 + l - t) 2 / WIDTH) for l = 0..WIDTH-1, into
+ * w[0..15] (lanes >= WIDTH are 0), phi the exponential of semicircle kernel
+ * exp(beta (sqrt(1 - z^2) - 1)) (Barnett, Magland, af Klinteberg 2019). In double4 pieces:
+ * PoCL runs scalar double exp far slower than its vector form, and no wider vector may
+ * reach a built-in (docs/design.md, "Kernels"). Returns i0 = ceil(t - WIDTH / 2), the
+ * first node. */
+inline int axis_weights(const double t, const double beta, double *w)
 {
     const int i0 = (int)ceil(t - 0.5 * WIDTH);
-    const double16 lane = (double16)(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0,
-                                     11.0, 12.0, 13.0, 14.0, 15.0);
-    const double16 z = ((double)i0 - t + lane) * (2.0 / WIDTH);
-    const double16 phi = exp(beta * (sqrt(fmax(1.0 - z * z, 0.0)) - 1.0));
-    *w = select((double16)(0.0), phi, lane < (double16)(WIDTH));
+    const double base = (double)i0 - t;
+    for (int q = 0; q < (WIDTH + 3) / 4; ++q) {
+        const double4 lane = (double4)(4 * q, 4 * q + 1, 4 * q + 2, 4 * q + 3);
+        const double4 z = (base + lane) * (2.0 / WIDTH);
+        const double4 phi = exp(beta * (sqrt(fmax(1.0 - z * z, 0.0)) - 1.0));
+        vstore4(select((double4)(0.0), phi, lane < (double4)(WIDTH)), q, w);
+    }
     return i0;
 }
 
@@ -52,16 +56,14 @@ __kernel void spectrum_spread(__global const double *points, __global double *co
     const uint k0 = c * per, k1 = min(n, k0 + per);
     __global const double *p = points + (size_t)r * n * DIM;
     for (uint k = k0; k < k1; ++k) {
-        double16 wx;
-        const int i0 = axis_weights(p[k * DIM] * M, beta, &wx);
-        const double *wxs = (const double *)&wx;
+        double wxs[16];
+        const int i0 = axis_weights(p[k * DIM] * M, beta, wxs);
 #if DIM == 1
         for (int l = 0; l < WIDTH; ++l)
             g[wrap(i0 + l, M)] += wxs[l];
 #else
-        double16 wy;
-        const int j0 = axis_weights(p[k * 2 + 1] * M, beta, &wy);
-        const double *wys = (const double *)&wy;
+        double wys[16];
+        const int j0 = axis_weights(p[k * 2 + 1] * M, beta, wys);
         const bool inside = j0 >= 0 && j0 + WIDTH <= (int)M;
         for (int l = 0; l < WIDTH; ++l) {
             __global double *row = g + (size_t)wrap(i0 + l, M) * M;

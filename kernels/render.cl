@@ -57,12 +57,6 @@ typedef double4 vdouble;
 typedef float8 vfloat;
 typedef int8 vint;
 typedef uint8 vuint;
-typedef ulong8 vulong;
-typedef double8 vdouble;
-#define TO_ULONG convert_ulong8
-#define TO_UINT convert_uint8
-#define TO_DOUBLE convert_double8
-#define TO_FLOAT_RTZ convert_float8_rtz
 #define LANE_INDEX ((vuint)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u))
 #define VLOAD(p) vload8(0, p)
 #define LANES ((vfloat)(0.0f, 1.0f, 2.0f, 3.0f, 4.0f, 5.0f, 6.0f, 7.0f))
@@ -114,6 +108,26 @@ typedef double8 vdouble;
 #ifdef SAMPLES_PHILOX
 #define LOAD(dim) drawn[dim]
 
+/* The 64-bit products a * m of VW lanes: the low words returned, the high words in *hi.
+ * With VW = 8 in ulong4 halves: no 512-bit vector (ulong8, double8) may reach a built-in
+ * (docs/design.md, "Kernels"). */
+#if VW == 8
+inline vuint mul_wide(const vuint a, const ulong m, vuint *hi)
+{
+    const ulong4 p = convert_ulong4(a.lo) * m;
+    const ulong4 q = convert_ulong4(a.hi) * m;
+    *hi = (vuint)(convert_uint4(p >> 32), convert_uint4(q >> 32));
+    return (vuint)(convert_uint4(p), convert_uint4(q));
+}
+#else
+inline vuint mul_wide(const vuint a, const ulong m, vuint *hi)
+{
+    const vulong p = TO_ULONG(a) * m;
+    *hi = TO_UINT(p >> 32);
+    return TO_UINT(p);
+}
+#endif
+
 /* philox4x32_10 of philox.h on VW counters at once (the index differs per lane): the
  * same words, computed in vector lanes (a loop over lanes ran 3x slower on PoCL). */
 inline void philox_lanes(const uint2 key0, const uint stream, const uint realization,
@@ -127,12 +141,13 @@ inline void philox_lanes(const uint2 key0, const uint stream, const uint realiza
             key.x += CLSAMP_PHILOX_W0;
             key.y += CLSAMP_PHILOX_W1;
         }
-        const vulong p0 = TO_ULONG(c0) * (ulong)CLSAMP_PHILOX_M0;
-        const vulong p1 = TO_ULONG(c2) * (ulong)CLSAMP_PHILOX_M1;
-        const vuint n0 = TO_UINT(p1 >> 32) ^ c1 ^ key.x;
-        const vuint n2 = TO_UINT(p0 >> 32) ^ c3 ^ key.y;
-        c1 = TO_UINT(p1);
-        c3 = TO_UINT(p0);
+        vuint h0, h1;
+        const vuint l0 = mul_wide(c0, CLSAMP_PHILOX_M0, &h0);
+        const vuint l1 = mul_wide(c2, CLSAMP_PHILOX_M1, &h1);
+        const vuint n0 = h1 ^ c1 ^ key.x;
+        const vuint n2 = h0 ^ c3 ^ key.y;
+        c1 = l1;
+        c3 = l0;
         c0 = n0;
         c2 = n2;
     }
@@ -143,11 +158,22 @@ inline void philox_lanes(const uint2 key0, const uint stream, const uint realiza
 }
 
 /* clsamp_unit (53 bits) rounded toward zero to float, lane by lane */
+#if VW == 8
+inline vfloat unit_lanes(const vuint hi, const vuint lo)
+{
+    const double4 a = (convert_double4(hi.lo >> 5) * 67108864.0 + convert_double4(lo.lo >> 6))
+                      * (1.0 / 9007199254740992.0);
+    const double4 b = (convert_double4(hi.hi >> 5) * 67108864.0 + convert_double4(lo.hi >> 6))
+                      * (1.0 / 9007199254740992.0);
+    return (vfloat)(convert_float4_rtz(a), convert_float4_rtz(b));
+}
+#else
 inline vfloat unit_lanes(const vuint hi, const vuint lo)
 {
     const vdouble x = (TO_DOUBLE(hi >> 5) * 67108864.0 + TO_DOUBLE(lo >> 6)) * (1.0 / 9007199254740992.0);
     return TO_FLOAT_RTZ(x);
 }
+#endif
 #else
 #define LOAD(dim) VLOAD(mine + (dim) * spp_pad + s)
 #endif

@@ -1,6 +1,7 @@
 """The OpenCL runtime: devices, device choice, the built-program cache, build errors."""
 
 import os
+import re
 import subprocess
 import sys
 
@@ -100,3 +101,40 @@ def test_chunk_ranges_cover_everything_without_overlap():
 def test_local_size_is_a_power_of_two_within_limits():
     size = runtime.local_size(100)
     assert size & (size - 1) == 0 and size <= min(100, clsamp.current_device().max_work_group_size)
+
+
+def _code(text):
+    """Kernel source without its comments."""
+    return re.sub(r"//[^\n]*", "", re.sub(r"/\*.*?\*/", "", text, flags=re.S))
+
+
+def test_no_kernel_uses_512_bit_vectors():
+    # PoCL 3.0 links AVX-512 hosts to its AVX-512 built-in library but compiles kernels for
+    # a CPU model LLVM 14 knows (znver3 on a Zen 4): a 512-bit vector (double8, ulong8,
+    # float16, ...) passed to or returned from a built-in then crosses two calling
+    # conventions, which crashed the Sobol, render and NUFFT kernels and made programs come
+    # back from PoCL's binary cache with no kernels at all.
+    wide = re.compile(r"\b(?:double|long|ulong)(?:8|16)\b|\b(?:float|int|uint|short|ushort)16\b"
+                      r"|\b(?:char|uchar)(?:32|64)\b")
+    folder = runtime.kernel_folder()
+    names = sorted(p.name for p in folder.iterdir() if p.name.endswith((".cl", ".h")))
+    assert names
+    offenders = {name: sorted(set(wide.findall(_code((folder / name).read_text()))))
+                 for name in names}
+    assert not {k: v for k, v in offenders.items() if v}
+
+
+def test_a_program_from_the_binary_cache_has_its_kernels(tmp_path):
+    # a second process builds from PoCL's cache (the first filled it): the kernels are there
+    code = ("from clsamp import runtime\n"
+            "print(runtime.program('lowdiscrepancy.cl').kernel_names)\n"
+            "print(runtime.program('render.cl', {'VW': 8, 'SAMPLES_PHILOX': 1, 'SAMPLES_PHILOX_STREAM': 0,"
+            " 'AO_RAYS': 2, 'EFFECT_AA': 1}).kernel_names)\n"
+            "print(runtime.program('nufft.cl', {'DIM': 2, 'WIDTH': 16}).kernel_names)\n")
+    env = dict(os.environ, POCL_CACHE_DIR=str(tmp_path))
+    root = os.path.dirname(os.path.dirname(__file__))
+    for _ in range(2):
+        out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                             check=True, cwd=root)
+        assert out.stdout.split() == ["sobol_points;radical_points", "render_pixels",
+                                      "spectrum_spread;spectrum_sum_copies"]

@@ -200,8 +200,8 @@ class SobolSampler(_LowDiscrepancy):
         return out
 
     def _width(self):
-        """Dimensions the kernel makes at once (its SIMD width): 2, 4 or 8."""
-        return 2 if self.d <= 2 else 4 if self.d <= 4 else 8
+        """Dimensions the kernel makes at once (its SIMD width): 2 or 4."""
+        return 2 if self.d <= 2 else 4
 
     def _kernel_matrices(self):
         # (32, d padded to the width): row c holds direction number c of every dimension,
