@@ -75,11 +75,12 @@ def run(devices, quick):
         dev = short_name(device)
         for radius in radii:
             sampler = clsamp.make_sampler("poisson_disk", radius=radius, seed=1)
-            t_cl, pts = timed(sampler.sample, repeats=7)
+            t_cl, (pts, info) = timed(lambda: sampler.sample(return_info=True),  # noqa: B023
+                                      repeats=7)
             assert min_distance(pts) >= radius
             void = _void_fraction(pts, radius, periodic=True)
             quality = (f"{len(pts)} pts, rho {relative_radius(pts):.4f}, void {void:.2%}, "
-                       f"{sampler.stats['rounds']} rounds, {sampler.stats['darts']} darts")
+                       f"{info.rounds} rounds, {info.darts} darts")
             size = f"maximal r={radius}"
             t_s, q_s = peers[("scipy", radius)]
             rows.append(Row("poisson_disk", size, dev, t_cl, "scipy PoissonDisk.fill_space", t_s,
@@ -95,10 +96,11 @@ def run(devices, quick):
         reference = clsamp.make_sampler("poisson_disk", rho=0.75, seed=1, backend="numpy")
         sweep = 0.0
         for n, r in ((256, 8), (16, 128), (64, 128), (256, 128), (1024, 128)):
-            t_cl, pts = timed(lambda: sampler.sample(n, realizations=r), repeats=3)
+            t_cl, (pts, info) = timed(lambda: sampler.sample(n, realizations=r, return_info=True),
+                                      repeats=3)
             rho = relative_radius(pts)
             quality = (f"rho min {rho.min():.4f} mean {rho.mean():.4f}, {n} pts each, "
-                       f"{sampler.stats['redraws']} redraws")
+                       f"{info.redraws} redraws")
             if r == 128:
                 sweep += t_cl
             if (n, r) == (256, 8):

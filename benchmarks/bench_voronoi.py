@@ -35,7 +35,10 @@ import numpy as np
 from common import GAUGE_PUBLISHED, Row, machine_gauge, main, on_device, short_name, timed
 
 from clsamp import point_metrics
-from clsamp.samplers import ccvt, lloyd, voronoi
+from clsamp.geometry import integer_torus as it
+from clsamp.samplers import lloyd
+from clsamp.samplers.ccvt import ccvt_optimize, density, start
+from clsamp.samplers.optimizer import initial_sites
 
 BALZER = {(1024, 1024): 4.9, (256, 1024): 1.0, (4096, 256): 4.5}
 
@@ -66,52 +69,51 @@ def ckdtree_lloyd(sites, g, iterations):
 def ccvt_start(sites, points, p, relax):
     """The whole start of a CCVT run: the sites relaxed (``relax`` steps), then the exact
     partition."""
-    relaxed, weight = ccvt.start_sites(sites, p, steps=relax)
-    return ccvt.start_partition(relaxed, points, p, "opencl", weight)
+    relaxed, weight = start.start_sites(sites, p, steps=relax)
+    return start.start_partition(relaxed, points, p, "opencl", weight)
 
 
 def run(devices, quick):
     rows = []
     n_lloyd, g = (256, 128) if quick else (1024, 512)
-    density = g * g // n_lloyd
-    start = voronoi.initial_sites(1, np.arange(1), n_lloyd)
-    t_kd1, (_, e_kd) = timed(lambda: ckdtree_lloyd(voronoi.to_unit(start[0]), g, 1), repeats=3)
-    t_kd11, (kd_sites, e_kd10) = timed(
-        lambda: ckdtree_lloyd(voronoi.to_unit(start[0]), g, 11), repeats=3)
+    per_site = g * g // n_lloyd
+    begin = it.to_unit(initial_sites(1, np.arange(1), n_lloyd))
+    t_kd1, (_, e_kd) = timed(lambda: ckdtree_lloyd(begin[0], g, 1), repeats=3)
+    t_kd11, (kd_sites, e_kd10) = timed(lambda: ckdtree_lloyd(begin[0], g, 11), repeats=3)
     t_kd = max(t_kd11 - t_kd1, 1e-9) / 10
     cases = ([(256, 64), (1024, 64), (4096, 16)] if quick
              else [(1024, 1024), (256, 1024), (4096, 256), (256, 256), (1024, 256)])
     # the default start, then Balzer's three cases from relaxed sites
-    ccvt_cases = [(n, p, 0) for n, p in cases] + [(n, p, ccvt.RELAX_STEPS) for n, p in cases[:3]]
+    ccvt_cases = [(n, p, 0) for n, p in cases] + [(n, p, start.RELAX_STEPS) for n, p in cases[:3]]
     gauges = [] if quick else [machine_gauge()]
     ccvt_rows = []
     for device in devices:
         on_device(device)
         dev = short_name(device)
-        lloyd._run(start, n_lloyd, density, 1, "opencl")              # build the kernels
-        t1, _ = timed(lambda: lloyd._run(start, n_lloyd, density, 1, "opencl"), repeats=3)
-        t11, res = timed(lambda: lloyd._run(start, n_lloyd, density, 11, "opencl"), repeats=3)
+        lloyd.lloyd_relax(begin, per_site, 1)              # build the kernels
+        t1, _ = timed(lambda: lloyd.lloyd_relax(begin, per_site, 1), repeats=3)
+        t11, (relaxed, info) = timed(lambda: lloyd.lloyd_relax(begin, per_site, 11), repeats=3)
         per = max(t11 - t1, 1e-9) / 10
-        ne = n_lloyd * res.energy_history[0]
+        ne = n_lloyd * info.energy_history[0]
         rows.append(Row("lloyd iteration", f"{n_lloyd} sites, {g}^2 density", dev, per,
                         "scipy cKDTree Lloyd", t_kd,
                         f"N*E after 10: {ne[9]:.5f} (cKDTree {n_lloyd * e_kd10[9]:.5f}); "
                         f"after 1: {ne[0]:.5f} ({n_lloyd * e_kd[0]:.5f}); set N*E after "
-                        f"11: {point_metrics.normalized_energy(res.points[0]):.5f} "
+                        f"11: {point_metrics.normalized_energy(relaxed[0]):.5f} "
                         f"(cKDTree {point_metrics.normalized_energy(kd_sites):.5f})"))
         for n, p, relax in ccvt_cases:
-            sites = voronoi.initial_sites(1, np.arange(1), n)
-            ccvt.ccvt_optimize(voronoi.to_unit(voronoi.initial_sites(2, np.arange(1), 16)),
-                               points_per_site=16, iterations=5)          # build the kernels
-            seconds, res = timed(lambda: ccvt.ccvt_optimize(  # noqa: B023
-                voronoi.to_unit(sites), points_per_site=p, iterations=2000, seed=1,  # noqa: B023
+            sites = initial_sites(1, np.arange(1), n)
+            ccvt_optimize(it.to_unit(initial_sites(2, np.arange(1), 16)),
+                          points_per_site=16, iterations=5)          # build the kernels
+            seconds, (points, res) = timed(lambda: ccvt_optimize(  # noqa: B023
+                it.to_unit(sites), points_per_site=p, iterations=2000, seed=1,  # noqa: B023
                 relax=relax), repeats=1 if quick else 3, warmup=1)  # noqa: B023
-            points = ccvt.density_points_device(1, np.arange(1), n * p)
-            start, _ = timed(lambda: ccvt_start(sites, points, p, relax),  # noqa: B023
-                             repeats=1, warmup=0)
+            dense = density.density_points_device(1, np.arange(1), n * p).get()
+            start_seconds, _ = timed(lambda: ccvt_start(sites, dense, p, relax),  # noqa: B023
+                                     repeats=1, warmup=0)
             capacity = n * res.energy_history[0, -1]
-            ne = point_metrics.normalized_energy(res.points[0])
-            rho = point_metrics.relative_radius(res.points[0])
+            ne = point_metrics.normalized_energy(points[0])
+            rho = point_metrics.relative_radius(points[0])
             peer = BALZER.get((n, p))
             name = f"ccvt relax={relax}" if relax else "ccvt"
             ccvt_rows.append(Row(name, f"{n} x {p}", dev, seconds,
@@ -119,11 +121,11 @@ def run(devices, quick):
                                  f"{int(res.iterations[0])} iterations, "
                                  f"{'converged' if res.converged[0] else 'NOT converged'}, "
                                  f"N*E {ne:.5f} (capacity N*E {capacity:.5f}), rho {rho:.3f}; "
-                                 f"start {start:.2f} s; "
+                                 f"start {start_seconds:.2f} s; "
                                  f"{seconds / (n * p) * 1e9:.0f} ns per density point",
                                  extra={"iterations": int(res.iterations[0]), "ne": float(ne),
                                         "capacity_ne": float(capacity), "rho": float(rho),
-                                        "start_seconds": start, "relax": relax}))
+                                        "start_seconds": start_seconds, "relax": relax}))
     if not quick:
         gauges.append(machine_gauge())
         for row in ccvt_rows:

@@ -10,7 +10,7 @@ See README.md for a tour and ``clsamp --help`` for the command line.
 
 # clsamp.render is the module (its function is clsamp.render.render); clsamp.convergence is the
 # function, while `from clsamp.convergence import x` still reads the module.
-from . import integrands, render, theory
+from . import integrands, plots, render, theory
 from .convergence import convergence
 from .errors import (
                      BuildError,
@@ -21,14 +21,15 @@ from .errors import (
                      SamplingError,
 )
 from .runtime import current_device, devices, use_device
-from .samplers import Sampler, make_sampler, sampler_names
+from .samplers import Rate, SampleInfo, Sampler, as_qmc_engine, make_sampler, sampler_names
 from .spectrum import anisotropy, power_spectrum, radial_mean
 
 __version__ = "0.1.0"
 
 __all__ = [
     "BuildError", "ClsampError", "DeviceMemoryError", "InvalidArgumentError", "NoDeviceError",
-    "SamplingError", "Sampler", "anisotropy", "convergence", "current_device", "devices",
-    "integrands", "make_sampler", "render", "theory",
+    "Rate", "SampleInfo", "SamplingError", "Sampler", "anisotropy", "as_qmc_engine",
+    "convergence", "current_device", "devices", "integrands", "make_sampler", "plots", "render",
+    "theory",
     "power_spectrum", "radial_mean", "sampler_names", "use_device",
 ]

@@ -127,7 +127,7 @@ def _run_spectrum(args):
 
     import numpy as np
 
-    from . import io, spectrum
+    from . import io, plots, spectrum
     from .samplers import make_sampler, sampler_names
     source = Path(args.source)
     if source.is_file() and args.source.split(":")[0] not in sampler_names(aliases=True):
@@ -143,18 +143,18 @@ def _run_spectrum(args):
                                 backend=args.backend)
     output = Path(args.output)
     if output.suffix == ".exr":
-        spectrum.save_spectrum_exr(output, P, header={"source": label})
+        plots.save_spectrum_exr(output, P, header={"source": label})
     elif output.suffix == ".npy":
         import io as _io
         buffer = _io.BytesIO()
         np.save(buffer, P)
         io.write_bytes(output, buffer.getvalue())
     else:
-        spectrum.save_spectrum_png(output, P, scale=args.scale)
+        plots.save_spectrum_png(output, P, scale=args.scale)
     n = points.shape[-2]
     r = points.shape[0] if points.ndim == 3 else 1
     if args.plots:
-        spectrum.save_spectrum_plots(args.plots, P, n=n, realizations=r, label=label, scale=args.scale)
+        plots.save_spectrum_plots(args.plots, P, n=n, realizations=r, label=label, scale=args.scale)
     freqs, mean = spectrum.radial_mean(P)
     print(f"wrote the {'x'.join(map(str, P.shape))} spectrum of {r} x {n} points of {label} to "
           f"{output}; radial mean over all annuli {np.nanmean(mean):.4g}", file=sys.stderr)
@@ -191,7 +191,8 @@ def _run_convergence(args):
     from pathlib import Path
 
     from . import io, theory
-    from .convergence import convergence, convergence_plot, pareto_front, pareto_plot, parse_ns
+    from .convergence import convergence, pareto_front, parse_ns
+    from .plots import convergence_plot, pareto_plot
     samplers = [s.strip() for s in args.samplers.split(",") if s.strip()]
     integrands = [s.strip() for s in args.integrand.split(",") if s.strip()]
     if not samplers or not integrands:

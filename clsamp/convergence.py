@@ -38,19 +38,21 @@ import numpy as np
 
 from . import philox, runtime
 from .errors import InvalidArgumentError
+from .geometry import torus
 from .integrands import Integrand, make_integrand
+from .samplers import Sampler, make_sampler
+from .samplers.base import CASES
 from .validation import MAX_UINT32, check_choice, check_int, check_seed
 
 SLICE = 4096            # points one work-group sums (fixed: the summation order depends on n only)
 HOST_CHUNK = 2**22      # doubles per chunk of the NumPy path (32 MB)
 # Doubles of points generated per launch: on a CPU 16 MB, so the points the sampler just
-# wrote are still in the caches when the integrand kernel reads them (with PoCL here up to
-# 2x faster than 64 MB chunks when the integrand is cheap); on a GPU larger launches keep
-# more items in flight.
+# wrote are still in the caches when the integrand kernel reads them (which matters most
+# when the integrand is cheap; docs/performance.md); on a GPU larger launches keep more
+# items in flight.
 DEVICE_CHUNK = {"cpu": 2**21, "gpu": 2**25, "other": 2**23}
 
-__all__ = ["ConvergenceResult", "convergence", "convergence_plot", "pareto_front", "pareto_plot",
-           "time_to_mse", "parse_ns"]
+__all__ = ["ConvergenceResult", "convergence", "pareto_front", "time_to_mse", "parse_ns"]
 
 
 # -- the result ------------------------------------------------------------------------
@@ -73,8 +75,8 @@ class ConvergenceResult:
     realizations, integral, homogenize, seed, backend, device
         How it was measured.
     kind : str
-        The sampler's registry name and randomization (``"sobol:owen"``), for
-        :mod:`clsamp.theory`; not changed by relabelling.
+        The sampler's registry name and randomization (``"sobol:owen"``); not changed by
+        relabelling.
     randomized : bool
         Whether the sampler itself is random (else only the shift randomizes).
     d : int
@@ -82,6 +84,11 @@ class ConvergenceResult:
     traits : dict
         ``smooth``, ``periodic`` and ``edges`` of the integrand as the estimator sees it
         (a shifted non-periodic integrand has the square's sides as edges).
+    rates : dict
+        The sampler's published rates (``Sampler.convergence_rate``) by case, as
+        ``{case: (exponent, source)}`` (None where none is published), asked of the
+        sampler with its parameters; :func:`clsamp.theory.compare` holds the fit
+        against them. Empty: theory asks a sampler made from ``kind``.
     """
 
     sampler: str
@@ -99,6 +106,7 @@ class ConvergenceResult:
     randomized: bool = True
     d: int = 2
     traits: dict = dataclasses.field(default_factory=dict)
+    rates: dict = dataclasses.field(default_factory=dict)
 
     def __post_init__(self):
         self.ns = np.asarray(self.ns, dtype=np.int64)
@@ -157,7 +165,9 @@ class ConvergenceResult:
         out = {"sampler": self.sampler, "kind": self.kind, "integrand": self.integrand,
                "integral": self.integral, "d": self.d, "realizations": int(self.realizations),
                "homogenize": bool(self.homogenize), "seed": int(self.seed), "backend": self.backend,
-               "device": self.device, "traits": dict(self.traits), "ns": self.ns.tolist(),
+               "device": self.device, "traits": dict(self.traits),
+               "rates": {k: (list(v) if v else None) for k, v in self.rates.items()},
+               "ns": self.ns.tolist(),
                "mean": self.mean.tolist(), "bias2": self.bias2.tolist(),
                "variance": self.variance.tolist(), "mse": self.mse.tolist(),
                "mse_stderr": self.mse_stderr.tolist(), "seconds": self.seconds.tolist(),
@@ -185,13 +195,7 @@ def _statistics(e):
 
 
 # -- arguments -------------------------------------------------------------------------
-def _sampler_key(sampler):
-    randomize = getattr(sampler, "randomize", None)
-    return f"{sampler.name}:{randomize}" if randomize else str(sampler.name)
-
-
 def _resolve(sampler, integrand, seed, backend):
-    from .samplers import Sampler, make_sampler
     if isinstance(sampler, str):
         if isinstance(integrand, Integrand):
             f = integrand
@@ -202,7 +206,7 @@ def _resolve(sampler, integrand, seed, backend):
     elif isinstance(sampler, Sampler):
         s = sampler
         f = make_integrand(integrand, d=s.d) if not isinstance(integrand, Integrand) else integrand
-        label = _sampler_key(s)
+        label = s.label
     else:
         raise InvalidArgumentError(
             f"'sampler' must be a Sampler or a sampler name such as 'jittered' or 'sobol:owen', "
@@ -212,6 +216,15 @@ def _resolve(sampler, integrand, seed, backend):
             f"'integrand' {f.name!r} is {f.d}-dimensional but 'sampler' {label!r} makes "
             f"{s.d}-dimensional points")
     return s, f, label
+
+
+def sampler_rates(sampler):
+    """The published rates of ``sampler`` by case: ``{case: (exponent, source) or None}``."""
+    out = {}
+    for case in CASES:
+        rate = sampler.convergence_rate(case)
+        out[case] = None if rate is None else (rate.exponent, rate.source)
+    return out
 
 
 def _check_ns(ns, sampler, label):
@@ -233,37 +246,11 @@ def _check_ns(ns, sampler, label):
 
 
 # -- points ----------------------------------------------------------------------------
-def _device_points(sampler, n, lo, hi, total):
-    """Realizations [lo, hi) of the sampler as a device array (r, n, d)."""
-    if (lo, hi) == (0, total):
-        return sampler.sample_device(n, realizations=total)
-    # A chunk: the base's documented per-range contract (what its own chunking uses).
-    if sampler.backend == "numpy":
-        import pyopencl.array as cla
-        return cla.to_device(runtime.queue(),
-                             np.ascontiguousarray(sampler._reference(n, range(lo, hi), 0)))
-    return sampler._device(n, range(lo, hi), 0)
-
-
-def _host_points(sampler, n, lo, hi, total):
-    if (lo, hi) == (0, total):
-        return sampler.sample(n, realizations=total)
-    if sampler.backend == "numpy":
-        return np.asarray(sampler._reference(n, range(lo, hi), 0), dtype=np.float64)
-    return sampler._device(n, range(lo, hi), 0).get()
-
-
 def homogenization_shifts(seed, realizations, d):
     """The toroidal shift of each realization: (len(realizations), d) doubles in [0, 1),
     ``philox.uniform(seed, Stream.EXPERIMENT, k, 0, j)`` (the kernel draws the same)."""
     k = np.asarray(realizations, dtype=np.uint32)[:, None]
     return philox.uniform(seed, philox.Stream.EXPERIMENT, k, 0, np.arange(d, dtype=np.uint32)[None, :])
-
-
-def shift_points(points, shifts):
-    """(x + u) mod 1 with one rounding, per realization: points (r, n, d), shifts (r, d)."""
-    y = points + shifts[:, None, :]
-    return np.where(y >= 1.0, y - 1.0, y)
 
 
 def _errors_numpy(sampler, f, n, r, homogenize, seed):
@@ -272,9 +259,9 @@ def _errors_numpy(sampler, f, n, r, homogenize, seed):
     out = np.empty(r)
     for lo in range(0, r, step):
         hi = min(r, lo + step)
-        x = _host_points(sampler, n, lo, hi, r)
+        x = sampler.sample(n, realizations=range(lo, hi))
         if homogenize:
-            x = shift_points(x, homogenization_shifts(seed, np.arange(lo, hi), f.d))
+            x = torus.shift(x, homogenization_shifts(seed, np.arange(lo, hi), f.d)[:, None, :])
         # numpy sums a contiguous row pairwise: error ~ eps log2(n) of sum |f - I|
         out[lo:hi] = np.sum(f._evaluate(x) - f.integral, axis=1) / n
     return out
@@ -331,13 +318,10 @@ def combine_sums(parts):
 
 
 def _errors_opencl(kernel, sampler, n, r):
-    step = max(1, DEVICE_CHUNK[runtime.current_device().type] // (n * sampler.d))
-    ranges = []
-    for lo, hi in runtime.chunk_ranges(r, 8 * n * sampler.d):
-        ranges += [(a, min(hi, a + step)) for a in range(lo, hi, step)]
+    limit = 8 * DEVICE_CHUNK[runtime.current_device().type]
     out = np.empty(r)
-    for lo, hi in ranges:
-        points = _device_points(sampler, n, lo, hi, r)
+    for lo, hi in runtime.chunk_ranges(r, 8 * n * sampler.d, limit):
+        points = sampler.sample_device(n, realizations=range(lo, hi))
         out[lo:hi] = combine_sums(kernel.error_sums(points, n, lo)) / n
     return out
 
@@ -429,8 +413,8 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
     return ConvergenceResult(sampler=label, integrand=f.name, ns=values, errors=errors,
                              seconds=seconds, realizations=r, integral=f.integral,
                              homogenize=bool(homogenize), seed=seed, backend=backend, device=device,
-                             kind=_sampler_key(s), randomized=bool(getattr(s, "randomized", True)),
-                             d=f.d, traits=traits)
+                             kind=s.label, randomized=bool(s.randomized), d=f.d, traits=traits,
+                             rates=sampler_rates(s))
 
 
 # -- accuracy against time -------------------------------------------------------------
@@ -492,82 +476,6 @@ def time_to_mse(result, target):
             out["seconds_interpolated"] = float(math.exp(
                 (1 - a) * math.log(t[k - 1]) + a * math.log(t[k])))
     return out
-
-
-# -- pictures --------------------------------------------------------------------------
-def _pyplot():
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    return plt
-
-
-def _panels(results):
-    """One matplotlib panel per integrand: (figure, [(axes, integrand name, its results)])."""
-    groups = {}
-    for res in results:
-        groups.setdefault(res.integrand, []).append(res)
-    if not groups:
-        raise InvalidArgumentError("'results' must hold at least one ConvergenceResult")
-    fig, axes = _pyplot().subplots(1, len(groups), figsize=(5.5 * len(groups), 4.5), squeeze=False)
-    return fig, list(zip(axes[0], groups, groups.values(), strict=True))
-
-
-def _label(ax, xlabel, title):
-    """The labels, grid and legend every panel has (MSE up the side)."""
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel("MSE")
-    ax.set_title(title)
-    ax.grid(True, which="both", alpha=0.2)
-    ax.legend(fontsize=7)
-
-
-def convergence_plot(results, path):
-    """MSE against N (log-log), one panel per integrand, with the theory slopes drawn.
-
-    Each result is a line with error bars (one standard error); where
-    :func:`clsamp.theory.compare` knows the published rate, a dashed line of that
-    slope in the same colour passes through the result's largest N. Saved with
-    :func:`clsamp.io.save_figure`; returns its path.
-    """
-    from . import io, theory
-    fig, panels = _panels(results)
-    for ax, name, group in panels:
-        for res in group:
-            ok = res.mse > 0
-            cmp = theory.compare(res)
-            label = res.sampler
-            if np.isfinite(cmp["slope"]):
-                label += f": {cmp['slope']:.2f} (theory {cmp['expected_text'] or '?'})"
-            line = ax.errorbar(res.ns[ok], res.mse[ok], yerr=res.mse_stderr[ok], marker="o",
-                               markersize=3, capsize=2, label=label)
-            if cmp["expected"] is not None and ok.any():
-                n = res.ns[ok].astype(np.float64)
-                ax.loglog(n, res.mse[ok][-1] * (n / n[-1]) ** cmp["expected"], "--",
-                          color=line[0].get_color(), linewidth=0.9, alpha=0.7)
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        _label(ax, "N (samples)", f"{name}: MSE against N (dashed: theory)")
-    fig.tight_layout()
-    return io.save_figure(path, fig)
-
-
-def pareto_plot(results, path):
-    """MSE against seconds per estimate (generation included), one panel per integrand,
-    with the accuracy-time front (:func:`pareto_front`) drawn in black; returns the path."""
-    from . import io
-    fig, panels = _panels(results)
-    for ax, name, group in panels:
-        for res in group:
-            ok = (res.mse > 0) & (res.seconds_per_estimate > 0)
-            ax.loglog(res.seconds_per_estimate[ok], res.mse[ok], "o-", markersize=3, label=res.sampler)
-        front = [p for p in pareto_front(group) if p["mse"] > 0 and p["seconds"] > 0]
-        if front:
-            ax.step([p["seconds"] for p in front], [p["mse"] for p in front], "k-", where="post",
-                    linewidth=1.5, alpha=0.6, label="front")
-        _label(ax, "seconds per estimate (generation included)", f"{name}: accuracy against time")
-    fig.tight_layout()
-    return io.save_figure(path, fig)
 
 
 # -- the command line's sample counts --------------------------------------------------

@@ -35,6 +35,7 @@ from fractions import Fraction
 import numpy as np
 
 from .errors import InvalidArgumentError
+from .geometry.torus import ball_volume
 from .validation import check_real
 
 # Kernel codes (INTEGRAND in kernels/integrands.cl).
@@ -191,11 +192,6 @@ class Gaussian(Integrand):
         for j in range(1, self.d):
             out = out * g[..., j]
         return out
-
-
-def ball_volume(d, radius):
-    """Volume of the d-ball of ``radius``: pi^(d/2) r^d / Gamma(d/2 + 1)."""
-    return math.pi ** (d / 2) * radius**d / math.gamma(d / 2 + 1)
 
 
 class Disk(Integrand):

@@ -244,7 +244,7 @@ def fisher_yates_draws(seed, stream, realizations, length, perms):
     return draws
 
 
-SLOW_SWAPS = 2**21      # about 2 s of Python swaps: show a progress bar beyond this
+SLOW_SWAPS = 2**21      # Python swaps beyond which the NumPy reference shows a progress bar
 
 
 def random_permutations(seed, stream, realizations, length, perms, progress=True):
@@ -263,8 +263,8 @@ def random_permutations(seed, stream, realizations, length, perms, progress=True
     perms : range or int
         Permutation numbers within a realization (an int ``c`` means ``range(c)``).
     progress : bool
-        Show a progress bar when the swaps are many (they run as a Python loop,
-        about a microsecond each).
+        Show a progress bar when the swaps are many (more than ``SLOW_SWAPS``: they run
+        as a Python loop).
 
     Returns
     -------

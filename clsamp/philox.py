@@ -5,9 +5,9 @@ Salmon, Moraes, Dror, Shaw, "Parallel random numbers: as easy as 1, 2, 3"
 words for the same key and counter, and tests hold them together with the
 Random123 known-answer vectors.
 
-clsamp's convention (DESIGN.md): the key is the 64-bit ``seed`` split into two
-32-bit words (low, high); the counter is ``(index, realization, block, stream)``
-where ``block`` numbers the groups of four 32-bit words (two doubles) drawn for
+clsamp's convention (docs/design.md, "Conventions"): the key is the 64-bit ``seed``
+split into two 32-bit words (low, high); the counter is ``(index, realization, block,
+stream)`` where ``block`` numbers the groups of four 32-bit words (two doubles) drawn for
 one point. So point ``index`` of realization ``r`` gets the same numbers however
 many points or realizations were asked for, and different purposes inside one
 sampler (point coordinates, permutations, shifts) use different ``stream``s.

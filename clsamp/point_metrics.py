@@ -5,98 +5,31 @@
 * :func:`relative_radius` -- that distance over the largest one n points could have,
   rho = min distance / d_max (Lagae & Dutre 2008): about 0.93 for a square grid,
   1 for the hexagonal lattice, 0.7--0.8 for maximal dart throwing.
-* :func:`max_min_distance` -- d_max itself.
+* :func:`max_min_distance` -- d_max itself (:func:`clsamp.geometry.torus.max_min_distance`).
 * :func:`normalized_energy` -- N*E, n times the CVT energy of a 2-D set (mean squared
   distance from the torus to the nearest point): 0.160375 for the hexagonal lattice,
   1/6 for a square grid, about 1/pi for white noise.
 
-Distances wrap: a pair's distance is computed coordinate by coordinate as
-``min(|a - b|, 1 - |a - b|)``, summed in squares from the first coordinate to the
-last and square-rooted, the same operations (hence the same bits) as the Poisson-disk
-kernels test acceptance with, so a sampler that promises "min distance >= r" can be
-checked without tolerance.
+Distances wrap (:mod:`clsamp.geometry.torus`): a pair's distance is computed coordinate
+by coordinate as ``min(|a - b|, 1 - |a - b|)``, summed in squares from the first
+coordinate to the last and square-rooted, the same operations (hence the same bits) as
+the Poisson-disk kernels test acceptance with, so a sampler that promises "min distance
+>= r" can be checked without tolerance.
 """
-
-import math
 
 import numpy as np
 
 from .errors import InvalidArgumentError
+from .geometry import integer_torus, voronoi
+from .geometry.torus import PACKING_DENSITY, max_min_distance
+from .geometry.torus import distance2 as toroidal_distance2
 from .validation import check_points, check_positive_int
 
-# Densest known sphere packings (fraction of space covered) in dimensions 1..8:
-# integers, hexagonal, FCC, D4, D5, E6, E7, E8 (Conway & Sloane, "Sphere Packings,
-# Lattices and Groups", table 1.2); proven optimal in 1, 2, 3 and 8.
-PACKING_DENSITY = {
-    1: 1.0,
-    2: math.pi / math.sqrt(12.0),
-    3: math.pi / math.sqrt(18.0),
-    4: math.pi ** 2 / 16.0,
-    5: math.pi ** 2 / (15.0 * math.sqrt(2.0)),
-    6: math.pi ** 3 / (48.0 * math.sqrt(3.0)),
-    7: math.pi ** 3 / 105.0,
-    8: math.pi ** 4 / 384.0,
-}
+__all__ = ["min_distance", "relative_radius", "max_min_distance", "normalized_energy",
+           "toroidal_distance2", "HEXAGONAL_NE", "WHITE_NOISE_NE"]
 
-
-def _ball_volume(d):
-    return math.pi ** (d / 2.0) / math.gamma(d / 2.0 + 1.0)
-
-
-def max_min_distance(n, d=2):
-    """The largest minimum distance n points can have in the unit d-torus, d_max.
-
-    Parameters
-    ----------
-    n : int
-        Number of points (>= 1).
-    d : int
-        Dimension, 1 to 8.
-
-    Returns
-    -------
-    float
-
-    Notes
-    -----
-    n disjoint balls of radius d_max/2 fill at most the packing density Delta_d of
-    the torus, ``n V_d (d_max / 2)^d = Delta_d``, so
-    ``d_max = 2 (Delta_d / (n V_d))^(1/d)``. In 2-D (hexagonal packing) this is
-    ``sqrt(2 / (sqrt(3) n))``; in 3-D (FCC) ``(sqrt(2) / n)^(1/3)``; in 1-D ``1/n``.
-
-    References
-    ----------
-    A. Lagae, P. Dutre, "A comparison of methods for generating Poisson disk
-    distributions", Computer Graphics Forum 27(1), 2008.
-
-    Examples
-    --------
-    >>> from clsamp.point_metrics import max_min_distance
-    >>> round(max_min_distance(1000), 5)
-    0.03398
-    """
-    n = check_positive_int(n, "n")
-    d = check_positive_int(d, "d")
-    if d not in PACKING_DENSITY:
-        raise InvalidArgumentError(
-            f"'d' must be in 1..8 (dimensions with a known densest packing), got {d}")
-    if d == 2:
-        return math.sqrt(2.0 / (math.sqrt(3.0) * n))
-    return 2.0 * (PACKING_DENSITY[d] / (n * _ball_volume(d))) ** (1.0 / d)
-
-
-def toroidal_distance2(a, b):
-    """Squared toroidal distances between points ``a`` and ``b`` (broadcast, last axis d).
-
-    The operations and their order are those of the Poisson-disk kernels
-    (``kernels/dart_throwing.cl``), so results agree bit for bit.
-    """
-    delta = np.abs(a - b)
-    delta = np.minimum(delta, 1.0 - delta)
-    total = delta[..., 0] * delta[..., 0]
-    for k in range(1, delta.shape[-1]):
-        total = total + delta[..., k] * delta[..., k]
-    return total
+HEXAGONAL_NE = 5.0 / (18.0 * np.sqrt(3.0))   # N*E of the hexagonal lattice, 0.160375
+WHITE_NOISE_NE = 1.0 / np.pi                 # expected N*E of independent uniform points
 
 
 def _min_distance2_brute(batch):
@@ -260,8 +193,8 @@ def normalized_energy(points, density=4096, backend="opencl"):
         Points in [0, 1)^2.
     density : int
         Regular g x g grid of cell centres the mean is taken over, g = ceil(sqrt(n *
-        density)) (the density of :func:`clsamp.samplers.lloyd.lloyd_relax`; the
-        nearest point of each is found through a grid of the points, in OpenCL).
+        density)); the nearest point of each is found through a grid of the points, in
+        OpenCL (:func:`clsamp.geometry.voronoi.cvt_energy`).
     backend : {"opencl", "numpy"}
 
     Returns
@@ -270,12 +203,13 @@ def normalized_energy(points, density=4096, backend="opencl"):
 
     Notes
     -----
-    The same energy Lloyd relaxation lowers, so sets of every sampler compare on one
-    scale: 0.160375 for the hexagonal lattice (the optimum), 1/6 for a square grid
-    (less a term of order 1 / density from the discrete grid), 1/pi for the expectation
-    over white noise. A CCVT's own ``normalized_energy`` is over its density points
-    with each point counted at the site that owns it (capacity-constrained), which is
-    never lower than this figure for its sites.
+    The energy Lloyd relaxation lowers, so sets of every sampler compare on one scale:
+    0.160375 for the hexagonal lattice (the optimum), 1/6 for a square grid (less a term
+    of order 1 / density from the discrete grid), 1/pi for the expectation over white
+    noise. The points are rounded to the 2^22 integer torus first
+    (:mod:`clsamp.geometry.integer_torus`), so both backends give the same bits. A
+    CCVT's own energy (``energy_history`` of its info) counts each density point at the
+    site that owns it, under equal capacities, and is never lower than this figure.
 
     Examples
     --------
@@ -285,13 +219,11 @@ def normalized_energy(points, density=4096, backend="opencl"):
     >>> round(normalized_energy(g), 5)
     0.16663
     """
-    from .samplers import lloyd, voronoi
     batch, single = check_points(points, "points")
     if batch.shape[-1] != 2:
         raise InvalidArgumentError(
             f"'points' must be 2-D for normalized_energy, got d = {batch.shape[-1]}")
     density = check_positive_int(density, "density")
-    # the assignment pass alone (no Lloyd step): the energy of the points as they are
-    result = lloyd._run(voronoi.to_torus(batch), batch.shape[1], density, 0, backend)
-    out = batch.shape[1] * result.initial_energy
+    energy = voronoi.cvt_energy(integer_torus.to_torus(batch), density, backend)
+    out = batch.shape[1] * energy
     return float(out[0]) if single else out

@@ -5,8 +5,8 @@ with ``kernels/render.cl`` and returns a float32 image of shape (resolution, res
 (one channel: the scenes are gray). ``reference`` renders (and caches) a high-spp
 reference, ``compare`` and ``mse`` measure an image against it.
 
-Sample dimensions (DESIGN.md, "Rendering")
-------------------------------------------
+Sample dimensions (docs/design.md, "Rendering")
+-------------------------------------------------
 Each pixel sample has exactly the dimensions of the scene's effects, in the fixed order
 pixel 2, lens 2, time 1, 2 per AO ray, light 2 (``scene.sample_groups``). With
 ``pad=True`` (the default) the sampler is asked, for each pixel, for one set of ``spp``
@@ -32,9 +32,8 @@ follows only from ``spp`` and the dimensions, never from the device, so the same
 gives the same samples on every device, and the same image up to float rounding
 (the ray math is float32; on one device the image is bit-identical run to run).
 
-*Expensive* samplers (those named in :data:`EXPENSIVE_SAMPLERS`, or whose class or
-object sets ``expensive = True``: optimizers and dart throwing) cannot afford one
-realization per pixel. For them a pool of ``pool`` realizations (default
+*Expensive* samplers (``Sampler.expensive``: optimizers and dart throwing) cannot afford
+one realization per pixel. For them a pool of ``pool`` realizations (default
 :data:`DEFAULT_POOL`) per set is made once (seeded per set),
 and pixel ``p`` takes pool member ``j(p)`` shifted by its own random toroidal vector
 ``u(p)``: ``x -> (x + u) mod 1`` (Cranley–Patterson). The shift keeps the set's
@@ -42,14 +41,13 @@ blue-noise and stratification on the torus and makes each pixel's estimate unbia
 (every point uniform); ``j`` and ``u`` are Philox draws keyed by (seed, pixel, set),
 so pixels sharing a pool member still see different point positions.
 
-Images are rendered in tiles of whole seed blocks sized from the device's largest
-allocation (:func:`clsamp.runtime.chunk_ranges`) and at most :data:`TILE_BYTES` of
-samples, so large images never exceed device (or host) memory; the tiling does not
-change the image. Samples cross to the kernel as float32, rounded toward zero (so they stay
-below 1); the pixel mean is accumulated in double.
+Images are rendered in tiles of whole seed blocks that fit one launch
+(:func:`clsamp.runtime.chunk_ranges`) and at most :data:`TILE_BYTES` of samples, so large
+images never exceed device (or host) memory; the tiling does not change the image.
+Samples cross to the kernel as float32, rounded toward zero (so they stay below 1); the
+pixel mean is accumulated in double.
 """
 
-import copy
 import hashlib
 import math
 import os
@@ -59,11 +57,11 @@ import numpy as np
 
 from . import io, permutation, philox, runtime
 from .errors import InvalidArgumentError
-from .samplers import Sampler, make_sampler, sampler_names
+from .geometry import torus
+from .samplers import Sampler, make_sampler, sampler_class
 from .scene import Scene
 from .validation import check_int, check_positive_int, check_seed
 
-EXPENSIVE_SAMPLERS = frozenset({"poisson_disk", "lloyd", "ccvt"})
 DEFAULT_POOL = 8                    # realizations per set of an expensive sampler
 MAX_BLOCK = 1024                    # pixels per seed block at most
 BLOCK_BYTES = 64 * 2**20            # float64 sample bytes of one block at most
@@ -134,26 +132,13 @@ def _sampler_factory(sampler, sampler_params):
                 raise InvalidArgumentError(
                     f"'sampler' has d={base.d}; this render needs d={d} (pairs of dimensions "
                     "with pad=True, scene.sample_dimensions with pad=False)")
-            # a copy re-seeded per block or set: the sampler's other parameters are kept
-            other = copy.copy(base)
-            other.seed = check_seed(seed)
-            return other
+            return base.with_seed(seed)
 
-        name = type(base).name or type(base).__name__
-        expensive = name in EXPENSIVE_SAMPLERS or bool(getattr(base, "expensive", False))
-        return name, make, lambda d: d == base.d, expensive
+        return base.label, make, lambda d: d == base.d, base.expensive
     if not isinstance(sampler, str):
         raise InvalidArgumentError(f"'sampler' must be a sampler name or a Sampler, got {sampler!r}")
     params = dict(sampler_params or {})
-    if sampler.partition(":")[0] not in sampler_names(aliases=True):
-        make_sampler(sampler)                # raises, naming the unknown sampler and the known ones
-    probe = None
-    for d in (2, 1):                         # an instance, to read its class attributes
-        try:
-            probe = make_sampler(sampler, d=d, seed=0, **dict(params))
-            break
-        except InvalidArgumentError:
-            continue
+    cls = sampler_class(sampler)        # raises, naming the unknown sampler and the known ones
 
     def make(d, seed):
         return make_sampler(sampler, d=d, seed=seed, **dict(params))
@@ -165,9 +150,7 @@ def _sampler_factory(sampler, sampler_params):
         except InvalidArgumentError:
             return False
 
-    base = sampler.partition(":")[0]
-    expensive = base in EXPENSIVE_SAMPLERS or bool(getattr(probe, "expensive", False))
-    return sampler, make, supports, expensive
+    return sampler, make, supports, cls.expensive
 
 
 def _plan(scene, sampler, spp, sampler_params, pad, pool):
@@ -239,16 +222,15 @@ def pixel_samples(scene, sampler, spp, resolution, seed=0, sampler_params=None, 
             w = _words(seed, np.arange(lo, hi), g, _PURPOSE_SHIFT)
             shift = np.stack([philox.words_to_unit(w[:, 0], w[:, 1]),
                               philox.words_to_unit(w[:, 2], w[:, 3])], axis=-1)[:, :s.d]
-            y = s.pool[choice] + shift[:, None, :]
-            points = np.where(y >= 1.0, y - 1.0, y)
+            points = torus.shift(s.pool[choice], shift[:, None, :])
         else:
             points = np.empty((hi - lo, spp, s.d))
             for b in range(lo // block, -(-hi // block)):
                 b_lo, b_hi = max(lo, b * block), min(hi, (b + 1) * block)
                 sampler_b = s.factory(s.d, derived_seed(seed, b, g))
-                # realization k of block b is pixel b * block + k: ask for the first b_hi - b*block
-                got = sampler_b.sample(spp, realizations=b_hi - b * block)
-                points[b_lo - lo:b_hi - lo] = got[b_lo - b * block:]
+                # realization k of block b is pixel b * block + k
+                points[b_lo - lo:b_hi - lo] = sampler_b.sample(
+                    spp, realizations=range(b_lo - b * block, b_hi - b * block))
         if perms is not None:
             flat = perms[:, g, :].astype(np.intp) + (np.arange(hi - lo, dtype=np.intp) * spp)[:, None]
             points = points.reshape(-1, s.d)[flat.ravel()].reshape(hi - lo, spp, s.d)
@@ -571,9 +553,7 @@ def render(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=Tru
     # device bytes per block: float32 samples (padded to the vector width) and the output
     per_block = block * (4 * max(dims, 1) * spp_pad + 4)
     # host memory holds each tile's samples several times over (float64, permuted, float32)
-    cap = max(1, TILE_BYTES // per_block)
-    tiles = [(start, min(hi, start + cap)) for lo, hi in runtime.chunk_ranges(blocks, per_block)
-             for start in range(lo, hi, cap)]
+    tiles = runtime.chunk_ranges(blocks, per_block, limit=TILE_BYTES)
     image = np.empty(total, dtype=np.float32)
     from tqdm import tqdm
     long = total * spp * scene.rays_per_sample() > 2**27

@@ -1,9 +1,12 @@
-"""OpenCL runtime: devices, the current context and queue, and built programs.
+"""OpenCL runtime: devices, the current context and queue, programs, kernels and buffers.
 
-This module is the one owner of OpenCL state (DESIGN.md, "Kernels"): nothing
-else creates contexts or builds programs. Programs are cached by
-(device, kernel file, build options), so a kernel is compiled once per process
-(PoCL and pyopencl also keep binaries on disk between processes).
+This module is the one owner of OpenCL state (docs/design.md, "Kernels and the
+runtime"): nothing else creates contexts, queues, programs, kernel objects or buffers over
+host memory, and every module asks :func:`chunk_ranges` / :func:`fit` how much work one
+launch may hold.
+Programs are cached by (device, kernel file, build options), so a kernel is compiled once
+per process (PoCL also keeps binaries on disk between processes); kernel objects once per
+program, and small read-only tables once per device (:func:`table`).
 
 The default device is the first CPU device (PoCL from ``pocl-binary-distribution``),
 so a fresh install works with no GPU. ``CLSAMP_DEVICE`` (an index into
@@ -52,7 +55,9 @@ _records = None
 _current = None         # index into _records
 _contexts = {}          # device index -> (context, queue)
 _programs = {}          # (device index, file, options) -> pyopencl.Program
-_kernels = {}           # (program key, kernel name) -> pyopencl.Kernel
+_kernels = {}           # (program key, kernel name, instance) -> pyopencl.Kernel
+_tables = {}            # (device index, key) -> pyopencl.array.Array, least recently used first
+_TABLES = 64            # tables kept per process
 _build_count = 0
 
 
@@ -278,16 +283,136 @@ def program(file, defines=None, options=()):
         return built
 
 
-def kernel(file, name, defines=None, options=()):
-    """A kernel object from :func:`program`, fetched once per program."""
+def kernel(file, name, defines=None, options=(), instance=None):
+    """A kernel object from :func:`program`, fetched once per program.
+
+    Callers share the object, so each launch sets all its arguments. A loop that sets
+    arguments once and launches many times asks for its own ``instance`` (any hashable
+    key): a distinct object per key, kept with the program.
+    """
     prog = program(file, defines, options)
-    key = (id(prog), name)
+    key = (id(prog), name, instance)
     with _lock:
         k = _kernels.get(key)
         if k is None:
-            k = getattr(prog, name)
+            k = _cl().Kernel(prog, name) if instance is not None else getattr(prog, name)
             _kernels[key] = k
         return k
+
+
+def table(key, build, dtype=np.uint32):
+    """A small read-only device array, uploaded once per (device, ``key``).
+
+    ``build()`` makes the host array the first time; later calls on the same device get
+    the same device array (the most recently used tables are kept, at most 64).
+    """
+    import pyopencl.array as cla
+    full = (current_device().index, key)
+    with _lock:
+        found = _tables.pop(full, None)
+        if found is None:
+            found = cla.to_device(queue(), np.ascontiguousarray(build(), dtype=dtype))
+        _tables[full] = found
+        while len(_tables) > _TABLES:
+            _tables.pop(next(iter(_tables)))
+        return found
+
+
+class Output:
+    """Where a kernel writes its result.
+
+    Without ``host`` a new device array; with ``host`` (a C-contiguous NumPy array) a
+    buffer over that array's memory, so that on a CPU device the kernel writes straight
+    into the array the caller gets. Pass :attr:`buffer` to the kernel, then
+    :meth:`finish` gives the result (the host array, its writes visible, or the device
+    array).
+    """
+
+    def __init__(self, shape, dtype=np.float64, host=None):
+        import pyopencl.array as cla
+        self.host = host
+        if host is None:
+            self.array = cla.empty(queue(), shape, dtype)
+            self.buffer = self.array.data
+        else:
+            cl = _cl()
+            self.array = host
+            self.buffer = cl.Buffer(context(), cl.mem_flags.WRITE_ONLY | cl.mem_flags.USE_HOST_PTR,
+                                    hostbuf=host)
+
+    def finish(self):
+        if self.host is not None:
+            # mapping makes the kernel's writes visible in host memory (no copy on PoCL)
+            cl = _cl()
+            mapped, _ = cl.enqueue_map_buffer(queue(), self.buffer, cl.map_flags.READ, 0,
+                                              self.host.shape, self.host.dtype, is_blocking=True)
+            mapped.base.release(queue())
+        return self.array
+
+
+def is_device_array(value):
+    """Whether ``value`` is a ``pyopencl.array.Array``."""
+    import pyopencl.array as cla
+    return isinstance(value, cla.Array)
+
+
+def to_device(array):
+    """``array`` on the current device: itself if it is a device array, else a copy."""
+    if is_device_array(array):
+        return array
+    import pyopencl.array as cla
+    return cla.to_device(queue(), np.ascontiguousarray(array))
+
+
+def to_host(array, into=None):
+    """``array`` as a NumPy array (a device array read back), in ``into`` when given."""
+    if is_device_array(array):
+        return array.get() if into is None else array.get(ary=into)
+    if into is None:
+        return np.asarray(array)
+    into[...] = array
+    return into
+
+
+def bounds(array):
+    """(smallest, largest, count of NaN or infinite) of the doubles of a device array,
+    computed on the device (``kernels/points.cl``); smallest/largest over finite values."""
+    import pyopencl.array as cla
+    require_fp64()
+    items = 64 * max(1, current_device().compute_units)
+    q = queue()
+    lo = cla.empty(q, items, np.float64)
+    hi = cla.empty(q, items, np.float64)
+    bad = cla.empty(q, items, np.uint32)
+    kernel("points.cl", "points_bounds")(q, (items,), None, array.base_data, np.uint64(array.size),
+                                         lo.data, hi.data, bad.data)
+    return float(lo.get().min()), float(hi.get().max()), int(bad.get().sum())
+
+
+def device_block(array, r0, r1, k0=0, k1=None):
+    """``array[r0:r1, k0:k1]`` of a device array (r, n, d) as a contiguous device array:
+    the array itself when that is all of it, else a copy made on the device."""
+    import pyopencl.array as cla
+    r, n, d = array.shape
+    k1 = n if k1 is None else k1
+    if (r0, r1, k0, k1) == (0, r, 0, n) and array.offset == 0:
+        return array
+    out = cla.empty(queue(), (r1 - r0, k1 - k0, d), array.dtype)
+    item = array.dtype.itemsize
+    row = n * d * item
+    _cl().enqueue_copy(queue(), out.data, array.base_data,
+                       src_origin=(array.offset + k0 * d * item, r0, 0), dst_origin=(0, 0, 0),
+                       region=((k1 - k0) * d * item, r1 - r0, 1), src_pitches=(row, 0),
+                       dst_pitches=((k1 - k0) * d * item, 0))
+    return out
+
+
+def concatenate(parts):
+    """Device arrays joined along their first axis (the one part itself when alone)."""
+    if len(parts) == 1:
+        return parts[0]
+    import pyopencl.array as cla
+    return cla.concatenate(parts, axis=0, queue=queue())
 
 
 def build_count():
@@ -305,15 +430,27 @@ def require_fp64():
     return device
 
 
-def chunk_ranges(total, bytes_per_item, fraction=0.25):
-    """Split ``total`` items into contiguous ranges that each fit in device memory.
+def work_budget():
+    """Bytes one launch's buffers may hold on the current device: a quarter of its largest
+    single allocation (the one rule every module asks, through :func:`fit`)."""
+    return max(1, current_device().max_allocation // 4)
 
-    Each range's buffer stays under ``fraction`` of the device's largest single
-    allocation, so work too large for the device is split, never refused or truncated.
+
+def fit(bytes_per_item, limit=None):
+    """How many items of ``bytes_per_item`` one launch may hold (at least one).
+
+    ``limit`` caps the bytes further where a caller has its own reason (a working set
+    that should stay in the caches, a host-memory cap).
     """
-    device = current_device()
-    limit = max(1, int(device.max_allocation * fraction) // max(1, int(bytes_per_item)))
-    return [(lo, min(total, lo + limit)) for lo in range(0, total, limit)]
+    budget = work_budget() if limit is None else min(work_budget(), int(limit))
+    return max(1, budget // max(1, int(bytes_per_item)))
+
+
+def chunk_ranges(total, bytes_per_item, limit=None):
+    """Split ``total`` items into contiguous ranges that each fit one launch (:func:`fit`),
+    so work too large for the device is split, never refused or truncated."""
+    step = fit(bytes_per_item, limit)
+    return [(lo, min(total, lo + step)) for lo in range(0, total, step)]
 
 
 def local_size(preferred=64):

@@ -1,7 +1,7 @@
 """Scenes for the renderer: JSON files in ``scenes/``, validated into a :class:`Scene`.
 
 A scene file holds a camera, shapes, an optional quad light and the list of effects
-the renderer simulates (DESIGN.md, "Rendering")::
+the renderer simulates (docs/design.md, "Rendering")::
 
     {
       "name": "ao",

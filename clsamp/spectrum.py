@@ -8,9 +8,9 @@ so P(0) = N and white noise has E[P(ω)] = 1 at every ω ≠ 0. For r realizatio
 expected spectrum is estimated by the mean of the r periodograms (Ulichney 1987; Lagae &
 Dutré 2008; Heck, Schlömer & Deussen 2013).
 
-Layout (DESIGN.md): a resolution R (even) gives frequencies ω in [-R/2, R/2)^d and
-P[i, j] is frequency (i - R/2) along x and (j - R/2) along y, DC at [R/2, R/2]. One
-dimensional points give a spectrum of length R, DC at [R/2].
+Layout (docs/design.md, "Conventions"): a resolution R (even) gives frequencies ω in
+[-R/2, R/2)^d and P[i, j] is frequency (i - R/2) along x and (j - R/2) along y, DC at
+[R/2, R/2]. One dimensional points give a spectrum of length R, DC at [R/2].
 
 Two ways to compute it, one knob between them:
 
@@ -41,8 +41,7 @@ from .validation import check_choice, check_int, check_points, check_real
 __all__ = [
     "power_spectrum", "radial_mean", "anisotropy", "normalized_frequency", "frequencies",
     "direct_reference", "spread_reference", "twiddles_reference", "nufft_parameters",
-    "spectrum_image", "save_spectrum_png", "save_spectrum_exr", "plot_spectrum",
-    "plot_radial_mean", "plot_anisotropy", "save_spectrum_plots",
+    "check_spectrum",
 ]
 
 METHODS = ("auto", "direct", "fast")
@@ -54,7 +53,7 @@ _PHASE = 2.0 * np.pi * 2.0**-64     # radians per unit of 64-bit fixed-point pha
 _FINE = 16                          # twiddles per exact sincos, as FINE in spectrum.cl
 _TILE = 4                           # TILE_U = TILE_V in spectrum.cl
 _SUPER = 4
-_BUDGET = 256 * 2**20               # device bytes a chunk of work may hold
+WORKING_SET = 256 * 2**20           # device bytes a chunk of work holds at most (runtime.fit)
 
 
 # -- frequencies -------------------------------------------------------------------
@@ -99,7 +98,7 @@ def _check_resolution(resolution):
     return resolution
 
 
-def _check_spectrum(P, name="P"):
+def check_spectrum(P, name="P"):
     if not isinstance(P, np.ndarray) or P.ndim not in (1, 2):
         shape = getattr(P, "shape", type(P).__name__)
         raise InvalidArgumentError(f"'{name}' must be a 1-D or 2-D spectrum array, got {shape}")
@@ -119,9 +118,10 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
 
     Parameters
     ----------
-    points : ndarray, shape (n, d) or (r, n, d)
+    points : ndarray or pyopencl.array.Array, shape (n, d) or (r, n, d)
         Points in [0, 1)^d, d = 1 or 2. A batch gives the mean of the r periodograms
-        (never the transform of the union of the sets).
+        (never the transform of the union of the sets). A device array
+        (``Sampler.sample_device``) is read where it is, with no copy to the host.
     resolution : int
         R, even, >= 2: frequencies [-R/2, R/2) along each axis.
     method : {"auto", "direct", "fast"}
@@ -156,19 +156,12 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
     φ(z) = exp(β(√(1-z²) - 1)), |z| <= 1, w nodes wide, then an FFT, gives
     G(ω) = S(ω)·ψ̂(ω) + aliasing, where ψ̂ is the kernel's Fourier transform (computed by
     Gauss–Legendre quadrature); dividing by ψ̂ leaves an error of about e^{-πw√(1-1/σ)}
-    relative to N (Barnett et al. 2019). clsamp takes σ = 1.25 (a grid 2.56× smaller
-    than finufft's σ = 2 in 2-D, and the FFT is the larger cost here) and w, β from
-    ``tol`` (:func:`nufft_parameters`). The FFT is of real data (rfft2), P(ω) = P(-ω)
-    gives the other half, and Σ_r |G_r|² is divided by ψ̂² once.
-
-    Measured (64 realizations × 4096 points, R = 256, 2-D, PoCL on 2 cores, shared
-    machine; ``python benchmarks/bench_spectrum.py``):
-
-    ========  ==  =========  ==========  =========================
-    tol       w   seconds    max error   finufft seconds (σ = 2)
-    ========  ==  =========  ==========  =========================
-    1e-3      5   see the    benchmark   table; filled in below
-    ========  ==  =========  ==========  =========================
+    relative to N (Barnett et al. 2019). clsamp picks σ in ``SIGMAS`` and w, β from
+    ``tol`` (:func:`nufft_parameters`: the cheapest that meets it); at loose tolerances
+    that is σ = 1.25, a grid 2.56× smaller than finufft's σ = 2 in 2-D, which matters
+    since the FFT is the larger cost here. The FFT is of real data (rfft2), P(ω) = P(-ω)
+    gives the other half, and Σ_r |G_r|² is divided by ψ̂² once. Timings and errors of
+    both methods against finufft and NumPy are in docs/performance.md.
 
     References
     ----------
@@ -188,10 +181,10 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
     >>> P.shape, float(P[16, 16])
     ((32, 32), 256.0)
     """
-    batch, _ = check_points(points, "points", d=(1, 2))
+    check_choice(backend, "backend", BACKENDS)
+    batch, _ = check_points(points, "points", d=(1, 2), keep_device=backend == "opencl")
     resolution = _check_resolution(resolution)
     check_choice(method, "method", METHODS)
-    check_choice(backend, "backend", BACKENDS)
     if tol is not None:
         tol = check_real(tol, "tol", minimum=0.0, maximum=0.1, open_minimum=True)
         if tol < MIN_TOL and method == "fast":
@@ -207,7 +200,8 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
 
 
 def _direct_seconds(r, n, resolution, d):
-    """Rough cost of the exact sum here (the kernel ran at ~35 GFLOP/s on 2 Zen 3 cores)."""
+    """Rough cost of the exact sum: its flops at the direct kernel's rate on a 2-core CPU
+    (the figure is in docs/performance.md), plus the twiddles."""
     flops = 8.0 * r * n * resolution * (resolution / 2 + 1) if d == 2 else 8.0 * r * n * resolution
     return flops / 35e9 + r * n * resolution * d * 2e-9
 
@@ -295,6 +289,14 @@ def _pad(count, multiple):
     return -(-count // multiple) * multiple
 
 
+def _block(batch, r0, r1, k0=0, k1=None):
+    """Realizations r0..r1, points k0..k1 of the batch as a contiguous device array (a
+    device batch stays on the device)."""
+    if runtime.is_device_array(batch):
+        return runtime.device_block(batch, r0, r1, k0, k1)
+    return runtime.to_device(np.ascontiguousarray(batch[r0:r1, k0:k1]))
+
+
 def _direct(batch, resolution, backend, progress):
     if backend == "numpy":
         return direct_reference(batch, resolution)
@@ -308,8 +310,8 @@ def _direct(batch, resolution, backend, progress):
     count_v = _pad(resolution + 1, _TILE) if d == 2 else 0
     plane = count_u * max(count_v, 1)
     per_point = (count_u + count_v) * 16 + d * 8
-    points_per_chunk = max(1, min(n, _BUDGET // per_point))
-    reals_per_chunk = max(1, min(r, _BUDGET // (per_point * points_per_chunk + plane * 16)))
+    points_per_chunk = min(n, runtime.fit(per_point, WORKING_SET))
+    reals_per_chunk = min(r, runtime.fit(per_point * points_per_chunk + plane * 16, WORKING_SET))
     defines = {"SUPER": _SUPER, "KBLOCK": 128, "FINE": _FINE}
     twiddles = runtime.kernel("spectrum.cl", "spectrum_twiddles", defines, _MAD)
     product = runtime.kernel("spectrum.cl", "spectrum_direct2" if d == 2 else "spectrum_direct1",
@@ -327,7 +329,7 @@ def _direct(batch, resolution, backend, progress):
         S = cla.zeros(queue, rc * 2 * plane, np.float64)
         for k0, k1 in point_chunks:
             nc = k1 - k0
-            pts = cla.to_device(queue, np.ascontiguousarray(batch[r0:r1, k0:k1]))
+            pts = _block(batch, r0, r1, k0, k1)
             A = cla.empty(queue, rc * count_u * nc * 2, np.float64)
             glob = (_pad(nc, local), rc)
             twiddles(queue, glob, (local, 1), pts.data, A.data, np.uint32(nc), np.uint32(d),
@@ -342,8 +344,8 @@ def _direct(batch, resolution, backend, progress):
                          np.uint32(1), np.int64(-half), np.uint32(count_v), np.uint32(_TILE))
                 tiles_u, tiles_v = count_u // _TILE, count_v // _TILE
                 grid = (-(-tiles_v // _SUPER), -(-tiles_u // _SUPER))
-                # PoCL's implicit vectorization across work-items fought the explicit double4
-                # code (2x slower); one work-item per group on the CPU, a row of them elsewhere
+                # PoCL's implicit vectorization across work-items fights the explicit double4
+                # code: one work-item per group on the CPU, a row of them elsewhere
                 group = (1, 1) if cpu else (min(16, local), 1)
                 product(queue, (_pad(grid[0], group[0]), grid[1]), group, A.data, B.data, S.data,
                         np.uint32(nc), np.uint32(tiles_u), np.uint32(tiles_v), np.uint32(rc))
@@ -524,12 +526,12 @@ def _fast(batch, resolution, tol, backend, progress):
         # a work-item spreads a block of points onto its own grid copy: enough of them to
         # keep every compute unit busy, never blocks of fewer than 1024 points
         blocks = max(1, min(-(-4 * device.compute_units // r), n // 1024))
-        while blocks > 1 and (blocks + 1) * size * 8 > _BUDGET:
+        while blocks > 1 and (blocks + 1) * size * 8 > WORKING_SET:
             blocks //= 2
         per_real = 8 * size * (blocks + 1 if blocks > 1 else 1) + 8 * n * d
     else:
         per_real = 8 * size + 8 * n * d
-    reals_per_chunk = max(1, min(r, _BUDGET // per_real))
+    reals_per_chunk = min(r, runtime.fit(per_real, WORKING_SET))
     chunks = [(a, min(r, a + reals_per_chunk)) for a in range(0, r, reals_per_chunk)]
     bar = _progress(len(chunks), progress, _fast_seconds(r, n, resolution, d, tol), "spectrum (fast)")
     for r0, r1 in chunks:
@@ -537,7 +539,7 @@ def _fast(batch, resolution, tol, backend, progress):
         if backend == "numpy":
             grids = spread_reference(batch[r0:r1], M, width, beta)
         else:
-            pts = cla.to_device(queue, np.ascontiguousarray(batch[r0:r1]))
+            pts = _block(batch, r0, r1)
             copies = cla.empty(queue, rc * blocks * size, np.float64)
             spread(queue, (blocks, rc), (1, 1), pts.data, copies.data, np.uint32(n), np.uint32(M),
                    np.uint32(blocks), np.float64(beta))
@@ -613,7 +615,7 @@ def radial_mean(P, bin_width=1.0):
     >>> f[:3], bool(abs(m.mean() - 1) < 0.05)
     (array([1., 2., 3.]), True)
     """
-    P = _check_spectrum(P)
+    P = check_spectrum(P)
     index, count = _annuli(P, bin_width)
     sums = np.bincount(index.ravel(), P.ravel(), minlength=count + 1)
     counts = np.bincount(index.ravel(), minlength=count + 1)
@@ -647,7 +649,7 @@ def anisotropy(P, bin_width=1.0):
     >>> bool(abs(a[10:].mean() + 10) < 1.5)
     True
     """
-    P = _check_spectrum(P)
+    P = check_spectrum(P)
     if P.ndim != 2:
         raise InvalidArgumentError(f"'P' must be a 2-D spectrum for anisotropy, got shape {P.shape}")
     index, count = _annuli(P, bin_width)
@@ -660,132 +662,3 @@ def anisotropy(P, bin_width=1.0):
         variance = squares[1:] / (counts[1:] - 1)
         values = 10.0 * np.log10(variance / mean[1:] ** 2)
     return np.arange(1, count + 1) * float(bin_width), values
-
-
-# -- pictures --------------------------------------------------------------------------------
-def spectrum_image(P, scale="linear", vmin=None, vmax=None):
-    """A 2-D spectrum as a grey image in [0, 1], DC at the centre.
-
-    Rows are y frequencies from -R/2 (top) to R/2 - 1, columns x frequencies from -R/2
-    (left): ``image[j, i] = P[i, j]``.
-
-    Parameters
-    ----------
-    scale : {"linear", "log"}
-        ``"linear"``: P / vmax clipped to [0, 1] (vmax default 4, so white noise is a
-        mid grey after the PNG's gamma, the look of PSA and UTK pictures). ``"log"``:
-        10·log10 P mapped from [vmin, vmax] dB (default [-20, 10]).
-    """
-    P = _check_spectrum(P)
-    if P.ndim != 2:
-        raise InvalidArgumentError(f"'P' must be a 2-D spectrum to make an image, got shape {P.shape}")
-    check_choice(scale, "scale", ("linear", "log"))
-    if scale == "linear":
-        top = 4.0 if vmax is None else check_real(vmax, "vmax", minimum=0.0, open_minimum=True)
-        image = P / top
-    else:
-        low = -20.0 if vmin is None else check_real(vmin, "vmin")
-        high = 10.0 if vmax is None else check_real(vmax, "vmax")
-        if high <= low:
-            raise InvalidArgumentError(f"'vmax' must be > 'vmin', got {high} <= {low}")
-        with np.errstate(divide="ignore"):
-            image = (10.0 * np.log10(P) - low) / (high - low)
-    return np.clip(image.T, 0.0, 1.0)
-
-
-def save_spectrum_png(path, P, scale="linear", vmin=None, vmax=None):
-    """Write a 2-D spectrum as a grey PNG (:func:`spectrum_image`; gamma 2.2 for "linear")."""
-    from . import io
-    image = spectrum_image(P, scale, vmin, vmax)
-    return io.write_png(path, image, gamma=2.2 if scale == "linear" else 1.0)
-
-
-def save_spectrum_exr(path, P, header=None):
-    """Write a spectrum's raw values as a one-channel OpenEXR (float32), same orientation as
-    :func:`spectrum_image` (row j = y frequency j - R/2, column i = x frequency i - R/2).
-    A 1-D spectrum is one row."""
-    from . import io
-    P = _check_spectrum(P)
-    image = P[None, :] if P.ndim == 1 else P.T
-    info = {"clsamp": "power spectrum", "layout": "row j: fy = j - R/2; column i: fx = i - R/2"}
-    info.update(header or {})
-    return io.write_exr(path, np.ascontiguousarray(image), header=info)
-
-
-def plot_spectrum(ax, P, scale="linear", vmin=None, vmax=None, title=None):
-    """Show a 2-D spectrum on a matplotlib Axes, axes labelled in integer frequencies."""
-    R = P.shape[0]
-    image = spectrum_image(P, scale, vmin, vmax)
-    shown = ax.imshow(image ** (1 / 2.2) if scale == "linear" else image, cmap="gray", vmin=0, vmax=1,
-                      extent=(-R / 2 - 0.5, R / 2 - 0.5, R / 2 - 0.5, -R / 2 - 0.5),
-                      interpolation="nearest")
-    ax.set_xlabel("frequency x")
-    ax.set_ylabel("frequency y")
-    if title:
-        ax.set_title(title)
-    return shown
-
-
-def _frequency_axis(ax, freqs, n, convention):
-    if n is None:
-        ax.set_xlabel("frequency |ω|")
-        return np.asarray(freqs, dtype=np.float64)
-    label = "2ν/√N" if convention == "psa" else "ν/√N"
-    ax.set_xlabel(f"frequency {label}")
-    return normalized_frequency(freqs, n, convention)
-
-
-def plot_radial_mean(ax, freqs, values, label=None, n=None, convention="psa", **line_args):
-    """Plot a radial mean (from :func:`radial_mean`) on a matplotlib Axes.
-
-    With ``n`` (points per set) the frequency axis is normalized as PSA (2ν/√N,
-    ``convention="psa"``) or UTK (ν/√N) do, so sets of different N line up.
-    Returns the Line2D.
-    """
-    x = _frequency_axis(ax, freqs, n, convention)
-    (line,) = ax.plot(x, values, label=label, **line_args)
-    ax.axhline(1.0, color="0.6", linewidth=0.8, linestyle=":")
-    ax.set_ylabel("radial mean power")
-    if label:
-        ax.legend()
-    return line
-
-
-def plot_anisotropy(ax, freqs, values, label=None, n=None, convention="psa", realizations=None,
-                    **line_args):
-    """Plot an anisotropy curve (dB, from :func:`anisotropy`) on a matplotlib Axes.
-
-    With ``realizations`` a dotted line marks -10·log10(r) dB, white noise's level.
-    """
-    x = _frequency_axis(ax, freqs, n, convention)
-    (line,) = ax.plot(x, values, label=label, **line_args)
-    if realizations:
-        ax.axhline(-10.0 * math.log10(realizations), color="0.6", linewidth=0.8, linestyle=":")
-    ax.set_ylabel("anisotropy (dB)")
-    if label:
-        ax.legend()
-    return line
-
-
-def save_spectrum_plots(path, P, n=None, realizations=None, label=None, bin_width=1.0,
-                        convention="psa", scale="linear"):
-    """One figure, saved as PNG: the spectrum, its radial mean and (2-D) its anisotropy."""
-    import matplotlib.pyplot as plt
-
-    from . import io
-    P = _check_spectrum(P)
-    panels = 3 if P.ndim == 2 else 1
-    figure, axes = plt.subplots(1, panels, figsize=(4.2 * panels, 3.8), squeeze=False)
-    axes = axes[0]
-    freqs, mean = radial_mean(P, bin_width)
-    if P.ndim == 2:
-        plot_spectrum(axes[0], P, scale=scale, title=label)
-        plot_radial_mean(axes[1], freqs, mean, n=n, convention=convention)
-        f, a = anisotropy(P, bin_width)
-        plot_anisotropy(axes[2], f, a, n=n, convention=convention, realizations=realizations)
-    else:
-        plot_radial_mean(axes[0], freqs, mean, n=n, convention=convention)
-        if label:
-            axes[0].set_title(label)
-    figure.tight_layout()
-    return io.save_figure(path, figure)

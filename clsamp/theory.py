@@ -11,7 +11,9 @@ Cases, from the integrand as the estimator sees it (``ConvergenceResult.traits``
   non-periodic smooth integrand, a step in x): a separate case, since stratification
   along the axes helps there; few rates are published.
 
-Exponents of MSE against N in d = 2 (the table below cites each):
+Each sampler reports its own published rate for its parameters and dimension
+(:meth:`clsamp.Sampler.convergence_rate`); the exponents of MSE against N in d = 2 for the
+default parameters are (a test holds this table to what the samplers say):
 
 ==========================  ======  ======  ======================================
 sampler                     best    worst   source
@@ -28,12 +30,14 @@ sobol:owen                  -3      -1.5    Owen 1997 (smooth, up to log N); He 
 ==========================  ======  ======  ======================================
 
 Random sampling is -1 in the ``"axis"`` case too and jittered -1.5 (the cells of one
-column or row are cut). Anything else, and every case of a deterministic sampler that
-is not shifted, has no published rate here: the verdict is ``"unknown"``. That includes
-samplers whose rate we measured but found no theorem for: in 2-D, N = 1024..16384, 512
-realizations, seed 3, this library measured multijittered -1.99 (Gaussian) and -1.47
-(disk), correlated_multijittered -2.98 and -1.54, and Owen-scrambled Halton (bases 2
-and 3, not a base-2 net; N powers of 4) -2.01 and -1.53.
+column or row are cut); jittered in d-D is N^(-1-2/d) and N^(-1-1/d). Parameters change
+the answer: ``uncorrelated_jitter(groups=(1, 1))`` is a Latin hypercube (-1),
+``jittered(strata=(4096, 1))`` is not a grid of square cells (unknown), and
+``ccvt(density="random")`` has an N^-1 floor (unknown). Anything else, and every case of
+a deterministic sampler that is not shifted, has no published rate here: the verdict is
+``"unknown"``. That includes samplers with no theorem for their rate, such as
+multijittered, correlated_multijittered and Owen-scrambled Halton (bases 2 and 3, not a
+base-2 net), whatever slope a measurement shows (docs/performance.md lists measured ones).
 
 A measured slope **matches** when |slope - expected| <= 3 stderr + 0.15: three standard
 errors for the noise of the fit, plus 0.15 for pre-asymptotic curvature (and the
@@ -57,28 +61,6 @@ import math
 TOLERANCE_SIGMAS = 3.0
 CURVATURE_ALLOWANCE = 0.15
 
-PILLEBOUE = "Pilleboue et al. 2015"
-
-# (sampler kind, case) -> (exponent, source), for d = 2.
-RATES = {
-    ("random", "best"): (-1.0, PILLEBOUE),
-    ("random", "worst"): (-1.0, PILLEBOUE),
-    ("random", "axis"): (-1.0, PILLEBOUE),
-    ("jittered", "best"): (-2.0, PILLEBOUE),
-    ("jittered", "worst"): (-1.5, PILLEBOUE),
-    ("jittered", "axis"): (-1.5, PILLEBOUE),
-    ("uncorrelated_jitter", "best"): (-2.0, PILLEBOUE + " (jittered)"),
-    ("uncorrelated_jitter", "worst"): (-1.5, PILLEBOUE + " (jittered)"),
-    ("latin_hypercube", "best"): (-1.0, "Stein 1987"),
-    ("latin_hypercube", "worst"): (-1.0, "Stein 1987"),
-    ("poisson_disk", "best"): (-1.0, PILLEBOUE),
-    ("poisson_disk", "worst"): (-1.0, PILLEBOUE),
-    ("ccvt", "best"): (-3.0, PILLEBOUE),
-    ("ccvt", "worst"): (-1.5, PILLEBOUE),
-    ("sobol:owen", "best"): (-3.0, "Owen 1997"),
-    ("sobol:owen", "worst"): (-1.5, "He and Wang 2015"),
-}
-
 
 def case_of(traits):
     """``"best"``, ``"worst"`` or ``"axis"`` from an integrand's traits (see the module)."""
@@ -91,24 +73,27 @@ def case_of(traits):
     return "unknown"
 
 
-def expected_rate(kind, case, d=2):
-    """(exponent, source) of MSE ~ N^exponent, or (None, None) when none is published."""
-    kind = str(kind)
-    if kind == "random" and case in ("best", "worst", "axis"):
-        return -1.0, PILLEBOUE
-    if kind == "jittered" and d != 2 and case in ("best", "worst"):
-        return (-1.0 - 2.0 / d if case == "best" else -1.0 - 1.0 / d), PILLEBOUE
-    if d != 2:
-        return None, None
-    return RATES.get((kind, case), (None, None))
+def expected_rate(sampler, case, d=2):
+    """(exponent, source) of MSE ~ N^exponent, or (None, None) when none is published.
 
-
-def _kind(result):
-    kind = getattr(result, "kind", "") or str(result.sampler)
-    base, _, variant = kind.partition(":")
-    aliases = {"n_rooks": "latin_hypercube"}
-    base = aliases.get(base, base)
-    return f"{base}:{variant}" if variant else base
+    Parameters
+    ----------
+    sampler : Sampler or str
+        A sampler (its own parameters and dimension count), or a name such as
+        ``"sobol:owen"``, made with default parameters in ``d`` dimensions.
+    case : {"best", "worst", "axis"}
+    d : int
+        The dimension, for a sampler given by name.
+    """
+    from .errors import InvalidArgumentError
+    from .samplers import Sampler, make_sampler
+    if not isinstance(sampler, Sampler):
+        try:
+            sampler = make_sampler(str(sampler), d=d)
+        except InvalidArgumentError:
+            return None, None          # an unknown name, or one that does not exist in d-D
+    rate = sampler.convergence_rate(case)
+    return (None, None) if rate is None else (rate.exponent, rate.source)
 
 
 def _text(exponent):
@@ -121,19 +106,26 @@ def compare(result):
     Parameters
     ----------
     result : ConvergenceResult
+        Its ``rates`` (the sampler's own answer, recorded by :func:`clsamp.convergence`)
+        give the published rate; a result without them asks a sampler made from its
+        ``kind``.
 
     Returns
     -------
     dict
         ``case`` (``"best"``, ``"worst"``, ``"axis"`` or ``"unknown"``), ``slope`` and
         ``stderr`` (from ``result.rate()``), ``expected`` (the exponent, or None),
-        ``expected_text`` (``"N^-1.5"``, or None), ``source`` (the paper), and
+        ``expected_text`` (``"N^-1.5"``, or None), ``source`` (the paper), ``kind``, and
         ``verdict``, whose first word is ``matches``, ``differs`` or ``unknown``.
     """
     slope, stderr = result.rate()
     case = case_of(getattr(result, "traits", {}) or {})
-    kind = _kind(result)
-    expected, source = expected_rate(kind, case, getattr(result, "d", 2))
+    kind = getattr(result, "kind", "") or str(result.sampler)
+    rates = getattr(result, "rates", None)
+    if rates:
+        expected, source = rates.get(case) or (None, None)
+    else:
+        expected, source = expected_rate(kind, case, getattr(result, "d", 2))
     if not getattr(result, "homogenize", True) and not getattr(result, "randomized", True):
         expected, source = None, None      # a fixed point set: no variance to speak of
     out = {"case": case, "slope": slope, "stderr": stderr, "expected": expected,

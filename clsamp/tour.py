@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import io, runtime
+from . import io, plots, runtime
 
 # Samplers shown in section 1, with the parameters that make each one its textbook self.
 TOUR_SAMPLERS = (
@@ -47,6 +47,18 @@ TOUR_SAMPLERS = (
     ("lloyd", {}),
     ("ccvt", {}),
 )
+# The tour's budgets for the samplers whose points cost most (Sampler.expensive): the
+# parameters of section 1, full and --quick, and of the convergence sweeps, with their
+# (sample counts, realizations) where they stop earlier than the others.
+TOUR_BUDGETS = {
+    "ccvt": {"full": {"points_per_site": 128}, "quick": {"points_per_site": 64},
+             "convergence": {"points_per_site": 64}},
+    "lloyd": {"quick": {"iterations": 20}},
+}
+TOUR_SWEEPS = {
+    "poisson_disk": ([16, 64, 256, 1024, 4096], 512),
+    "ccvt": ([16, 64, 256, 1024], 64),
+}
 
 
 @dataclasses.dataclass
@@ -176,13 +188,6 @@ def _versions():
     return versions
 
 
-def _pyplot():
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    return plt
-
-
 def _plot_points(ax, points, title):
     ax.scatter(points[:, 0], points[:, 1] if points.shape[1] > 1 else np.zeros(len(points)),
                s=max(0.5, 1600.0 / len(points)), color="black", linewidths=0)
@@ -195,14 +200,10 @@ def _plot_points(ax, points, title):
 
 
 def tour_sampler_params(name, quick):
-    """Parameters the tour gives each sampler (optimizers are kept to tour-sized budgets:
-    CCVT's default of 1024 density points per site costs about 0.8 to 1.5 s per 1024-point
-    set here, depending on the machine's load)."""
+    """Parameters the tour gives each sampler in section 1: the textbook ones, and for the
+    expensive samplers the tour's budgets (:data:`TOUR_BUDGETS`)."""
     params = dict(dict(TOUR_SAMPLERS).get(name, {}))
-    if name == "ccvt":
-        params.setdefault("points_per_site", 64 if quick else 128)
-    if name == "lloyd" and quick:
-        params.setdefault("iterations", 20)
+    params.update(TOUR_BUDGETS.get(name, {}).get("quick" if quick else "full", {}))
     return params
 
 
@@ -210,7 +211,7 @@ def section_samplers(report, quick):
     """Every sampler: a point set, its expected power spectrum and radial mean."""
     from . import point_metrics, spectrum
     from .samplers import make_sampler, sampler_names
-    plt = _pyplot()
+    plt = plots.pyplot()
     n, realizations, resolution = (256, 8, 64) if quick else (1024, 32, 128)
     known = set(sampler_names())
     rows, data, cells, curves = [], {}, [], []
@@ -230,12 +231,12 @@ def section_samplers(report, quick):
             rho = np.asarray(point_metrics.relative_radius(points))
             report.points(f"points_{name}", points)
             report.array(f"spectrum_{name}", P)
-            spectrum.save_spectrum_exr(report.out / "data" / f"spectrum_{name}.exr", P,
+            plots.save_spectrum_exr(report.out / "data" / f"spectrum_{name}.exr", P,
                                        header={"sampler": name, "n": n, "realizations": realizations})
             fig, axes = plt.subplots(1, 3, figsize=(10.5, 3.3))
             _plot_points(axes[0], points[0], f"{name}, n = {n}")
-            spectrum.plot_spectrum(axes[1], P, title=f"expected spectrum, {realizations} sets")
-            spectrum.plot_radial_mean(axes[2], freqs, mean, n=n)
+            plots.plot_spectrum(axes[1], P, title=f"expected spectrum, {realizations} sets")
+            plots.plot_radial_mean(axes[2], freqs, mean, n=n)
             axes[2].set_ylim(0, 2.5)
             fig.tight_layout()
             cells.append((name, report.figure(f"sampler_{name}", fig)))
@@ -251,7 +252,7 @@ def section_samplers(report, quick):
             data[name] = {"error": traceback.format_exc()}
     fig, ax = plt.subplots(figsize=(8, 4.5))
     for name, freqs, mean in curves:
-        spectrum.plot_radial_mean(ax, freqs, mean, n=n).set_label(name)
+        plots.plot_radial_mean(ax, freqs, mean, n=n).set_label(name)
     ax.set_ylim(0, 2.5)
     ax.legend(fontsize=8, ncol=2)
     ax.set_title(f"radial means of expected spectra (n = {n}, {realizations} realizations)")
@@ -282,26 +283,24 @@ def tour_convergence_plan(quick):
         samplers = ("random", "jittered", "latin_hypercube", "sobol:owen", "halton:owen",
                     "poisson_disk", "ccvt")
         ns, realizations = [16, 64, 256, 1024, 4096, 16384], 512
-        sweeps = {name: (ns, realizations) for name in samplers}
-        sweeps["poisson_disk"] = (ns[:-1], realizations)
-        sweeps["ccvt"] = ([16, 64, 256, 1024], 64)
+        sweeps = {name: TOUR_SWEEPS.get(name, (ns, realizations)) for name in samplers}
     return samplers, ("gaussian", "disk"), sweeps
 
 
 def _sampler_for_convergence(name, quick):
-    """Expensive optimizers get a cheaper configuration in the sweep (named in the report)."""
+    """The sampler of a sweep; expensive ones at the tour's budget (named in the report)."""
     from .samplers import make_sampler
     base, _, variant = name.partition(":")
     params = {"randomize": variant} if variant else {}
-    if base == "ccvt":
-        params["points_per_site"] = 64
+    params.update(TOUR_BUDGETS.get(base, {}).get("convergence", {}))
     return make_sampler(base, d=2, seed=2, **params), params
 
 
 def section_convergence(report, quick):
     """MSE against N for a smooth and a discontinuous integrand, rates against theory."""
     from . import theory
-    from .convergence import convergence, convergence_plot
+    from .convergence import convergence
+    from .plots import convergence_plot
     samplers, integrands, sweeps = tour_convergence_plan(quick)
     results, rows, data = [], [], {}
     for integrand in integrands:
@@ -431,7 +430,7 @@ def _spectrum_cost(report, quick):
 
 def section_cost(report, quick):
     """What accuracy costs in time: spectra, sampler MSE, rendered images."""
-    plt = _pyplot()
+    plt = plots.pyplot()
     data, body, failures = {}, "", []
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
     # spectra
@@ -605,10 +604,9 @@ def _stability_cases(quick):
          owen_mse, 1e-12)
 
     def ccvt_capacities():
-        s = make_sampler("ccvt", seed=3, points_per_site=32)
-        s.sample(64)
-        caps = np.asarray(s.capacities)
-        energy = np.asarray(s.energy_history, dtype=np.float64)
+        _, info = make_sampler("ccvt", seed=3, points_per_site=32).sample(64, return_info=True)
+        caps = info.capacities[0]
+        energy = info.energy_history[0]
         rises = np.max(np.diff(energy)) if len(energy) > 1 else 0.0
         return max(float(caps.max() - caps.min()), max(0.0, rises))
     case("CCVT capacities and energy", "capacity spread + largest energy rise", ccvt_capacities, 0.0)

@@ -64,40 +64,49 @@ def check_choice(value, name, choices):
     return value
 
 
-def check_points(points, name="points", d=None, allow_batch=True):
+def _is_device_array(value):
+    return type(value).__module__.startswith("pyopencl") and hasattr(value, "shape")
+
+
+def check_points(points, name="points", d=None, allow_batch=True, keep_device=False):
     """Validate a point set and return it as a float64 array of shape (r, n, d).
 
     Parameters
     ----------
-    points : array_like
+    points : array_like or pyopencl.array.Array
         Shape (n, d) for one set or (r, n, d) for r realizations, float64
-        (float32 is accepted and widened exactly), every coordinate in [0, 1).
+        (float32 is accepted and widened exactly), every coordinate in [0, 1). A device
+        array (``Sampler.sample_device``) is checked on the device.
     name : str
         The argument's name, used in error messages.
     d : int or tuple of int, optional
         The dimension(s) accepted.
     allow_batch : bool
         Whether the (r, n, d) form is accepted.
+    keep_device : bool
+        Return a device array as a device array (for kernels that read it there); else
+        it is read back.
 
     Returns
     -------
-    batch : ndarray, shape (r, n, d), float64, C-contiguous
+    batch : ndarray (or device array), shape (r, n, d), float64, C-contiguous
     single : bool
         True when the input was one (n, d) set.
     """
+    device = _is_device_array(points)
     if isinstance(points, (list, tuple)):
         points = np.asarray(points)
-    if not isinstance(points, np.ndarray):
+    if not (device or isinstance(points, np.ndarray)):
         raise InvalidArgumentError(
             f"'{name}' must be a NumPy array of shape (n, d) or (r, n, d), "
             f"got {type(points).__name__}")
-    if points.dtype not in (np.float64, np.float32):
-        raise InvalidArgumentError(
-            f"'{name}' must have dtype float64 (or float32), got {points.dtype}")
+    if points.dtype not in ((np.float64,) if device else (np.float64, np.float32)):
+        allowed = "float64" if device else "float64 (or float32)"
+        raise InvalidArgumentError(f"'{name}' must have dtype {allowed}, got {points.dtype}")
     shapes = "(n, d) or (r, n, d)" if allow_batch else "(n, d)"
     if points.ndim == 2:
         single = True
-        batch = points[None]
+        batch = points.reshape((1,) + points.shape) if device else points[None]
     elif points.ndim == 3 and allow_batch:
         single = False
         batch = points
@@ -111,11 +120,19 @@ def check_points(points, name="points", d=None, allow_batch=True):
             want = " or ".join(str(a) for a in allowed)
             raise InvalidArgumentError(
                 f"'{name}' must have {want} dimensions (last axis), got {batch.shape[2]}")
-    batch = np.ascontiguousarray(batch, dtype=np.float64)
-    if not np.all(np.isfinite(batch)):
+    if device:
+        from . import runtime
+        batch = runtime.device_block(batch, 0, batch.shape[0])    # contiguous, offset 0
+        lo, hi, bad = runtime.bounds(batch)
+    else:
+        batch = np.ascontiguousarray(batch, dtype=np.float64)
+        bad = 0 if np.all(np.isfinite(batch)) else 1
+        lo, hi = (batch.min(), batch.max()) if not bad else (0.0, 0.0)
+    if bad:
         raise InvalidArgumentError(f"'{name}' contains NaN or infinite values")
-    if batch.min() < 0.0 or batch.max() >= 1.0:
+    if lo < 0.0 or hi >= 1.0:
         raise InvalidArgumentError(
-            f"'{name}' must lie in [0, 1) in every coordinate, got values in "
-            f"[{batch.min()!r}, {batch.max()!r}]")
+            f"'{name}' must lie in [0, 1) in every coordinate, got values in [{lo!r}, {hi!r}]")
+    if device and not keep_device:
+        batch = batch.get()
     return batch, single

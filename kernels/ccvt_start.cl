@@ -1,5 +1,6 @@
-/* The starting partition of CCVT (clsamp/samplers/ccvt.py, start_partition): the power
- * diagram pass. NumPy twin: ccvt.power_pass_reference (the same integers).
+/* The starting partition of CCVT (clsamp/samplers/ccvt/start.py, start_partition): the
+ * power diagram pass. NumPy twin: clsamp/samplers/ccvt/power.py, power_pass_reference (the
+ * same integers).
  *
  * Every density point finds, among the sites in the 3 x 3 cells of a G x G grid around it
  * (all n sites when G == 1; the host lists them per cell), the two smallest power
@@ -9,7 +10,11 @@
  * visited, hence not on the device. */
 #include "voronoi.h"
 
-#define START_NO_SECOND 0x7FFFFFFFFFFFFFFFL   /* margin when a point has one candidate */
+/* From the host (clsamp.samplers.ccvt.pairs): CCVT_NO_OWNER, the owner of a point with no
+ * candidate, and CCVT_NO_SECOND, the margin of a point with one. */
+#if !defined(CCVT_NO_OWNER) || !defined(CCVT_NO_SECOND)
+#error "CCVT_NO_OWNER and CCVT_NO_SECOND come from clsamp.samplers.ccvt.pairs"
+#endif
 
 /* Global size (M, r). points: realization r's M points start at r * stride (stride 0:
  * one set for all). The candidates of a point in cell c of realization r (G == 1: one
@@ -30,8 +35,8 @@ __kernel void ccvt_power(__global const uint2 *points, const uint M, const uint 
     const uint2 x = points[(size_t)r * stride + j];
     const uint cell = G == 1 ? 0 : vor_cell(x.y, G) * G + vor_cell(x.x, G);
     const size_t row = ((size_t)r * G * G + cell) * W;
-    long c1 = START_NO_SECOND, c2 = START_NO_SECOND;
-    uint i1 = 0xFFFFFFFFu, i2 = 0xFFFFFFFFu;
+    long c1 = CCVT_NO_SECOND, c2 = CCVT_NO_SECOND;
+    uint i1 = CCVT_NO_OWNER, i2 = CCVT_NO_OWNER;
     for (uint t = 0; t < W; ++t) {
         const uint i = cand_id[row + t];
         if (i >= n)
@@ -48,6 +53,6 @@ __kernel void ccvt_power(__global const uint2 *points, const uint M, const uint 
         i1 = nearer1 ? i : i1;
     }
     owner[at] = i1;
-    second[at] = i2 == 0xFFFFFFFFu ? i1 : i2;
-    margin[at] = i2 == 0xFFFFFFFFu ? START_NO_SECOND : c2 - c1;
+    second[at] = i2 == CCVT_NO_OWNER ? i1 : i2;
+    margin[at] = i2 == CCVT_NO_OWNER ? CCVT_NO_SECOND : c2 - c1;
 }

@@ -48,7 +48,7 @@ inline vec indicator(long4 holds)
 }
 
 /* The difference wrapped into [-1/2, 1/2]: numpy's w - round(w) for w in (-1, 1) (half to
- * even keeps +-1/2), by comparisons; PoCL's rint on double4 cost half the Gaussian's time. */
+ * even keeps +-1/2), by comparisons, far cheaper on PoCL than its double4 rint. */
 inline vec wrapped(vec x, double c)
 {
     vec w = x - c;

@@ -29,7 +29,7 @@
  * which PoCL turns into SIMD instructions (it does not vectorize across work-items when a
  * kernel has an inner loop). No wider: a double8 handed to a built-in (vload8, vstore8)
  * crosses an ABI that PoCL's AVX-512 library and kernels compiled without AVX-512 disagree
- * on (see docs/design.md, "Kernels"). */
+ * on (see docs/design.md, "Kernels and the runtime"). */
 #ifndef LD_WIDTH
 #define LD_WIDTH 4
 #endif

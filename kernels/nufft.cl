@@ -9,10 +9,10 @@
 
 /* The WIDTH weights of one axis, phi((i0 + l - t) 2 / WIDTH) for l = 0..WIDTH-1, into
  * w[0..15] (lanes >= WIDTH are 0), phi the exponential of semicircle kernel
- * exp(beta (sqrt(1 - z^2) - 1)) (Barnett, Magland, af Klinteberg 2019). In double4 pieces:
- * PoCL runs scalar double exp far slower than its vector form, and no wider vector may
- * reach a built-in (docs/design.md, "Kernels"). Returns i0 = ceil(t - WIDTH / 2), the
- * first node. */
+ * exp(beta (sqrt(1 - z^2) - 1)) (Barnett, Magland, af Klinteberg 2019). In double4
+ * pieces: PoCL runs scalar double exp far slower than its vector form, and no wider vector
+ * may reach a built-in (docs/design.md, "Kernels and the runtime"). Returns
+ * i0 = ceil(t - WIDTH / 2), the first node. */
 inline int axis_weights(const double t, const double beta, double *w)
 {
     const int i0 = (int)ceil(t - 0.5 * WIDTH);

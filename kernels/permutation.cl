@@ -3,8 +3,8 @@
  *
  * Two launches: the bounded draws j_t are independent of each other, so they are
  * made in parallel over (steps, permutations); only the swaps are sequential, one
- * work-item per permutation (on PoCL that split is ~7x faster than drawing inside
- * the sequential loop, whose Philox calls then run one at a time). */
+ * work-item per permutation. Drawing inside the sequential loop would run its Philox
+ * calls one at a time. */
 #include "permutation.h"
 
 /* Grid (ceil(length / 4), count * perms); draws has shape (count, perms, length):

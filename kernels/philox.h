@@ -15,9 +15,9 @@
 #define CLSAMP_PHILOX_W0 0x9E3779B9u
 #define CLSAMP_PHILOX_W1 0xBB67AE85u
 
-/* The 32x32->64 products are taken as ulong multiplies: on PoCL (LLVM 14, x86-64)
- * mul_hi() was 4-5x slower than the widening multiply; GPUs compile both to the same
- * wide multiply. */
+/* The 32x32->64 products are taken as ulong multiplies, not mul_hi(): PoCL (LLVM 14,
+ * x86-64) compiles the widening multiply to far better code (docs/performance.md); GPUs
+ * compile both to the same wide multiply. */
 inline uint4 philox4x32_10(uint4 ctr, uint2 key)
 {
 #pragma unroll

@@ -1,7 +1,7 @@
 /* The renderer: ray casting of spheres (optionally moving), planes and axis-aligned boxes,
  * shaded with ambient occlusion and a quad area light (shading model: clsamp/scene.py).
  *
- * Effects are compiled in only when the scene lists them (DESIGN.md, "Rendering"):
+ * Effects are compiled in only when the scene lists them (docs/design.md, "Rendering"):
  *   EFFECT_AA      pixel area sampling (2 dimensions), else pixel centres
  *   EFFECT_DOF     thin lens (2 dimensions), else a pinhole
  *   EFFECT_MB      motion blur: a time in the shutter interval (1 dimension), else time 0
@@ -14,10 +14,11 @@
  * NumPy reference: clsamp.render.render_reference (float64, same steps).
  *
  * Ray math is float (fp32): one work-item renders one pixel, VW of its samples at a
- * time in explicit vector lanes (POCL_NOTES: PoCL vectorizes explicit vector types, not
- * loops across work-items). The per-pixel sum is double: each lane group's radiance is
- * summed in float (VW terms of at most a few units) and added to a double accumulator,
- * so the mean of any number of samples carries no growing rounding error.
+ * time in explicit vector lanes (PoCL vectorizes explicit vector types, not loops across
+ * work-items: docs/performance.md, "PoCL"). The per-pixel sum is double: each lane
+ * group's radiance is summed in float (VW terms of at most a few units) and added to a
+ * double accumulator, so the mean of any number of samples carries no growing rounding
+ * error.
  */
 #include "philox.h"
 
@@ -110,7 +111,7 @@ typedef uint8 vuint;
 
 /* The 64-bit products a * m of VW lanes: the low words returned, the high words in *hi.
  * With VW = 8 in ulong4 halves: no 512-bit vector (ulong8, double8) may reach a built-in
- * (docs/design.md, "Kernels"). */
+ * (docs/design.md, "Kernels and the runtime"). */
 #if VW == 8
 inline vuint mul_wide(const vuint a, const ulong m, vuint *hi)
 {
@@ -129,7 +130,7 @@ inline vuint mul_wide(const vuint a, const ulong m, vuint *hi)
 #endif
 
 /* philox4x32_10 of philox.h on VW counters at once (the index differs per lane): the
- * same words, computed in vector lanes (a loop over lanes ran 3x slower on PoCL). */
+ * same words, computed in vector lanes (PoCL does not vectorize a loop over lanes). */
 inline void philox_lanes(const uint2 key0, const uint stream, const uint realization,
                          const vuint index, const uint pair, vuint *w0, vuint *w1, vuint *w2,
                          vuint *w3)

@@ -1,25 +1,29 @@
-/* Periodic Lloyd relaxation (Lloyd 1982) on the integer torus of voronoi.h.
- * NumPy reference: clsamp/samplers/lloyd.py (lloyd_reference).
+/* Nearest-site assignment of a regular density grid on the integer torus of voronoi.h.
+ * NumPy reference: clsamp/geometry/voronoi.py (assign_reference).
  *
  * The density is the regular g x g grid of cell centres, X_m = ((2 m_x + 1) 2^B) div (2 g),
- * computed from its index, never stored. One iteration is
- *   voronoi_build_grid -> lloyd_assign (nearest site of every density point, through the
- *   site grid; centroid sums per site) -> lloyd_move (site to the periodic centroid).
- * Ties between equally near sites go to the smaller site index, as numpy.argmin does. */
+ * computed from its index, never stored. voronoi_build_grid sorts the sites into their
+ * grid, then voronoi_assign finds the nearest site of every density point through it and
+ * sums each site's offsets: one Lloyd pass (lloyd.cl moves the sites), or the CVT energy.
+ * Ties between equally near sites go to the smaller site index, as numpy.argmin does.
+ *
+ * Build options from the host (clsamp.geometry.voronoi.DEFINES): VOR_BITS, VOR_SEGMENT. */
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
 #include "voronoi.h"
 
-#define LLOYD_SEGMENT 16      /* density points per work-item, one row (lloyd.LLOYD_SEGMENT) */
-#define LLOYD_CANDIDATES 64   /* sites gathered per segment before falling back to rings */
+#ifndef VOR_SEGMENT
+#error "VOR_SEGMENT must be given by the host: clsamp.geometry.voronoi.DEFINES"
+#endif
+#define VOR_CANDIDATES 64     /* sites gathered per segment before falling back to rings */
 
-inline uint lloyd_density_coordinate(const uint k, const uint g)
+inline uint vor_density_coordinate(const uint k, const uint g)
 {
     return (uint)((((ulong)(2 * k + 1)) << VOR_BITS) / (2 * (ulong)g));
 }
 
 /* Nearest site of (X, Y) by rings of cells around its own: exact, since every site outside
  * ring k is at least k * width + 1 away along some axis. */
-inline long lloyd_nearest_rings(const uint X, const uint Y, __global const uint *s, const uint n,
+inline long vor_nearest_rings(const uint X, const uint Y, __global const uint *s, const uint n,
                                 const uint G, __global const uint *start,
                                 __global const uint *list, uint *site_out)
 {
@@ -50,7 +54,7 @@ inline long lloyd_nearest_rings(const uint X, const uint Y, __global const uint 
     return best;
 }
 
-/* Grid (segments, realizations); a segment is up to LLOYD_SEGMENT consecutive density points
+/* Grid (segments, realizations); a segment is up to VOR_SEGMENT consecutive density points
  * of one row. The sites of the cells around the segment (one ring beyond the cells it
  * spans) are gathered once; a point whose nearest gathered site is within one cell width
  * has its answer (anything not gathered is farther), the others search rings.
@@ -59,32 +63,32 @@ inline long lloyd_nearest_rings(const uint X, const uint Y, __global const uint 
  * segment; energy gets each segment's sum of squared distances as (low 32 bits, high bits)
  * so the realization's total cannot overflow; far_* keep each segment's farthest density
  * point for re-seeding empty sites. */
-__kernel void lloyd_assign(__global const uint *sites, const uint n, const uint G,
-                           __global const uint *cell_start, __global const uint *cell_sites,
-                           const uint g, const uint segments,
-                           __global long *acc, __global long *energy, const uint energy_stride,
-                           const uint energy_offset,
-                           __global long *far_d2, __global uint *far_index)
+__kernel void voronoi_assign(__global const uint *sites, const uint n, const uint G,
+                             __global const uint *cell_start, __global const uint *cell_sites,
+                             const uint g, const uint segments,
+                             __global long *acc, __global long *energy, const uint energy_stride,
+                             const uint energy_offset,
+                             __global long *far_d2, __global uint *far_index)
 {
     const uint seg = get_global_id(0);
     const uint r = get_global_id(1);
     if (seg >= segments)
         return;
     const uint cells = G * G;
-    const uint per_row = (g + LLOYD_SEGMENT - 1) / LLOYD_SEGMENT;
+    const uint per_row = (g + VOR_SEGMENT - 1) / VOR_SEGMENT;
     const uint row = seg / per_row;
-    const uint x0 = (seg % per_row) * LLOYD_SEGMENT;
-    const uint x1 = min(g, x0 + LLOYD_SEGMENT);
+    const uint x0 = (seg % per_row) * VOR_SEGMENT;
+    const uint x1 = min(g, x0 + VOR_SEGMENT);
     __global const uint *s = sites + (size_t)r * n * 2;
     __global const uint *start = cell_start + (size_t)r * (cells + 1);
     __global const uint *list = cell_sites + (size_t)r * n;
     __global long *a = acc + (size_t)r * n * 3;
     const long width = (long)(VOR_SIZE / G);
-    const uint Y = lloyd_density_coordinate(row, g);
+    const uint Y = vor_density_coordinate(row, g);
     const int cy = (int)vor_cell(Y, G);
-    const int cxa = (int)vor_cell(lloyd_density_coordinate(x0, g), G);
-    const int cxb = (int)vor_cell(lloyd_density_coordinate(x1 - 1, g), G);
-    uint cid[LLOYD_CANDIDATES], cxs[LLOYD_CANDIDATES], cys[LLOYD_CANDIDATES];
+    const int cxa = (int)vor_cell(vor_density_coordinate(x0, g), G);
+    const int cxb = (int)vor_cell(vor_density_coordinate(x1 - 1, g), G);
+    uint cid[VOR_CANDIDATES], cxs[VOR_CANDIDATES], cys[VOR_CANDIDATES];
     uint nc = 0;
     int gathered = (int)G >= cxb - cxa + 3;     /* the ring of cells does not wrap onto itself */
     for (int dy = -1; gathered && dy <= 1; ++dy) {
@@ -92,7 +96,7 @@ __kernel void lloyd_assign(__global const uint *sites, const uint n, const uint 
         for (int cx = cxa - 1; gathered && cx <= cxb + 1; ++cx) {
             const uint c = crow + (uint)((cx % (int)G + (int)G) % (int)G);
             for (uint q = start[c]; q < start[c + 1]; ++q) {
-                if (nc == LLOYD_CANDIDATES) {
+                if (nc == VOR_CANDIDATES) {
                     gathered = 0;
                     break;
                 }
@@ -109,7 +113,7 @@ __kernel void lloyd_assign(__global const uint *sites, const uint n, const uint 
     uint current = n;
     long sx = 0, sy = 0, count = 0;
     for (uint xi = x0; xi < x1; ++xi) {
-        const uint X = lloyd_density_coordinate(xi, g);
+        const uint X = vor_density_coordinate(xi, g);
         long best = LONG_MAX;
         uint site = n;
         if (gathered) {
@@ -122,7 +126,7 @@ __kernel void lloyd_assign(__global const uint *sites, const uint n, const uint 
             }
         }
         if (!gathered || best > width * width)
-            best = lloyd_nearest_rings(X, Y, s, n, G, start, list, &site);
+            best = vor_nearest_rings(X, Y, s, n, G, start, list, &site);
         e += best;
         if (best > far) {
             far = best;
@@ -151,26 +155,4 @@ __kernel void lloyd_assign(__global const uint *sites, const uint n, const uint 
     atom_add(en + 1, e >> 32);
     far_d2[(size_t)r * segments + seg] = far;
     far_index[(size_t)r * segments + seg] = far_m;
-}
-
-/* Grid (n, realizations): each site to the rounded mean of its cell (unwrapped relative to
- * the site); empty sites stay and are counted in empty[r] for the host to re-seed. */
-__kernel void lloyd_move(__global uint *sites, const uint n, __global long *acc,
-                         __global uint *counts, __global uint *empty)
-{
-    const uint i = get_global_id(0);
-    const uint r = get_global_id(1);
-    if (i >= n)
-        return;
-    __global long *a = acc + ((size_t)r * n + i) * 3;
-    __global uint *s = sites + ((size_t)r * n + i) * 2;
-    const long c = a[2];
-    counts[(size_t)r * n + i] = (uint)c;
-    if (c > 0) {
-        s[0] = (uint)((long)s[0] + vor_round_mean(a[0], c)) & VOR_MASK;
-        s[1] = (uint)((long)s[1] + vor_round_mean(a[1], c)) & VOR_MASK;
-    } else {
-        atomic_inc(empty + r);
-    }
-    a[0] = a[1] = a[2] = 0;
 }

@@ -1,5 +1,6 @@
-/* Shared by the Voronoi optimizers (kernels/voronoi.cl: Lloyd, kernels/ccvt.cl: CCVT).
- * NumPy twins: clsamp/samplers/voronoi.py (integer torus, grid), lloyd.py, ccvt.py.
+/* The integer torus and the site grid, shared by the nearest-site assignment
+ * (voronoi.cl), Lloyd (lloyd.cl) and CCVT (ccvt*.cl).
+ * NumPy twins: clsamp/geometry/integer_torus.py (the torus, the grid).
  *
  * Positions live on an integer torus: a coordinate is an integer in [0, 2^VOR_BITS)
  * (point x in [0, 1) is floor(x * 2^VOR_BITS)). Toroidal differences, squared
@@ -10,7 +11,10 @@
 #ifndef CLSAMP_VORONOI_H
 #define CLSAMP_VORONOI_H
 
-#define VOR_BITS 22
+/* VOR_BITS comes from the host (clsamp.geometry.integer_torus.BITS, its one source). */
+#ifndef VOR_BITS
+#error "VOR_BITS must be given by the host: clsamp.geometry.integer_torus.DEFINES"
+#endif
 #define VOR_SIZE (1u << VOR_BITS)
 #define VOR_MASK (VOR_SIZE - 1u)
 #define VOR_HALF (1 << (VOR_BITS - 1))

@@ -27,10 +27,10 @@ from clsamp.convergence import (
     homogenization_shifts,
     pareto_front,
     parse_ns,
-    shift_points,
     time_to_mse,
 )
 from clsamp.errors import InvalidArgumentError
+from clsamp.geometry.torus import shift
 from clsamp.integrands import Gaussian, make_integrand
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -99,7 +99,7 @@ def test_tiny_mse_has_no_rounding_floor():
     assert 1e-17 < res.mse[0] < 1e-12
     # reference: the same points and shifts in NumPy, each sum of f - I correctly rounded
     # (n is a power of two, so n * I and the division by n are exact)
-    x = shift_points(sampler.sample(n, realizations=r), homogenization_shifts(5, np.arange(r), 2))
+    x = shift(sampler.sample(n, realizations=r), homogenization_shifts(5, np.arange(r), 2)[:, None, :])
     values = f(x)
     want = np.array([math.fsum([*row, -n * f.integral]) / n for row in values])
     np.testing.assert_allclose(res.errors[0], want, rtol=1e-9)
@@ -114,7 +114,7 @@ def test_errors_against_exact_rationals_on_a_small_case():
     sampler = clsamp.make_sampler("jittered", seed=6, strata=(40, 25))
     f = make_integrand("gaussian")
     res = run(sampler, f, [n], r, seed=6)
-    x = shift_points(sampler.sample(n, realizations=r), homogenization_shifts(6, np.arange(r), 2))
+    x = shift(sampler.sample(n, realizations=r), homogenization_shifts(6, np.arange(r), 2)[:, None, :])
     for row, got in zip(f(x), res.errors[0], strict=True):
         exact = (sum(Fraction(v) for v in row) - n * Fraction(f.integral)) / n
         assert abs(Fraction(float(got)) - exact) <= abs(exact) * Fraction(1, 10**10)
@@ -152,15 +152,14 @@ def test_kernel_path_equals_numpy_path(name, integrand, homogenize):
 
 def test_every_registered_sampler_runs():
     # generic on purpose: samplers registered later (poisson_disk, lloyd, ccvt) run here too
-    from clsamp.samplers.base import _REGISTRY
     for name in clsamp.sampler_names():
-        dims = _REGISTRY[name].dimensions
+        dims = clsamp.samplers.sampler_class(name).dimensions
         d = 2 if dims is None or 2 in dims else dims[0]
         sampler = clsamp.make_sampler(name, d=d, seed=3)
         n = sampler.valid_n(16)
         f = make_integrand("gaussian", d=d)
         res = run(sampler, f, [n], 3, seed=2)
-        x = shift_points(sampler.sample(n, realizations=3), homogenization_shifts(2, np.arange(3), d))
+        x = shift(sampler.sample(n, realizations=3), homogenization_shifts(2, np.arange(3), d)[:, None, :])
         want = np.sum(f(x) - f.integral, axis=1) / n
         np.testing.assert_allclose(res.errors[0], want, rtol=1e-11, atol=1e-15, err_msg=name)
         assert res.kind.split(":")[0] == name
@@ -230,7 +229,7 @@ def test_pareto_front_and_time_to_mse():
 
 
 def test_plots_and_to_dict(tmp_path):
-    from clsamp.convergence import convergence_plot, pareto_plot
+    from clsamp.plots import convergence_plot, pareto_plot
     a = run("random", "gaussian", [16, 64, 256], 20)
     b = run("jittered", "disk", [16, 64, 256], 20)
     assert convergence_plot([a, b], tmp_path / "c.png").stat().st_size > 1000
@@ -287,3 +286,41 @@ def test_cli_writes_plot_and_json(tmp_path):
                           "--ns", "8", "-o", str(tmp_path / "x.png")],
                          capture_output=True, text=True, env=env, cwd=ROOT, timeout=300)
     assert bad.returncode == 2 and "nearest valid n is 9" in bad.stderr and "Traceback" not in bad.stderr
+
+
+# -- published rates come from the samplers ----------------------------------------------
+@pytest.mark.parametrize("name, params, best, worst", [
+    ("uncorrelated_jitter", {"groups": (1, 1)}, -1.0, -1.0),      # a Latin hypercube
+    ("uncorrelated_jitter", {}, -2.0, -1.5),                      # one group: jittered
+    ("jittered", {"strata": (4096, 1)}, None, None),              # not k^2 square cells
+    ("jittered", {"strata": (64, 64)}, -2.0, -1.5),
+    ("ccvt", {"density": "random"}, None, None),                  # an N^-1 floor
+    ("ccvt", {}, -3.0, -1.5),
+    ("sobol", {"randomize": "xor"}, None, None),
+    ("poisson_disk", {"radius": 0.05}, None, None),
+])
+def test_rates_follow_the_parameters(name, params, best, worst):
+    s = clsamp.make_sampler(name, **params)
+    assert theory.expected_rate(s, "best")[0] == best
+    assert theory.expected_rate(s, "worst")[0] == worst
+
+
+def test_a_result_carries_the_rates_of_its_sampler():
+    s = clsamp.make_sampler("uncorrelated_jitter", groups=(1, 1), seed=1)
+    res = run(s, "disk", [16, 64, 256], 64)
+    assert res.rates["worst"] == (-1.0, "Stein 1987")
+    cmp = theory.compare(res)
+    assert cmp["expected"] == -1.0 and cmp["source"] == "Stein 1987"
+    assert json.loads(json.dumps(res.to_dict()))["rates"]["worst"] == [-1.0, "Stein 1987"]
+    # jittered in 3-D: the d-D rates
+    assert theory.expected_rate("jittered", "best", d=3)[0] == pytest.approx(-1 - 2 / 3)
+
+
+def test_the_table_in_the_theory_docstring_is_what_the_samplers_say():
+    rows = [line.split() for line in theory.__doc__.splitlines()
+            if line[:1].isalpha() and len(line.split()) > 3 and line.split()[1].startswith("-")]
+    assert len(rows) == 7
+    for name, best, worst, *_ in rows:
+        s = clsamp.make_sampler(name, d=2)
+        assert theory.expected_rate(s, "best")[0] == float(best), name
+        assert theory.expected_rate(s, "worst")[0] == float(worst), name

@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 
+import clsamp
 from clsamp.errors import InvalidArgumentError
 from clsamp.point_metrics import (
     max_min_distance,
@@ -127,3 +128,13 @@ def test_normalized_energy_refuses_other_dimensions():
         normalized_energy(np.random.default_rng(0).random((10, 3)))
     with pytest.raises(InvalidArgumentError, match="'density'"):
         normalized_energy(np.random.default_rng(0).random((10, 2)), density=0)
+
+
+def test_device_arrays_are_accepted():
+    sampler = clsamp.make_sampler("poisson_disk", seed=2)
+    host = sampler.sample(200, realizations=3)
+    device = sampler.sample_device(200, realizations=3)
+    assert np.array_equal(min_distance(device), min_distance(host))
+    assert np.array_equal(relative_radius(device), relative_radius(host))
+    assert np.array_equal(normalized_energy(device), normalized_energy(host))
+    assert normalized_energy(sampler.sample_device(200)) == normalized_energy(host[0])

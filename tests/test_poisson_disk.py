@@ -9,6 +9,7 @@ import clsamp
 from clsamp.errors import InvalidArgumentError
 from clsamp.point_metrics import max_min_distance, min_distance, relative_radius
 from clsamp.samplers import poisson_disk
+from clsamp.samplers.poisson_disk import sampler as poisson_sampler
 
 
 def uncovered(points, radius, probes):
@@ -27,13 +28,14 @@ def probe_grid(k, d):
 @pytest.mark.parametrize("d, n, r", [(2, 256, 6), (3, 256, 3)])
 def test_fixed_n_reaches_rho_in_every_realization(d, n, r):
     sampler = clsamp.make_sampler("poisson_disk", d=d, rho=0.75, seed=5)
-    pts = sampler.sample(n, realizations=r)
+    pts, info = sampler.sample(n, realizations=r, return_info=True)
     assert pts.shape == (r, n, d) and pts.dtype == np.float64
     assert pts.min() >= 0.0 and pts.max() < 1.0
     rho = relative_radius(pts)
     assert np.all(rho >= 0.75), rho
-    assert np.all(sampler.counts == n)
-    assert sampler.radius_used == pytest.approx(0.75 * max_min_distance(n, d))
+    assert np.all(info.counts == n) and info.realizations.tolist() == list(range(r))
+    assert info.radius == pytest.approx(0.75 * max_min_distance(n, d))
+    assert np.all(info.rho_bound <= rho) and info.darts > 0 and info.rounds > 0
     for i in range(r):
         for j in range(i):
             assert not np.array_equal(pts[i], pts[j])
@@ -74,9 +76,11 @@ def test_kernel_equals_numpy_reference_with_redraws():
     # At n = 16 a few realizations become maximal below n and are drawn again.
     cl = clsamp.make_sampler("poisson_disk", seed=1)
     ref = clsamp.make_sampler("poisson_disk", seed=1, backend="numpy")
-    a = cl.sample(16, realizations=64)
-    b = ref.sample(16, realizations=64)
-    assert cl.stats["redraws"] > 0 and ref.stats == cl.stats
+    a, info = cl.sample(16, realizations=64, return_info=True)
+    b, ref_info = ref.sample(16, realizations=64, return_info=True)
+    assert info.redraws > 0
+    assert (info.rounds, info.darts, info.redraws) == (ref_info.rounds, ref_info.darts,
+                                                       ref_info.redraws)
     np.testing.assert_array_equal(a, b)
     assert np.all(relative_radius(a) >= 0.75)
 
@@ -85,15 +89,18 @@ def test_kernel_equals_numpy_reference_with_redraws():
 def test_kernel_equals_numpy_reference_maximal(d, radius):
     cl = clsamp.make_sampler("poisson_disk", d=d, radius=radius, seed=7)
     ref = clsamp.make_sampler("poisson_disk", d=d, radius=radius, seed=7, backend="numpy")
-    np.testing.assert_array_equal(cl.sample(), ref.sample())
-    np.testing.assert_array_equal(cl.counts, ref.counts)
+    a, info = cl.sample(return_info=True)
+    b, ref_info = ref.sample(return_info=True)
+    np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(info.counts, ref_info.counts)
+    assert info.counts.tolist() == [len(a)]
 
 
 @pytest.mark.parametrize("d, radius, k", [(2, 0.03, 600), (3, 0.11, 64)])
 def test_maximal_set_leaves_no_void(d, radius, k):
     sampler = clsamp.make_sampler("poisson_disk", d=d, radius=radius, seed=4)
-    pts = sampler.sample()
-    assert pts.shape == (sampler.counts[0], d) and not sampler.needs_n
+    pts, info = sampler.sample(return_info=True)
+    assert pts.shape == (info.counts[0], d) and not sampler.needs_n
     assert min_distance(pts) >= radius
     rng = np.random.default_rng(0)
     probes = np.concatenate([probe_grid(k, d), rng.random((200_000, d))])
@@ -114,14 +121,18 @@ def test_sample_device_and_sample_sets():
     sets = maximal.sample_sets(3)
     assert len(sets) == 3 and len({len(s) for s in sets}) >= 2
     np.testing.assert_array_equal(sets[0], maximal.sample())
-    np.testing.assert_array_equal(maximal.sample_device().get()[0], sets[0])
+    np.testing.assert_array_equal(maximal.sample_device().get(), sets[0])
     assert maximal.sample(realizations=1).shape == (1, len(sets[0]), 2)
+    later, info = maximal.sample_sets(range(1, 3), return_info=True)
+    assert all(np.array_equal(a, b) for a, b in zip(later, sets[1:], strict=True))
+    assert info.counts.tolist() == [len(x) for x in sets[1:]]
+    np.testing.assert_array_equal(maximal.sample(realizations=range(2, 3))[0], sets[2])
 
 
 def test_batches_give_the_same_sets(monkeypatch):
     sampler = clsamp.make_sampler("poisson_disk", seed=6)
     whole = sampler.sample(100, realizations=5)
-    monkeypatch.setattr(poisson_disk, "BATCH_CELLS", 700)   # two realizations per batch
+    monkeypatch.setattr(poisson_sampler, "BATCH_CELLS", 700)   # two realizations per batch
     np.testing.assert_array_equal(sampler.sample(100, realizations=5), whole)
 
 

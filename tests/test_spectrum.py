@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import clsamp
-from clsamp import philox, spectrum
+from clsamp import philox, plots, spectrum
 from clsamp.errors import InvalidArgumentError
 
 
@@ -125,7 +125,7 @@ def test_fast_numpy_backend_and_split_blocks(monkeypatch):
     ref = clsamp.power_spectrum(pts, 32, method="fast", tol=1e-10, backend="numpy")
     assert np.abs(cl - ref).max() <= 1e-12 * 4096
     # and chunks of realizations when the device budget is small
-    monkeypatch.setattr(spectrum, "_BUDGET", 100_000)
+    monkeypatch.setattr(spectrum, "WORKING_SET", 100_000)
     batch = white(3, 300, 2)
     chunked = clsamp.power_spectrum(batch, 32, method="fast", tol=1e-10)
     assert np.abs(chunked - brute_force(batch, 32)).max() <= 1e-10 * 300
@@ -133,7 +133,7 @@ def test_fast_numpy_backend_and_split_blocks(monkeypatch):
 
 def test_direct_chunks_points_and_realizations(monkeypatch, small2):
     pts, exact = small2
-    monkeypatch.setattr(spectrum, "_BUDGET", 60_000)   # a few dozen points per chunk
+    monkeypatch.setattr(spectrum, "WORKING_SET", 60_000)   # a few dozen points per chunk
     P = clsamp.power_spectrum(pts, 32, method="direct")
     assert np.abs(P - exact).max() <= 1e-11 * 200
 
@@ -251,16 +251,16 @@ def test_normalized_frequency():
 def test_pictures(tmp_path, medium2):
     from clsamp import io
     pts, P = medium2
-    png = spectrum.save_spectrum_png(tmp_path / "s.png", P)
+    png = plots.save_spectrum_png(tmp_path / "s.png", P)
     assert png.stat().st_size > 100
-    spectrum.save_spectrum_png(tmp_path / "log.png", P, scale="log")
-    spectrum.save_spectrum_exr(tmp_path / "s.exr", P)
+    plots.save_spectrum_png(tmp_path / "log.png", P, scale="log")
+    plots.save_spectrum_exr(tmp_path / "s.exr", P)
     back = io.read_exr(tmp_path / "s.exr")
     assert np.allclose(back, P.T.astype(np.float32))
-    image = spectrum.spectrum_image(P)
+    image = plots.spectrum_image(P)
     assert image.shape == (64, 64) and image[32, 32] == 1.0 and image.min() >= 0
-    plots = spectrum.save_spectrum_plots(tmp_path / "plots.png", P, n=1000, realizations=4, label="white")
-    assert plots.stat().st_size > 1000
+    figure = plots.save_spectrum_plots(tmp_path / "plots.png", P, n=1000, realizations=4, label="white")
+    assert figure.stat().st_size > 1000
 
 
 def test_cli_spectrum(tmp_path):
@@ -321,3 +321,39 @@ def test_bad_spectra():
         clsamp.radial_mean(np.ones((8, 8)), bin_width=0)
     with pytest.raises(InvalidArgumentError, match="NaN"):
         clsamp.radial_mean(np.full((8, 8), np.nan))
+
+
+@pytest.mark.parametrize("method", ["direct", "fast"])
+def test_device_points_are_read_where_they_are(method, monkeypatch):
+    # sample_device output goes straight to the kernels: the same bits as the host array,
+    # whole and cut into chunks of realizations and points (copied on the device)
+    sampler = clsamp.make_sampler("jittered", seed=4)
+    on_device = sampler.sample_device(256, realizations=5)
+    host = sampler.sample(256, realizations=5)
+    for budget in (None, 60_000):
+        if budget:
+            monkeypatch.setattr(spectrum, "WORKING_SET", budget)
+        a = clsamp.power_spectrum(on_device, 32, method=method, progress=False)
+        b = clsamp.power_spectrum(host, 32, method=method, progress=False)
+        assert np.array_equal(a, b)
+    one = clsamp.power_spectrum(sampler.sample_device(256), 32, method=method, progress=False)
+    assert np.array_equal(one, clsamp.power_spectrum(host[0], 32, method=method, progress=False))
+    ref = clsamp.power_spectrum(on_device, 32, method=method, backend="numpy", progress=False)
+    assert np.allclose(ref, b, rtol=0, atol=1e-10 * 256)
+
+
+def test_bad_device_points_are_refused_on_the_device():
+    import pyopencl.array as cla
+
+    from clsamp import runtime
+    good = np.full((2, 8, 2), 0.5)
+    for value, match in ((np.nan, "NaN"), (np.inf, "NaN or infinite"), (1.0, r"\[0, 1\)"),
+                         (-1e-300, r"\[0, 1\)")):
+        bad = good.copy()
+        bad[1, 3, 1] = value
+        with pytest.raises(InvalidArgumentError, match=match):
+            clsamp.power_spectrum(cla.to_device(runtime.queue(), bad), 16)
+    with pytest.raises(InvalidArgumentError, match="float64"):
+        clsamp.power_spectrum(cla.to_device(runtime.queue(), good.astype(np.float32)), 16)
+    with pytest.raises(InvalidArgumentError, match="shape"):
+        clsamp.power_spectrum(cla.to_device(runtime.queue(), good.ravel()), 16)

@@ -1,4 +1,4 @@
-"""Samplers: one module per family, all reachable through :func:`make_sampler`."""
+"""Samplers: one module (or package) per family, all reachable through :func:`make_sampler`."""
 
 # Importing a module registers its samplers.
 from . import (  # noqa: F401
@@ -9,6 +9,16 @@ from . import (  # noqa: F401
     random,  # random
     stratified,  # regular, jittered, uncorrelated_jitter, latin_hypercube, (correlated_)multijittered
 )
-from .base import Sampler, make_sampler, register, sampler_names
+from .base import (
+    Rate,
+    SampleInfo,
+    Sampler,
+    make_sampler,
+    register,
+    sampler_class,
+    sampler_names,
+)
+from .engine import as_qmc_engine
 
-__all__ = ["Sampler", "make_sampler", "register", "sampler_names"]
+__all__ = ["Rate", "SampleInfo", "Sampler", "as_qmc_engine", "make_sampler", "register",
+           "sampler_class", "sampler_names"]

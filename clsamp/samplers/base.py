@@ -1,14 +1,28 @@
-"""The sampler contract: one thin base class and the registry.
+"""The sampler contract: one thin base class, the registry, and what a call reports.
 
-As in scipy.stats.qmc, the base validates once and subclasses write two small
-methods: ``_device`` (the OpenCL kernel, returning a device array) and
-``_reference`` (the NumPy reference, returning an ndarray). Both receive
-``realizations`` as a ``range`` of realization indices and give points of shape
-(len(realizations), n, d) for point indices ``[start, start + n)``; realization
-``k`` never depends on how many were asked for, which lets the base split large
-requests into chunks of realizations that fit the device.
+As in ``scipy.stats.qmc``, the base checks every argument once and subclasses write two
+small methods over a ``range`` of realization indices:
+
+* ``_reference(n, realizations, start)``: the NumPy reference, an ndarray
+  (len(realizations), n, d);
+* ``_device(n, realizations, start, out=None)``: the OpenCL path, a ``pyopencl.array.Array``
+  of that shape (or an ndarray, for samplers whose work ends on the host). A sampler with
+  ``host_output = True`` also accepts ``out``, a C-contiguous host array of that shape to
+  write into: on CPU devices the kernel then writes straight into the array the caller
+  gets, with no second copy.
+
+Samplers that iterate or reject (``info`` set to a :class:`SampleInfo` subclass) return
+``(points, info)`` from both methods, ``info`` covering those realizations; the base
+merges the parts of a call split into chunks, so ``sample(..., return_info=True)`` always
+describes every realization it returned.
+
+Realization k never depends on how many realizations are asked for, or which: that is
+what lets the base split requests into chunks that fit the device, and lets any caller
+ask for realizations lo..hi alone (``realizations=range(lo, hi)``).
 """
 
+import copy
+import dataclasses
 import difflib
 
 import numpy as np
@@ -21,6 +35,16 @@ _REGISTRY = {}   # name -> class
 _ALIASES = {}    # alias -> name
 
 BACKENDS = ("opencl", "numpy")
+CASES = ("best", "worst", "axis")   # the integrand cases of clsamp.theory
+PILLEBOUE = "Pilleboue et al. 2015"
+
+
+@dataclasses.dataclass(frozen=True)
+class Rate:
+    """A published convergence rate: MSE ~ N^exponent, and where it is published."""
+
+    exponent: float
+    source: str
 
 
 def register(name, *aliases):
@@ -29,6 +53,7 @@ def register(name, *aliases):
         if name in _REGISTRY or name in _ALIASES:
             raise RuntimeError(f"sampler name {name!r} registered twice")
         cls.name = name
+        cls.aliases = tuple(aliases)
         _REGISTRY[name] = cls
         for alias in aliases:
             _ALIASES[alias] = name
@@ -42,6 +67,27 @@ def sampler_names(aliases=False):
     if aliases:
         names |= set(_ALIASES)
     return sorted(names)
+
+
+def sampler_class(name):
+    """The class registered as ``name`` (or an alias; ``"sobol:owen"`` names ``sobol``).
+
+    Raises
+    ------
+    InvalidArgumentError
+        For an unknown name, with the nearest known one and the list of all.
+    """
+    if not isinstance(name, str):
+        raise InvalidArgumentError(f"'name' must be a sampler name (str), got {name!r}")
+    base = name.partition(":")[0]
+    cls = _REGISTRY.get(_ALIASES.get(base, base))
+    if cls is None:
+        close = difflib.get_close_matches(base, sampler_names(aliases=True), n=1)
+        hint = f" Did you mean {close[0]!r}?" if close else ""
+        raise InvalidArgumentError(
+            f"unknown sampler 'name'={base!r}.{hint} Known samplers: "
+            + ", ".join(sampler_names(aliases=True)))
+    return cls
 
 
 def make_sampler(name, d=2, seed=0, **params):
@@ -61,6 +107,15 @@ def make_sampler(name, d=2, seed=0, **params):
         Sampler-specific parameters (``randomize=``, ``radius=``, ``iterations=``,
         ``backend="numpy"`` for the NumPy reference, ...).
 
+    Returns
+    -------
+    Sampler
+
+    Raises
+    ------
+    InvalidArgumentError
+        An unknown name (with the nearest known one), or a parameter the sampler refuses.
+
     Examples
     --------
     >>> import clsamp
@@ -68,41 +123,109 @@ def make_sampler(name, d=2, seed=0, **params):
     >>> pts.shape, pts.dtype
     ((1000, 3), dtype('float64'))
     """
-    if not isinstance(name, str):
-        raise InvalidArgumentError(f"'name' must be a sampler name (str), got {name!r}")
-    base, _, variant = name.partition(":")
+    cls = sampler_class(name)
+    variant = name.partition(":")[2]
     if variant:
         if "randomize" in params:
             raise InvalidArgumentError(
                 f"'name' {name!r} names a randomization and 'randomize' is given too")
         params["randomize"] = variant
-    key = _ALIASES.get(base, base)
-    cls = _REGISTRY.get(key)
-    if cls is None:
-        close = difflib.get_close_matches(base, sampler_names(aliases=True), n=1)
-        hint = f" Did you mean {close[0]!r}?" if close else ""
-        raise InvalidArgumentError(
-            f"unknown sampler 'name'={base!r}.{hint} Known samplers: "
-            + ", ".join(sampler_names(aliases=True)))
     return cls(d=d, seed=seed, **params)
+
+
+def _merge_field(values, how):
+    if how == "same":
+        return values[0]
+    if how == "sum":
+        return type(values[0])(sum(values))
+    if how == "max":
+        return max(values)
+    if how == "pad":      # rows of different lengths: each padded with its last value
+        length = max(v.shape[1] for v in values)
+        return np.concatenate([np.pad(v, ((0, 0), (0, length - v.shape[1])), mode="edge")
+                               if v.shape[1] < length else v for v in values])
+    return np.concatenate(values)
+
+
+@dataclasses.dataclass(frozen=True)
+class SampleInfo:
+    """What one call of a sampler that iterates or rejects did, realization by realization.
+
+    Every array has the call's realizations on its first axis, in the order of
+    ``realizations`` (the realization indices, also for a call with
+    ``realizations=None``, which has one: realization 0). Subclasses add their fields;
+    a field's ``merge`` metadata says how the parts of a call split into chunks combine
+    ("concat" by default, "pad" for histories of different lengths, "sum", "max", or
+    "same" for a value every part shares).
+    """
+
+    realizations: np.ndarray
+
+    @classmethod
+    def merge(cls, parts):
+        """One info for the realizations of ``parts``, in order."""
+        if len(parts) == 1:
+            return parts[0]
+        values = {}
+        for field in dataclasses.fields(cls):
+            how = field.metadata.get("merge", "concat")
+            values[field.name] = _merge_field([getattr(p, field.name) for p in parts], how)
+        return cls(**values)
+
+
+def info_field(how="concat", **kwargs):
+    """A :class:`SampleInfo` field and how its parts merge (see there)."""
+    return dataclasses.field(metadata={"merge": how}, **kwargs)
 
 
 class Sampler:
     """Base of every sampler.
 
-    Subclasses set ``name`` (via :func:`register`), may set ``dimensions`` (the
-    tuple of supported d, or None for any), ``max_n``, ``randomized`` and ``accepts_start``, and
-    implement ``_reference`` and ``_device``. ``_check_n`` maps a requested n to
-    itself or raises naming the nearest valid one.
+    Subclasses set ``name`` and ``aliases`` (via :func:`register`) and the facts below,
+    and write ``_reference`` and ``_device`` (module docstring). ``valid_n`` maps a
+    requested n to the nearest one the sampler can make; ``convergence_rate`` gives the
+    published rate for the parameters of the instance.
+
+    Attributes
+    ----------
+    dimensions : tuple of int or None
+        The supported d (None: any d >= 1).
+    randomized : bool
+        Whether the seed changes the points.
+    sequence : bool
+        Whether ``start`` continues a sequence (``sample(n, start=k)`` continues
+        ``sample(k)``).
+    accepts_start : bool
+        False for point sets made whole (dart throwing, optimizers): ``start`` must be 0.
+    needs_n : bool
+        False where n may follow from the parameters (a maximal Poisson-disk set).
+    max_n : int
+        The largest n (point indices are 32-bit counters).
+    expensive : bool
+        Whether a point costs far more than a counter-based draw (optimizers, dart
+        throwing): callers such as the renderer reuse a few sets of such samplers.
+    randomizations : tuple
+        The values ``randomize=`` accepts; ``(None,)`` for a sampler without it.
+    info : type or None
+        The :class:`SampleInfo` subclass ``sample(..., return_info=True)`` returns, for
+        samplers that iterate or reject; None where there is nothing to report.
+    host_output : bool
+        Whether ``_device`` can write into a host array (zero copy on CPU devices).
     """
 
     name = None
-    dimensions = None       # e.g. (1,) or (2,) or (2, 3); None = any d >= 1
-    randomized = True       # whether the seed changes the points
-    sequence = False        # whether `start` continues a sequence
-    max_n = MAX_UINT32      # point indices are 32-bit counters
-    needs_n = True          # False for samplers whose n follows from parameters (maximal Poisson disk)
-    accepts_start = True    # False for point sets made whole (dart throwing, optimizers): start must be 0
+    aliases = ()
+    dimensions = None
+    randomized = True
+    sequence = False
+    accepts_start = True
+    needs_n = True
+    max_n = MAX_UINT32
+    expensive = False
+    randomizations = (None,)
+    info = None
+    host_output = False
+    rates = {}              # case -> Rate for d = 2 (see convergence_rate)
 
     def __init__(self, d=2, seed=0, backend="opencl"):
         self.d = check_positive_int(d, "d")
@@ -116,58 +239,160 @@ class Sampler:
     def __repr__(self):
         return f"{type(self).__name__}(name={self.name!r}, d={self.d}, seed={self.seed})"
 
-    # -- the public entry point ---------------------------------------------------
-    def sample(self, n=None, realizations=None, start=0):
+    # -- facts -----------------------------------------------------------------------
+    @property
+    def label(self):
+        """The sampler's name with its randomization, as :func:`make_sampler` reads it
+        (``"sobol:owen"``, ``"jittered"``)."""
+        randomize = getattr(self, "randomize", None)
+        return f"{self.name}:{randomize}" if randomize else str(self.name)
+
+    def convergence_rate(self, case):
+        """The published rate of the MSE of this sampler's estimates, or None.
+
+        Parameters
+        ----------
+        case : {"best", "worst", "axis"}
+            The integrand as the estimator sees it (:func:`clsamp.theory.case_of`): smooth,
+            discontinuous along a curve, or discontinuous only along the axes.
+
+        Returns
+        -------
+        Rate or None
+            The exponent a of MSE ~ N^a and its source, for this instance's parameters
+            and dimension; None where nothing is published.
+        """
+        return self.rates.get(case) if self.d == 2 else None
+
+    def with_seed(self, seed):
+        """A copy of this sampler with another seed (every other parameter kept)."""
+        other = copy.copy(self)
+        other.seed = check_seed(seed)
+        return other
+
+    # -- the public entry points -------------------------------------------------------
+    def sample(self, n=None, realizations=None, start=0, return_info=False):
         """Generate points.
 
         Parameters
         ----------
         n : int
-            Number of points per set.
-        realizations : int, optional
-            None for one set of shape (n, d); an integer r for r independent sets
-            of shape (r, n, d) (realization k is the same whatever r is).
+            Number of points per set (some samplers derive it from their parameters
+            when it is left out).
+        realizations : None, int or range
+            None for one set of shape (n, d) (realization 0); an integer r for the
+            realizations 0..r-1, shape (r, n, d); a range for exactly those
+            realizations, shape (len(range), n, d), equal to the same rows of a larger
+            call. Realization k is the same whatever else is asked for.
         start : int
             Index of the first point: ``sample(n, start=k)`` continues ``sample(k)``
-            for sequences; for other samplers it offsets the counters.
+            for sequences; for other samplers it offsets the counters of the jitter.
+        return_info : bool
+            Also return what the call did (samplers that iterate or reject: ``info`` of
+            the class; the others raise).
 
         Returns
         -------
-        ndarray of float64 in [0, 1)^d, shape (n, d) or (r, n, d)
+        points : ndarray of float64 in [0, 1)^d
+        info : SampleInfo
+            Only with ``return_info``.
+
+        Raises
+        ------
+        InvalidArgumentError
+            An n the sampler cannot make (naming the nearest valid one), a bad
+            ``realizations`` or ``start``, or ``return_info`` where there is no info.
         """
-        n, r, start = self._check_call(n, realizations, start)
-        if self.backend == "numpy":
-            points = np.asarray(self._reference(n, range(r), start), dtype=np.float64)
-        else:
-            count = self.d * (n if n is not None else 1)
-            parts = runtime.chunk_ranges(r, 8 * count)
-            if len(parts) == 1:
-                points = self._device(n, range(r), start).get()
-            else:
-                points = np.concatenate([self._device(n, range(lo, hi), start).get()
-                                         for lo, hi in parts])
-        return points[0] if realizations is None else points
+        n, runs, single, start = self._check_call(n, realizations, start, return_info)
+        points, infos = self._generate(n, runs, start)
+        if single:
+            points = points[0]
+        if not return_info:
+            return points
+        return points, self.info.merge(infos)
 
-    def sample_device(self, n=None, realizations=None, start=0):
-        """Like :meth:`sample` with ``realizations`` required, but the (r, n, d) points
-        stay on the device as a ``pyopencl.array.Array`` (for kernels that consume them)."""
-        if realizations is None:
-            realizations = 1
-        n, r, start = self._check_call(n, realizations, start)
-        if self.backend == "numpy":
-            import pyopencl.array as cla
-            return cla.to_device(runtime.queue(),
-                                 np.ascontiguousarray(self._reference(n, range(r), start)))
-        return self._device(n, range(r), start)
+    def sample_device(self, n=None, realizations=None, start=0, return_info=False):
+        """Like :meth:`sample`, but the points stay on the current device.
 
-    def _check_call(self, n, realizations, start):
+        Returns
+        -------
+        points : pyopencl.array.Array of float64, shape (n, d) or (r, n, d)
+            On the current device's queue, for kernels that consume them (spectra,
+            integrands, metrics), with no copy through the host.
+        info : SampleInfo
+            Only with ``return_info``.
+        """
+        n, runs, single, start = self._check_call(n, realizations, start, return_info)
+        parts, infos = [], []
+        for run in runs:
+            for chunk in self._chunks(run, n):
+                points, info = self._split(self._make(n, chunk, start))
+                parts.append(runtime.to_device(points))
+                infos.append(info)
+        points = runtime.concatenate(parts)
+        if single:
+            points = points.reshape(points.shape[1:])
+        if not return_info:
+            return points
+        return points, self.info.merge(infos)
+
+    # -- what the entry points share --------------------------------------------------
+    def _chunks(self, run, n):
+        """``run`` in consecutive pieces whose output fits the device (the runtime's rule);
+        the NumPy reference takes it whole."""
+        if self.backend == "numpy":
+            return [run]
+        per = 8 * self.d * (n if n is not None else 1)
+        return [range(run.start + lo, run.start + hi)
+                for lo, hi in runtime.chunk_ranges(len(run), per)]
+
+    def _split(self, result):
+        return result if self.info is not None else (result, None)
+
+    def _make(self, n, realizations, start, out=None):
+        if self.backend == "numpy":
+            return self._reference(n, realizations, start)
+        if out is not None:
+            return self._device(n, realizations, start, out=out)
+        return self._device(n, realizations, start)
+
+    def _generate(self, n, runs, start):
+        """Host points (total, n, d) of every run, and the infos of their chunks."""
+        total = sum(len(run) for run in runs)
+        host = (self.host_output and self.backend == "opencl" and n is not None
+                and runtime.current_device().type == "cpu")
+        out = np.empty((total, n, self.d), dtype=np.float64) if n is not None else None
+        infos, row, single_set = [], 0, None
+        for run in runs:
+            for chunk in self._chunks(run, n):
+                target = out[row:row + len(chunk)] if out is not None else None
+                result = self._make(n, chunk, start, out=target if host else None)
+                points, info = self._split(result)
+                infos.append(info)
+                if out is None:                       # a maximal set: n follows from the run
+                    single_set = runtime.to_host(points)
+                elif not (host and points is target):
+                    runtime.to_host(points, into=target)
+                row += len(chunk)
+        return (out if out is not None else single_set), infos
+
+    def _default_n(self):
+        """n when the caller leaves it out (None: n is required)."""
+        return None
+
+    def _check_call(self, n, realizations, start, return_info=False):
+        if return_info and self.info is None:
+            raise InvalidArgumentError(
+                f"'return_info': sampler {self.name!r} does not iterate or reject, so it has no "
+                "info to return")
+        if n is None:
+            n = self._default_n()
         if n is None and self.needs_n:
             raise InvalidArgumentError(f"'n' is required for sampler {self.name!r}")
         if n is not None:
             n = check_positive_int(n, "n", maximum=self.max_n)
             n = self._check_n(n)
-        r = 1 if realizations is None else check_positive_int(realizations, "realizations",
-                                                              maximum=MAX_UINT32)
+        runs, single = _check_realizations(realizations)
         start = check_int(start, "start", minimum=0)
         if start != 0 and not self.accepts_start:
             raise InvalidArgumentError(
@@ -177,9 +402,9 @@ class Sampler:
             raise InvalidArgumentError(
                 f"'start' + 'n' must stay within the {self.max_n + 1} point indices of "
                 f"{self.name!r}, got start={start}, n={n}")
-        return n, r, start
+        return n, runs, single, start
 
-    # -- what subclasses write ----------------------------------------------------
+    # -- what subclasses write ----------------------------------------------------------
     def valid_n(self, n):
         """The valid point count nearest to ``n`` (n itself when valid)."""
         return n
@@ -196,6 +421,24 @@ class Sampler:
         """NumPy reference: ndarray (len(realizations), n, d); ``realizations`` is a range."""
         raise NotImplementedError
 
-    def _device(self, n, realizations, start):
+    def _device(self, n, realizations, start, out=None):
         """OpenCL: pyopencl Array (len(realizations), n, d) on ``runtime.queue()``."""
         raise NotImplementedError
+
+
+def _check_realizations(realizations):
+    """The runs of consecutive realization indices asked for, and whether one (n, d) set is."""
+    if realizations is None:
+        return [range(1)], True
+    if isinstance(realizations, range):
+        if len(realizations) == 0:
+            raise InvalidArgumentError(f"'realizations' must not be empty, got {realizations!r}")
+        if min(realizations) < 0 or max(realizations) > MAX_UINT32:
+            raise InvalidArgumentError(
+                f"'realizations' must lie in [0, {MAX_UINT32}] (32-bit counters), got {realizations!r}")
+        if realizations.step == 1:
+            return [realizations], False
+        return [range(k, k + 1) for k in realizations], False
+    r = check_positive_int(realizations, "realizations", maximum=MAX_UINT32)
+    return [range(r)], False
+

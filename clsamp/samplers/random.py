@@ -1,10 +1,9 @@
 """The ``random`` sampler: independent uniform points (white noise)."""
 
 import numpy as np
-import pyopencl.array as cla
 
 from .. import philox, runtime
-from .base import Sampler, register
+from .base import PILLEBOUE, Rate, Sampler, register
 
 
 @register("random")
@@ -30,18 +29,23 @@ class RandomSampler(Sampler):
     """
 
     sequence = True
+    host_output = True
+
+    def convergence_rate(self, case):
+        # the variance of i.i.d. sampling: sigma^2 / N for any square-integrable integrand
+        return Rate(-1.0, PILLEBOUE) if case in ("best", "worst", "axis") else None
 
     def _reference(self, n, realizations, start):
         return philox.uniform_block(self.seed, philox.Stream.POINTS,
                                     np.arange(realizations.start, realizations.stop),
                                     n, self.d, start)
 
-    def _device(self, n, realizations, start):
+    def _device(self, n, realizations, start, out=None):
         runtime.require_fp64()
         r = len(realizations)
-        out = cla.empty(runtime.queue(), (r, n, self.d), np.float64)
+        target = runtime.Output((r, n, self.d), host=out)
         kernel = runtime.kernel("random.cl", "random_points")
-        kernel(runtime.queue(), (n, r), None, out.data, np.uint32(n), np.uint32(self.d),
+        kernel(runtime.queue(), (n, r), None, target.buffer, np.uint32(n), np.uint32(self.d),
                np.uint32(start), np.uint32(realizations.start), *runtime.key_args(self.seed),
                np.uint32(philox.Stream.POINTS))
-        return out
+        return target.finish()

@@ -21,13 +21,11 @@ import math
 import re
 
 import numpy as np
-import pyopencl as cl
-import pyopencl.array as cla
 
 from .. import permutation, philox, runtime
 from ..errors import InvalidArgumentError
 from ..validation import check_int, check_real
-from .base import Sampler, register
+from .base import PILLEBOUE, Rate, Sampler, register
 
 # -- small pure functions, shared by the references and the parameter checks ----------
 STRATUM_STEPS = 4   # ulp steps of stratum_point each way (CLSAMP_STRATUM_STEPS in the kernel)
@@ -116,6 +114,24 @@ def _check_strata(strata, d, name="strata"):
     return tuple(check_int(s, name, minimum=1) for s in strata)
 
 
+STEIN = "Stein 1987"
+LATIN_RATES = {"best": Rate(-1.0, STEIN), "worst": Rate(-1.0, STEIN)}
+
+
+def jitter_rate(d, case, source=PILLEBOUE):
+    """The published rate of jittered sampling of k^d cells (Pilleboue et al. 2015): in 2-D
+    N^-2 for smooth integrands and N^-1.5 for edges (curved, or along the axes, where the
+    cells of one column or row are cut); in d-D N^(-1-2/d) and N^(-1-1/d)."""
+    if d == 2:
+        return {"best": Rate(-2.0, source), "worst": Rate(-1.5, source),
+                "axis": Rate(-1.5, source)}.get(case)
+    if case == "best":
+        return Rate(-1.0 - 2.0 / d, source)
+    if case == "worst":
+        return Rate(-1.0 - 1.0 / d, source)
+    return None
+
+
 def _default_groups(d):
     return (2,) * (d // 2) + ((1,) if d % 2 else ())
 
@@ -143,50 +159,13 @@ def _layout_reference(sampler, n, realizations, start, radix, group, perms):
     return out
 
 
-class _HostOutput(Sampler):
-    """``sample()`` without the second copy on CPU devices.
-
-    On a CPU device the kernel writes straight into the NumPy array the caller gets (a
-    buffer over host memory, mapped once at the end); elsewhere the base's device array
-    and ``.get()``. Subclasses write ``_device(n, realizations, start, into=None)`` and
-    get their output buffer from :meth:`_output`.
-    """
-
-    def sample(self, n=None, realizations=None, start=0):
-        if self.backend != "opencl" or runtime.current_device().type != "cpu":
-            return super().sample(n, realizations, start)
-        n, r, start = self._check_call(n, realizations, start)
-        out = np.empty((r, n, self.d), dtype=np.float64)
-        for lo, hi in runtime.chunk_ranges(r, 8 * n * self.d):
-            self._device(n, range(lo, hi), start, into=out[lo:hi])
-        return out[0] if realizations is None else out
-
-    @staticmethod
-    def _output(shape, into):
-        """(result, buffer): a new device array, or a buffer over the host array ``into``."""
-        if into is None:
-            out = cla.empty(runtime.queue(), shape, np.float64)
-            return out, out.data
-        buffer = cl.Buffer(runtime.context(), cl.mem_flags.WRITE_ONLY | cl.mem_flags.USE_HOST_PTR,
-                           hostbuf=into)
-        return into, buffer
-
-    @staticmethod
-    def _finish(result, buffer, into):
-        if into is not None:
-            # mapping makes the kernel's writes visible in host memory (no copy on PoCL)
-            mapped, _ = cl.enqueue_map_buffer(runtime.queue(), buffer, cl.map_flags.READ, 0,
-                                              into.shape, into.dtype, is_blocking=True)
-            mapped.base.release(runtime.queue())
-        return result
-
-
-class _Stratified(_HostOutput):
+class _Stratified(Sampler):
     """Samplers made by ``stratified_points``: each group of dimensions is a grid of
     cells; point i of a group takes cell i, or cell perm[i] when ``permuted``."""
 
     permuted = False
     centered = False
+    host_output = True
 
     def _layout(self, n):
         """(radix per dimension, group per dimension, number of groups)."""
@@ -200,44 +179,33 @@ class _Stratified(_HostOutput):
         return permutation.random_permutations(self.seed, philox.Stream.PERMUTATION,
                                                realizations, n, groups, progress=self.progress)
 
-    def _tables(self, n, radix, group):
-        """The radix and group arrays on the current device, uploaded once per (device, n)."""
-        cache = self.__dict__.setdefault("_table_cache", {})
-        key = (runtime.current_device().index, n)
-        if key not in cache:
-            queue = runtime.queue()
-            cache.clear()   # one n at a time is the common use; keep the cache small
-            cache[key] = (cla.to_device(queue, np.asarray(radix, dtype=np.uint32)),
-                          cla.to_device(queue, np.asarray(group, dtype=np.uint32)),
-                          cla.zeros(queue, (1,), np.uint32))
-        return cache[key]
-
     def _reference(self, n, realizations, start):
         radix, group, groups = self._layout(n)
         perms = self._perms_reference(n, realizations, groups)
         return _layout_reference(self, n, realizations, start, radix, group, perms)
 
-    def _device(self, n, realizations, start, into=None):
+    def _device(self, n, realizations, start, out=None):
         runtime.require_fp64()
         queue = runtime.queue()
         radix, group, groups = self._layout(n)
         r = len(realizations)
-        result, target = self._output((r, n, self.d), into)
-        radix_d, group_d, unused = self._tables(n, radix, group)
+        target = runtime.Output((r, n, self.d), host=out)
+        radix_d = runtime.table(("stratified radix", radix), lambda: radix)
+        group_d = runtime.table(("stratified group", group), lambda: group)
         if self.permuted:
             perms = permutation.random_permutations_device(
                 self.seed, philox.Stream.PERMUTATION, realizations, n, groups)
         else:
-            perms = unused      # the kernel reads cell = i
+            perms = runtime.table("stratified unused", lambda: [0])   # the kernel reads cell = i
         kernel = runtime.kernel("stratified.cl", "stratified_points",
                                 defines={"PERMUTED": int(self.permuted),
                                          "CENTERED": int(self.centered)})
         local = runtime.local_size()
-        kernel(queue, (-(-n // local) * local, r), (local, 1), target, np.uint32(n),
+        kernel(queue, (-(-n // local) * local, r), (local, 1), target.buffer, np.uint32(n),
                np.uint32(self.d), np.uint32(start), np.uint32(realizations.start),
                *runtime.key_args(self.seed), np.uint32(philox.Stream.POINTS),
                radix_d.data, group_d.data, perms.data, np.uint32(groups))
-        return self._finish(result, target, into)
+        return target.finish()
 
 
 class _Grid(_Stratified):
@@ -251,10 +219,8 @@ class _Grid(_Stratified):
                 f"'strata' {self.strata} make {math.prod(self.strata)} points, more than "
                 f"the {self.max_n} point indices allow")
 
-    def _check_call(self, n, realizations, start):
-        if n is None and self.strata is not None:
-            n = math.prod(self.strata)
-        return super()._check_call(n, realizations, start)
+    def _default_n(self):
+        return None if self.strata is None else math.prod(self.strata)
 
     def valid_n(self, n):
         if self.strata is not None:
@@ -351,6 +317,11 @@ class JitteredSampler(_Grid):
     16
     """
 
+    def convergence_rate(self, case):
+        if self.strata is not None and len(set(self.strata)) > 1:
+            return None     # the published rates are for k^d cubic cells
+        return jitter_rate(self.d, case)
+
 
 @register("uncorrelated_jitter")
 class UncorrelatedJitterSampler(_Stratified):
@@ -413,6 +384,13 @@ class UncorrelatedJitterSampler(_Stratified):
         self.groups = groups
         self._power = math.lcm(*groups)
 
+    def convergence_rate(self, case):
+        if self.groups == (self.d,):     # one group: a jittered grid, shuffled
+            return jitter_rate(self.d, case, PILLEBOUE + " (jittered)")
+        if self.groups == (1, 1):        # two shuffled 1-D strata: a Latin hypercube
+            return LATIN_RATES.get(case)
+        return None
+
     def valid_n(self, n):
         return nearest_power(n, self._power, self.max_n)
 
@@ -474,6 +452,7 @@ class LatinHypercubeSampler(_Stratified):
     """
 
     permuted = True
+    rates = LATIN_RATES
 
     def __init__(self, d=2, seed=0, backend="opencl", progress=True):
         super().__init__(d=d, seed=seed, backend=backend)
@@ -484,7 +463,7 @@ class LatinHypercubeSampler(_Stratified):
 
 
 @register("multijittered")
-class MultiJitteredSampler(_HostOutput):
+class MultiJitteredSampler(Sampler):
     """Multi-jittered sampling (Chiu, Shirley, Wang 1994): jittered and N-rooks at once.
 
     With n = mx * my, the unit square is an mx x my grid of cells (mx columns) and
@@ -526,6 +505,7 @@ class MultiJitteredSampler(_HostOutput):
     """
 
     dimensions = (2,)
+    host_output = True
 
     def __init__(self, d=2, seed=0, strata=None, max_aspect=None, backend="opencl", progress=True):
         super().__init__(d=d, seed=seed, backend=backend)
@@ -573,10 +553,8 @@ class MultiJitteredSampler(_HostOutput):
                 "shuffles; give 'strata' or 'max_aspect' (or an n with a squarer factorization)")
         return n
 
-    def _check_call(self, n, realizations, start):
-        if n is None and self.strata is not None:
-            n = math.prod(self.strata)
-        return super()._check_call(n, realizations, start)
+    def _default_n(self):
+        return None if self.strata is None else math.prod(self.strata)
 
     def _reference(self, n, realizations, start):
         mx, my = self.factors(n)
@@ -595,7 +573,7 @@ class MultiJitteredSampler(_HostOutput):
         out[..., 1] = stratum_point(row * mx + sy, u[..., 1], n)
         return out
 
-    def _device(self, n, realizations, start, into=None):
+    def _device(self, n, realizations, start, out=None):
         runtime.require_fp64()
         queue = runtime.queue()
         mx, my = self.factors(n)
@@ -604,17 +582,18 @@ class MultiJitteredSampler(_HostOutput):
             self.seed, philox.Stream.PERMUTATION, realizations, my, range(0, mx))
         rowperm = permutation.random_permutations_device(
             self.seed, philox.Stream.PERMUTATION, realizations, mx, range(mx, mx + my))
-        result, target = self._output((r, n, 2), into)
+        target = runtime.Output((r, n, 2), host=out)
         local = runtime.local_size()
         runtime.kernel("stratified.cl", "multijittered_points")(
-            queue, (-(-n // local) * local, r), (local, 1), target, np.uint32(mx), np.uint32(my),
-            np.uint32(start), np.uint32(realizations.start), *runtime.key_args(self.seed),
-            np.uint32(philox.Stream.POINTS), colperm.data, rowperm.data)
-        return self._finish(result, target, into)
+            queue, (-(-n // local) * local, r), (local, 1), target.buffer, np.uint32(mx),
+            np.uint32(my), np.uint32(start), np.uint32(realizations.start),
+            *runtime.key_args(self.seed), np.uint32(philox.Stream.POINTS), colperm.data,
+            rowperm.data)
+        return target.finish()
 
 
 @register("correlated_multijittered")
-class CorrelatedMultiJitteredSampler(_HostOutput):
+class CorrelatedMultiJitteredSampler(Sampler):
     """Correlated multi-jittered sampling (Kensler 2013): multi-jittering, any n, point by point.
 
     With m = floor(sqrt(n)) columns and k = ceil(n / m) rows, point i of pattern p is
@@ -659,6 +638,7 @@ class CorrelatedMultiJitteredSampler(_HostOutput):
 
     dimensions = (2,)
     max_n = 2**32 - 2**17       # m * k stays below 2^32
+    host_output = True
 
     @staticmethod
     def factors(n):
@@ -685,16 +665,16 @@ class CorrelatedMultiJitteredSampler(_HostOutput):
         out[..., 1] = stratum_point(s, u[..., 1], n)
         return out
 
-    def _device(self, n, realizations, start, into=None):
+    def _device(self, n, realizations, start, out=None):
         runtime.require_fp64()
         queue = runtime.queue()
         m, k = self.factors(n)
         r = len(realizations)
-        result, target = self._output((r, n, 2), into)
+        target = runtime.Output((r, n, 2), host=out)
         local = runtime.local_size()
         runtime.kernel("stratified.cl", "correlated_multijittered_points")(
-            queue, (-(-n // local) * local, r), (local, 1), target, np.uint32(n), np.uint32(m),
-            np.uint32(k), np.uint32(start), np.uint32(realizations.start),
+            queue, (-(-n // local) * local, r), (local, 1), target.buffer, np.uint32(n),
+            np.uint32(m), np.uint32(k), np.uint32(start), np.uint32(realizations.start),
             *runtime.key_args(self.seed), np.uint32(philox.Stream.POINTS),
             np.uint32(philox.Stream.PERMUTATION))
-        return self._finish(result, target, into)
+        return target.finish()

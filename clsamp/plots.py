@@ -1,0 +1,220 @@
+"""Pictures of what clsamp measures: spectra, radial means, anisotropy, and MSE against N
+or against time, as matplotlib figures or PNG/OpenEXR files (written whole, through
+:mod:`clsamp.io`).
+
+matplotlib is imported when a picture is made (the Agg backend: no screen needed).
+"""
+
+import math
+
+import numpy as np
+
+from . import io, spectrum, theory
+from .convergence import pareto_front
+from .errors import InvalidArgumentError
+from .validation import check_choice, check_real
+
+__all__ = ["spectrum_image", "save_spectrum_png", "save_spectrum_exr", "plot_spectrum",
+           "plot_radial_mean", "plot_anisotropy", "save_spectrum_plots", "convergence_plot",
+           "pareto_plot", "pyplot"]
+
+
+def pyplot():
+    """matplotlib.pyplot on the Agg backend (files, no screen)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+# -- spectra --------------------------------------------------------------------------------
+def spectrum_image(P, scale="linear", vmin=None, vmax=None):
+    """A 2-D spectrum as a grey image in [0, 1], DC at the centre.
+
+    Rows are y frequencies from -R/2 (top) to R/2 - 1, columns x frequencies from -R/2
+    (left): ``image[j, i] = P[i, j]``.
+
+    Parameters
+    ----------
+    scale : {"linear", "log"}
+        ``"linear"``: P / vmax clipped to [0, 1] (vmax default 4, so white noise is a
+        mid grey after the PNG's gamma, the look of PSA and UTK pictures). ``"log"``:
+        10·log10 P mapped from [vmin, vmax] dB (default [-20, 10]).
+    """
+    P = spectrum.check_spectrum(P)
+    if P.ndim != 2:
+        raise InvalidArgumentError(f"'P' must be a 2-D spectrum to make an image, got shape {P.shape}")
+    check_choice(scale, "scale", ("linear", "log"))
+    if scale == "linear":
+        top = 4.0 if vmax is None else check_real(vmax, "vmax", minimum=0.0, open_minimum=True)
+        image = P / top
+    else:
+        low = -20.0 if vmin is None else check_real(vmin, "vmin")
+        high = 10.0 if vmax is None else check_real(vmax, "vmax")
+        if high <= low:
+            raise InvalidArgumentError(f"'vmax' must be > 'vmin', got {high} <= {low}")
+        with np.errstate(divide="ignore"):
+            image = (10.0 * np.log10(P) - low) / (high - low)
+    return np.clip(image.T, 0.0, 1.0)
+
+
+def save_spectrum_png(path, P, scale="linear", vmin=None, vmax=None):
+    """Write a 2-D spectrum as a grey PNG (:func:`spectrum_image`; gamma 2.2 for "linear")."""
+    image = spectrum_image(P, scale, vmin, vmax)
+    return io.write_png(path, image, gamma=2.2 if scale == "linear" else 1.0)
+
+
+def save_spectrum_exr(path, P, header=None):
+    """Write a spectrum's raw values as a one-channel OpenEXR (float32), same orientation as
+    :func:`spectrum_image` (row j = y frequency j - R/2, column i = x frequency i - R/2).
+    A 1-D spectrum is one row."""
+    P = spectrum.check_spectrum(P)
+    image = P[None, :] if P.ndim == 1 else P.T
+    info = {"clsamp": "power spectrum", "layout": "row j: fy = j - R/2; column i: fx = i - R/2"}
+    info.update(header or {})
+    return io.write_exr(path, np.ascontiguousarray(image), header=info)
+
+
+def plot_spectrum(ax, P, scale="linear", vmin=None, vmax=None, title=None):
+    """Show a 2-D spectrum on a matplotlib Axes, axes labelled in integer frequencies."""
+    R = P.shape[0]
+    image = spectrum_image(P, scale, vmin, vmax)
+    shown = ax.imshow(image ** (1 / 2.2) if scale == "linear" else image, cmap="gray", vmin=0, vmax=1,
+                      extent=(-R / 2 - 0.5, R / 2 - 0.5, R / 2 - 0.5, -R / 2 - 0.5),
+                      interpolation="nearest")
+    ax.set_xlabel("frequency x")
+    ax.set_ylabel("frequency y")
+    if title:
+        ax.set_title(title)
+    return shown
+
+
+def _frequency_axis(ax, freqs, n, convention):
+    if n is None:
+        ax.set_xlabel("frequency |ω|")
+        return np.asarray(freqs, dtype=np.float64)
+    label = "2ν/√N" if convention == "psa" else "ν/√N"
+    ax.set_xlabel(f"frequency {label}")
+    return spectrum.normalized_frequency(freqs, n, convention)
+
+
+def plot_radial_mean(ax, freqs, values, label=None, n=None, convention="psa", **line_args):
+    """Plot a radial mean (from :func:`clsamp.radial_mean`) on a matplotlib Axes.
+
+    With ``n`` (points per set) the frequency axis is normalized as PSA (2ν/√N,
+    ``convention="psa"``) or UTK (ν/√N) do, so sets of different N line up.
+    Returns the Line2D.
+    """
+    x = _frequency_axis(ax, freqs, n, convention)
+    (line,) = ax.plot(x, values, label=label, **line_args)
+    ax.axhline(1.0, color="0.6", linewidth=0.8, linestyle=":")
+    ax.set_ylabel("radial mean power")
+    if label:
+        ax.legend()
+    return line
+
+
+def plot_anisotropy(ax, freqs, values, label=None, n=None, convention="psa", realizations=None,
+                    **line_args):
+    """Plot an anisotropy curve (dB, from :func:`clsamp.anisotropy`) on a matplotlib Axes.
+
+    With ``realizations`` a dotted line marks -10·log10(r) dB, white noise's level.
+    """
+    x = _frequency_axis(ax, freqs, n, convention)
+    (line,) = ax.plot(x, values, label=label, **line_args)
+    if realizations:
+        ax.axhline(-10.0 * math.log10(realizations), color="0.6", linewidth=0.8, linestyle=":")
+    ax.set_ylabel("anisotropy (dB)")
+    if label:
+        ax.legend()
+    return line
+
+
+def save_spectrum_plots(path, P, n=None, realizations=None, label=None, bin_width=1.0,
+                        convention="psa", scale="linear"):
+    """One figure, saved as PNG: the spectrum, its radial mean and (2-D) its anisotropy."""
+    plt = pyplot()
+    P = spectrum.check_spectrum(P)
+    panels = 3 if P.ndim == 2 else 1
+    figure, axes = plt.subplots(1, panels, figsize=(4.2 * panels, 3.8), squeeze=False)
+    axes = axes[0]
+    freqs, mean = spectrum.radial_mean(P, bin_width)
+    if P.ndim == 2:
+        plot_spectrum(axes[0], P, scale=scale, title=label)
+        plot_radial_mean(axes[1], freqs, mean, n=n, convention=convention)
+        f, a = spectrum.anisotropy(P, bin_width)
+        plot_anisotropy(axes[2], f, a, n=n, convention=convention, realizations=realizations)
+    else:
+        plot_radial_mean(axes[0], freqs, mean, n=n, convention=convention)
+        if label:
+            axes[0].set_title(label)
+    figure.tight_layout()
+    return io.save_figure(path, figure)
+
+
+# -- convergence --------------------------------------------------------------------------
+def _panels(results):
+    """One matplotlib panel per integrand: (figure, [(axes, integrand name, its results)])."""
+    groups = {}
+    for res in results:
+        groups.setdefault(res.integrand, []).append(res)
+    if not groups:
+        raise InvalidArgumentError("'results' must hold at least one ConvergenceResult")
+    fig, axes = pyplot().subplots(1, len(groups), figsize=(5.5 * len(groups), 4.5), squeeze=False)
+    return fig, list(zip(axes[0], groups, groups.values(), strict=True))
+
+
+def _label(ax, xlabel, title):
+    """The labels, grid and legend every panel has (MSE up the side)."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("MSE")
+    ax.set_title(title)
+    ax.grid(True, which="both", alpha=0.2)
+    ax.legend(fontsize=7)
+
+
+def convergence_plot(results, path):
+    """MSE against N (log-log), one panel per integrand, with the theory slopes drawn.
+
+    Each result is a line with error bars (one standard error); where
+    :func:`clsamp.theory.compare` knows the published rate, a dashed line of that
+    slope in the same colour passes through the result's largest N. Saved with
+    :func:`clsamp.io.save_figure`; returns its path.
+    """
+    fig, panels = _panels(results)
+    for ax, name, group in panels:
+        for res in group:
+            ok = res.mse > 0
+            cmp = theory.compare(res)
+            label = res.sampler
+            if np.isfinite(cmp["slope"]):
+                label += f": {cmp['slope']:.2f} (theory {cmp['expected_text'] or '?'})"
+            line = ax.errorbar(res.ns[ok], res.mse[ok], yerr=res.mse_stderr[ok], marker="o",
+                               markersize=3, capsize=2, label=label)
+            if cmp["expected"] is not None and ok.any():
+                n = res.ns[ok].astype(np.float64)
+                ax.loglog(n, res.mse[ok][-1] * (n / n[-1]) ** cmp["expected"], "--",
+                          color=line[0].get_color(), linewidth=0.9, alpha=0.7)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        _label(ax, "N (samples)", f"{name}: MSE against N (dashed: theory)")
+    fig.tight_layout()
+    return io.save_figure(path, fig)
+
+
+def pareto_plot(results, path):
+    """MSE against seconds per estimate (generation included), one panel per integrand,
+    with the accuracy-time front (:func:`clsamp.convergence.pareto_front`) drawn in black;
+    returns the path."""
+    fig, panels = _panels(results)
+    for ax, name, group in panels:
+        for res in group:
+            ok = (res.mse > 0) & (res.seconds_per_estimate > 0)
+            ax.loglog(res.seconds_per_estimate[ok], res.mse[ok], "o-", markersize=3, label=res.sampler)
+        front = [p for p in pareto_front(group) if p["mse"] > 0 and p["seconds"] > 0]
+        if front:
+            ax.step([p["seconds"] for p in front], [p["mse"] for p in front], "k-", where="post",
+                    linewidth=1.5, alpha=0.6, label="front")
+        _label(ax, "seconds per estimate (generation included)", f"{name}: accuracy against time")
+    fig.tight_layout()
+    return io.save_figure(path, fig)

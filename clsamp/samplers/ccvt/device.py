@@ -1,0 +1,160 @@
+"""The CCVT optimization in OpenCL (``kernels/ccvt.cl``): stepwise launches over all
+realizations, or one work-group per realization in a single launch (``ccvt_solve``)."""
+
+import numpy as np
+
+from ... import runtime
+from ...geometry import integer_torus as it
+from .pairs import CCVT_BUCKETS, CCVT_META, PHASES, ccvt_defines, ccvt_grid_size, ccvt_near2
+
+TAIL_SHARE = 8    # the last iterations, from n / TAIL_SHARE exchanges or fewer, in one launch
+
+
+def device_buffers(q, sites, points, members):
+    """Device buffers of both OpenCL paths: members (ids) and their coordinates (xy), the
+    scratch slots of the rebuilds, the sites, the per-site records and bucket ranges.
+    ``points`` may be on the device already."""
+    import pyopencl.array as cla
+    r, n, p = members.shape
+    ids = cla.to_device(q, np.ascontiguousarray(members, dtype=np.uint32))
+    # each slot carries its point's coordinates (ccvt_gather), so the kernels stream
+    # instead of gathering
+    xy = cla.empty(q, (r, n, p, 2), np.uint32)
+    if r and n * p:
+        runtime.kernel("ccvt.cl", "ccvt_gather", ccvt_defines())(
+            q, (n * p, r), None, runtime.to_device(points).data, ids.data, xy.data,
+            np.uint32(n * p))
+    return dict(ids=ids, xy=xy,
+                tids=cla.empty(q, (r, n, p), np.uint32), txy=cla.empty(q, (r, n, p, 2), np.uint32),
+                sites=cla.to_device(q, np.ascontiguousarray(sites, dtype=np.uint32)),
+                meta=cla.zeros(q, (r, n, CCVT_META), np.int64),
+                bstart=cla.zeros(q, (r, n, CCVT_BUCKETS + 1), np.uint32))
+
+
+def _divisor(x, most):
+    """The largest divisor of x that is at most ``most``."""
+    return max(d for d in range(1, most + 1) if x % d == 0)
+
+
+def ccvt_device(sites, points, members, iterations, callback=None, fused=None, tail=None):
+    """OpenCL CCVT: integer sites (r, n, 2), points (r, M, 2) (host or device), members
+    (r, n, p); returns (sites, energies, members, converged) as :func:`ccvt_reference`.
+
+    With ``fused`` (default: when there are at least twice as many realizations as compute
+    units and no callback) each realization runs whole in one work-group (``ccvt_solve``,
+    one launch); otherwise every step is its own launch over all realizations, which keeps
+    a single large realization spread over the whole device, until the iteration's
+    exchanges fall to ``tail`` or fewer in every realization still running (default
+    n / TAIL_SHARE; -1: never, and never with a callback): then ``ccvt_solve`` takes
+    the rest in one launch, since a dozen launches cost more than the few exchanges left.
+    All of these give the same bits. The members come back as sets: the kernels keep
+    each site's slots grouped by bucket.
+    """
+    import pyopencl as cl
+    import pyopencl.array as cla
+    runtime.require_fp64()
+    q = runtime.queue()
+    r, n, p = members.shape
+    if fused is None:
+        fused = callback is None and r >= 2 * runtime.current_device().compute_units
+    if tail is None:
+        tail = n // TAIL_SHARE
+    if callback is not None:
+        tail = -1
+    G = ccvt_grid_size(n)
+    near2 = ccvt_near2(n)
+    u32 = np.uint32
+    b = device_buffers(q, sites, points, members)
+    b.update(cell_start=cla.empty(q, (r, G * G + 1), np.uint32),
+             cell_sites=cla.empty(q, (r, n), np.uint32),
+             dirty=cla.zeros(q, (r, n), np.uint32), touched=cla.zeros(q, (r, n), np.uint32),
+             site_energy=cla.zeros(q, (r, n), np.int64),
+             status=cla.zeros(q, (r, 3), np.int64))
+    active_host = np.ones(r, dtype=np.uint32)
+    active = cla.to_device(q, active_host)
+    energies = [[] for _ in range(r)]
+    if fused:
+        converged = solve_device(b, n, p, iterations, active, np.arange(r), 0, energies)
+        return b["sites"].get(), energies, b["ids"].get(), converged
+    slots = (b["ids"].data, b["xy"].data, b["tids"].data, b["txy"].data)
+    swaps = cla.zeros(q, (r,), np.uint32)
+    # every launch of the loop gets its arguments once, here: an iteration is a dozen
+    # launches, and setting twenty arguments each time costs more than some of them run.
+    # The phases run in work-groups of at most 4 x 4 cell pairs, so that the uneven work
+    # of the pairs spreads over the compute units (one group per launch would keep a
+    # phase on one core); the results do not depend on the grouping
+    defines = ccvt_defines()
+    build = runtime.kernel("ccvt.cl", "voronoi_build_grid", defines, instance="loop")
+    swap = [runtime.kernel("ccvt.cl", "ccvt_swap", defines, instance=("loop", k))
+            for k in range(len(PHASES))]
+    centroids = runtime.kernel("ccvt.cl", "ccvt_centroids", defines, instance="loop")
+    build.set_args(b["sites"].data, u32(n), u32(G), b["cell_start"].data,
+                   b["cell_sites"].data, u32(r))
+    phases = []
+    for k, (ox, oy, parity) in zip(swap, PHASES, strict=True):
+        k.set_args(*slots, u32(n), u32(p), b["sites"].data, b["meta"].data, b["bstart"].data,
+                   b["cell_start"].data, b["cell_sites"].data, u32(G), np.int32(ox),
+                   np.int32(oy), u32(parity), active.data, b["dirty"].data,
+                   b["touched"].data, swaps.data, np.int64(near2))
+        size = (G if ox == 0 and oy == 0 else G // 2, G, r)
+        phases.append((k, size, (_divisor(size[0], 4), _divisor(size[1], 4), 1)))
+    centroids.set_args(*slots, b["sites"].data, u32(n), u32(p), b["meta"].data,
+                       b["bstart"].data, active.data, b["dirty"].data, b["touched"].data,
+                       b["site_energy"].data, b["status"].data, swaps.data, u32(1))
+    cl.enqueue_nd_range_kernel(q, centroids, (n, r), None)   # the sites to the start's centroids
+    centroids.set_arg(15, u32(0))
+    b["dirty"].fill(1)        # every pair meets in the first iteration
+    status = np.zeros((r, 3), dtype=np.int64)
+    converged = np.zeros(r, dtype=bool)
+    for t in range(iterations):
+        cl.enqueue_nd_range_kernel(q, build, (r,), None)
+        for k, size, local in phases:
+            cl.enqueue_nd_range_kernel(q, k, size, local)
+        cl.enqueue_nd_range_kernel(q, centroids, (n, r), None)
+        cl.enqueue_copy(q, status, b["status"].data)
+        totals = it.exact_total(status[:, 0], status[:, 1])
+        running = np.flatnonzero(active_host)
+        for k in running:
+            energies[k].append(totals[k])
+        if callback is not None:
+            callback(b["ids"].get(), b["sites"].get())
+        made = status[:, 2]
+        done = (active_host == 1) & (made == 0)
+        if done.any():
+            converged |= done
+            active_host[done] = 0
+            if not active_host.any():
+                break
+            active.set(active_host)
+        if t + 1 < iterations and made[active_host == 1].max() <= tail:
+            tail_converged = solve_device(b, n, p, iterations - t - 1, active,
+                                          np.flatnonzero(active_host), 1, energies)
+            converged |= tail_converged & (active_host == 1)
+            break
+    return b["sites"].get(), energies, b["ids"].get(), converged
+
+
+def solve_device(b, n, p, iterations, active, running, resume, energies):
+    """``ccvt_solve`` over the buffers ``b`` of :func:`ccvt_device`: one work-group per
+    active realization (``active`` on the device, ``running`` their indices), one launch
+    for ``iterations`` at most; from the start, or with ``resume`` from where the
+    stepwise launches left them. Appends each iteration's energy to ``energies`` and
+    returns which realizations converged (the sites and members stay on the device)."""
+    import pyopencl.array as cla
+    q = runtime.queue()
+    r = b["ids"].shape[0]
+    G = ccvt_grid_size(n)
+    history = cla.zeros(q, (r, iterations, 2), np.int64)
+    state = cla.zeros(q, (r, 2), np.uint32)
+    local = runtime.local_size(64)
+    solve = runtime.kernel("ccvt.cl", "ccvt_solve", ccvt_defines())
+    solve(q, (local * r,), (local,), b["ids"].data, b["xy"].data, b["tids"].data,
+          b["txy"].data, np.uint32(n), np.uint32(p), b["sites"].data, b["meta"].data,
+          b["bstart"].data, b["cell_start"].data, b["cell_sites"].data, np.uint32(G),
+          b["dirty"].data, b["touched"].data, b["site_energy"].data,
+          np.int64(ccvt_near2(n)), np.uint32(iterations), np.uint32(resume), active.data,
+          b["status"].data, history.data, state.data)
+    h, st = history.get(), state.get()
+    for k in running:
+        energies[k].extend(it.exact_total(h[k, :st[k, 0], 0], h[k, :st[k, 0], 1]))
+    return st[:, 1].astype(bool)

@@ -1,0 +1,53 @@
+"""What the Voronoi optimizers (``lloyd``, ``ccvt``) share: their starting sites and the
+sampler base that runs an optimization per realization.
+
+Both work on the exact integer torus of :mod:`clsamp.geometry.integer_torus`; the
+starting sites of realization k are Philox words of (seed, ``Stream.INIT``, k), so
+realization k never depends on how many are drawn.
+"""
+
+import numpy as np
+
+from .. import philox
+from ..geometry import integer_torus as it
+from ..validation import check_points
+from .base import Sampler
+
+
+def initial_sites(seed, realizations, n, start=0):
+    """Initial sites, uint32 (r, n, 2): words 0 and 1 of Philox (seed, Stream.INIT, r, start + i),
+    top BITS bits each. The optimizers' density points use other words of the stream."""
+    r = np.asarray(realizations, dtype=np.uint32)[:, None, None]
+    i = (np.uint64(start) + np.arange(n, dtype=np.uint64)).astype(np.uint32)[None, :, None]
+    w = np.arange(2, dtype=np.uint32)[None, None, :]
+    return philox.random_words(seed, philox.Stream.INIT, r, i, w) >> np.uint32(32 - it.BITS)
+
+
+def check_sites(sites, name="sites"):
+    """Starting sites (n, 2) or (r, n, 2) in [0, 1) as integer torus coordinates (r, n, 2)."""
+    batch, single = check_points(sites, name, d=2)
+    return it.to_torus(batch), single
+
+
+class OptimizerSampler(Sampler):
+    """Base of the optimizers: each realization is an optimization from its own random
+    sites; ``_optimize(sites, realizations, backend)`` returns ``(points, info)``."""
+
+    dimensions = (2,)
+    max_n = 2**31
+    expensive = True
+    # the density points are keyed by realization only: an offset start would move the
+    # starting sites but not the density, a set that belongs to no realization
+    accepts_start = False
+
+    def _sites(self, n, realizations):
+        return initial_sites(self.seed, np.arange(realizations.start, realizations.stop), n)
+
+    def _reference(self, n, realizations, start):
+        return self._optimize(self._sites(n, realizations), realizations, "numpy")
+
+    def _device(self, n, realizations, start):
+        return self._optimize(self._sites(n, realizations), realizations, "opencl")
+
+    def _optimize(self, sites, realizations, backend):
+        raise NotImplementedError

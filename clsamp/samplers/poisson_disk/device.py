@@ -1,0 +1,161 @@
+"""Dart throwing in OpenCL (``kernels/dart_throwing.cl``): each step one launch over every
+active entry of every realization."""
+
+import numpy as np
+import pyopencl as cl
+import pyopencl.array as cla
+
+from ... import philox, runtime
+from .grid import IN, rank_overflow, resolve_steps
+
+
+class DeviceDarts:
+    """Runs each step as one launch over every active entry of every realization."""
+
+    def __init__(self, geo, ids, attempt, seed):
+        runtime.require_fp64()
+        self.geo, self.attempt, self.seed = geo, attempt, seed
+        self.B = len(ids)
+        q = self.q = runtime.queue()
+        self.ls = runtime.local_size(64)
+        self.defines = {"DIM": geo.d}
+        slots = self.B * geo.cells
+        self.ids = cla.to_device(q, np.asarray(ids, dtype=np.uint32))
+        self.window = self._table(geo.window)
+        self._covers = {}
+        # dart_init clears occ and cand_round; the small buffers come from the host (no
+        # pyopencl fill kernels: runtime builds every program)
+        self.occ = cla.empty(q, slots, np.uint8)
+        self.pts = cla.empty(q, slots * geo.d, np.float64)
+        self.cand_round = cla.empty(q, slots, np.uint32)
+        self.cand_first = cla.empty(q, slots, np.uint32)
+        self.accepted_ = cla.to_device(q, np.zeros(self.B, dtype=np.uint32))
+        self.overflow = cla.to_device(q, np.zeros(1, dtype=np.uint32))
+        self.remaining = cla.to_device(q, np.zeros(self.B, dtype=np.uint32))
+        self.done = cla.to_device(q, np.zeros(self.B, dtype=np.uint8))
+        self._done = np.zeros(self.B, dtype=np.uint8)
+        self.m = slots
+        self._alloc_entries(slots)
+        self._run("dart_init", self.m, self.rel.data, self.base.data, self.sub.data,
+                  self.first.data, self.occ.data, self.cand_round.data, np.uint32(geo.cells),
+                  np.uint32(self.m))
+
+    def _alloc_entries(self, m):
+        """Entry buffers for m entries: the (rel, base, sub, first) set not in use is
+        reused when large enough (emit reads one set and writes the other), the per-dart
+        buffers grow only; creating buffers every round costs more than a small round."""
+        q, d, m = self.q, self.geo.d, max(m, 1)
+        spare = getattr(self, "_spare", None)
+        current = getattr(self, "rel", None)
+        if current is not None:
+            self._spare = (self.rel, self.base, self.sub, self.first)
+        if spare is not None and spare[0].size >= m:
+            self.rel, self.base, self.sub, self.first = spare
+        else:
+            self.rel = cla.empty(q, m, np.uint32)
+            self.base = cla.empty(q, m, np.uint32)
+            self.sub = cla.empty(q, m * d, np.uint32)
+            self.first = cla.empty(q, m, np.uint32)
+        if getattr(self, "_darts", 0) < m:
+            self._darts = m
+            self.cand = cla.empty(q, m * d, np.float64)
+            self.prio = cla.empty(q, m, np.uint32)
+            self.valid = cla.empty(q, m, np.uint8)
+            self.state = cla.empty(q, m, np.uint8)
+            self.mask = cla.empty(q, m, np.uint8)
+            self.count = cla.empty(q, m, np.uint8)
+
+    def _run(self, name, items, *args):
+        k = runtime.kernel("dart_throwing.cl", name, defines=self.defines)
+        size = max(self.ls, -(-items // self.ls) * self.ls)
+        k(self.q, (size,), (self.ls,), *args)
+
+    def _table(self, offsets):
+        """A window table for the kernels: rows of d offsets and their flat difference,
+        with the rows' count and their reach along an axis."""
+        G, d = self.geo.G, self.geo.d
+        flat = offsets @ (G ** np.arange(d - 1, -1, -1))
+        rows = np.concatenate([offsets, flat[:, None]], axis=1).astype(np.int32)
+        table = runtime.table(("dart window", rows.shape, rows.tobytes()), rows.ravel, np.int32)
+        return table, np.uint32(len(rows)), np.int32(np.abs(offsets).max())
+
+    def _cover_window(self, level):
+        if level not in self._covers:
+            self._covers[level] = self._table(self.geo.cover(level))
+        return self._covers[level]
+
+    def _common(self, window=None):
+        g = self.geo
+        table, rows, reach = window or self.window
+        return (np.uint32(self.m), np.uint32(g.G), table.data, rows, reach, np.uint32(g.cells))
+
+    def throw(self, round_, level):
+        self._run("dart_throw", self.m, self.rel.data, self.base.data, self.sub.data,
+                  self.first.data, self.occ.data, self.pts.data, self.cand.data, self.prio.data,
+                  self.valid.data, self.cand_round.data, self.cand_first.data,
+                  self.overflow.data, *self._common(),
+                  np.uint32(level), np.uint32(round_), np.float64(self.geo.r2), self.ids.data,
+                  np.uint32(self.attempt), *runtime.key_args(self.seed),
+                  np.uint32(philox.Stream.CANDIDATES))
+
+    def resolve(self, round_):
+        state, other = self.valid, self.state
+        for step in range(resolve_steps(round_)):
+            self._run("dart_resolve", self.m, self.rel.data, self.base.data, self.cand.data,
+                      self.prio.data, state.data, other.data, self.cand_round.data,
+                      self.cand_first.data, self.occ.data, self.pts.data, self.accepted_.data,
+                      *self._common(), np.uint32(round_), np.uint32(step),
+                      np.float64(self.geo.r2))
+            state, other = other, state
+        self.won = state
+
+    def accepted(self):
+        """Darts accepted so far, per realization (trimmed ones included)."""
+        if self.overflow.get()[0]:
+            raise rank_overflow()
+        return self.accepted_.get().astype(np.int64)
+
+    def won_entries(self):
+        m = self.m
+        won = self.won[:m].get() == IN
+        rel = self.rel[:m].get()[won].astype(np.int64)
+        base = self.base[:m].get()[won].astype(np.int64)
+        return rel, rel * self.geo.cells + base, self.prio[:m].get()[won]
+
+    def clear(self, slots):
+        if len(slots):
+            buf = cla.to_device(self.q, np.asarray(slots, dtype=np.uint32))
+            self._run("dart_clear", len(slots), self.occ.data, buf.data, np.uint32(len(slots)))
+
+    def refine(self, level, split, done, tally):
+        if not np.array_equal(done, self._done):
+            self._done = done.copy()
+            self.done.set(self._done)
+        if tally:
+            self.remaining.set(np.zeros(self.B, dtype=np.uint32))
+        self._run("dart_refine", self.m, self.rel.data, self.base.data, self.sub.data,
+                  self.occ.data, self.pts.data, self.done.data, self.mask.data, self.count.data,
+                  self.remaining.data, *self._common(self._cover_window(level + split)),
+                  np.uint32(level), np.uint32(split), np.float64(self.geo.r2))
+        return (self.count[:self.m].get(),
+                self.remaining.get().astype(np.int64) if tally else None)
+
+    def emit(self, counts, offs, split):
+        total = int(offs[-1] + counts[-1]) if len(counts) else 0
+        m = self.m
+        if getattr(self, "_offs", None) is None or self._offs.size < m:
+            self._offs = cla.empty(self.q, max(m, 1), np.uint32)
+        # not blocking: the host array is kept until the next round's blocking read
+        self._offs_host = np.ascontiguousarray(offs, dtype=np.uint32)
+        cl.enqueue_copy(self.q, self._offs.data, self._offs_host, is_blocking=False)
+        old = (self.rel, self.base, self.sub, self.first, self.mask)
+        self._alloc_entries(total)
+        self._run("dart_emit", m, old[0].data, old[1].data, old[2].data, old[3].data,
+                  old[4].data, self._offs.data, self.rel.data, self.base.data, self.sub.data,
+                  self.first.data, np.uint32(m), np.uint32(split))
+        self.m = total
+
+    def gather(self, dst, out):
+        self._run("dart_gather", self.B, self.occ.data, self.pts.data,
+                  cla.to_device(self.q, np.asarray(dst, dtype=np.uint32)).data, out.data,
+                  np.uint32(self.geo.cells), np.uint32(self.B))

@@ -1,0 +1,180 @@
+"""The NumPy twin of ``kernels/dart_throwing.cl``: one method per kernel, the same
+arithmetic in the same order, so it gives the kernels' sets bit for bit."""
+
+import numpy as np
+
+from ... import philox
+from ...geometry import torus
+from .grid import (
+    IN,
+    MAX_RANK,
+    NO_ROUND,
+    OPEN,
+    OUT,
+    SKIP,
+    cell_coords,
+    child_bits,
+    far_corner2,
+    flat_index,
+    rank_overflow,
+    resolve_steps,
+)
+
+
+class NumpyDarts:
+    """Reference backend: one method per kernel, the same arithmetic in the same order.
+
+    ``ids`` are the (global) realization numbers of the batch and ``attempt`` the
+    redraw number (see :func:`_sample_sets`).
+    """
+
+    def __init__(self, geo, ids, attempt, seed):
+        self.geo, self.ids, self.attempt, self.seed = geo, np.asarray(ids), attempt, seed
+        self.B = len(ids)
+        slots = self.B * geo.cells
+        self.occ = np.zeros(slots, dtype=np.uint8)
+        self.pts = np.zeros((slots, geo.d), dtype=np.float64)
+        self.cand_round = np.full(slots, NO_ROUND, dtype=np.uint32)
+        self.cand_first = np.zeros(slots, dtype=np.int64)
+        self.total = np.zeros(self.B, dtype=np.int64)
+        i = np.arange(slots, dtype=np.int64)
+        self.rel, self.base, self.first = i // geo.cells, i % geo.cells, i.copy()
+        self.sub = np.zeros((slots, geo.d), dtype=np.int64)
+
+    @property
+    def m(self):
+        return self.rel.size
+
+    def throw(self, round_, level):
+        g = self.geo
+        m = self.m
+        slot = self.rel * g.cells + self.base
+        heads = np.flatnonzero(self.first == np.arange(m))
+        self.cand_round[slot[heads]] = round_
+        self.cand_first[slot[heads]] = heads
+        tag = (np.uint32(round_) << np.uint32(20)) | (np.arange(m) - self.first).astype(np.uint32)
+        index = self.base.astype(np.uint32) | np.uint32(self.attempt << 26)
+        key = np.stack(philox.seed_key(self.seed))
+        u = np.empty((m, g.d))
+        prio = np.zeros(m, dtype=np.uint32)
+        for b in range(g.nblocks):
+            counter = np.stack([index, self.ids[self.rel].astype(np.uint32),
+                                tag * np.uint32(g.nblocks) + np.uint32(b),
+                                np.full(m, philox.Stream.CANDIDATES, dtype=np.uint32)], axis=-1)
+            w = philox.philox4x32(counter, key)
+            if 2 * b < g.d:
+                u[:, 2 * b] = philox.words_to_unit(w[:, 0], w[:, 1])
+            else:
+                prio = w[:, 0]
+            if 2 * b + 1 < g.d:
+                u[:, 2 * b + 1] = philox.words_to_unit(w[:, 2], w[:, 3])
+            elif 2 * b < g.d:
+                prio = w[:, 2]
+        bc = cell_coords(self.base, g.G, g.d)
+        c = (bc << level) | self.sub
+        x = (c.astype(np.float64) + u) / float(g.G << level)
+        x[x >= 1.0] = 0.0
+        ok = self.occ[slot] == 0
+        for off in g.window:
+            nslot = self.rel * g.cells + flat_index(bc + off, g.G)
+            hit = ok & (self.occ[nslot] == 1)
+            if hit.any():
+                h = np.flatnonzero(hit)
+                ok[h[torus.distance2(x[h], self.pts[nslot[h]]) < g.r2]] = False
+        self.cand, self.prio, self.valid = x, prio, ok
+        if m and int(np.max(np.arange(m) - self.first)) >= MAX_RANK:
+            raise rank_overflow()
+
+    def accepted(self):
+        """Darts accepted so far, per realization (trimmed ones included)."""
+        return self.total.copy()
+
+    def resolve(self, round_):
+        g = self.geo
+        m = self.m
+        slot = self.rel * g.cells + self.base
+        state = np.where(self.valid, OPEN, OUT).astype(np.uint8)
+        for _ in range(resolve_steps(round_)):
+            idx = np.flatnonzero(state == OPEN)
+            bc = cell_coords(self.base[idx], g.G, g.d)
+            rel, pi = self.rel[idx], self.prio[idx]
+            beaten = np.zeros(idx.size, dtype=bool)
+            blocked = np.zeros(idx.size, dtype=bool)
+            for off in g.window:
+                nb = flat_index(bc + off, g.G)
+                nslot = rel * g.cells + nb
+                live = self.cand_round[nslot] == round_
+                j = self.cand_first[nslot]
+                while True:
+                    jj = np.minimum(j, m - 1)
+                    live &= (j < m) & (self.rel[jj] == rel) & (self.base[jj] == nb)
+                    if not live.any():
+                        break
+                    sj, pj = state[jj], self.prio[jj]
+                    higher = (pj > pi) | ((pj == pi) & (jj < idx))
+                    ask = live & higher & (sj != OUT)
+                    if ask.any():
+                        q = np.flatnonzero(ask)
+                        close = torus.distance2(self.cand[idx[q]], self.cand[jj[q]]) < g.r2
+                        beaten[q[close & (sj[q] == IN)]] = True
+                        blocked[q[close & (sj[q] == OPEN)]] = True
+                    j = j + 1
+            nxt = np.where(beaten, OUT, np.where(blocked, OPEN, IN)).astype(np.uint8)
+            state[idx] = nxt
+            won = idx[nxt == IN]
+            self.occ[slot[won]] = 1
+            self.pts[slot[won]] = self.cand[won]
+            self.total += np.bincount(self.rel[won], minlength=self.B)
+        self.won = state == IN
+
+    def won_entries(self):
+        """(realization, slot, priority) of each dart accepted this round."""
+        w = np.flatnonzero(self.won)
+        return self.rel[w], self.rel[w] * self.geo.cells + self.base[w], self.prio[w]
+
+    def clear(self, slots):
+        self.occ[slots] = 0
+
+    def refine(self, level, split, done, tally):
+        g = self.geo
+        children = (1 << g.d) if split else 1
+        slot = self.rel * g.cells + self.base
+        active = (done[self.rel] == 0) & (self.occ[slot] == 0)
+        open_ = np.zeros((self.m, children), dtype=bool)
+        open_[active] = True
+        idx = np.flatnonzero(active)
+        bc = cell_coords(self.base[idx], g.G, g.d)
+        cp = (bc << level) | self.sub[idx]
+        cc = (cp[:, None, :] << 1) | child_bits(children, g.d)[None]
+        Mp, Mc = float(g.G << level), float(g.G << (level + 1))
+        for off in g.cover(level + split):
+            nslot = self.rel[idx] * g.cells + flat_index(bc + off, g.G)
+            has = self.occ[nslot] == 1
+            if not has.any():
+                continue
+            h = np.flatnonzero(has)
+            p = self.pts[nslot[h]]
+            covered = far_corner2(cp[h], Mp, p) < g.r2
+            open_[idx[h[covered]]] = False
+            if split:
+                open_[idx[h]] &= ~(far_corner2(cc[h], Mc, p[:, None, :]) < g.r2)
+        self.mask = open_
+        counts = open_.sum(axis=1)
+        return counts, np.bincount(self.rel, weights=counts, minlength=self.B).astype(np.int64)
+
+    def emit(self, counts, offs, split):
+        g = self.geo
+        # row-major nonzero: parents in order, each parent's children in bit order
+        parent, t = np.nonzero(self.mask)
+        bits = child_bits(1 << g.d, g.d)[t] if split else np.zeros((t.size, g.d), dtype=np.int64)
+        self.sub = (self.sub[parent] << split) | bits
+        self.first = offs[self.first[parent]].astype(np.int64)
+        self.rel, self.base = self.rel[parent], self.base[parent]
+
+    def gather(self, dst, out):
+        occ = self.occ.reshape(self.B, self.geo.cells)
+        pts = self.pts.reshape(self.B, self.geo.cells, self.geo.d)
+        for r in range(self.B):
+            if dst[r] != SKIP:
+                got = pts[r][occ[r] == 1]
+                out[dst[r]:dst[r] + len(got)] = got

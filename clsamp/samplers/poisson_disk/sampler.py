@@ -1,0 +1,404 @@
+"""The ``poisson_disk`` sampler: the round loop both backends share, the batches, and the
+sampler itself."""
+
+import dataclasses
+
+import numpy as np
+
+from ... import runtime
+from ...errors import InvalidArgumentError, SamplingError
+from ...geometry import torus
+from ...validation import check_positive_int, check_real
+from ..base import PILLEBOUE, Rate, SampleInfo, Sampler, info_field, register
+from .device import DeviceDarts
+from .grid import (
+    BATCH_CELLS,
+    HEXAGONAL_DENSITY,
+    MAX_ATTEMPTS,
+    MAX_CELLS,
+    MAX_LEVEL,
+    MAX_RADIUS,
+    MAX_ROUNDS,
+    SKIP,
+    Geometry,
+    acceptance_threshold,
+    grid_size,
+    level_of,
+)
+from .reference import NumpyDarts
+
+
+# -- the round loop -------------------------------------------------------------------------
+def _throw_darts(backend, n):
+    """Run rounds until every realization is maximal or (n given) holds n points.
+
+    Each round: one dart per active entry (``throw``), a few greedy steps among the
+    valid darts (``resolve``), then the entries are refined (``refine``/``emit``): covered ones are
+    dropped, uncovered ones kept or split into their 2^d halves. With n given, the round
+    that passes n keeps only its highest-priority darts, so exactly n points remain, and a
+    realization that becomes maximal with fewer than n points is marked short.
+
+    Returns
+    -------
+    counts : ndarray of int, points per realization
+    short : ndarray of bool, realizations that became maximal below n
+    stats : dict, rounds and darts thrown
+    """
+    B = backend.B
+    trimmed = np.zeros(B, dtype=np.int64)
+    counts = np.zeros(B, dtype=np.int64)
+    done = np.zeros(B, dtype=np.uint8)
+    short = np.zeros(B, dtype=bool)
+    darts = 0
+    round_ = 0
+    while backend.m:
+        level = level_of(round_)
+        if round_ >= MAX_ROUNDS or level > MAX_LEVEL:
+            raise SamplingError(
+                f"poisson_disk did not finish in {MAX_ROUNDS} rounds / {MAX_LEVEL} levels "
+                "(a bug: please report it with the seed and radius)")
+        backend.throw(round_, level)
+        darts += backend.m
+        backend.resolve(round_)
+        if n is not None:
+            # the maximal mode reads the counts once, at the end (one sync less a round)
+            counts = backend.accepted() - trimmed
+            over = (counts >= n) & (done == 0)
+            if over.any():
+                excess = np.where(over, counts - n, 0)
+                if excess.any():
+                    rel, slots, prio = backend.won_entries()
+                    # each realization's darts of this round, best first: higher priority,
+                    # then lower entry index (dart_resolve's key); the last `excess` go
+                    order = np.lexsort((np.arange(rel.size), -prio.astype(np.int64), rel))
+                    rel, slots = rel[order], slots[order]
+                    start = np.searchsorted(rel, np.arange(B))
+                    size = np.bincount(rel, minlength=B)
+                    rank = np.arange(rel.size) - start[rel]
+                    backend.clear(slots[rank >= size[rel] - excess[rel]])
+                    trimmed += excess
+                counts[over] = n
+                done[over] = 1
+        split = int(level_of(round_ + 1) > level)
+        entry_counts, remaining = backend.refine(level, split, done, n is not None)
+        if n is not None:
+            newly_short = (remaining == 0) & (done == 0)
+            short |= newly_short
+            done[newly_short] = 1
+        entry_counts = np.asarray(entry_counts, dtype=np.int64)
+        offs = np.concatenate(([0], np.cumsum(entry_counts)[:-1])).astype(np.int64)
+        if len(entry_counts) and offs[-1] + entry_counts[-1] > 2**32 - 1:
+            raise SamplingError("poisson_disk: more than 2^32 active cells in one batch")
+        backend.emit(entry_counts, offs, split)
+        round_ += 1
+    counts = backend.accepted() - trimmed
+    return counts, short, {"rounds": round_, "darts": darts}
+
+
+@dataclasses.dataclass(frozen=True)
+class PoissonDiskInfo(SampleInfo):
+    """What a call of the dart thrower did, per realization (first axis).
+
+    Attributes
+    ----------
+    realizations : ndarray (r,)
+        The realization indices.
+    counts : ndarray (r,) of int
+        Points in each set.
+    radius : float
+        The radius the call kept (``rho * d_max(n)`` with a fixed n).
+    rho_bound : ndarray (r,) of float
+        ``radius / d_max(count)``: a lower bound of each set's relative radius
+        (:func:`clsamp.point_metrics.relative_radius` measures it).
+    rounds : int
+        Rounds of darts the longest batch took.
+    darts : int
+        Darts thrown in all.
+    redraws : int
+        Realizations drawn again because they became maximal below n.
+    """
+
+    counts: np.ndarray = info_field()
+    radius: float = info_field("same")
+    rho_bound: np.ndarray = info_field()
+    rounds: int = info_field("max")
+    darts: int = info_field("sum")
+    redraws: int = info_field("sum")
+
+
+@register("poisson_disk")
+class PoissonDiskSampler(Sampler):
+    """Poisson-disk points by parallel dart throwing, on the unit torus.
+
+    Parameters
+    ----------
+    d : int
+        Dimension, 1 to 3.
+    seed : int
+        Seed of the darts (``Stream.CANDIDATES``).
+    rho : float, optional
+        Relative radius in (0, 0.9069] for a fixed n (default 0.75 when ``radius`` is not
+        given): the points are at least ``rho * d_max(n)`` apart, d_max from
+        :func:`clsamp.point_metrics.max_min_distance` (2-D: sqrt(2 / (sqrt(3) n))).
+        Saturated (maximal) dart throwing reaches about 0.77 in 2-D (0.80 in 3-D, 0.75 in
+        1-D), so values close to that may need redraws and values above it fail: the
+        error says so.
+    radius : float, optional
+        Absolute radius in (0, 0.5]. With ``sample()`` (n left out) the set is maximal:
+        no point of the torus is r or more from every point. With ``sample(n)`` exactly n
+        points at least r apart. Not together with ``rho``.
+    backend : {"opencl", "numpy"}
+        ``"numpy"`` runs the NumPy reference, which gives the same points.
+
+    Notes
+    -----
+    A background grid of G^d cells of side 1/G < r / sqrt(d) holds at most one point per
+    cell (Wei 2008; Ebeida et al. 2011). Uncovered space is tracked as a list of active
+    cells: all grid cells at first, then their 2^d-fold subdivisions (the flat quadtree of
+    Ebeida et al. 2011, 2012), one level deeper every round after the first two. In every
+    round each active cell receives one dart, uniform in the cell (so darts land uniformly
+    in the uncovered area's cover); a dart is valid when no accepted point is within r.
+    Valid darts closer than r to each other are settled by a few parallel steps of the
+    greedy independent set in the order of a random Philox priority (Luby 1986): a dart is
+    accepted when no higher conflicting dart is still in play, which is what throwing them
+    one at a time in that order would accept; darts still undecided after
+    :func:`resolve_steps` steps are dropped for the round (their cells stay active). Every
+    rule asks only whether some neighbour exists, so the outcome is a function of the seed
+    alone: the same on every device and in the NumPy reference. An active cell is dropped
+    as soon as it lies inside one disk (its farthest corner closer than r to a point); when
+    none is left, no point of the torus is r or more from the set: the set is maximal --
+    exactly, not after a count of failures.
+
+    Fixed n runs the same process at r = rho * d_max(n) and stops a realization in the
+    round its count passes n, keeping that round's n - (earlier points) highest-priority
+    darts (any subset of a valid set is valid). A realization that becomes maximal below n
+    (small n fluctuates) is drawn again from the next of ``MAX_ATTEMPTS`` independent Philox
+    streams, so realization k still depends on k alone; if all fail, n points cannot be
+    placed at that rho and ``InvalidArgumentError`` says so. Saturated dart throwing reaches
+    rho of about 0.75 in 1-D (Renyi's parking constant 0.7476), 0.77 in 2-D and 0.80 in 3-D,
+    so at the default 0.75 large 1-D sets fail: use a smaller rho there.
+
+    In radius mode the count differs between realizations, so ``sample()`` accepts
+    ``realizations`` of None (shape (m, d)) or 1 (shape (1, m, d)) only;
+    :meth:`sample_sets` returns a list of k maximal sets (made in one batch). ``start``
+    must be 0 (a set, not a sequence).
+
+    Points are returned in grid-cell order (row-major), not in the order of acceptance.
+
+    References
+    ----------
+    M. S. Ebeida, A. A. Davidson, A. Patney, P. M. Knupp, S. A. Mitchell, J. D. Owens,
+    "Efficient maximal Poisson-disk sampling", ACM Trans. Graph. 30(4), 2011.
+    M. S. Ebeida, S. A. Mitchell, A. Patney, A. A. Davidson, J. D. Owens, "A simple
+    algorithm for maximal Poisson-disk sampling in high dimensions", Comput. Graph.
+    Forum 31(2), 2012.
+    L.-Y. Wei, "Parallel Poisson disk sampling", ACM Trans. Graph. 27(3), 2008.
+    M. Luby, "A simple parallel algorithm for the maximal independent set problem",
+    SIAM J. Comput. 15(4), 1986.
+    A. Lagae, P. Dutre, "A comparison of methods for generating Poisson disk
+    distributions", Comput. Graph. Forum 27(1), 2008.
+
+    Examples
+    --------
+    >>> import clsamp
+    >>> from clsamp.point_metrics import relative_radius
+    >>> pts = clsamp.make_sampler("poisson_disk", seed=1).sample(256, realizations=2)
+    >>> pts.shape, bool(relative_radius(pts).min() >= 0.75)
+    ((2, 256, 2), True)
+    >>> s = clsamp.make_sampler("poisson_disk", radius=0.1, seed=1)
+    >>> pts, info = s.sample(return_info=True)
+    >>> pts.shape == (info.counts[0], 2)
+    True
+    """
+
+    dimensions = (1, 2, 3)
+    accepts_start = False
+    expensive = True
+    info = PoissonDiskInfo
+    rates = {"best": Rate(-1.0, PILLEBOUE), "worst": Rate(-1.0, PILLEBOUE)}
+
+    def __init__(self, d=2, seed=0, rho=None, radius=None, backend="opencl"):
+        super().__init__(d=d, seed=seed, backend=backend)
+        if rho is not None and radius is not None:
+            raise InvalidArgumentError(
+                "give 'radius' (absolute) or 'rho' (relative to d_max(n)), not both; "
+                f"got radius={radius!r}, rho={rho!r}")
+        if radius is not None:
+            self.radius = check_real(radius, "radius", minimum=0.0, open_minimum=True)
+            if self.radius > MAX_RADIUS:
+                raise InvalidArgumentError(
+                    f"'radius' must be <= {MAX_RADIUS} on the unit torus, got {self.radius}: a "
+                    "wider disk around a point overlaps its own periodic image, so it is no "
+                    "longer a disk on the torus")
+            G = grid_size(self.radius, self.d)
+            if G ** self.d > MAX_CELLS:
+                raise InvalidArgumentError(
+                    f"'radius'={self.radius} is too small for d={self.d}: its background grid "
+                    f"would have {G ** self.d} cells, more than {MAX_CELLS}")
+            self.rho = None
+            self.needs_n = False
+        else:
+            self.radius = None
+            self.rho = 0.75 if rho is None else check_real(rho, "rho", minimum=0.0,
+                                                           open_minimum=True)
+            if self.rho > HEXAGONAL_DENSITY:
+                raise InvalidArgumentError(
+                    f"'rho' must be <= {HEXAGONAL_DENSITY:.4f} (pi / sqrt(12), beyond "
+                    f"hexagonal packing), got {self.rho}; maximal dart throwing reaches "
+                    "about 0.77 in 2-D")
+
+    def __repr__(self):
+        what = f"radius={self.radius}" if self.radius is not None else f"rho={self.rho}"
+        return f"{type(self).__name__}(d={self.d}, seed={self.seed}, {what})"
+
+    def sample_sets(self, realizations, return_info=False):
+        """Maximal sets (radius mode) as a list of (m_k, d) arrays, one per realization.
+
+        Parameters
+        ----------
+        realizations : int or range
+            r for the realizations 0..r-1, or a range for exactly those. Set k is the one
+            ``sample(realizations=range(k, k + 1))`` gives and does not depend on which
+            others are asked for; all sets are made in one batch.
+        return_info : bool
+            Also return the :class:`PoissonDiskInfo` of the call.
+        """
+        if self.radius is None:
+            raise InvalidArgumentError("sample_sets needs 'radius' (maximal sets)")
+        if isinstance(realizations, range):
+            if len(realizations) == 0 or realizations.step != 1 or realizations.start < 0:
+                raise InvalidArgumentError(
+                    f"'realizations' must be a count or a non-empty range of step 1, got "
+                    f"{realizations!r}")
+            reals = realizations
+        else:
+            reals = range(check_positive_int(realizations, "realizations"))
+        sets, info = self._run(None, reals, device=self.backend == "opencl", as_list=True)
+        return (sets, info) if return_info else sets
+
+    def convergence_rate(self, case):
+        return self.rates.get(case) if self.d == 2 and self.radius is None else None
+
+    # -- what the base calls ------------------------------------------------------------
+    def _check_call(self, n, realizations, start, return_info=False):
+        checked = super()._check_call(n, realizations, start, return_info)
+        runs = checked[1]
+        if checked[0] is None and sum(len(run) for run in runs) != 1:
+            raise InvalidArgumentError(
+                f"'realizations'={realizations!r}: maximal sets (radius mode, n left out) have "
+                "different sizes, so they do not fit one (r, n, d) array; use "
+                "sample_sets(realizations) for a list, or give n for exactly n points each")
+        return checked
+
+    def _reference(self, n, realizations, start):
+        return self._run(n, realizations, device=False)
+
+    def _device(self, n, realizations, start):
+        return self._run(n, realizations, device=True)
+
+    # -- the work -------------------------------------------------------------------------
+    def _geometry(self, n):
+        if self.radius is not None:
+            return Geometry(self.d, self.radius, acceptance_threshold(self.radius))
+        d_max = torus.max_min_distance(n, self.d)
+        radius = self.rho * d_max
+        G = grid_size(radius, self.d)
+        if G ** self.d > MAX_CELLS:
+            raise InvalidArgumentError(
+                f"'n'={n} is too large for d={self.d}: the background grid would have "
+                f"{G ** self.d} cells, more than {MAX_CELLS}")
+        return Geometry(self.d, radius, acceptance_threshold(radius, d_max, self.rho))
+
+    def _run(self, n, realizations, device, as_list=False):
+        geo = self._geometry(n)
+        ids = np.arange(realizations.start, realizations.stop, dtype=np.int64)
+        if self.radius is not None:
+            what = f"'radius'={self.radius:.6g}"
+        else:
+            what = f"'rho'={self.rho:.6g} (radius {geo.radius:.6g})"
+        parts, counts, stats = _draw(geo, ids, n, self.seed, device, what)
+        sizes, where = np.unique(counts, return_inverse=True)
+        rho_bound = np.array([geo.radius / torus.max_min_distance(int(c), self.d)
+                              for c in sizes])[where]
+        info = PoissonDiskInfo(realizations=ids, counts=counts, radius=geo.radius,
+                               rho_bound=rho_bound, rounds=stats["rounds"], darts=stats["darts"],
+                               redraws=stats["redraws"])
+        if as_list:
+            sets = []
+            for out, c in parts:
+                host = out.get() if device else out
+                sets.extend(np.split(host[:int(c.sum())], np.cumsum(c)[:-1]))
+            return sets, info
+        (out, c), = parts if n is None else ((parts, counts),)
+        m = int(c[0])
+        shape = (len(ids), m, self.d)
+        if m * len(ids) < out.shape[0]:  # a maximal set's buffer is one row long when empty
+            out = out[:m * len(ids)]
+        return out.reshape(shape), info
+
+
+def _draw(geo, ids, n, seed, device, what):
+    """Draw realizations ``ids`` in batches of at most BATCH_CELLS grid cells.
+
+    Fixed n: returns ``(out, counts, stats)`` with out of shape (len(ids) * n, d) (device or
+    host), realization after realization. A realization that becomes maximal below n is
+    drawn again with the next ``attempt`` (the Philox counters' grid-cell word carries it
+    in bits 26-31), up to MAX_ATTEMPTS times; so realization k still depends on k alone, and
+    its points follow the process conditioned on reaching n.
+
+    Maximal (n None): returns ``([(out, counts) per batch], counts, stats)``.
+    """
+    make = DeviceDarts if device else NumpyDarts
+    per_batch = max(1, BATCH_CELLS // geo.cells)
+    if device:  # the point grid, the largest buffer, within one launch's budget
+        per_batch = min(per_batch, runtime.fit(8 * geo.d * geo.cells))
+    stats = {"rounds": 0, "darts": 0, "redraws": 0}
+
+    def alloc(rows):
+        if device:
+            import pyopencl.array as cla
+            return cla.empty(runtime.queue(), (max(rows, 1), geo.d), np.float64)
+        return np.empty((max(rows, 1), geo.d), dtype=np.float64)
+
+    def account(st):
+        stats["rounds"] = max(stats["rounds"], st["rounds"])
+        stats["darts"] += st["darts"]
+
+    if n is None:
+        parts, all_counts = [], []
+        for lo in range(0, len(ids), per_batch):
+            backend = make(geo, ids[lo:lo + per_batch], 0, seed)
+            counts, _, st = _throw_darts(backend, None)
+            account(st)
+            out = alloc(int(counts.sum()))
+            backend.gather(np.concatenate(([0], np.cumsum(counts)[:-1])).astype(np.int64), out)
+            parts.append((out, counts))
+            all_counts.append(counts)
+        return parts, np.concatenate(all_counts), stats
+
+    out = alloc(len(ids) * n)
+    pending = np.arange(len(ids))
+    best = 0
+    for attempt in range(MAX_ATTEMPTS):
+        if not pending.size:
+            break
+        if attempt:
+            stats["redraws"] += int(pending.size)
+        still = []
+        for lo in range(0, pending.size, per_batch):
+            batch = pending[lo:lo + per_batch]
+            backend = make(geo, ids[batch], attempt, seed)
+            counts, short, st = _throw_darts(backend, n)
+            account(st)
+            backend.gather(np.where(short, SKIP, batch * n).astype(np.int64), out)
+            if short.any():
+                best = max(best, int(counts[short].max()))
+            still.append(batch[short])
+        pending = np.concatenate(still)
+    if pending.size:
+        raise InvalidArgumentError(
+            f"n={n} points cannot be placed at {what} in d={geo.d}: realization "
+            f"{int(ids[pending[0]])} became maximal below n in {MAX_ATTEMPTS} attempts (at most "
+            f"{best} points). Use a smaller 'rho' (saturated dart throwing reaches about 0.75 "
+            "in 1-D, 0.77 in 2-D, 0.80 in 3-D) or a smaller 'radius'")
+    return out, np.full(len(ids), n, dtype=np.int64), stats

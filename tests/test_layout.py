@@ -1,0 +1,192 @@
+"""The layout docs/design.md describes holds: imports flow one way between the layers
+(function-level imports included), no module imports itself back through a circle, no
+module outgrows ~800 lines, the private protocol of the samplers stays inside them, the
+constants the host and the kernels share have one source, and no file cites a document
+the repository does not hold."""
+
+import ast
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+PACKAGE = ROOT / "clsamp"
+
+# docs/design.md, "Layers": a module may import its own layer and the layers before it.
+LAYERS = [
+    ("core", {"errors", "validation", "runtime", "philox", "number_theory", "permutation", "io"}),
+    ("geometry", {"geometry"}),
+    ("samplers", {"samplers"}),
+    ("analysis", {"spectrum", "point_metrics"}),
+    ("experiments", {"integrands", "convergence", "theory"}),
+    ("render", {"scene", "render"}),
+    ("report", {"plots", "tour", "cli", "__main__", "__init__"}),
+]
+
+
+def _module_name(path):
+    rel = path.relative_to(ROOT).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+def _modules():
+    return {_module_name(p): p for p in PACKAGE.rglob("*.py")}
+
+
+MODULES = _modules()
+
+
+def _resolve(module, level, name):
+    """The clsamp module an import names (relative or absolute), or None if outside."""
+    path = MODULES[module]
+    base = module.split(".") if path.name == "__init__.py" else module.split(".")[:-1]
+    if level:
+        base = base[:len(base) - (level - 1)]
+        target = ".".join(base + ([name] if name else []))
+    else:
+        target = name or ""
+    return target if target.split(".")[0] == "clsamp" else None
+
+
+def _imports(module):
+    """Every clsamp module ``module`` imports, anywhere in its body (functions included)."""
+    tree = ast.parse(MODULES[module].read_text())
+    found = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name.split(".")[0] == "clsamp":
+                    found.add(alias.name)
+        elif isinstance(node, ast.ImportFrom):
+            target = _resolve(module, node.level, node.module)
+            if target is None:
+                continue
+            for alias in node.names:              # `from . import x` names the module x
+                sub = f"{target}.{alias.name}"
+                found.add(sub if sub in MODULES else target)
+    return {m for m in found if m in MODULES and m != module}
+
+
+GRAPH = {m: _imports(m) for m in MODULES}
+
+
+def _layer(module):
+    parts = module.split(".")
+    top = parts[1] if len(parts) > 1 else "__init__"
+    for index, (_, members) in enumerate(LAYERS):
+        if top in members:
+            return index
+    raise AssertionError(f"{module} is in no layer of docs/design.md")
+
+
+def test_every_module_has_a_layer():
+    for module in MODULES:
+        _layer(module)
+
+
+def test_imports_flow_one_way():
+    wrong = [(m, t) for m, targets in GRAPH.items() for t in targets
+             if _layer(t) > _layer(m) and not m.startswith("clsamp.__")]
+    assert not wrong, wrong
+
+
+def test_no_import_circles():
+    state, stack, cycles = {}, [], []
+
+    def visit(m):
+        state[m] = "open"
+        stack.append(m)
+        for t in sorted(GRAPH[m]):
+            # a package's __init__ re-exporting its submodules is the way in, not a circle
+            if MODULES[t].name == "__init__.py" and m.startswith(t + "."):
+                continue
+            if state.get(t) == "open":
+                cycles.append(stack[stack.index(t):] + [t])
+            elif t not in state:
+                visit(t)
+        stack.pop()
+        state[m] = "done"
+
+    for m in sorted(MODULES):
+        if m not in state:
+            visit(m)
+    assert not cycles, cycles
+
+
+def test_no_module_outgrows_800_lines():
+    long = {m: n for m, p in MODULES.items() if (n := len(p.read_text().splitlines())) > 800}
+    assert not long, long
+
+
+def test_the_private_sampler_protocol_stays_in_the_samplers():
+    calls = re.compile(r"\._(device|reference|optimize|generate|make)\(")
+    outside = [str(p.relative_to(ROOT)) for m, p in MODULES.items()
+               if not m.startswith("clsamp.samplers") and calls.search(p.read_text())]
+    for folder in ("benchmarks", "tests"):
+        outside += [str(p.relative_to(ROOT)) for p in (ROOT / folder).glob("*.py")
+                    if calls.search(p.read_text())]
+    assert not outside, outside
+
+
+@pytest.mark.parametrize("name", ["VOR_BITS", "VOR_SEGMENT", "CCVT_TOP", "CCVT_SECTORS",
+                                  "CCVT_BANDS", "CCVT_META", "CCVT_NO_OWNER", "CCVT_NO_SECOND"])
+def test_shared_constants_come_from_the_host(name):
+    # the kernels get them as build options from their one Python source and refuse to
+    # build without them
+    for path in (ROOT / "kernels").iterdir():
+        text = path.read_text()
+        assert not re.search(rf"#define\s+{name}\b", text), (path.name, name)
+    from clsamp.geometry import voronoi
+    from clsamp.samplers.ccvt import pairs
+    defines = {**voronoi.DEFINES, **pairs.ccvt_defines()}
+    assert name in defines
+
+
+def test_a_kernel_without_its_constants_does_not_build():
+    from clsamp import runtime
+    from clsamp.errors import BuildError
+    with pytest.raises(BuildError, match="VOR_BITS"):
+        runtime.program("voronoi.cl")
+    from clsamp.samplers.ccvt import pairs
+    wrong = {**pairs.ccvt_defines(), "CCVT_META": pairs.CCVT_META + 1}
+    with pytest.raises(BuildError, match="CCVT_META"):
+        runtime.program("ccvt.cl", wrong)
+
+
+def test_no_file_cites_a_document_the_repository_lacks():
+    cited = re.compile(r"\b([A-Za-z_][\w/.-]*\.md)\b")
+    files = [p for p in ROOT.rglob("*") if p.is_file() and p.suffix in (".py", ".cl", ".h", ".md")
+             and ".venv" not in p.parts and ".git" not in p.parts]
+    missing = []
+    for path in files:
+        for name in cited.findall(path.read_text(errors="replace")):
+            if not ((ROOT / name).is_file() or (path.parent / name).is_file()):
+                missing.append((str(path.relative_to(ROOT)), name))
+    assert not missing, missing
+
+
+def test_setup_ships_every_package():
+    text = (ROOT / "setup.py").read_text()
+    listed = set(re.findall(r'"(clsamp(?:\.\w+)*)"', text))
+    packages = {_module_name(p.parent / "__init__.py") for p in PACKAGE.rglob("__init__.py")}
+    assert packages <= listed, packages - listed
+
+
+def test_cited_sections_exist():
+    # `docs/design.md, "Rendering"`: the document has a heading with that name
+    cited = re.compile(r'(docs/[\w-]+\.md),\s+"([^"]+)"')
+    files = [p for p in ROOT.rglob("*") if p.is_file() and p.suffix in (".py", ".cl", ".h")
+             and ".venv" not in p.parts]
+    missing = []
+    for path in files:
+        text = re.sub(r"\s*\n\s*(\*|#)?\s*", " ", path.read_text())    # comments wrap lines
+        for doc, section in cited.findall(text):
+            headings = [line.lstrip("#").strip() for line in (ROOT / doc).read_text().splitlines()
+                        if line.startswith("#")]
+            if section not in headings:
+                missing.append((str(path.relative_to(ROOT)), doc, section))
+    assert not missing, missing
