@@ -162,8 +162,10 @@ def permutation_element(i, length, p):
     """Element ``i`` of the pseudo-random permutation of [0, length) chosen by ``p``.
 
     Kensler's hash-and-cycle-walk permutation [7]_ (pbrt's PermutationElement):
-    a bijection on the next power of two, walked until it lands in [0, length).
-    All arguments broadcast; arithmetic wraps modulo 2^32.
+    a bijection on the next power of two, walked until it lands in [0, length), then
+    rotated by p: ``(i + p) mod length``, the sum taken in 64 bits (pbrt's 32-bit sum
+    wraps for p > 2^32 - length, and the result is then not a permutation). All
+    arguments broadcast; the hash's arithmetic wraps modulo 2^32.
     """
     i, length, p = np.broadcast_arrays(np.asarray(i, dtype=_U32), np.asarray(length, dtype=_U32),
                                        np.asarray(p, dtype=_U32))
@@ -199,7 +201,9 @@ def permutation_element(i, length, p):
             done = xs < ls
             idx = np.flatnonzero(todo)
             finished = idx[done]
-            out.flat[finished] = ((xs[done] + ps[done]) % ls[done]).astype(_U32)
+            # the rotation by p in 64 bits: (i + p) mod l, which 32 bits would wrap for
+            # p > 2^32 - l and then miss some of [0, l)
+            out.flat[finished] = ((xs[done].astype(_U64) + ps[done]) % ls[done]).astype(_U32)
             todo.flat[finished] = False
     return out
 

@@ -65,7 +65,8 @@ inline uint digit_shift(uint h, uint base)
     return (uint)(((ulong)h * base) >> 32);
 }
 
-/* Kensler's permutation element: i-th element of the permutation of [0, l) chosen by p. */
+/* Kensler's permutation element: i-th element of the permutation of [0, l) chosen by p
+ * (number_theory.permutation_element). */
 inline uint permutation_element(uint i, uint l, uint p)
 {
     uint w = l - 1u;
@@ -94,7 +95,7 @@ inline uint permutation_element(uint i, uint l, uint p)
         i &= w;
         i ^= i >> 5;
     } while (i >= l);
-    return (i + p) % l;
+    return (uint)(((ulong)i + p) % l);   /* in 64 bits: a 32-bit sum wraps for p > 2^32 - l */
 }
 
 /* Cranley-Patterson rotation on the torus: (x + u) mod 1 with one rounding. */

@@ -216,11 +216,27 @@ def test_owen_base2_is_a_nested_bijection():
         assert (int(ya) ^ int(yb)).bit_length() == (int(a) ^ int(b)).bit_length()
 
 
-@pytest.mark.parametrize("length", [2, 3, 5, 7, 17, 64, 311])
+@pytest.mark.parametrize("length", [2, 3, 5, 7, 17, 64, 311, 1048573])
 def test_permutation_element_is_a_permutation(length):
-    for p in (0, 1, 12345, 0xDEADBEEF):
+    # p near 2^32 too: the final rotation (i + p) mod length must not wrap in 32 bits
+    for p in (0, 1, 12345, 0xDEADBEEF, 2**32 - length, 2**32 - length + 1, 2**32 - 1):
         perm = nt.permutation_element(np.arange(length), length, p)
-        assert sorted(perm.tolist()) == list(range(length))
+        assert np.array_equal(np.sort(perm), np.arange(length)), p
+
+
+@pytest.mark.parametrize("randomize, realization", [("permute", 1968), ("owen", 1899)])
+def test_large_base_digits_stay_permutations(randomize, realization):
+    # base 1048573, seed 0: these realizations draw a top-digit permutation hash above
+    # 2^32 - 1048573, where a 32-bit rotation left 12288 strata empty; every stratum
+    # floor(x b) of the first b points holds exactly one, kernel and reference alike
+    b = 1048573
+    s = clsamp.make_sampler("van_der_corput", d=1, base=b, seed=0, randomize=randomize)
+    x = s.sample(b, realizations=range(realization, realization + 1))[0, :, 0]
+    assert np.array_equal(np.sort(np.floor(x * b).astype(np.int64)), np.arange(b))
+    ref = clsamp.make_sampler("van_der_corput", d=1, base=b, seed=0, randomize=randomize,
+                              backend="numpy")
+    assert np.array_equal(ref.sample(2048, realizations=range(realization, realization + 1))[0, :, 0],
+                          x[:2048])
 
 
 def test_first_primes():
