@@ -190,3 +190,10 @@ def test_cited_sections_exist():
             if section not in headings:
                 missing.append((str(path.relative_to(ROOT)), doc, section))
     assert not missing, missing
+
+
+def test_only_the_runtime_makes_opencl_state():
+    made = re.compile(r"\bcl\.(Buffer|Kernel|Program|Context|CommandQueue)\(|create_some_context"
+                      r"|enqueue_map_buffer|\.Kernel\(")
+    outside = [m for m, p in MODULES.items() if m != "clsamp.runtime" and made.search(p.read_text())]
+    assert not outside, outside
