@@ -189,8 +189,8 @@ def normalized_energy(points, density=4096, backend="opencl"):
 
     Parameters
     ----------
-    points : ndarray, shape (n, 2) or (r, n, 2)
-        Points in [0, 1)^2.
+    points : ndarray or pyopencl.array.Array, shape (n, 2) or (r, n, 2)
+        Points in [0, 1)^2 (a device array is read on the device).
     density : int
         Regular g x g grid of cell centres the mean is taken over, g = ceil(sqrt(n *
         density)); the nearest point of each is found through a grid of the points, in
@@ -219,7 +219,7 @@ def normalized_energy(points, density=4096, backend="opencl"):
     >>> round(normalized_energy(g), 5)
     0.16663
     """
-    batch, single = check_points(points, "points")
+    batch, single = check_points(points, "points", keep_device=backend == "opencl")
     if batch.shape[-1] != 2:
         raise InvalidArgumentError(
             f"'points' must be 2-D for normalized_energy, got d = {batch.shape[-1]}")

@@ -24,3 +24,4 @@ __kernel void points_bounds(__global const double *x, const ulong n, __global do
     hi[g] = b;
     bad[g] = c;
 }
+

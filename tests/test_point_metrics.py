@@ -138,3 +138,14 @@ def test_device_arrays_are_accepted():
     assert np.array_equal(relative_radius(device), relative_radius(host))
     assert np.array_equal(normalized_energy(device), normalized_energy(host))
     assert normalized_energy(sampler.sample_device(200)) == normalized_energy(host[0])
+
+
+def test_to_torus_on_the_device_equals_numpy():
+    import pyopencl.array as cla
+
+    from clsamp import runtime
+    from clsamp.geometry import integer_torus
+    x = np.concatenate([np.random.default_rng(4).random((999, 2)),
+                        [[0.0, 1 - 2.0**-53], [0.5, 2.0**-22], [2.0**-22 - 2.0**-60, 0.75]]])
+    on_device = integer_torus.to_torus(cla.to_device(runtime.queue(), x))
+    assert on_device.dtype == np.uint32 and np.array_equal(on_device.get(), integer_torus.to_torus(x))

@@ -26,7 +26,17 @@ DEFINES = {"VOR_BITS": BITS}  # the build options every kernel on the integer to
 
 
 def to_torus(points):
-    """Points in [0, 1) as integer torus coordinates (uint32, ``floor(x 2^BITS)``)."""
+    """Points in [0, 1) as integer torus coordinates (uint32, ``floor(x 2^BITS)``); a
+    device array stays on the device (``kernels/integer_torus.cl``, the same integers)."""
+    from .. import runtime
+    if runtime.is_device_array(points):
+        import pyopencl.array as cla
+        flat = runtime.device_block(points.reshape((1, -1, 1)), 0, 1)
+        out = cla.empty(runtime.queue(), points.shape, np.uint32)
+        if points.size:
+            runtime.kernel("integer_torus.cl", "points_to_torus", DEFINES)(
+                runtime.queue(), (points.size,), None, flat.data, np.uint64(points.size), out.data)
+        return out
     return np.minimum(np.floor(np.asarray(points, dtype=np.float64) * SIZE), MASK).astype(np.uint32)
 
 

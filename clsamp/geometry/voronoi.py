@@ -150,8 +150,8 @@ def cvt_energy(sites, density, backend="opencl"):
 
     Parameters
     ----------
-    sites : ndarray (r, n, 2) of uint32
-        Integer torus coordinates.
+    sites : ndarray or pyopencl.array.Array (r, n, 2) of uint32
+        Integer torus coordinates (on the device already, for the OpenCL backend).
     density : int
         Density points per site: the grid has side g = :func:`density_side` (n, density).
     backend : {"opencl", "numpy"}
@@ -164,12 +164,13 @@ def cvt_energy(sites, density, backend="opencl"):
     r, n, _ = sites.shape
     g = density_side(n, density)
     if backend == "numpy":
+        sites = runtime.to_host(sites)
         totals = [it.split_total(assign_reference(sites[k].astype(np.int64), g)[1])
                   for k in range(r)]
     else:
-        import pyopencl.array as cla
         runtime.require_fp64()
-        d_sites = cla.to_device(runtime.queue(), np.ascontiguousarray(sites, dtype=np.uint32))
+        d_sites = runtime.to_device(sites if runtime.is_device_array(sites)
+                                    else np.asarray(sites, dtype=np.uint32))
         assignment = DeviceAssignment(r, n, g, 1)
         assignment(d_sites, 0)
         totals = [e[0] for e in assignment.energies()]
