@@ -7,8 +7,39 @@ in the order ``clsamp --help`` shows them.
 
 import argparse
 import sys
+from pathlib import Path
 
 from .errors import ClsampError, InvalidArgumentError
+
+TEXT_POINTS = (".txt", ".dat", ".pts")      # one point a line, as UTK and PSA read them
+FIGURES = (".png", ".pdf", ".svg")
+
+
+def _output(value, accepted, command, option="-o"):
+    """The output path ``value`` if its suffix is one ``command`` writes; refused (before
+    any work) otherwise, naming the accepted ones."""
+    path = Path(value)
+    if path.suffix.lower() not in accepted:
+        got = repr(path.suffix) if path.suffix else "no suffix"
+        raise InvalidArgumentError(
+            f"'{option}' {value!r}: clsamp {command} writes {', '.join(accepted)}; got {got}")
+    return path
+
+
+def _distinct(paths):
+    """Refuse outputs that would overwrite each other."""
+    seen = {}
+    for option, path in paths:
+        key = Path(path).resolve()
+        if key in seen:
+            raise InvalidArgumentError(
+                f"'{option}' {str(path)!r} would overwrite the output of '{seen[key]}'")
+        seen[key] = option
+
+
+def _wrote(paths, what=""):
+    print("wrote " + ", ".join(str(p) for p in paths) + (f": {what}" if what else ""),
+          file=sys.stderr)
 
 
 def _parse_params(items):
@@ -59,8 +90,8 @@ def _add_sample(sub):
                    help="sampler parameter, e.g. --param randomize=owen (repeatable)")
     p.add_argument("--backend", default="opencl", choices=("opencl", "numpy"))
     p.add_argument("--list", action="store_true", help="list the sampler names and exit")
-    p.add_argument("-o", "--output", help="output file: .npy, or text (one point a line) "
-                   "for any other suffix; default: text to standard output")
+    p.add_argument("-o", "--output", help="output file: .npy, or text (one point a line) as "
+                   f"{', '.join(TEXT_POINTS)}; default: text to standard output")
     p.set_defaults(run=_run_sample)
 
 
@@ -70,13 +101,13 @@ def _run_sample(args):
     if args.list or not args.name:
         print("\n".join(sampler_names(aliases=True)))
         return 0
+    output = _output(args.output, (".npy",) + TEXT_POINTS, "sample") if args.output else None
     sampler = make_sampler(args.name, d=args.d, seed=args.seed, backend=args.backend,
                            **_parse_params(args.param))
     points = sampler.sample(args.n, realizations=args.realizations, start=args.start)
-    if args.output:
-        io.save_points(args.output, points)
-        shape = "x".join(str(s) for s in points.shape)
-        print(f"wrote {shape} points of {args.name} to {args.output}", file=sys.stderr)
+    if output:
+        io.save_points(output, points)
+        _wrote([output], f"{'x'.join(str(s) for s in points.shape)} points of {args.name}")
     else:
         sys.stdout.write(io.format_points(points))
     return 0
@@ -93,6 +124,8 @@ def _add_tour(sub):
 
 def _run_tour(args):
     from .tour import run_tour
+    if Path(args.out).exists() and not Path(args.out).is_dir():
+        raise InvalidArgumentError(f"'--out' {args.out!r} is a file, not a folder")
     index = run_tour(args.out, quick=args.quick, progress=not args.no_progress)
     print(f"wrote {index}")
     return 0
@@ -103,12 +136,13 @@ def _add_spectrum(sub):
     p = sub.add_parser("spectrum", help="power spectrum of a sampler's points or of a point file",
                        description="Expected power spectrum (mean periodogram) of a sampler's "
                        "realizations or of points read from a file (text or .npy).")
-    p.add_argument("source", help="sampler name (e.g. jittered, sobol:owen) or a point file")
+    p.add_argument("source", help="sampler name (e.g. jittered, sobol:owen) or a point file "
+                   "(.npy, or text)")
     p.add_argument("-n", type=int, help="points per set (sampler only)")
-    p.add_argument("-d", type=int, default=2, help="dimension, 1 or 2 (sampler only; default 2)")
+    p.add_argument("-d", type=int, default=None, help="dimension, 1 or 2 (sampler only; default 2)")
     p.add_argument("--realizations", type=int, default=None,
                    help="independent sets to average (sampler only; default one)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=None, help="sampler seed (sampler only; default 0)")
     p.add_argument("--param", action="append", metavar="KEY=VALUE",
                    help="sampler parameter, e.g. --param randomize=owen (repeatable)")
     p.add_argument("--resolution", type=int, default=256, help="R: frequencies [-R/2, R/2) (even)")
@@ -118,33 +152,51 @@ def _add_spectrum(sub):
     p.add_argument("--scale", default="linear", choices=("linear", "log"), help="PNG tone mapping")
     p.add_argument("-o", "--output", required=True,
                    help="output: .png (picture), .exr (raw float values) or .npy (raw float64)")
-    p.add_argument("--plots", help="also write a PNG with the spectrum, radial mean and anisotropy")
+    p.add_argument("--plots", help="also write a figure (.png, .pdf, .svg) with the spectrum, its "
+                   "radial mean and anisotropy")
     p.set_defaults(run=_run_spectrum)
 
 
 def _run_spectrum(args):
-    from pathlib import Path
-
     import numpy as np
 
     from . import io, plots, spectrum
     from .samplers import make_sampler, sampler_names
+    output = _output(args.output, (".png", ".exr", ".npy"), "spectrum")
+    outputs = [("-o", output)]
+    if args.plots:
+        outputs.append(("--plots", _output(args.plots, FIGURES, "spectrum", "--plots")))
+    _distinct(outputs)
     source = Path(args.source)
-    if source.is_file() and args.source.split(":")[0] not in sampler_names(aliases=True):
+    is_sampler = args.source.split(":")[0] in sampler_names(aliases=True)
+    looks_like_path = bool(source.suffix) or "/" in args.source or "\\" in args.source
+    if not is_sampler and (source.is_file() or looks_like_path):
+        if not source.is_file():
+            raise InvalidArgumentError(f"'source' {args.source!r}: no such file (and no sampler "
+                                       "of that name)")
+        given = [flag for flag, value in (("-n", args.n), ("-d", args.d),
+                                          ("--realizations", args.realizations),
+                                          ("--seed", args.seed), ("--param", args.param))
+                 if value is not None]
+        if given:
+            raise InvalidArgumentError(
+                f"{', '.join(repr(g) for g in given)} applies to a sampler source, not to the "
+                f"point file {args.source!r}")
         points = io.load_points(source)
         label = source.name
     else:
         if args.n is None:
-            raise ClsampError("'-n' is required when the source is a sampler name")
-        sampler = make_sampler(args.source, d=args.d, seed=args.seed, **_parse_params(args.param))
+            raise InvalidArgumentError("'-n' is required when the source is a sampler name")
+        sampler = make_sampler(args.source, d=2 if args.d is None else args.d,
+                               seed=0 if args.seed is None else args.seed,
+                               **_parse_params(args.param))
         points = sampler.sample(args.n, realizations=args.realizations)
         label = args.source
     P = spectrum.power_spectrum(points, resolution=args.resolution, method=args.method, tol=args.tol,
                                 backend=args.backend)
-    output = Path(args.output)
-    if output.suffix == ".exr":
+    if output.suffix.lower() == ".exr":
         plots.save_spectrum_exr(output, P, header={"source": label})
-    elif output.suffix == ".npy":
+    elif output.suffix.lower() == ".npy":
         import io as _io
         buffer = _io.BytesIO()
         np.save(buffer, P)
@@ -154,10 +206,9 @@ def _run_spectrum(args):
     n = points.shape[-2]
     r = points.shape[0] if points.ndim == 3 else 1
     if args.plots:
-        plots.save_spectrum_plots(args.plots, P, n=n, realizations=r, label=label, scale=args.scale)
-    freqs, mean = spectrum.radial_mean(P)
-    print(f"wrote the {'x'.join(map(str, P.shape))} spectrum of {r} x {n} points of {label} to "
-          f"{output}; radial mean over all annuli {np.nanmean(mean):.4g}", file=sys.stderr)
+        plots.spectrum_figure(outputs[1][1], P, n=n, realizations=r, label=label, scale=args.scale)
+    _wrote([path for _, path in outputs],
+           f"the {'x'.join(map(str, P.shape))} spectrum of {r} x {n} points of {label}")
     return 0
 
 
@@ -167,7 +218,8 @@ def _add_convergence(sub):
         "convergence", help="MSE against N of samplers on an integrand, rates against theory",
         description="MSE, bias and variance of integral estimates against the number of samples, "
         "for each sampler and integrand; writes the MSE-against-N plot (-o), the accuracy-"
-        "against-time plot beside it (<stem>_time.png) and every number as JSON (<stem>.json).")
+        "against-time plot beside it (<stem>_time.<suffix>) and every number as JSON "
+        "(<stem>.json).")
     p.add_argument("--samplers", default="random,jittered,sobol:owen",
                    help="comma-separated sampler names (default random,jittered,sobol:owen)")
     p.add_argument("--integrand", default="gaussian",
@@ -182,17 +234,19 @@ def _add_convergence(sub):
                    help="no random toroidal shift per realization")
     p.add_argument("--backend", default="opencl", choices=("opencl", "numpy"))
     p.add_argument("--no-progress", action="store_true", help="hide the progress bars")
-    p.add_argument("-o", "--output", default="conv.png", help="the MSE plot (PNG; default conv.png)")
+    p.add_argument("-o", "--output", default="conv.png",
+                   help=f"the MSE plot ({', '.join(FIGURES)}; default conv.png)")
     p.set_defaults(run=_run_convergence)
 
 
 def _run_convergence(args):
     import json
-    from pathlib import Path
 
-    from . import io, theory
+    from . import io, plots, theory
     from .convergence import convergence, pareto_front, parse_ns
-    from .plots import convergence_plot, pareto_plot
+    output = _output(args.output, FIGURES, "convergence")
+    time_path = output.with_name(output.stem + "_time" + output.suffix)
+    json_path = output.with_suffix(".json")
     samplers = [s.strip() for s in args.samplers.split(",") if s.strip()]
     integrands = [s.strip() for s in args.integrand.split(",") if s.strip()]
     if not samplers or not integrands:
@@ -210,16 +264,14 @@ def _run_convergence(args):
             print(f"{name:>26} {integrand:<14} slope {verdict['slope']:+.2f} +- {verdict['stderr']:.2f}"
                   f"  theory {verdict['expected_text'] or '-':<8} {verdict['verdict'].split()[0]}"
                   f"  MSE(N={res.ns[-1]}) {res.mse[-1]:.3g}  {res.seconds.sum():.2f} s")
-    output = Path(args.output)
-    convergence_plot(results, output)
-    time_plot = pareto_plot(results, output.with_name(output.stem + "_time.png"))
+    plots.convergence(results, output)
+    plots.accuracy_time(results, time_path)
     fronts = {f: pareto_front([r for r in results if r.integrand == f]) for f in integrands}
     document = {"ns": ns, "realizations": args.realizations, "seed": args.seed,
                 "homogenize": not args.no_homogenize, "backend": args.backend,
                 "results": records, "pareto_front": fronts}
-    json_path = output.with_suffix(".json")
     io.write_text(json_path, json.dumps(document, indent=1, default=str))
-    print(f"wrote {output}, {time_plot} and {json_path}", file=sys.stderr)
+    _wrote([output, time_path, json_path])
 # -- render --------------------------------------------------------------------
 def _add_render(sub):
     p = sub.add_parser("render", help="render a scene with a sampler; OpenEXR plus a PNG preview",
@@ -241,7 +293,8 @@ def _add_render(sub):
     p.add_argument("--reference-spp", type=int, default=None,
                    help="samples per pixel of the reference (default 64 x the scene's spp)")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
-    p.add_argument("-o", "--output", required=True, help="output .exr (the preview gets .png)")
+    p.add_argument("-o", "--output", required=True,
+                   help="the image, .exr or .png: writes <stem>.exr and a <stem>.png preview")
     p.set_defaults(run=_run_render)
 
 
@@ -250,6 +303,7 @@ def _run_render(args):
 
     from . import render as rendering
     from .scene import Scene
+    _output(args.output, (".exr", ".png"), "render")
     scene = Scene.from_file(args.scene)
     spp = scene.default_spp if args.spp is None else args.spp
     params = _parse_params(args.param)
@@ -258,8 +312,8 @@ def _run_render(args):
                              sampler_params=params or None, pad=not args.no_pad,
                              progress=not args.no_progress)
     seconds = time.perf_counter() - t0
-    path = rendering.save(args.output, image, args.sampler, spp, args.seed, scene=scene)
-    print(f"wrote {path} and {path.with_suffix('.png')}: {scene.name}, {args.sampler}, {spp} spp, "
+    written = rendering.save(args.output, image, args.sampler, spp, args.seed, scene=scene)
+    print(f"wrote {' and '.join(map(str, written))}: {scene.name}, {args.sampler}, {spp} spp, "
           f"{args.resolution}x{args.resolution}, seed {args.seed}, {seconds:.2f} s")
     if args.reference:
         ref = rendering.reference(scene, args.resolution, spp=args.reference_spp,

@@ -56,7 +56,7 @@ __all__ = ["ConvergenceResult", "convergence", "pareto_front", "time_to_mse", "p
 
 
 # -- the result ------------------------------------------------------------------------
-@dataclasses.dataclass
+@dataclasses.dataclass(repr=False)
 class ConvergenceResult:
     """The outcome of :func:`convergence`: per n, the errors and their statistics.
 
@@ -115,6 +115,17 @@ class ConvergenceResult:
         stats = np.array([_statistics(e) for e in self.errors], dtype=np.float64).reshape(-1, 5)
         mean_error, self.bias2, self.variance, self.mse, self.mse_stderr = stats.T
         self.mean = self.integral + mean_error
+
+    def __repr__(self):
+        from . import theory
+        verdict = theory.compare(self)
+        slope, stderr = verdict["slope"], verdict["stderr"]
+        fit = "no fit" if not np.isfinite(slope) else f"slope {slope:.2f} +- {stderr:.2f}"
+        theory_text = verdict["expected_text"] or "no published rate"
+        return (f"ConvergenceResult({self.sampler!r} on {self.integrand!r}: N = {self.ns[0]}.."
+                f"{self.ns[-1]} ({len(self.ns)} values), {self.realizations} realizations,\n"
+                f"    MSE {float(self.mse[-1]):.3g} at the largest N, {fit}, theory {theory_text}: "
+                f"{verdict['verdict'].split(' (')[0]})")
 
     @property
     def seconds_per_estimate(self):

@@ -36,7 +36,7 @@ import numpy as np
 
 from .errors import InvalidArgumentError
 from .geometry.torus import ball_volume
-from .validation import check_real
+from .validation import check_real, plain
 
 # Kernel codes (INTEGRAND in kernels/integrands.cl).
 GAUSSIAN, DISK, HEAVISIDE, PMJ_DISK, PMJ_GAUSSIAN, PMJ_BILINEAR, PMJ_STEP, PMJ_TRIANGLE = range(8)
@@ -47,12 +47,13 @@ def _vector(value, name, d=None):
     try:
         array = np.asarray(value, dtype=np.float64).reshape(-1)
     except (TypeError, ValueError):
-        raise InvalidArgumentError(f"'{name}' must be a sequence of real numbers, got {value!r}") from None
+        raise InvalidArgumentError(
+            f"'{name}' must be a sequence of real numbers, got {plain(value)}") from None
     if array.size == 0 or (d is not None and array.size != d):
         want = f"{d} numbers" if d is not None else "at least one number"
-        raise InvalidArgumentError(f"'{name}' must hold {want}, got {value!r}")
+        raise InvalidArgumentError(f"'{name}' must hold {want}, got {plain(value)}")
     if not np.all(np.isfinite(array)):
-        raise InvalidArgumentError(f"'{name}' must be finite, got {value!r}")
+        raise InvalidArgumentError(f"'{name}' must be finite, got {plain(value)}")
     return array
 
 
@@ -124,7 +125,7 @@ class Integrand:
 
     def describe(self):
         """A one-line description with the parameters (for reports)."""
-        return f"{self.name}: {self._describe()}, integral {self.integral!r}"
+        return f"{self.name}: {self._describe()}, integral {float(self.integral)!r}"
 
 
 class Gaussian(Integrand):
@@ -163,7 +164,7 @@ class Gaussian(Integrand):
     def __init__(self, center=(0.4142, 0.7320), sigma=0.15):
         c = _vector(center, "center")
         if np.any(c < 0) or np.any(c >= 1):
-            raise InvalidArgumentError(f"'center' must lie in [0, 1)^d, got {center!r}")
+            raise InvalidArgumentError(f"'center' must lie in [0, 1)^d, got {plain(center)}")
         super().__init__(c.size)
         self.center = c
         self.sigma = check_real(sigma, "sigma", minimum=0.0, maximum=self.MAX_SIGMA, open_minimum=True)
@@ -222,7 +223,7 @@ class Disk(Integrand):
     def __init__(self, center=(0.7311, 0.2243), radius=0.3389):
         c = _vector(center, "center")
         if np.any(c < 0) or np.any(c >= 1):
-            raise InvalidArgumentError(f"'center' must lie in [0, 1)^d, got {center!r}")
+            raise InvalidArgumentError(f"'center' must lie in [0, 1)^d, got {plain(center)}")
         super().__init__(c.size)
         self.center = c
         self.radius = check_real(radius, "radius", minimum=0.0, maximum=0.5,
@@ -293,7 +294,7 @@ class Heaviside(Integrand):
     def __init__(self, normal=(0.9553, 0.2955), offset=0.6):
         nrm = _vector(normal, "normal")
         if not np.any(nrm != 0):
-            raise InvalidArgumentError(f"'normal' must not be zero, got {normal!r}")
+            raise InvalidArgumentError(f"'normal' must not be zero, got {plain(normal)}")
         super().__init__(nrm.size)
         self.normal = nrm
         self.offset = check_real(offset, "offset")

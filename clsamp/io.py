@@ -7,13 +7,16 @@ for looking at).
 
 Every writer writes to a temporary file in the target's folder and renames it into
 place (``os.replace``), so a crash leaves either the old file or the whole new one,
-never half a file.
+never half a file. The file gets the mode ``open`` would give it: the existing file's,
+or 0666 less the umask.
 """
 
 import contextlib
 import io as _io
 import os
+import stat
 import tempfile
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -21,12 +24,36 @@ import numpy as np
 from .errors import InvalidArgumentError
 from .validation import check_points
 
+_UMASK_LOCK = threading.Lock()
+
+
+def umask():
+    """The process's umask (read from /proc where it can be, else set and restored)."""
+    with contextlib.suppress(OSError, ValueError):
+        with open("/proc/self/status") as status:
+            for line in status:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    with _UMASK_LOCK:
+        mask = os.umask(0o077)
+        os.umask(mask)
+    return mask
+
+
+def _mode_for(path):
+    """The mode a plain ``open(path, "w")`` gives: the existing file's, else 0666 & ~umask."""
+    try:
+        return stat.S_IMODE(os.stat(path).st_mode)
+    except FileNotFoundError:
+        return 0o666 & ~umask()
+
 
 @contextlib.contextmanager
 def atomic_path(path):
     """Yield a temporary path beside ``path``; on success rename it to ``path``.
 
-    On any exception the temporary file is removed and ``path`` is untouched.
+    On any exception the temporary file is removed and ``path`` is untouched. The file
+    that lands has the mode ``open`` would have given it (not mkstemp's 0600).
     """
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
@@ -35,6 +62,7 @@ def atomic_path(path):
     os.close(fd)
     try:
         yield Path(tmp)
+        os.chmod(tmp, _mode_for(path))
         os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):

@@ -9,14 +9,15 @@ import math
 
 import numpy as np
 
-from . import io, spectrum, theory
+from . import io, theory
+from . import spectrum as spectra
 from .convergence import pareto_front
 from .errors import InvalidArgumentError
 from .validation import check_choice, check_real
 
-__all__ = ["spectrum_image", "save_spectrum_png", "save_spectrum_exr", "plot_spectrum",
-           "plot_radial_mean", "plot_anisotropy", "save_spectrum_plots", "convergence_plot",
-           "pareto_plot", "pyplot"]
+__all__ = ["spectrum", "radial_mean", "anisotropy", "spectrum_figure", "convergence",
+           "accuracy_time", "render_comparison", "spectrum_image", "save_spectrum_png",
+           "save_spectrum_exr", "pyplot"]
 
 
 def pyplot():
@@ -29,19 +30,28 @@ def pyplot():
 
 # -- spectra --------------------------------------------------------------------------------
 def spectrum_image(P, scale="linear", vmin=None, vmax=None):
-    """A 2-D spectrum as a grey image in [0, 1], DC at the centre.
+    """A 2-D spectrum as a grey image in [0, 1], DC at the centre, +y up and +x right.
 
-    Rows are y frequencies from -R/2 (top) to R/2 - 1, columns x frequencies from -R/2
-    (left): ``image[j, i] = P[i, j]``.
+    The array keeps clsamp's layout, ``P[i, j]`` = (x frequency i - R/2, y frequency
+    j - R/2); the image is that as people read a picture: row 0 (the top) is the highest
+    y frequency R/2 - 1, the last row -R/2, columns x from -R/2 (left):
+    ``image[R - 1 - j, i] = P[i, j]``. (``plt.imshow(P)`` would show it transposed.)
 
     Parameters
     ----------
+    P : ndarray (R, R)
+        A spectrum from :func:`clsamp.power_spectrum`.
     scale : {"linear", "log"}
         ``"linear"``: P / vmax clipped to [0, 1] (vmax default 4, so white noise is a
         mid grey after the PNG's gamma, the look of PSA and UTK pictures). ``"log"``:
         10·log10 P mapped from [vmin, vmax] dB (default [-20, 10]).
+    vmin, vmax : float, optional
+
+    Returns
+    -------
+    ndarray (R, R) of float64 in [0, 1]
     """
-    P = spectrum.check_spectrum(P)
+    P = spectra.check_spectrum(P)
     if P.ndim != 2:
         raise InvalidArgumentError(f"'P' must be a 2-D spectrum to make an image, got shape {P.shape}")
     check_choice(scale, "scale", ("linear", "log"))
@@ -55,7 +65,7 @@ def spectrum_image(P, scale="linear", vmin=None, vmax=None):
             raise InvalidArgumentError(f"'vmax' must be > 'vmin', got {high} <= {low}")
         with np.errstate(divide="ignore"):
             image = (10.0 * np.log10(P) - low) / (high - low)
-    return np.clip(image.T, 0.0, 1.0)
+    return np.clip(image.T[::-1], 0.0, 1.0)
 
 
 def save_spectrum_png(path, P, scale="linear", vmin=None, vmax=None):
@@ -65,22 +75,37 @@ def save_spectrum_png(path, P, scale="linear", vmin=None, vmax=None):
 
 
 def save_spectrum_exr(path, P, header=None):
-    """Write a spectrum's raw values as a one-channel OpenEXR (float32), same orientation as
-    :func:`spectrum_image` (row j = y frequency j - R/2, column i = x frequency i - R/2).
-    A 1-D spectrum is one row."""
-    P = spectrum.check_spectrum(P)
-    image = P[None, :] if P.ndim == 1 else P.T
-    info = {"clsamp": "power spectrum", "layout": "row j: fy = j - R/2; column i: fx = i - R/2"}
+    """Write a spectrum's raw values as a one-channel OpenEXR (float32), oriented as
+    :func:`spectrum_image` (+y up: row j = y frequency R/2 - 1 - j, column i = x frequency
+    i - R/2). A 1-D spectrum is one row."""
+    P = spectra.check_spectrum(P)
+    image = P[None, :] if P.ndim == 1 else P.T[::-1]
+    info = {"clsamp": "power spectrum",
+            "layout": "row j: fy = R/2 - 1 - j (+y up); column i: fx = i - R/2"}
     info.update(header or {})
     return io.write_exr(path, np.ascontiguousarray(image), header=info)
 
 
-def plot_spectrum(ax, P, scale="linear", vmin=None, vmax=None, title=None):
-    """Show a 2-D spectrum on a matplotlib Axes, axes labelled in integer frequencies."""
+def spectrum(ax, P, scale="linear", vmin=None, vmax=None, title=None):
+    """Show a 2-D spectrum on a matplotlib Axes: +y up, +x right, axes in integer frequencies.
+
+    Parameters
+    ----------
+    ax : matplotlib Axes
+    P : ndarray (R, R)
+        A spectrum from :func:`clsamp.power_spectrum` (``P[i, j]`` = (x, y)).
+    scale, vmin, vmax
+        As :func:`spectrum_image`.
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib AxesImage
+    """
     R = P.shape[0]
     image = spectrum_image(P, scale, vmin, vmax)
     shown = ax.imshow(image ** (1 / 2.2) if scale == "linear" else image, cmap="gray", vmin=0, vmax=1,
-                      extent=(-R / 2 - 0.5, R / 2 - 0.5, R / 2 - 0.5, -R / 2 - 0.5),
+                      extent=(-R / 2 - 0.5, R / 2 - 0.5, -R / 2 - 0.5, R / 2 - 0.5),
                       interpolation="nearest")
     ax.set_xlabel("frequency x")
     ax.set_ylabel("frequency y")
@@ -95,10 +120,10 @@ def _frequency_axis(ax, freqs, n, convention):
         return np.asarray(freqs, dtype=np.float64)
     label = "2ν/√N" if convention == "psa" else "ν/√N"
     ax.set_xlabel(f"frequency {label}")
-    return spectrum.normalized_frequency(freqs, n, convention)
+    return spectra.normalized_frequency(freqs, n, convention)
 
 
-def plot_radial_mean(ax, freqs, values, label=None, n=None, convention="psa", **line_args):
+def radial_mean(ax, freqs, values, label=None, n=None, convention="psa", **line_args):
     """Plot a radial mean (from :func:`clsamp.radial_mean`) on a matplotlib Axes.
 
     With ``n`` (points per set) the frequency axis is normalized as PSA (2ν/√N,
@@ -114,7 +139,7 @@ def plot_radial_mean(ax, freqs, values, label=None, n=None, convention="psa", **
     return line
 
 
-def plot_anisotropy(ax, freqs, values, label=None, n=None, convention="psa", realizations=None,
+def anisotropy(ax, freqs, values, label=None, n=None, convention="psa", realizations=None,
                     **line_args):
     """Plot an anisotropy curve (dB, from :func:`clsamp.anisotropy`) on a matplotlib Axes.
 
@@ -130,22 +155,22 @@ def plot_anisotropy(ax, freqs, values, label=None, n=None, convention="psa", rea
     return line
 
 
-def save_spectrum_plots(path, P, n=None, realizations=None, label=None, bin_width=1.0,
-                        convention="psa", scale="linear"):
+def spectrum_figure(path, P, n=None, realizations=None, label=None, bin_width=1.0,
+                    convention="psa", scale="linear"):
     """One figure, saved as PNG: the spectrum, its radial mean and (2-D) its anisotropy."""
     plt = pyplot()
-    P = spectrum.check_spectrum(P)
+    P = spectra.check_spectrum(P)
     panels = 3 if P.ndim == 2 else 1
     figure, axes = plt.subplots(1, panels, figsize=(4.2 * panels, 3.8), squeeze=False)
     axes = axes[0]
-    freqs, mean = spectrum.radial_mean(P, bin_width)
+    freqs, mean = spectra.radial_mean(P, bin_width)
     if P.ndim == 2:
-        plot_spectrum(axes[0], P, scale=scale, title=label)
-        plot_radial_mean(axes[1], freqs, mean, n=n, convention=convention)
-        f, a = spectrum.anisotropy(P, bin_width)
-        plot_anisotropy(axes[2], f, a, n=n, convention=convention, realizations=realizations)
+        spectrum(axes[0], P, scale=scale, title=label)
+        radial_mean(axes[1], freqs, mean, n=n, convention=convention)
+        f, a = spectra.anisotropy(P, bin_width)
+        anisotropy(axes[2], f, a, n=n, convention=convention, realizations=realizations)
     else:
-        plot_radial_mean(axes[0], freqs, mean, n=n, convention=convention)
+        radial_mean(axes[0], freqs, mean, n=n, convention=convention)
         if label:
             axes[0].set_title(label)
     figure.tight_layout()
@@ -173,7 +198,7 @@ def _label(ax, xlabel, title):
     ax.legend(fontsize=7)
 
 
-def convergence_plot(results, path):
+def convergence(results, path):
     """MSE against N (log-log), one panel per integrand, with the theory slopes drawn.
 
     Each result is a line with error bars (one standard error); where
@@ -202,7 +227,7 @@ def convergence_plot(results, path):
     return io.save_figure(path, fig)
 
 
-def pareto_plot(results, path):
+def accuracy_time(results, path):
     """MSE against seconds per estimate (generation included), one panel per integrand,
     with the accuracy-time front (:func:`clsamp.convergence.pareto_front`) drawn in black;
     returns the path."""
@@ -216,5 +241,51 @@ def pareto_plot(results, path):
             ax.step([p["seconds"] for p in front], [p["mse"] for p in front], "k-", where="post",
                     linewidth=1.5, alpha=0.6, label="front")
         _label(ax, "seconds per estimate (generation included)", f"{name}: accuracy against time")
+    fig.tight_layout()
+    return io.save_figure(path, fig)
+
+
+# -- renders ---------------------------------------------------------------------------
+def render_comparison(path, reference, images, columns=4):
+    """Rendered images beside their reference, each titled with its MSE against it.
+
+    Parameters
+    ----------
+    path : str or Path
+        The figure (.png, .pdf or .svg), written whole.
+    reference : ndarray (H, W)
+        The reference image (:func:`clsamp.render.reference`).
+    images : dict or sequence of (label, image)
+        The renders to compare, in order.
+    columns : int
+        Panels per row.
+
+    Returns
+    -------
+    Path
+
+    Examples
+    --------
+    >>> from clsamp import plots, render
+    >>> ref = render.render("ao", "random", 64, 16, seed=1, progress=False)
+    >>> images = {s: render.render("ao", s, 16, 16, seed=2, progress=False)
+    ...           for s in ("random", "sobol:owen")}
+    >>> import tempfile, pathlib
+    >>> out = plots.render_comparison(pathlib.Path(tempfile.mkdtemp()) / "c.png", ref, images)
+    >>> out.stat().st_size > 1000
+    True
+    """
+    from . import render
+    items = list(images.items()) if isinstance(images, dict) else list(images)
+    panels = [("reference", reference, None)] + [(label, image, render.mse(image, reference))
+                                                 for label, image in items]
+    columns = max(1, min(int(columns), len(panels)))
+    rows = -(-len(panels) // columns)
+    fig, axes = pyplot().subplots(rows, columns, figsize=(3.0 * columns, 3.2 * rows), squeeze=False)
+    for ax in axes.ravel():
+        ax.axis("off")
+    for ax, (label, image, error) in zip(axes.ravel(), panels, strict=False):
+        ax.imshow(io.tone_map(image), cmap="gray", vmin=0, vmax=255, interpolation="nearest")
+        ax.set_title(label if error is None else f"{label}\nMSE {error:.3g}", fontsize=9)
     fig.tight_layout()
     return io.save_figure(path, fig)

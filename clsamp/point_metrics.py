@@ -23,7 +23,7 @@ from .errors import InvalidArgumentError
 from .geometry import integer_torus, voronoi
 from .geometry.torus import PACKING_DENSITY, max_min_distance
 from .geometry.torus import distance2 as toroidal_distance2
-from .validation import check_points, check_positive_int
+from .validation import check_points, check_positive_int, point_sets
 
 __all__ = ["min_distance", "relative_radius", "max_min_distance", "normalized_energy",
            "toroidal_distance2", "HEXAGONAL_NE", "WHITE_NOISE_NE"]
@@ -108,8 +108,8 @@ def min_distance(points):
 
     Parameters
     ----------
-    points : ndarray, shape (n, d) or (r, n, d)
-        Points in [0, 1)^d.
+    points : ndarray, shape (n, d) or (r, n, d), or a list of (n_k, d) arrays
+        Points in [0, 1)^d (a list: sets of different sizes, one value each).
 
     Returns
     -------
@@ -135,6 +135,9 @@ def min_distance(points):
     >>> round(min_distance(np.array([[0.05, 0.5], [0.95, 0.5]])), 12)
     0.1
     """
+    sets = point_sets(points)
+    if sets is not None:
+        return np.array([min_distance(p) for p in sets])
     batch, single = check_points(points, "points")
     d2 = _min_distance2(batch)
     out = np.minimum(np.sqrt(d2), 1.0)
@@ -146,8 +149,8 @@ def relative_radius(points):
 
     Parameters
     ----------
-    points : ndarray, shape (n, d) or (r, n, d), d in 1..8
-        Points in [0, 1)^d.
+    points : ndarray, shape (n, d) or (r, n, d), d in 1..8, or a list of (n_k, d) arrays
+        Points in [0, 1)^d (a list: sets of different sizes, one value each).
 
     Returns
     -------
@@ -174,6 +177,9 @@ def relative_radius(points):
     >>> round(relative_radius(g), 4)
     0.9306
     """
+    sets = point_sets(points)
+    if sets is not None:
+        return np.array([relative_radius(p) for p in sets])
     batch, single = check_points(points, "points")
     n, d = batch.shape[1], batch.shape[2]
     if d not in PACKING_DENSITY:
@@ -189,8 +195,9 @@ def normalized_energy(points, density=4096, backend="opencl"):
 
     Parameters
     ----------
-    points : ndarray or pyopencl.array.Array, shape (n, 2) or (r, n, 2)
-        Points in [0, 1)^2 (a device array is read on the device).
+    points : ndarray or pyopencl.array.Array, shape (n, 2) or (r, n, 2), or a list of (n_k, 2)
+        Points in [0, 1)^2 (a device array is read on the device; a list: sets of
+        different sizes, one value each).
     density : int
         Regular g x g grid of cell centres the mean is taken over, g = ceil(sqrt(n *
         density)); the nearest point of each is found through a grid of the points, in
@@ -219,6 +226,9 @@ def normalized_energy(points, density=4096, backend="opencl"):
     >>> round(normalized_energy(g), 5)
     0.16663
     """
+    sets = point_sets(points)
+    if sets is not None:
+        return np.array([normalized_energy(p, density, backend) for p in sets])
     batch, single = check_points(points, "points", keep_device=backend == "opencl")
     if batch.shape[-1] != 2:
         raise InvalidArgumentError(

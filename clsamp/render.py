@@ -696,12 +696,35 @@ def compare(image, ref):
 
 def save(path, image, sampler, spp, seed, scene=None, preview=True):
     """Write ``image`` as OpenEXR with sampler, spp and seed in the header, and a
-    tone-mapped PNG preview beside it (same name, .png). Returns the EXR path."""
+    tone-mapped PNG preview beside it.
+
+    Parameters
+    ----------
+    path : str or Path
+        The image's name, ending in ``.exr`` or ``.png``: both files are written from its
+        stem, ``<stem>.exr`` and (``preview``) ``<stem>.png``, so neither overwrites the
+        other.
+
+    Returns
+    -------
+    list of Path
+        The files written, the EXR first.
+
+    Raises
+    ------
+    InvalidArgumentError
+        Another suffix.
+    """
+    path = Path(path)
+    if path.suffix.lower() not in (".exr", ".png"):
+        raise InvalidArgumentError(
+            f"'path' {str(path)!r} must end in .exr or .png (a render writes <stem>.exr and a "
+            f"<stem>.png preview), got {path.suffix or 'no suffix'!r}")
     header = {"sampler": sampler if isinstance(sampler, str) else repr(sampler), "spp": spp,
               "seed": seed}
     if scene is not None:
         header["scene"] = scene.name
-    path = io.write_exr(path, image, header)
+    written = [io.write_exr(path.with_suffix(".exr"), image, header)]
     if preview:
-        io.write_png(Path(path).with_suffix(".png"), image)
-    return Path(path)
+        written.append(io.write_png(path.with_suffix(".png"), image))
+    return [Path(p) for p in written]

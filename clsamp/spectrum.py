@@ -36,7 +36,7 @@ import numpy as np
 
 from . import runtime
 from .errors import InvalidArgumentError
-from .validation import check_choice, check_int, check_points, check_real
+from .validation import check_choice, check_int, check_points, check_real, point_sets
 
 __all__ = [
     "power_spectrum", "radial_mean", "anisotropy", "normalized_frequency", "frequencies",
@@ -118,10 +118,12 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
 
     Parameters
     ----------
-    points : ndarray or pyopencl.array.Array, shape (n, d) or (r, n, d)
+    points : ndarray or pyopencl.array.Array, shape (n, d) or (r, n, d), or a list of (n_k, d)
         Points in [0, 1)^d, d = 1 or 2. A batch gives the mean of the r periodograms
         (never the transform of the union of the sets). A device array
-        (``Sampler.sample_device``) is read where it is, with no copy to the host.
+        (``Sampler.sample_device``) is read where it is, with no copy to the host. A list
+        of sets of different sizes (``sample_sets`` of maximal Poisson disk) gives the mean
+        of their periodograms, each |S_k|^2 / n_k.
     resolution : int
         R, even, >= 2: frequencies [-R/2, R/2) along each axis.
     method : {"auto", "direct", "fast"}
@@ -182,6 +184,9 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
     ((32, 32), 256.0)
     """
     check_choice(backend, "backend", BACKENDS)
+    sets = point_sets(points, "points", d=(1, 2))
+    if sets is not None:
+        return _sets_spectrum(sets, resolution, method, tol, backend, progress)
     batch, _ = check_points(points, "points", d=(1, 2), keep_device=backend == "opencl")
     resolution = _check_resolution(resolution)
     check_choice(method, "method", METHODS)
@@ -197,6 +202,22 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
         return _fast(batch, resolution, DEFAULT_FAST_TOL if tol is None else max(tol, MIN_TOL),
                      backend, progress)
     return _direct(batch, resolution, backend, progress)
+
+
+def _sets_spectrum(sets, resolution, method, tol, backend, progress):
+    """The expected periodogram of sets of different sizes: the mean over the sets of
+    |S_k|^2 / n_k, as batches of the sets of each size, weighted by their counts."""
+    groups = {}
+    for k, s in enumerate(sets):
+        groups.setdefault(s.shape[0], []).append(k)
+    total = None
+    for size in sorted(groups):
+        members = groups[size]
+        P = power_spectrum(np.stack([sets[k] for k in members]), resolution, method, tol, backend,
+                           progress)
+        part = P * (len(members) / len(sets)) if len(groups) > 1 else P
+        total = part if total is None else total + part
+    return total
 
 
 def _direct_seconds(r, n, resolution, d):

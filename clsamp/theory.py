@@ -39,10 +39,18 @@ a deterministic sampler that is not shifted, has no published rate here: the ver
 multijittered, correlated_multijittered and Owen-scrambled Halton (bases 2 and 3, not a
 base-2 net), whatever slope a measurement shows (docs/performance.md lists measured ones).
 
-A measured slope **matches** when |slope - expected| <= 3 stderr + 0.15: three standard
-errors for the noise of the fit, plus 0.15 for pre-asymptotic curvature (and the
-(log N)^(d-1) factor of scrambled nets, whose local slope over N = 2^10..2^16 is about
-0.1 shallower than -3).
+The verdict holds the fitted slope s (standard error sigma) against the published exponent
+a, at the distance s - a, in slope units and in standard errors:
+
+* **matches** when |s - a| <= 3 sigma: the gap is within the fit's own noise;
+* **pre-asymptotic** when 3 sigma < |s - a| <= 3 sigma + 0.15: beyond the noise, but within
+  the curvature that the finite N of a sweep leaves (and the (log N)^(d-1) factor of
+  scrambled nets, whose local slope over N = 2^10..2^16 is about 0.1 shallower than -3);
+  a longer sweep should close it;
+* **differs** beyond that.
+
+The verdict's text says which, how far (for example "0.15 steeper than N^-1, 3.8
+standard errors") and the rule.
 
 References
 ----------
@@ -115,8 +123,10 @@ def compare(result):
     dict
         ``case`` (``"best"``, ``"worst"``, ``"axis"`` or ``"unknown"``), ``slope`` and
         ``stderr`` (from ``result.rate()``), ``expected`` (the exponent, or None),
-        ``expected_text`` (``"N^-1.5"``, or None), ``source`` (the paper), ``kind``, and
-        ``verdict``, whose first word is ``matches``, ``differs`` or ``unknown``.
+        ``expected_text`` (``"N^-1.5"``, or None), ``source`` (the paper), ``kind``,
+        ``distance`` (slope - expected) and ``sigmas`` (|distance| / stderr), None without
+        an expected rate, and ``verdict``, whose first word is ``matches``,
+        ``pre-asymptotic``, ``differs`` or ``unknown`` (see the module).
     """
     slope, stderr = result.rate()
     case = case_of(getattr(result, "traits", {}) or {})
@@ -130,15 +140,24 @@ def compare(result):
         expected, source = None, None      # a fixed point set: no variance to speak of
     out = {"case": case, "slope": slope, "stderr": stderr, "expected": expected,
            "expected_text": None if expected is None else _text(expected), "source": source,
-           "kind": kind}
+           "kind": kind, "distance": None, "sigmas": None}
     if expected is None:
         out["verdict"] = f"unknown (no published rate for {kind} in the {case} case)"
     elif not (math.isfinite(slope) and math.isfinite(stderr)):
         out["verdict"] = "unknown (too few positive MSEs to fit a slope)"
     else:
-        gap = abs(slope - expected)
-        allowed = TOLERANCE_SIGMAS * stderr + CURVATURE_ALLOWANCE
-        word = "matches" if gap <= allowed else "differs"
-        out["verdict"] = (f"{word} ({_text(expected)}, {source}: |{slope:.2f} - ({expected:g})| = "
-                          f"{gap:.2f} {'<=' if gap <= allowed else '>'} 3 x {stderr:.2f} + 0.15)")
+        gap = slope - expected
+        sigmas = abs(gap) / stderr if stderr > 0 else (0.0 if gap == 0 else math.inf)
+        out["distance"], out["sigmas"] = float(gap), float(sigmas)
+        noise = TOLERANCE_SIGMAS * stderr
+        if abs(gap) <= noise:
+            word = "matches"
+        elif abs(gap) <= noise + CURVATURE_ALLOWANCE:
+            word = "pre-asymptotic"
+        else:
+            word = "differs"
+        side = "steeper" if gap < 0 else "shallower"
+        out["verdict"] = (f"{word} ({abs(gap):.2f} {side} than {_text(expected)}, {sigmas:.1f} "
+                          f"standard errors; {source}; matches within 3 standard errors, "
+                          f"pre-asymptotic within 3 standard errors + {CURVATURE_ALLOWANCE})")
     return out

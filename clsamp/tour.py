@@ -47,6 +47,9 @@ TOUR_SAMPLERS = (
     ("lloyd", {}),
     ("ccvt", {}),
 )
+# Section 1 shows Poisson disk as the lecture plots it: maximal sets (each of its own size)
+# at the radius 0.75 d_max(n), so about n points each.
+MAXIMAL_RHO = 0.75
 # The tour's budgets for the samplers whose points cost most (Sampler.expensive): the
 # parameters of section 1, full and --quick, and of the convergence sweeps, with their
 # (sample counts, realizations) where they stop earlier than the others.
@@ -89,7 +92,14 @@ class Report:
         return path.relative_to(self.out).as_posix()
 
     def points(self, name, points):
-        path = io.save_points(self.out / "data" / f"{name}.npy", points)
+        """data/<name>.npy, or for sets of different sizes data/<name>.txt (realizations
+        separated by a line ``#``)."""
+        suffix = ".txt" if isinstance(points, list) else ".npy"
+        if isinstance(points, list):
+            path = self.out / "data" / f"{name}{suffix}"
+            io.write_text(path, "#\n".join(io.format_points(p) for p in points))
+        else:
+            path = io.save_points(self.out / "data" / f"{name}{suffix}", points)
         return path.relative_to(self.out).as_posix()
 
     def array(self, name, array):
@@ -155,6 +165,7 @@ th { background: #f4f4f4; } td:first-child { text-align: left; }
 .error { background: #fee; border: 1px solid #c00; padding: 0.5em; white-space: pre-wrap; }
 .note { color: #555; font-size: 0.9em; }
 .matches { color: #070; font-weight: bold; } .differs { color: #b00; font-weight: bold; }
+.pre-asymptotic { color: #a60; font-weight: bold; }
 """
 
 
@@ -221,10 +232,16 @@ def section_samplers(report, quick):
             continue
         try:
             params = tour_sampler_params(name, quick)
+            if name == "poisson_disk":        # maximal sets: a list of different sizes
+                params["radius"] = MAXIMAL_RHO * point_metrics.max_min_distance(n)
             sampler = make_sampler(name, d=2, seed=1, **params)
             t0 = time.perf_counter()
-            points = sampler.sample(n, realizations=realizations)
+            if sampler.needs_n:
+                points = sampler.sample(n, realizations=realizations)
+            else:
+                points = sampler.sample_sets(realizations)
             seconds = time.perf_counter() - t0
+            size = n if sampler.needs_n else float(np.mean([len(p) for p in points]))
             P = spectrum.power_spectrum(points, resolution=resolution, method="direct", progress=False)
             freqs, mean = spectrum.radial_mean(P)
             _, aniso = spectrum.anisotropy(P)
@@ -232,19 +249,20 @@ def section_samplers(report, quick):
             report.points(f"points_{name}", points)
             report.array(f"spectrum_{name}", P)
             plots.save_spectrum_exr(report.out / "data" / f"spectrum_{name}.exr", P,
-                                       header={"sampler": name, "n": n, "realizations": realizations})
+                                    header={"sampler": name, "n": size, "realizations": realizations})
             fig, axes = plt.subplots(1, 3, figsize=(10.5, 3.3))
-            _plot_points(axes[0], points[0], f"{name}, n = {n}")
-            plots.plot_spectrum(axes[1], P, title=f"expected spectrum, {realizations} sets")
-            plots.plot_radial_mean(axes[2], freqs, mean, n=n)
+            _plot_points(axes[0], points[0], f"{name}, n = {len(points[0])}")
+            plots.spectrum(axes[1], P, title=f"expected spectrum, {realizations} sets")
+            plots.radial_mean(axes[2], freqs, mean, n=n)
             axes[2].set_ylim(0, 2.5)
             fig.tight_layout()
             cells.append((name, report.figure(f"sampler_{name}", fig)))
             curves.append((name, freqs, mean))
             low = float(np.nanmean(mean[freqs <= 0.5 * np.sqrt(n)]))
-            rows.append((name, n, realizations, seconds, float(rho.mean()),
-                         float(np.nanmean(aniso[len(aniso) // 4:])), f"{low:.3g}"))
-            data[name] = {"n": n, "realizations": realizations, "seconds": seconds,
+            rows.append((name, n if sampler.needs_n else f"{size:.0f} (maximal)", realizations,
+                         seconds, float(rho.mean()), float(np.nanmean(aniso[len(aniso) // 4:])),
+                         f"{low:.3g}"))
+            data[name] = {"n": size, "realizations": realizations, "seconds": seconds,
                           "params": params, "rho": rho, "radial_mean": mean, "frequencies": freqs,
                           "anisotropy_db": aniso}
         except Exception as error:  # one sampler failing leaves the others in the report
@@ -252,7 +270,7 @@ def section_samplers(report, quick):
             data[name] = {"error": traceback.format_exc()}
     fig, ax = plt.subplots(figsize=(8, 4.5))
     for name, freqs, mean in curves:
-        plots.plot_radial_mean(ax, freqs, mean, n=n).set_label(name)
+        plots.radial_mean(ax, freqs, mean, n=n).set_label(name)
     ax.set_ylim(0, 2.5)
     ax.legend(fontsize=8, ncol=2)
     ax.set_title(f"radial means of expected spectra (n = {n}, {realizations} realizations)")
@@ -261,7 +279,9 @@ def section_samplers(report, quick):
             "periodogram over the sets (exact, <code>method='direct'</code>), DC at the centre. "
             "&rho; is the relative radius (minimum toroidal distance over the hexagonal packing's, "
             "Lagae &amp; Dutr&eacute; 2008); the low-frequency power is the radial mean below "
-            "2&nu;/&radic;N = 1 (white noise: 1; blue noise: near 0).</p>")
+            "2&nu;/&radic;N = 1 (white noise: 1; blue noise: near 0). Poisson disk makes "
+            f"maximal sets at radius {MAXIMAL_RHO} d<sub>max</sub>(n), each of its own size; "
+            "their spectrum is the mean of the sets' periodograms.</p>")
     body += _table(("sampler", "n", "sets", "seconds", "ρ (mean)", "anisotropy dB (mean)",
                     "low-freq. power"), rows)
     body += _img(overlay, "radial means of all samplers", 700)
@@ -300,7 +320,6 @@ def section_convergence(report, quick):
     """MSE against N for a smooth and a discontinuous integrand, rates against theory."""
     from . import theory
     from .convergence import convergence
-    from .plots import convergence_plot
     samplers, integrands, sweeps = tour_convergence_plan(quick)
     results, rows, data = [], [], {}
     for integrand in integrands:
@@ -323,15 +342,17 @@ def section_convergence(report, quick):
                 rows.append((name, integrand, "-", "-", "-", "-", f"failed: {error}", "-", "-"))
                 data[label] = {"error": traceback.format_exc()}
     report.results["convergence"] = results
-    picture = convergence_plot(results, report.out / "img" / "convergence.png")
+    picture = plots.convergence(results, report.out / "img" / "convergence.png")
     body = ("<p>Each point: the given number of realizations (sets), each shifted by its own "
             "random toroidal vector (homogenization: the estimator is unbiased); MSE of the "
             "estimate of the integral of a wrapped Gaussian (smooth: the best case) and of a disk "
             "(discontinuous: the worst case). The optimizers (CCVT at 64 density points per site) "
             "run shorter sweeps. The slope is a weighted log-log fit over the larger half of the "
             "sweep, &plusmn; its standard error; it <span class='matches'>matches</span> the "
-            "published rate (Pilleboue et al. 2015; Owen 1997 for scrambled nets) when within "
-            "three standard errors plus 0.15 for pre-asymptotic curvature.</p>")
+            "published rate (Pilleboue et al. 2015; Owen 1997 for scrambled nets) within three "
+            "standard errors, is <span class='pre-asymptotic'>pre-asymptotic</span> within "
+            "three standard errors plus 0.15 (the curvature a finite sweep leaves), and "
+            "<span class='differs'>differs</span> beyond; the verdict says how far.</p>")
     headers = ("sampler", "integrand", "N range, sets", "case", "fitted slope", "theory", "verdict",
                "MSE at largest N", "seconds")
     verdict_column = headers.index("verdict")
@@ -367,7 +388,7 @@ def section_render(report, quick):
     ref = rendering.reference(scene, resolution=resolution, spp=2048 if quick else 8192,
                               progress=False)
     report.exr("render_reference", ref, {"scene": scene.name, "sampler": "random (reference)"})
-    rows, data, cells, timings = [], {}, [], []
+    rows, data, cells, timings, images = [], {}, [], [], {}
     cells.append(("reference", report.png("render_reference", ref)))
     for name, params in TOUR_RENDER_SAMPLERS:
         try:
@@ -382,6 +403,7 @@ def section_render(report, quick):
             report.exr(f"render_{safe}", image, {"scene": scene.name, "sampler": name, "spp": spp,
                                                  "seed": 4})
             cells.append((f"{name}: MSE {metrics['mse']:.3g}", report.png(f"render_{safe}", image)))
+            images[name] = image
             rows.append((name, spp, metrics["mse"], metrics["psnr"], metrics["ssim"], seconds))
             data[name] = {"spp": spp, "seconds": seconds, "params": params, **metrics}
             timings.append((name, seconds, metrics["mse"]))
@@ -396,6 +418,10 @@ def section_render(report, quick):
             "padded pairwise with random permutations, as pbrt pads; expensive samplers reuse a "
             "pool of realizations with a per-pixel random toroidal shift.</p>")
     body += _table(("sampler", "spp", "MSE", "PSNR dB", "SSIM", "seconds"), rows)
+    if images:
+        side = plots.render_comparison(report.out / "img" / "render_comparison.png", ref, images,
+                                       columns=len(images) + 1)
+        body += _img(side.relative_to(report.out).as_posix(), "renders beside the reference", 1100)
     body += "<div class='grid'>" + "".join(
         f"<div class='cell'>{_img(src, label, 220)}<br>{html.escape(label)}</div>" for label, src in cells)
     body += "</div>"

@@ -14,6 +14,16 @@ from .errors import InvalidArgumentError
 MAX_UINT32 = 2**32 - 1
 
 
+def plain(value):
+    """``value`` as a message shows it: NumPy scalars as the Python numbers they hold
+    (``0.25``, not ``np.float64(0.25)``), arrays as lists, anything else as ``repr``."""
+    if isinstance(value, np.generic):
+        value = value.item()
+    elif isinstance(value, np.ndarray):
+        value = value.tolist()
+    return repr(value)
+
+
 def check_int(value, name, minimum=None, maximum=None):
     """Return ``value`` as a Python int, or raise naming ``name``.
 
@@ -21,7 +31,7 @@ def check_int(value, name, minimum=None, maximum=None):
     the caller more often than a request for four points).
     """
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
-        raise InvalidArgumentError(f"'{name}' must be an integer, got {value!r}")
+        raise InvalidArgumentError(f"'{name}' must be an integer, got {plain(value)}")
     value = int(value)
     if minimum is not None and value < minimum:
         raise InvalidArgumentError(f"'{name}' must be an integer >= {minimum}, got {value}")
@@ -43,7 +53,7 @@ def check_seed(seed):
 def check_real(value, name, minimum=None, maximum=None, open_minimum=False, open_maximum=False):
     """Return ``value`` as a finite float within the given bounds, or raise naming ``name``."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        raise InvalidArgumentError(f"'{name}' must be a real number, got {value!r}")
+        raise InvalidArgumentError(f"'{name}' must be a real number, got {plain(value)}")
     value = float(value)
     if not np.isfinite(value):
         raise InvalidArgumentError(f"'{name}' must be finite, got {value}")
@@ -60,8 +70,27 @@ def check_choice(value, name, choices):
     """``value`` must be one of ``choices``; the message lists them."""
     if value not in choices:
         listed = ", ".join(repr(c) for c in choices)
-        raise InvalidArgumentError(f"'{name}' must be one of {listed}; got {value!r}")
+        raise InvalidArgumentError(f"'{name}' must be one of {listed}; got {plain(value)}")
     return value
+
+
+def point_sets(points, name="points", d=None):
+    """The sets of a list of point arrays of different sizes, or None for anything else.
+
+    ``[a_0, a_1, ...]`` with each ``a_k`` an (n_k, d) array (``sample_sets`` output: maximal
+    Poisson-disk sets) gives the list of the validated (n_k, d) float64 arrays, all of one
+    d. A nested list of numbers (one set written out) is not such a list.
+    """
+    if not (isinstance(points, (list, tuple)) and points
+            and all(isinstance(p, np.ndarray) or _is_device_array(p) for p in points)
+            and all(p.ndim == 2 for p in points)):
+        return None
+    sets = [check_points(p, f"{name}[{k}]", d=d, allow_batch=False)[0][0]
+            for k, p in enumerate(points)]
+    dims = {s.shape[1] for s in sets}
+    if len(dims) > 1:
+        raise InvalidArgumentError(f"'{name}' sets must share one dimension, got {sorted(dims)}")
+    return sets
 
 
 def _is_device_array(value):
@@ -127,7 +156,7 @@ def check_points(points, name="points", d=None, allow_batch=True, keep_device=Fa
     else:
         batch = np.ascontiguousarray(batch, dtype=np.float64)
         bad = 0 if np.all(np.isfinite(batch)) else 1
-        lo, hi = (batch.min(), batch.max()) if not bad else (0.0, 0.0)
+        lo, hi = (float(batch.min()), float(batch.max())) if not bad else (0.0, 0.0)
     if bad:
         raise InvalidArgumentError(f"'{name}' contains NaN or infinite values")
     if lo < 0.0 or hi >= 1.0:

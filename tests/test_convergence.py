@@ -229,11 +229,11 @@ def test_pareto_front_and_time_to_mse():
 
 
 def test_plots_and_to_dict(tmp_path):
-    from clsamp.plots import convergence_plot, pareto_plot
+    from clsamp import plots
     a = run("random", "gaussian", [16, 64, 256], 20)
     b = run("jittered", "disk", [16, 64, 256], 20)
-    assert convergence_plot([a, b], tmp_path / "c.png").stat().st_size > 1000
-    assert pareto_plot([a, b], tmp_path / "t.png").stat().st_size > 1000
+    assert plots.convergence([a, b], tmp_path / "c.png").stat().st_size > 1000
+    assert plots.accuracy_time([a, b], tmp_path / "t.png").stat().st_size > 1000
     d = json.loads(json.dumps(a.to_dict(errors=True)))
     assert d["ns"] == [16, 64, 256] and len(d["errors"][0]) == 20 and d["kind"] == "random"
     assert np.allclose(a.seconds_per_estimate, a.seconds / 20)
@@ -280,7 +280,8 @@ def test_cli_writes_plot_and_json(tmp_path):
     assert (tmp_path / "conv.png").stat().st_size > 1000 and (tmp_path / "conv_time.png").exists()
     doc = json.loads((tmp_path / "conv.json").read_text())
     assert len(doc["results"]) == 6 and doc["ns"] == [16, 64, 256, 1024]
-    assert doc["results"][0]["comparison"]["verdict"].split()[0] in ("matches", "differs", "unknown")
+    assert doc["results"][0]["comparison"]["verdict"].split()[0] in ("matches", "pre-asymptotic",
+                                                                      "differs", "unknown")
     assert "sobol:owen" in out.stdout
     bad = subprocess.run([sys.executable, "-m", "clsamp", "convergence", "--samplers", "jittered",
                           "--ns", "8", "-o", str(tmp_path / "x.png")],
@@ -324,3 +325,37 @@ def test_the_table_in_the_theory_docstring_is_what_the_samplers_say():
         s = clsamp.make_sampler(name, d=2)
         assert theory.expected_rate(s, "best")[0] == float(best), name
         assert theory.expected_rate(s, "worst")[0] == float(worst), name
+
+
+class _Fit:
+    """A stand-in result: a given fit against the disk (worst case) of a sampler kind."""
+
+    def __init__(self, kind, slope, stderr):
+        self.kind, self.sampler, self._fit = kind, kind, (slope, stderr)
+        self.traits, self.d, self.rates = {"smooth": False, "edges": "curved"}, 2, {}
+
+    def rate(self):
+        return self._fit
+
+
+@pytest.mark.parametrize("slope, stderr, word", [
+    (-1.05, 0.04, "matches"),            # 1.25 sigma
+    (-1.15, 0.04, "pre-asymptotic"),     # 3.75 sigma, within 3 sigma + 0.15
+    (-1.30, 0.04, "differs"),            # 7.5 sigma
+    (-0.75, 0.02, "differs"),             # 12.5 sigma, beyond 3 sigma + 0.15
+])
+def test_the_verdict_says_how_far(slope, stderr, word):
+    cmp = theory.compare(_Fit("poisson_disk", slope, stderr))
+    assert cmp["verdict"].split()[0] == word
+    assert cmp["distance"] == pytest.approx(slope + 1.0)
+    assert cmp["sigmas"] == pytest.approx(abs(slope + 1.0) / stderr)
+    side = "steeper" if slope < -1 else "shallower"
+    assert f"{abs(slope + 1.0):.2f} {side} than N^-1" in cmp["verdict"]
+    assert f"{cmp['sigmas']:.1f} standard errors" in cmp["verdict"]
+
+
+def test_a_result_prints_in_two_lines():
+    res = run("jittered", "disk", [16, 64, 256], 200)
+    text = repr(res)
+    assert text.count("\n") == 1 and len(text) < 300
+    assert "jittered" in text and "disk" in text and "N = 16..256" in text and "theory N^-1.5" in text

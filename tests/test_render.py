@@ -273,8 +273,9 @@ def test_compare_uses_scikit_image_metrics():
 def test_exr_round_trip_with_header_and_png_preview(tmp_path):
     scene = Scene.from_file("ao")
     image = rendering.render(scene, "jittered", 16, 8, seed=5, progress=False)
-    path = rendering.save(tmp_path / "ao.exr", image, "jittered", 16, 5, scene=scene)
-    back, header = io.read_exr(path, with_header=True)
+    exr, png = rendering.save(tmp_path / "ao.exr", image, "jittered", 16, 5, scene=scene)
+    assert (exr, png) == (tmp_path / "ao.exr", tmp_path / "ao.png")
+    back, header = io.read_exr(exr, with_header=True)
     np.testing.assert_array_equal(back, image)
     assert {k: str(header[k]) for k in ("sampler", "spp", "seed", "scene")} == {
         "sampler": "jittered", "spp": "16", "seed": "5", "scene": "ao"}

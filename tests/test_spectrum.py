@@ -256,10 +256,10 @@ def test_pictures(tmp_path, medium2):
     plots.save_spectrum_png(tmp_path / "log.png", P, scale="log")
     plots.save_spectrum_exr(tmp_path / "s.exr", P)
     back = io.read_exr(tmp_path / "s.exr")
-    assert np.allclose(back, P.T.astype(np.float32))
+    assert np.allclose(back, P.T[::-1].astype(np.float32))             # +y up, as the PNG
     image = plots.spectrum_image(P)
-    assert image.shape == (64, 64) and image[32, 32] == 1.0 and image.min() >= 0
-    figure = plots.save_spectrum_plots(tmp_path / "plots.png", P, n=1000, realizations=4, label="white")
+    assert image.shape == (64, 64) and image[31, 32] == 1.0 and image.min() >= 0
+    figure = plots.spectrum_figure(tmp_path / "plots.png", P, n=1000, realizations=4, label="white")
     assert figure.stat().st_size > 1000
 
 
