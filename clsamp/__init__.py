@@ -10,7 +10,7 @@ See README.md for a tour and ``clsamp --help`` for the command line.
 
 # clsamp.render is the module (its function is clsamp.render.render); clsamp.convergence is the
 # function, while `from clsamp.convergence import x` still reads the module.
-from . import integrands, plots, render, theory
+from . import integrands, metrics, plots, render, theory
 from .convergence import convergence
 from .errors import (
                      BuildError,
@@ -20,6 +20,7 @@ from .errors import (
                      NoDeviceError,
                      SamplingError,
 )
+from .metrics import StarBounds, discrepancy, nearest_neighbor_distances, pair_correlation, star_discrepancy
 from .runtime import current_device, devices, use_device
 from .samplers import Rate, SampleInfo, Sampler, as_qmc_engine, make_sampler, sampler_names
 from .spectrum import anisotropy, power_spectrum, radial_mean
@@ -28,8 +29,9 @@ __version__ = "0.1.0"
 
 __all__ = [
     "BuildError", "ClsampError", "DeviceMemoryError", "InvalidArgumentError", "NoDeviceError",
-    "Rate", "SampleInfo", "SamplingError", "Sampler", "anisotropy", "as_qmc_engine",
-    "convergence", "current_device", "devices", "integrands", "make_sampler", "plots", "render",
-    "theory",
-    "power_spectrum", "radial_mean", "sampler_names", "use_device",
+    "Rate", "SampleInfo", "SamplingError", "Sampler", "StarBounds", "anisotropy",
+    "as_qmc_engine", "convergence", "current_device", "devices", "discrepancy", "integrands",
+    "make_sampler", "metrics", "nearest_neighbor_distances", "pair_correlation", "plots",
+    "power_spectrum", "radial_mean", "render", "sampler_names", "star_discrepancy", "theory",
+    "use_device",
 ]

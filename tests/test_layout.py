@@ -18,7 +18,7 @@ LAYERS = [
     ("core", {"errors", "validation", "runtime", "philox", "number_theory", "permutation", "io"}),
     ("geometry", {"geometry"}),
     ("samplers", {"samplers"}),
-    ("analysis", {"spectrum", "point_metrics"}),
+    ("analysis", {"spectrum", "point_metrics", "metrics"}),
     ("experiments", {"integrands", "convergence", "theory"}),
     ("render", {"scene", "render"}),
     ("report", {"plots", "tour", "cli", "__main__", "__init__"}),

@@ -1,0 +1,18 @@
+"""Figures of point sets beyond the spectrum: L2-type discrepancies, the exact star
+discrepancy (and certified bounds), the pair correlation function and nearest-neighbour
+distances."""
+
+from .l2 import METHODS, discrepancy, discrepancy_reference
+from .neighbors import mean_spacing, nearest_neighbor_distances, nearest_neighbor_reference, pair_correlation
+from .star import (
+                   StarBounds,
+                   star_bounds,
+                   star_discrepancy,
+                   star_discrepancy_brute,
+                   star_discrepancy_reference,
+)
+
+__all__ = ["METHODS", "discrepancy", "discrepancy_reference", "mean_spacing",
+           "nearest_neighbor_distances", "nearest_neighbor_reference", "pair_correlation",
+           "StarBounds", "star_bounds", "star_discrepancy", "star_discrepancy_brute",
+           "star_discrepancy_reference"]

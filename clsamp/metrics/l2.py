@@ -1,0 +1,226 @@
+"""L2-type discrepancies of point sets, in closed form over pairs of points.
+
+For n points x_i in [0, 1)^d each discrepancy here is
+
+    D^2 = c0 + c1 / n * sum_i prod_k f(x_ik) + c2 / n^2 * sum_i sum_j prod_k g(x_ik, x_jk),
+
+an O(n^2 d) sum computed in OpenCL (``kernels/discrepancy.cl``), with every sum added
+without rounding error on the host (``math.fsum`` of compensated partial sums), so that
+the cancellation between the three terms costs no more than the terms' own rounding.
+The NumPy reference (``backend="numpy"``) evaluates the same formulas in blocks.
+"""
+
+import math
+from fractions import Fraction
+
+import numpy as np
+
+from .. import runtime
+from ..errors import InvalidArgumentError
+from ..validation import check_choice, check_points, point_sets
+
+METHODS = ("CD", "WD", "MD", "L2-star", "symmetric", "L2")
+BACKENDS = ("opencl", "numpy")
+ROOTED = {"L2-star", "symmetric", "L2"}      # these are returned as D, the others as D^2
+ROW_VECTORS = {"L2-star": 2}                 # RV: row vectors of four per work-item (1 else)
+_CODES = {m: k for k, m in enumerate(METHODS)}
+
+
+def _constants(method, d, n):
+    """(c0, c1 / n, c2 / n^2) of the method, exact rationals."""
+    n = Fraction(n)
+    if method == "CD":
+        return Fraction(13, 12) ** d, Fraction(-2) / n, 1 / n**2
+    if method == "WD":
+        return -Fraction(4, 3) ** d, Fraction(0), 1 / n**2
+    if method == "MD":          # f is kept three times larger: 5/3 is not a double
+        return Fraction(19, 12) ** d, Fraction(-2) / n / 3**d, 1 / n**2
+    if method == "L2-star":
+        return Fraction(1, 3) ** d, -Fraction(2) ** (1 - d) / n, 1 / n**2
+    if method == "symmetric":
+        return Fraction(4, 3) ** d, Fraction(-2) / n, Fraction(2) ** d / n**2
+    return Fraction(1, 12) ** d, -Fraction(2) ** (1 - d) / n, 1 / n**2       # L2 (unanchored)
+
+
+def _terms(method, x, y=None):
+    """f(x) per coordinate (y None) or g(x, y) per coordinate pair, broadcast (NumPy), in
+    the forms that round least (the kernel's: see the note in kernels/discrepancy.cl)."""
+    if y is None:
+        a = np.abs(x - 0.5)
+        if method == "CD":
+            return 1.0 + 0.5 * a - 0.5 * a * a
+        if method == "WD":
+            return np.ones_like(x)
+        if method == "MD":
+            return 5.0 - 0.75 * a - 0.75 * a * a           # 3 f
+        if method == "L2-star":
+            return 1.0 - x * x
+        if method == "symmetric":
+            return 1.0 + 2.0 * x - 2.0 * x * x
+        return x * (1.0 - x)
+    if method == "CD":          # 1 + a_i/2 + a_j/2 - |x_i - x_j|/2
+        same = (x < 0.5) == (y < 0.5)
+        return 1.0 + np.where(same, np.minimum(np.abs(x - 0.5), np.abs(y - 0.5)), 0.0)
+    delta = np.abs(x - y)
+    if method == "WD":
+        return 1.5 - delta + delta * delta
+    if method == "MD":
+        return (1.875 - 0.25 * np.abs(x - 0.5) - 0.25 * np.abs(y - 0.5) - 0.75 * delta
+                + 0.5 * delta * delta)
+    if method == "L2-star":
+        return 1.0 - np.maximum(x, y)
+    if method == "symmetric":
+        return 1.0 - delta
+    return np.minimum(x, y) * (1.0 - np.maximum(x, y))         # min(x, y) - x y
+
+
+def _exact_sum(values):
+    """The sum of ``values`` as an exact rational of two doubles: fsum's correctly rounded
+    sum and the correctly rounded remainder (together within an ulp of the remainder)."""
+    values = np.asarray(values, dtype=np.float64).ravel().tolist()
+    hi = math.fsum(values)
+    lo = math.fsum(values + [-hi])
+    return Fraction(hi) + Fraction(lo)
+
+
+def _combine(method, d, n, single, pairs):
+    """The discrepancy from the two sums of the formula (each given as a list of floats
+    whose exact sum it is), combined in exact rational arithmetic and rounded once."""
+    c0, c1, c2 = _constants(method, d, n)
+    value = float(c0 + c1 * _exact_sum(single) + c2 * _exact_sum(pairs))
+    if method in ROOTED:
+        return math.sqrt(value) if value >= 0.0 else float("nan")
+    return value
+
+
+def discrepancy_reference(points, method="CD"):
+    """NumPy twin of :func:`discrepancy` for one set (n, d): the same formulas, the pair
+    sum in blocks of rows, each row summed by NumPy and the rows added exactly."""
+    n, d = points.shape
+    single = np.prod(_terms(method, points), axis=1)
+    pairs = []
+    step = max(1, (1 << 22) // max(1, n * d))
+    for lo in range(0, n, step):
+        block = np.prod(_terms(method, points[lo:lo + step, None, :], points[None, :, :]), axis=2)
+        pairs.extend(np.sum(block, axis=1))
+    return _combine(method, d, n, single, pairs)
+
+
+def _device_sums(batch, method):
+    """Per realization: (the per-point products (r, n), the row blocks' pair sums as
+    (hi, lo) pairs (r, nb, 2)). Each set is sorted by its first coordinate first (the
+    kernel's SORT0: the first factor in its cheaper form)."""
+    import pyopencl.array as cla
+    runtime.require_fp64()
+    q = runtime.queue()
+    r, n, d = batch.shape
+    rv = ROW_VECTORS.get(method, 1)
+    npad = -(-n // (4 * rv)) * 4 * rv
+    order = np.argsort(batch[:, :, 0], axis=1, kind="stable")
+    points = runtime.to_device(np.take_along_axis(batch, order[:, :, None], axis=1))
+    defines = {"METHOD": _CODES[method], "D": d, "RV": rv, "SORT0": 1}
+    options = ("-cl-mad-enable",)
+    xr, ur, xc, vc = (cla.empty(q, (r, d, npad), np.float64) for _ in range(4))
+    f = cla.empty(q, (r, npad), np.float64)
+    valid = runtime.table(("discrepancy valid", n, npad),
+                          lambda: (np.arange(npad) < n).astype(np.float64), np.float64)
+    local = runtime.local_size(64)
+    runtime.kernel("discrepancy.cl", "discrepancy_prepare", defines, options)(
+        q, (-(-npad // local) * local, r), (local, 1), points.data, np.uint32(n),
+        np.uint32(npad), xr.data, ur.data, xc.data, vc.data, f.data)
+    nb = npad // (4 * rv)
+    items = -(-nb // 2)
+    out = cla.empty(q, (r, nb, 2), np.float64)
+    runtime.kernel("discrepancy.cl", "discrepancy_pairs", defines, options)(
+        q, (items, r), None, xr.data, ur.data, xc.data, vc.data, valid.data, np.uint32(n),
+        np.uint32(npad), np.uint32(nb), np.uint32(items), out.data)
+    return f.get()[:, :n], out.get()
+
+
+def discrepancy(points, method="CD", backend="opencl"):
+    """The L2-type discrepancy of a point set, as scipy.stats.qmc and UTK define it.
+
+    Parameters
+    ----------
+    points : ndarray or pyopencl.array.Array, (n, d) or (r, n, d), or a list of (n_k, d)
+        Points in [0, 1)^d, n >= 1. A batch (or a list of sets of different sizes) gives
+        one value per set, in one launch for a batch.
+    method : {"CD", "WD", "MD", "L2-star", "symmetric", "L2"}
+        ``"CD"`` centered, ``"WD"`` wrap-around, ``"MD"`` mixture (Hickernell 1998; Zhou
+        et al. 2013), ``"L2-star"`` (Warnock 1972), ``"symmetric"`` (Hickernell 1998),
+        ``"L2"`` the unanchored (extreme) L2 discrepancy (Morokoff and Caflisch 1994).
+    backend : {"opencl", "numpy"}
+
+    Returns
+    -------
+    float for one set, ndarray (r,) for r sets.
+        As ``scipy.stats.qmc.discrepancy`` returns them: the squared discrepancy for
+        ``"CD"``, ``"WD"`` and ``"MD"``, the discrepancy itself (the square root) for
+        ``"L2-star"``; ``"symmetric"`` and ``"L2"`` the discrepancy itself, as UTK.
+
+    Raises
+    ------
+    InvalidArgumentError
+        An unknown method, or points that are not a set in [0, 1)^d.
+
+    Notes
+    -----
+    Each is an integral over a family of boxes of the squared difference between the
+    fraction of points in the box and its volume, which the kernel's reproducing property
+    turns into the closed form of the module docstring: O(n^2 d) operations, here in
+    OpenCL, each pair once (the pair term is symmetric), four rows against one column per
+    vector operation. The pair terms are written in the forms that round least (for CD,
+    1 + min(|x_i - 1/2|, |x_j - 1/2|) when both coordinates lie on one side of 1/2, else
+    1, exactly the textbook term), summed in double with Neumaier compensation every 64
+    columns, and the partial sums and the constants (exact rationals) are added on the
+    host without rounding. The result is then as accurate as the pair terms allow: a few
+    ulps of the terms, divided by D^2 (for 16384 random points in d = 4, against an
+    extended-precision evaluation: 4e-15 relative for CD, 2e-15 for WD, 0 for L2-star,
+    2e-13 for MD); scipy adds the n^2 terms one by one, which for large n and small D^2
+    costs it digits (3e-8 relative for CD there).
+
+    References
+    ----------
+    .. [1] F. J. Hickernell, "A generalized discrepancy and quadrature error bound",
+       Math. Comp. 67(221), 1998.
+    .. [2] Y.-D. Zhou, K.-T. Fang, J.-H. Ning, "Mixture discrepancy for quasi-random
+       point sets", J. Complexity 29(3-4), 2013.
+    .. [3] T. T. Warnock, "Computational investigations of low discrepancy point sets",
+       Applications of Number Theory to Numerical Analysis, 1972.
+    .. [4] W. J. Morokoff, R. E. Caflisch, "Quasi-random sequences and their
+       discrepancies", SIAM J. Sci. Comput. 15(6), 1994.
+
+    Examples
+    --------
+    >>> import clsamp
+    >>> pts = clsamp.make_sampler("sobol", d=2).sample(256)
+    >>> rnd = clsamp.make_sampler("random", d=2, seed=1).sample(256)
+    >>> bool(clsamp.discrepancy(pts) < clsamp.discrepancy(rnd))
+    True
+    >>> clsamp.discrepancy(rnd[None].repeat(3, axis=0), method="L2-star").shape
+    (3,)
+    """
+    check_choice(method, "method", METHODS)
+    check_choice(backend, "backend", BACKENDS)
+    sets = point_sets(points)
+    if sets is not None:
+        return np.array([discrepancy(s, method, backend) for s in sets])
+    batch, single = check_points(points, "points")
+    r, n, d = batch.shape
+    if backend == "numpy":
+        values = np.array([discrepancy_reference(batch[k], method) for k in range(r)])
+    else:
+        values = np.empty(r)
+        # per realization: the points, four per-point layouts and the products
+        for lo, hi in runtime.chunk_ranges(r, 8 * (n + 8) * (5 * d + 2)):
+            f, pairs = _device_sums(batch[lo:hi], method)
+            values[lo:hi] = [_combine(method, d, n, f[k], pairs[k]) for k in range(hi - lo)]
+    return float(values[0]) if single else values
+
+
+def check_method(method):
+    """``method`` if it is one of :data:`METHODS` (the message lists them)."""
+    if method not in METHODS:
+        raise InvalidArgumentError(
+            f"'method' must be one of {', '.join(repr(m) for m in METHODS)}; got {method!r}")
+    return method

@@ -1,0 +1,41 @@
+/* Points in anchored boxes, for the certified star-discrepancy bounds (star_bounds in
+ * clsamp/metrics/star.py, which needs these counts at millions of box corners; NumPy twin:
+ * anchored_counts_reference there).
+ *
+ * Grid (m4 / 4): counts[c] = #{points p : p_k < corner_k for every k} (STRICT 1) or
+ * p_k <= corner_k (STRICT 0), four corners a work-item; corners (D, m4) coordinate-major,
+ * points (n, D). Comparisons only: the same counts on every device. Build options: D,
+ * STRICT. */
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+
+__kernel void anchored_counts(__global const double *points, const uint n,
+                              __global const double *corners, const uint m4,
+                              __global uint *counts)
+{
+    const uint w = get_global_id(0);
+    if (4 * w >= m4)
+        return;
+    double4 c[D];
+    for (int k = 0; k < D; ++k)
+        c[k] = *(__global const double4 *)(corners + (size_t)k * m4 + 4 * w);
+    long4 count = (long4)(0);
+    for (uint i = 0; i < n; ++i) {
+        __global const double *p = points + (size_t)i * D;
+#if STRICT
+        long4 inside = (double4)(p[0]) < c[0];
+#pragma unroll
+        for (int k = 1; k < D; ++k)
+            inside &= (double4)(p[k]) < c[k];
+#else
+        long4 inside = (double4)(p[0]) <= c[0];
+#pragma unroll
+        for (int k = 1; k < D; ++k)
+            inside &= (double4)(p[k]) <= c[k];
+#endif
+        count -= inside;           /* a true comparison is -1 in every bit */
+    }
+    counts[4 * w] = (uint)count.x;
+    counts[4 * w + 1] = (uint)count.y;
+    counts[4 * w + 2] = (uint)count.z;
+    counts[4 * w + 3] = (uint)count.w;
+}

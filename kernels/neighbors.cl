@@ -1,0 +1,171 @@
+/* Pair statistics of point sets on the unit torus, through a grid of cells
+ * (clsamp/metrics/neighbors.py; NumPy twins there): the Gaussian-smoothed pair-distance
+ * sums of the pair correlation function and the nearest-neighbour distances.
+ *
+ * The points of all realizations come sorted by (realization, cell) in pts (total, D);
+ * cell[i] is the flat cell of sorted point i in a G^D grid and start (r G^D + 1) the first
+ * sorted index of each (realization, cell). With G >= 3 a point meets the points of its
+ * 3^D neighbouring cells (distinct cells); the host passes G = 1 (one cell, every pair)
+ * when the reach is too long for three cells.
+ *
+ * Distances: exactly rounded double operations, no contraction, in the order of
+ * clsamp.geometry.torus.distance2 (as the Poisson-disk kernels): the nearest-neighbour
+ * distances agree with the NumPy twin bit for bit. The smoothing sums use exp: their
+ * bits depend on the device's exp (within a few ulps). Build options: D; NR (radii) for
+ * pcf_sums, UNIFORM (radii r0 + k step) and PPI (points a work-item takes).
+ */
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#pragma OPENCL FP_CONTRACT OFF
+
+inline double torus_delta(const double a, const double b)
+{
+    const double d = a - b;
+    const double t = d < 0.0 ? -d : d;
+    const double u = 1.0 - t;
+    return t < u ? t : u;
+}
+
+inline double distance2(const double *a, __global const double *b)
+{
+    double t = torus_delta(a[0], b[0]);
+    double total = t * t;
+    for (int k = 1; k < D; ++k) {
+        t = torus_delta(a[k], b[k]);
+        total = total + t * t;
+    }
+    return total;
+}
+
+/* the flat index of neighbour o (0 .. 3^D - 1, digits -1, 0, +1) of cell coordinates c,
+ * wrapped on the torus; with G == 1 the one cell */
+inline uint neighbour(const int *c, uint o, const int G)
+{
+    if (G == 1)
+        return 0;
+    uint flat = 0;
+    int digits[D];
+    for (int k = D - 1; k >= 0; --k) {
+        digits[k] = (int)(o % 3) - 1;
+        o /= 3;
+    }
+    for (int k = 0; k < D; ++k) {
+        int v = c[k] + digits[k];
+        v = v < 0 ? v + G : v >= G ? v - G : v;
+        flat = flat * (uint)G + (uint)v;
+    }
+    return flat;
+}
+
+inline void cell_coordinates(uint flat, const int G, int *c)
+{
+    for (int k = D - 1; k >= 0; --k) {
+        c[k] = (int)(flat % (uint)G);
+        flat /= (uint)G;
+    }
+}
+
+#ifdef NR
+/* Grid (items, realizations). For the points [w PPI, (w + 1) PPI) of a realization and
+ * every partner after them in sorted order (each unordered pair once) within reach:
+ * out[r][w][k] += exp(-(radius_k - s)^2 / (2 sigma^2)) for the radii with
+ * |radius_k - s| <= cut (s the pair's distance). UNIFORM radii take the Gaussian along
+ * k by a recurrence (three exp a pair, not one a radius). */
+__kernel void pcf_sums(__global const double *pts, __global const uint *cell,
+                       __global const uint *start, const uint n, const int G, const uint noff,
+                       const double reach2, __global const double *radii, const double r0,
+                       const double step, const double inv2s2, const double cut,
+                       const uint items, __global double *out)
+{
+    const uint w = get_global_id(0), r = get_global_id(1);
+    if (w >= items)
+        return;
+    double hist[NR];
+    for (int k = 0; k < NR; ++k)
+        hist[k] = 0.0;
+    const uint cells = (uint)G;
+    uint total_cells = 1;
+    for (int k = 0; k < D; ++k)
+        total_cells *= cells;
+    const size_t base = (size_t)r * n;
+    const uint stop = (w + 1) * PPI < n ? (w + 1) * PPI : n;
+    for (uint i = w * PPI; i < stop; ++i) {
+        const size_t gi = base + i;
+        double x[D];
+        for (int k = 0; k < D; ++k)
+            x[k] = pts[gi * D + k];
+        int c[D];
+        cell_coordinates(cell[gi], G, c);
+        for (uint o = 0; o < noff; ++o) {
+            const size_t slot = (size_t)r * total_cells + neighbour(c, o, G);
+            const uint s1 = start[slot + 1];
+            for (uint j = start[slot]; j < s1; ++j) {
+                if (j <= gi)
+                    continue;
+                const double d2 = distance2(x, pts + (size_t)j * D);
+                if (d2 >= reach2)
+                    continue;
+                const double s = sqrt(d2);
+#if UNIFORM
+                const double lo = ceil((s - cut - r0) / step), hi = floor((s + cut - r0) / step);
+                const int k0 = lo < 0.0 ? 0 : (int)lo;
+                const int k1 = hi > (double)(NR - 1) ? NR - 1 : (int)hi;
+                if (k0 > k1)
+                    continue;
+                const double t = (r0 + (double)k0 * step) - s;
+                double e = exp(-(t * t) * inv2s2);
+                double a = exp(-(2.0 * t * step + step * step) * inv2s2);
+                const double b = exp(-2.0 * step * step * inv2s2);
+                for (int k = k0; k <= k1; ++k) {
+                    hist[k] += e;
+                    e *= a;
+                    a *= b;
+                }
+#else
+                for (int k = 0; k < NR; ++k) {
+                    const double t = radii[k] - s;
+                    if (t <= cut && t >= -cut)
+                        hist[k] += exp(-(t * t) * inv2s2);
+                }
+#endif
+            }
+        }
+    }
+    __global double *row = out + ((size_t)r * items + w) * NR;
+    for (int k = 0; k < NR; ++k)
+        row[k] = hist[k];
+}
+#endif
+
+/* Grid (total points): d2[i] = the smallest squared distance from sorted point i to
+ * another point of its realization in the 3^D neighbouring cells (every point when
+ * G == 1), or INFINITY if there is none. Exact whenever it is at most (1 / G)^2: every
+ * point farther than two cells is farther than one cell width. */
+__kernel void nearest_neighbor(__global const double *pts, __global const uint *cell,
+                               __global const uint *start, const uint n, const uint total,
+                               const int G, const uint noff, __global double *d2)
+{
+    const uint gi = get_global_id(0);
+    if (gi >= total)
+        return;
+    const uint r = gi / n;
+    uint total_cells = 1;
+    for (int k = 0; k < D; ++k)
+        total_cells *= (uint)G;
+    double x[D];
+    for (int k = 0; k < D; ++k)
+        x[k] = pts[(size_t)gi * D + k];
+    int c[D];
+    cell_coordinates(cell[gi], G, c);
+    double best = INFINITY;
+    for (uint o = 0; o < noff; ++o) {
+        const size_t slot = (size_t)r * total_cells + neighbour(c, o, G);
+        const uint s1 = start[slot + 1];
+        for (uint j = start[slot]; j < s1; ++j) {
+            if (j == gi)
+                continue;
+            const double v = distance2(x, pts + (size_t)j * D);
+            best = v < best ? v : best;
+        }
+    }
+    d2[gi] = best;
+}

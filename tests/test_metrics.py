@@ -1,0 +1,330 @@
+"""clsamp.metrics: L2-type discrepancies, the star discrepancy, the pair correlation
+function and nearest-neighbour distances, against exact rationals, scipy, brute force,
+their NumPy twins and the patterns whose values are known."""
+
+import math
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+import clsamp
+from clsamp.errors import InvalidArgumentError
+from clsamp.metrics import l2, neighbors, star
+from clsamp.point_metrics import min_distance
+
+qmc = pytest.importorskip("scipy.stats.qmc")
+
+SCIPY_METHODS = ("CD", "WD", "MD", "L2-star")
+HALF = Fraction(1, 2)
+
+
+# -- discrepancies ----------------------------------------------------------------------
+
+
+def _exact_terms(method, a, b=None):
+    """The textbook f(a) or g(a, b) of each method, in rationals."""
+    if b is None:
+        c = abs(a - HALF)
+        return {"CD": 1 + c / 2 - c * c / 2, "WD": Fraction(1),
+                "MD": Fraction(5, 3) - c / 4 - c * c / 4, "L2-star": 1 - a * a,
+                "symmetric": 1 + 2 * a - 2 * a * a, "L2": a * (1 - a)}[method]
+    t = abs(a - b)
+    return {"CD": 1 + abs(a - HALF) / 2 + abs(b - HALF) / 2 - t / 2,
+            "WD": Fraction(3, 2) - t + t * t,
+            "MD": Fraction(15, 8) - abs(a - HALF) / 4 - abs(b - HALF) / 4 - 3 * t / 4 + t * t / 2,
+            "L2-star": 1 - max(a, b), "symmetric": 1 - t, "L2": min(a, b) - a * b}[method]
+
+
+def exact_discrepancy(points, method):
+    """D^2 in rational arithmetic from the textbook formulas (Hickernell 1998; Warnock
+    1972; Zhou et al. 2013; UTK's symmetric and unanchored forms)."""
+    n, d = points.shape
+    rows = [[Fraction(v) for v in row] for row in points]
+    single = sum(math.prod(_exact_terms(method, a) for a in row) for row in rows)
+    pairs = sum(math.prod(_exact_terms(method, a, b) for a, b in zip(p, q, strict=True))
+                for p in rows for q in rows)
+    c0 = {"CD": Fraction(13, 12) ** d, "WD": -Fraction(4, 3) ** d, "MD": Fraction(19, 12) ** d,
+          "L2-star": Fraction(1, 3) ** d, "symmetric": Fraction(4, 3) ** d,
+          "L2": Fraction(1, 12) ** d}[method]
+    c1 = {"WD": 0, "L2-star": -Fraction(2) ** (1 - d), "L2": -Fraction(2) ** (1 - d)}.get(method, -2)
+    c2 = Fraction(2) ** d if method == "symmetric" else Fraction(1)
+    return c0 + c1 * single / n + c2 * pairs / n**2
+
+
+@pytest.mark.parametrize("method", l2.METHODS)
+@pytest.mark.parametrize("n,d", [(1, 3), (2, 1), (9, 2), (23, 3), (40, 4), (17, 6)])
+def test_discrepancy_equals_exact_rationals(method, n, d):
+    x = np.random.default_rng(n * 10 + d).random((n, d))
+    exact = exact_discrepancy(x, method)
+    want = math.sqrt(exact) if method in l2.ROOTED else float(exact)
+    for backend in ("opencl", "numpy"):
+        got = clsamp.discrepancy(x, method, backend=backend)
+        assert got == pytest.approx(want, rel=1e-13, abs=1e-300), backend
+
+
+def _scipy_tolerance(x, method):
+    """How far scipy's value may be from the exact one: it adds the n^2 pair terms one by
+    one, whose rounding errors grow with the largest of the formula's three terms."""
+    n, d = x.shape
+    c0, c1, c2 = l2._constants(method, d, n)
+    single = float(np.sum(np.prod(l2._terms(method, x), axis=1)))
+    scale = max(abs(float(c0)), abs(float(c1)) * single, abs(float(c0)) + abs(float(c1)) * single)
+    return 16 * n * 2.0**-53 * scale
+
+
+@pytest.mark.parametrize("method", SCIPY_METHODS)
+@pytest.mark.parametrize("d", [1, 2, 3, 4, 5, 6])
+def test_discrepancy_equals_scipy(method, d):
+    rng = np.random.default_rng(d)
+    for n in (7, 64, 1000, 4096):
+        x = rng.random((n, d))
+        ours = clsamp.discrepancy(x, method)
+        theirs = qmc.discrepancy(x, method=method)
+        if method in l2.ROOTED:            # scipy returns the root of L2-star
+            ours, theirs = ours**2, theirs**2
+        assert abs(ours - theirs) <= max(1e-12 * ours, _scipy_tolerance(x, method)), (n, ours, theirs)
+        if n <= 64:                        # where scipy's sum is exact enough: 1e-12
+            assert ours == pytest.approx(theirs, rel=1e-12)
+
+
+@pytest.mark.parametrize("method", l2.METHODS)
+def test_discrepancy_kernel_equals_numpy_twin(method):
+    for n, d in [(4096, 2), (1031, 5), (333, 9)]:
+        x = np.random.default_rng(n).random((n, d))
+        assert clsamp.discrepancy(x, method) == pytest.approx(
+            clsamp.discrepancy(x, method, backend="numpy"), rel=1e-12)
+
+
+def test_discrepancy_batched_equals_looped():
+    x = np.random.default_rng(2).random((5, 301, 3))
+    for method in l2.METHODS:
+        batched = clsamp.discrepancy(x, method)
+        assert batched.shape == (5,)
+        assert np.array_equal(batched, [clsamp.discrepancy(x[k], method) for k in range(5)])
+    sets = [x[0], x[1, :100], x[2, :7]]
+    assert np.array_equal(clsamp.discrepancy(sets, "WD"),
+                          [clsamp.discrepancy(s, "WD") for s in sets])
+
+
+def test_discrepancy_known_values():
+    # 1-D midpoints (2i - 1) / 2n: Warnock's L2-star discrepancy is 1 / (sqrt(12) n)
+    for n in (1, 4, 100, 1000):
+        x = ((2 * np.arange(1, n + 1) - 1) / (2 * n))[:, None]
+        assert clsamp.discrepancy(x, "L2-star") == pytest.approx(1 / (math.sqrt(12) * n), rel=1e-12)
+    # low discrepancy beats random, and Sobol's L2-star falls faster than N^-1/2
+    sobol = clsamp.make_sampler("sobol", d=2)
+    rand = clsamp.make_sampler("random", d=2, seed=4)
+    assert clsamp.discrepancy(sobol.sample(1024)) < clsamp.discrepancy(rand.sample(1024))
+    coarse, fine = (clsamp.discrepancy(sobol.sample(n), "L2-star") for n in (256, 4096))
+    ratio = coarse / fine
+    assert ratio > 8.0                     # 16x the points: N^-1/2 would give 4
+
+
+def test_discrepancy_bad_input():
+    x = np.random.default_rng(0).random((10, 2))
+    with pytest.raises(InvalidArgumentError, match="method"):
+        clsamp.discrepancy(x, "centered")
+    bad = x.copy()
+    bad[3, 1] = np.nan
+    with pytest.raises(InvalidArgumentError, match="points"):
+        clsamp.discrepancy(bad)
+    bad[3, 1] = 1.0
+    with pytest.raises(InvalidArgumentError, match="points"):
+        clsamp.discrepancy(bad)
+    with pytest.raises(InvalidArgumentError, match="points"):
+        clsamp.discrepancy(np.zeros((0, 2)))
+    with pytest.raises(InvalidArgumentError, match="backend"):
+        clsamp.discrepancy(x, backend="cuda")
+
+
+# -- star discrepancy ---------------------------------------------------------------------
+
+
+def _with_ties(x):
+    x = x.copy()
+    if len(x) > 4:
+        x[1, 0] = x[0, 0]
+        x[3, 1] = x[2, 1]
+        x[4] = x[2]
+    return x
+
+
+@pytest.mark.parametrize("d", [2, 3])
+def test_star_discrepancy_equals_brute_force(d):
+    rng = np.random.default_rng(d)
+    for n in (1, 2, 3, 8, 33, 64 if d == 2 else 40):
+        x = _with_ties(rng.random((n, d)))
+        exact = star.star_discrepancy_brute(x)
+        assert clsamp.star_discrepancy(x) == exact
+        assert clsamp.star_discrepancy(x, backend="numpy") == exact
+    h = clsamp.make_sampler("hammersley", d=2).sample(64)
+    assert clsamp.star_discrepancy(h) == star.star_discrepancy_brute(h)
+
+
+def test_star_discrepancy_known_values():
+    # 1-D midpoints: 1/(2n); the n points i/n: 1/n
+    for n in (1, 5, 64, 1000):
+        mid = ((2 * np.arange(1, n + 1) - 1) / (2 * n))[:, None]
+        assert clsamp.star_discrepancy(mid) == pytest.approx(1 / (2 * n), rel=1e-12)
+        assert clsamp.star_discrepancy((np.arange(n) / n)[:, None]) == pytest.approx(1 / n, rel=1e-12)
+    # the centred m x m grid: the closed box up to the last point holds every point but
+    # the last row and column's outer halves are missing: 1/m - 1/(4 m^2)
+    for m in (2, 4, 7, 16):
+        g = (np.stack(np.meshgrid(np.arange(m), np.arange(m)), -1).reshape(-1, 2) + 0.5) / m
+        assert clsamp.star_discrepancy(g) == pytest.approx(1 / m - 1 / (4 * m * m), rel=1e-12)
+
+
+def test_star_bounds_bracket_the_exact_value():
+    rng = np.random.default_rng(7)
+    for d, n in [(2, 50), (2, 300), (3, 60)]:
+        x = rng.random((n, d))
+        exact = clsamp.star_discrepancy(x)
+        lo, hi = clsamp.star_discrepancy(x, bounds=True)
+        assert lo <= exact <= hi
+        b = clsamp.star_discrepancy(x, bounds=True, delta=0.05)
+        assert isinstance(b, clsamp.StarBounds)
+        assert b.lower <= exact <= b.upper <= b.lower + 0.05 + 1e-12
+    x = clsamp.make_sampler("sobol", d=5).sample(256)
+    b = clsamp.star_discrepancy(x, bounds=True, delta=0.3)
+    assert 0 < b.lower <= b.upper <= b.lower + 0.3 + 1e-12
+    assert clsamp.star_discrepancy(x, bounds=True, delta=0.3, backend="numpy") == b
+
+
+def test_delta_partition_covers_the_cube():
+    for d, delta in [(2, 0.1), (3, 0.2), (4, 0.3)]:
+        lo, hi = star.delta_partition(d, delta)
+        assert np.all(np.prod(hi, axis=1) - np.prod(lo, axis=1) <= delta + 1e-15)
+        assert np.sum(np.prod(hi - lo, axis=1)) == pytest.approx(1.0, rel=1e-12)
+        q = np.random.default_rng(d).random((500, d))           # every point in some box
+        inside = np.all((lo[None] <= q[:, None]) & (q[:, None] <= hi[None]), axis=2)
+        assert inside.any(axis=1).all()
+
+
+def test_anchored_counts_kernel_equals_numpy_twin():
+    rng = np.random.default_rng(3)
+    x = rng.random((301, 4))
+    corners = np.concatenate([rng.random((999, 4)), x[:50]])    # corners on points: ties
+    for strict in (True, False):
+        assert np.array_equal(star.anchored_counts(x, corners, strict),
+                              star.anchored_counts_reference(x, corners, strict))
+
+
+def test_star_discrepancy_bad_input():
+    x = np.random.default_rng(0).random((20, 4))
+    with pytest.raises(InvalidArgumentError, match="bounds=True"):
+        clsamp.star_discrepancy(x)
+    with pytest.raises(InvalidArgumentError, match="bounds=True"):
+        clsamp.star_discrepancy(np.random.default_rng(0).random((3000, 3)))
+    with pytest.raises(InvalidArgumentError, match="delta"):
+        clsamp.star_discrepancy(x, bounds=True, delta=0.0)
+    with pytest.raises(InvalidArgumentError, match="bounds"):
+        clsamp.star_discrepancy(x[:, :2], bounds="yes")
+    with pytest.raises(InvalidArgumentError, match="points"):
+        clsamp.star_discrepancy(np.full((4, 2), np.nan))
+
+
+# -- pair correlation ---------------------------------------------------------------------
+
+
+def test_pcf_of_random_points_is_one():
+    for d, n, r in [(1, 512, 32), (2, 2048, 16), (3, 2048, 16)]:
+        pts = clsamp.make_sampler("random", d=d, seed=d).sample(n, realizations=r)
+        radii, g = clsamp.pair_correlation(pts)
+        spacing = neighbors.mean_spacing(n, d)
+        assert radii[-1] == pytest.approx(3 * spacing) and len(radii) == 100
+        # the expected pairs within a smoothing window: Poisson noise of the estimate
+        sigma = 0.05 * spacing
+        surface = 2 * math.pi ** (d / 2) / math.gamma(d / 2) * radii ** (d - 1)
+        pairs = r * n * n * surface * 2.5 * sigma
+        assert np.all(np.abs(g - 1) <= 5 / np.sqrt(pairs) + 1e-3), np.max(np.abs(g - 1) * np.sqrt(pairs))
+        assert abs(np.mean(g[20:]) - 1) < 0.01
+
+
+def test_pcf_kernel_equals_numpy_twin():
+    pts = clsamp.make_sampler("jittered", d=2, seed=1).sample(1024, realizations=3)
+    r1, g1 = clsamp.pair_correlation(pts)
+    r2, g2 = clsamp.pair_correlation(pts, backend="numpy")
+    assert np.array_equal(r1, r2)
+    np.testing.assert_allclose(g1, g2, rtol=1e-12)
+    # irregular radii take the direct Gaussian; a list of sets of different sizes
+    radii = np.array([0.001, 0.01, 0.02, 0.05, 0.07])
+    sets = [pts[0], pts[1, :700]]
+    _, g3 = clsamp.pair_correlation(sets, radii=radii, sigma=0.004)
+    _, g4 = clsamp.pair_correlation(sets, radii=radii, sigma=0.004, backend="numpy")
+    np.testing.assert_allclose(g3, g4, rtol=1e-12)
+
+
+def test_pcf_shows_blue_noise():
+    n = 1024
+    spacing = neighbors.mean_spacing(n, 2)
+    jit = clsamp.make_sampler("jittered", d=2, seed=2).sample(n, realizations=8)
+    radii, g = clsamp.pair_correlation(jit)
+    assert np.all(g[radii < 0.2 * spacing] < 0.5)               # the dip
+    ccvt = clsamp.make_sampler("ccvt", d=2, seed=2).sample(n, realizations=2)
+    radii, g = clsamp.pair_correlation(ccvt)
+    assert np.all(g[radii < 0.6 * spacing] < 0.05)              # an empty disc around each
+    peak = radii[np.argmax(g)]
+    assert g.max() > 2.0 and 0.9 * spacing < peak < 1.25 * spacing
+    # the PCF and the spectrum agree on the spacing: neighbours at a put the first
+    # spectral peak at 1 / a on a square grid, 2 / (sqrt(3) a) on a hexagonal one, and a
+    # CCVT set lies between
+    f, p = clsamp.radial_mean(clsamp.power_spectrum(ccvt, resolution=128))
+    assert 0.95 < f[np.argmax(p)] * peak < 2 / math.sqrt(3)
+    m = 32
+    grid = (np.stack(np.meshgrid(np.arange(m), np.arange(m)), -1).reshape(-1, 2) + 0.5) / m
+    radii, g = clsamp.pair_correlation(grid)
+    f, p = clsamp.radial_mean(clsamp.power_spectrum(grid, resolution=128))
+    assert f[np.argmax(p)] == m and radii[np.argmax(g)] == pytest.approx(1 / m, rel=0.02)
+
+
+def test_pcf_bad_input():
+    x = np.random.default_rng(0).random((100, 2))
+    with pytest.raises(InvalidArgumentError, match="at least 2"):
+        clsamp.pair_correlation(x[:1])
+    with pytest.raises(InvalidArgumentError, match="dimensions"):
+        clsamp.pair_correlation(np.random.default_rng(0).random((100, 4)))
+    with pytest.raises(InvalidArgumentError, match="half the torus"):
+        clsamp.pair_correlation(x, radii=[0.1, 0.49])
+    with pytest.raises(InvalidArgumentError, match="increasing"):
+        clsamp.pair_correlation(x, radii=[0.1, 0.05])
+    with pytest.raises(InvalidArgumentError, match="sigma"):
+        clsamp.pair_correlation(x, sigma=-1.0)
+    with pytest.raises(InvalidArgumentError, match="points"):
+        clsamp.pair_correlation(np.full((10, 2), 1.5))
+
+
+# -- nearest neighbours -------------------------------------------------------------------
+
+
+def test_nearest_neighbors_equal_the_twin_bit_for_bit():
+    rng = np.random.default_rng(5)
+    for d in (1, 2, 3, 4):
+        for n in (2, 3, 60, 2000):
+            x = rng.random((n, d))
+            assert np.array_equal(clsamp.nearest_neighbor_distances(x),
+                                  neighbors.nearest_neighbor_reference(x))
+    # a cluster and a few far points: neighbours beyond the grid's reach
+    x = np.concatenate([0.5 + 1e-3 * rng.random((3000, 2)), rng.random((5, 2))])
+    assert np.array_equal(clsamp.nearest_neighbor_distances(x), neighbors.nearest_neighbor_reference(x))
+
+
+def test_nearest_neighbors_known_sets_and_min_distance():
+    m = 16
+    g = (np.stack(np.meshgrid(np.arange(m), np.arange(m)), -1).reshape(-1, 2) + 0.5) / m
+    assert np.all(clsamp.nearest_neighbor_distances(g) == 1 / m)
+    pd = clsamp.make_sampler("poisson_disk", d=2, seed=1)
+    pts = pd.sample(1000, realizations=3)
+    nn = clsamp.nearest_neighbor_distances(pts)
+    assert nn.shape == (3, 1000)
+    assert np.array_equal(nn.min(axis=1), min_distance(pts))
+    sets = [pts[0], pts[1, :10]]
+    out = clsamp.nearest_neighbor_distances(sets)
+    assert isinstance(out, list) and [len(o) for o in out] == [1000, 10]
+
+
+def test_nearest_neighbors_bad_input():
+    with pytest.raises(InvalidArgumentError, match="at least 2"):
+        clsamp.nearest_neighbor_distances(np.array([[0.5, 0.5]]))
+    with pytest.raises(InvalidArgumentError, match="backend"):
+        clsamp.nearest_neighbor_distances(np.random.default_rng(0).random((5, 2)), backend="gpu")
