@@ -131,20 +131,52 @@ def _run_tour(args):
     return 0
 
 
+def _add_source(p, dimensions="dimension (sampler only; default 2)"):
+    """The arguments of a command that reads points from a sampler or a point file."""
+    p.add_argument("source", help="sampler name (e.g. jittered, sobol:owen) or a point file "
+                   "(.npy, or text)")
+    p.add_argument("-n", type=int, help="points per set (sampler only)")
+    p.add_argument("-d", type=int, default=None, help=dimensions)
+    p.add_argument("--realizations", type=int, default=None,
+                   help="independent sets (sampler only; default one)")
+    p.add_argument("--seed", type=int, default=None, help="sampler seed (sampler only; default 0)")
+    p.add_argument("--param", action="append", metavar="KEY=VALUE",
+                   help="sampler parameter, e.g. --param randomize=owen (repeatable)")
+
+
+def _points_from_source(args):
+    """(points, label) from a sampler name (with -n, -d, ...) or a point file (without)."""
+    from . import io
+    from .samplers import make_sampler, sampler_names
+    source = Path(args.source)
+    is_sampler = args.source.split(":")[0] in sampler_names(aliases=True)
+    looks_like_path = bool(source.suffix) or "/" in args.source or "\\" in args.source
+    if not is_sampler and (source.is_file() or looks_like_path):
+        if not source.is_file():
+            raise InvalidArgumentError(f"'source' {args.source!r}: no such file (and no sampler "
+                                       "of that name)")
+        given = [flag for flag, value in (("-n", args.n), ("-d", args.d),
+                                          ("--realizations", args.realizations),
+                                          ("--seed", args.seed), ("--param", args.param))
+                 if value is not None]
+        if given:
+            raise InvalidArgumentError(
+                f"{', '.join(repr(g) for g in given)} applies to a sampler source, not to the "
+                f"point file {args.source!r}")
+        return io.load_points(source), source.name
+    if args.n is None:
+        raise InvalidArgumentError("'-n' is required when the source is a sampler name")
+    sampler = make_sampler(args.source, d=2 if args.d is None else args.d,
+                           seed=0 if args.seed is None else args.seed, **_parse_params(args.param))
+    return sampler.sample(args.n, realizations=args.realizations), args.source
+
+
 # -- spectrum ------------------------------------------------------------------
 def _add_spectrum(sub):
     p = sub.add_parser("spectrum", help="power spectrum of a sampler's points or of a point file",
                        description="Expected power spectrum (mean periodogram) of a sampler's "
                        "realizations or of points read from a file (text or .npy).")
-    p.add_argument("source", help="sampler name (e.g. jittered, sobol:owen) or a point file "
-                   "(.npy, or text)")
-    p.add_argument("-n", type=int, help="points per set (sampler only)")
-    p.add_argument("-d", type=int, default=None, help="dimension, 1 or 2 (sampler only; default 2)")
-    p.add_argument("--realizations", type=int, default=None,
-                   help="independent sets to average (sampler only; default one)")
-    p.add_argument("--seed", type=int, default=None, help="sampler seed (sampler only; default 0)")
-    p.add_argument("--param", action="append", metavar="KEY=VALUE",
-                   help="sampler parameter, e.g. --param randomize=owen (repeatable)")
+    _add_source(p, "dimension, 1 or 2 (sampler only; default 2)")
     p.add_argument("--resolution", type=int, default=256, help="R: frequencies [-R/2, R/2) (even)")
     p.add_argument("--method", default="auto", choices=("auto", "direct", "fast"))
     p.add_argument("--tol", type=float, default=None, help="error bound of the fast method (x N)")
@@ -161,37 +193,12 @@ def _run_spectrum(args):
     import numpy as np
 
     from . import io, plots, spectrum
-    from .samplers import make_sampler, sampler_names
     output = _output(args.output, (".png", ".exr", ".npy"), "spectrum")
     outputs = [("-o", output)]
     if args.plots:
         outputs.append(("--plots", _output(args.plots, FIGURES, "spectrum", "--plots")))
     _distinct(outputs)
-    source = Path(args.source)
-    is_sampler = args.source.split(":")[0] in sampler_names(aliases=True)
-    looks_like_path = bool(source.suffix) or "/" in args.source or "\\" in args.source
-    if not is_sampler and (source.is_file() or looks_like_path):
-        if not source.is_file():
-            raise InvalidArgumentError(f"'source' {args.source!r}: no such file (and no sampler "
-                                       "of that name)")
-        given = [flag for flag, value in (("-n", args.n), ("-d", args.d),
-                                          ("--realizations", args.realizations),
-                                          ("--seed", args.seed), ("--param", args.param))
-                 if value is not None]
-        if given:
-            raise InvalidArgumentError(
-                f"{', '.join(repr(g) for g in given)} applies to a sampler source, not to the "
-                f"point file {args.source!r}")
-        points = io.load_points(source)
-        label = source.name
-    else:
-        if args.n is None:
-            raise InvalidArgumentError("'-n' is required when the source is a sampler name")
-        sampler = make_sampler(args.source, d=2 if args.d is None else args.d,
-                               seed=0 if args.seed is None else args.seed,
-                               **_parse_params(args.param))
-        points = sampler.sample(args.n, realizations=args.realizations)
-        label = args.source
+    points, label = _points_from_source(args)
     P = spectrum.power_spectrum(points, resolution=args.resolution, method=args.method, tol=args.tol,
                                 backend=args.backend)
     if output.suffix.lower() == ".exr":
@@ -209,6 +216,100 @@ def _run_spectrum(args):
         plots.spectrum_figure(outputs[1][1], P, n=n, realizations=r, label=label, scale=args.scale)
     _wrote([path for _, path in outputs],
            f"the {'x'.join(map(str, P.shape))} spectrum of {r} x {n} points of {label}")
+    return 0
+
+
+# -- metrics -------------------------------------------------------------------
+METRICS = {"cd": "CD", "wd": "WD", "md": "MD", "l2-star": "L2-star", "symmetric": "symmetric",
+           "l2": "L2", "star": "star", "pcf": "pcf", "nn": "nn"}
+
+
+def _add_metrics(sub):
+    p = sub.add_parser("metrics", help="discrepancies, star discrepancy, pair correlation and "
+                       "nearest neighbours of a sampler's points or of a point file",
+                       description="Point-set metrics per set (mean and spread over the sets) "
+                       "as JSON (-o); with pcf also the expected PCF as a figure "
+                       "(<stem>_pcf.png).")
+    _add_source(p)
+    p.add_argument("--metric", default="cd,l2-star,star,pcf",
+                   help=f"comma-separated, of {', '.join(METRICS)} (default cd,l2-star,star,pcf)")
+    p.add_argument("--bounds", action="store_true",
+                   help="star: certified bounds instead of the exact value (any d)")
+    p.add_argument("--backend", default="opencl", choices=("opencl", "numpy"))
+    p.add_argument("-o", "--output", required=True, help="the numbers, .json")
+    p.set_defaults(run=_run_metrics)
+
+
+def _summary(values):
+    import numpy as np
+    values = np.atleast_1d(np.asarray(values, dtype=np.float64))
+    return {"values": values.tolist(), "mean": float(values.mean()),
+            "std": float(values.std(ddof=1)) if len(values) > 1 else 0.0}
+
+
+def _run_metrics(args):
+    import json
+
+    import numpy as np
+
+    from . import io, metrics, plots
+    output = _output(args.output, (".json",), "metrics")
+    wanted = [m.strip().lower() for m in args.metric.split(",") if m.strip()]
+    unknown = [m for m in wanted if m not in METRICS]
+    if unknown or not wanted:
+        raise InvalidArgumentError(f"'--metric' must name some of {', '.join(METRICS)}; got "
+                                   f"{', '.join(map(repr, unknown)) or 'none'}")
+    outputs = [("-o", output)]
+    if "pcf" in wanted:
+        outputs.append(("-o (pcf figure)", output.with_name(output.stem + "_pcf.png")))
+    _distinct(outputs)
+    points, label = _points_from_source(args)
+    batch = points if points.ndim == 3 else points[None]
+    r, n, d = batch.shape
+    document = {"source": label, "n": n, "d": d, "realizations": r, "backend": args.backend,
+                "metrics": {}}
+    for name in wanted:
+        key = METRICS[name]
+        if key in metrics.METHODS:
+            value = metrics.discrepancy(batch, key, backend=args.backend)
+            document["metrics"][key] = {**_summary(value),
+                                        "squared": key in ("CD", "WD", "MD")}
+        elif key == "star":
+            value = metrics.star_discrepancy(batch, bounds=args.bounds, backend=args.backend)
+            if args.bounds:
+                document["metrics"]["star"] = {"bounds": True, "lower": _summary(value[:, 0]),
+                                               "upper": _summary(value[:, 1])}
+            else:
+                document["metrics"]["star"] = {"bounds": False, **_summary(value)}
+        elif key == "pcf":
+            radii, pcf = metrics.pair_correlation(batch, backend=args.backend)
+            document["metrics"]["pcf"] = {"radii": radii.tolist(), "pcf": pcf.tolist(),
+                                          "sigma": 0.05 * metrics.mean_spacing(n, d),
+                                          "peak": float(pcf.max()),
+                                          "peak_radius": float(radii[np.argmax(pcf)])}
+        else:
+            nn = metrics.nearest_neighbor_distances(batch, backend=args.backend)
+            document["metrics"]["nn"] = {"mean": float(nn.mean()), "min": float(nn.min()),
+                                         "quantiles": dict(zip(("5%", "50%", "95%"),
+                                                               np.quantile(nn, [0.05, 0.5, 0.95]).tolist(),
+                                                               strict=True))}
+    io.write_text(output, json.dumps(document, indent=1))
+    if "pcf" in wanted:
+        entry = document["metrics"]["pcf"]
+        plots.pcf_figure(outputs[1][1], entry["radii"], entry["pcf"], n=n, d=d,
+                         label=f"{label}: expected PCF, {r} x {n} points")
+    for key, entry in document["metrics"].items():
+        if key == "pcf":
+            text = f"peak {entry['peak']:.3f} at r = {entry['peak_radius']:.4g}"
+        elif key == "nn":
+            text = f"mean {entry['mean']:.4g}, min {entry['min']:.4g}"
+        elif key == "star" and entry["bounds"]:
+            text = f"in [{entry['lower']['mean']:.4g}, {entry['upper']['mean']:.4g}] (mean bounds)"
+        else:
+            text = f"{entry['mean']:.6g} +- {entry['std']:.2g}"
+            text += " (squared, as scipy)" if entry.get("squared") else ""
+        print(f"{key:>10}: {text}")
+    _wrote([path for _, path in outputs], f"metrics of {r} x {n} points of {label}")
     return 0
 
 
@@ -328,6 +429,7 @@ _COMMANDS = (
     _add_devices,
     _add_sample,
     _add_spectrum,
+    _add_metrics,
     _add_convergence,
     _add_render,
     _add_tour,

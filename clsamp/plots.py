@@ -1,6 +1,6 @@
-"""Pictures of what clsamp measures: spectra, radial means, anisotropy, and MSE against N
-or against time, as matplotlib figures or PNG/OpenEXR files (written whole, through
-:mod:`clsamp.io`).
+"""Pictures of what clsamp measures: spectra, radial means, anisotropy, pair correlation,
+discrepancy against N, and MSE against N or against time, as matplotlib figures or
+PNG/OpenEXR files (written whole, through :mod:`clsamp.io`).
 
 matplotlib is imported when a picture is made (the Agg backend: no screen needed).
 """
@@ -15,9 +15,9 @@ from .convergence import pareto_front
 from .errors import InvalidArgumentError
 from .validation import check_choice, check_real
 
-__all__ = ["spectrum", "radial_mean", "anisotropy", "spectrum_figure", "convergence",
-           "accuracy_time", "render_comparison", "spectrum_image", "save_spectrum_png",
-           "save_spectrum_exr", "pyplot"]
+__all__ = ["spectrum", "radial_mean", "anisotropy", "spectrum_figure", "pair_correlation",
+           "pcf_figure", "discrepancy", "convergence", "accuracy_time", "render_comparison",
+           "spectrum_image", "save_spectrum_png", "save_spectrum_exr", "pyplot"]
 
 
 def pyplot():
@@ -175,6 +175,53 @@ def spectrum_figure(path, P, n=None, realizations=None, label=None, bin_width=1.
             axes[0].set_title(label)
     figure.tight_layout()
     return io.save_figure(path, figure)
+
+
+# -- metrics ------------------------------------------------------------------------------
+def pair_correlation(ax, radii, pcf, n=None, d=2, label=None, **line_args):
+    """Plot a pair correlation function (from :func:`clsamp.pair_correlation`).
+
+    With ``n`` (points per set) the radius axis is in mean spacings, r n^(1/d), so sets of
+    different N line up; a dotted line marks 1, a Poisson process. Returns the Line2D.
+    """
+    radii = np.asarray(radii, dtype=np.float64)
+    x = radii * float(n) ** (1.0 / d) if n else radii
+    (line,) = ax.plot(x, pcf, label=label, **line_args)
+    ax.axhline(1.0, color="0.6", linewidth=0.8, linestyle=":")
+    ax.set_xlabel("r (mean spacings)" if n else "r")
+    ax.set_ylabel("pair correlation g(r)")
+    if label:
+        ax.legend()
+    return line
+
+
+def pcf_figure(path, radii, pcf, n=None, d=2, label=None):
+    """One PCF, saved as a figure (.png, .pdf, .svg) with :func:`clsamp.io.save_figure`."""
+    fig, ax = pyplot().subplots(figsize=(5.5, 3.8))
+    pair_correlation(ax, radii, pcf, n=n, d=d)
+    if label:
+        ax.set_title(label)
+    fig.tight_layout()
+    return io.save_figure(path, fig)
+
+
+def discrepancy(ax, sweep, expected=None, **line_args):
+    """A discrepancy against N (a :class:`clsamp.metrics.DiscrepancySweep`), log-log, its
+    fitted slope in the label; ``expected`` (exponent, text) draws a dashed line of the
+    known slope through the largest N. Returns the line."""
+    slope, _ = sweep.slope()
+    label = f"{sweep.sampler}: {slope:.2f}" + (f" ({expected[1]})" if expected else "")
+    line_args = {"marker": "o", "markersize": 3, "capsize": 2, **line_args}
+    line = ax.errorbar(sweep.ns, sweep.values, yerr=sweep.stderr, label=label, **line_args)
+    if expected:
+        n = sweep.ns.astype(np.float64)
+        ax.plot(n, sweep.values[-1] * (n / n[-1]) ** expected[0], "--",
+                color=line[0].get_color(), linewidth=0.9, alpha=0.7)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("N (points)")
+    ax.set_ylabel(f"{sweep.method} discrepancy")
+    return line
 
 
 # -- convergence --------------------------------------------------------------------------

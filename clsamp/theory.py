@@ -161,3 +161,27 @@ def compare(result):
                           f"standard errors; {source}; matches within 3 standard errors, "
                           f"pre-asymptotic within 3 standard errors + {CURVATURE_ALLOWANCE})")
     return out
+
+
+# The known rates of L2-type discrepancies D (not D^2) against N in d = 2, for section 1
+# of the tour: (exponent, text). Independent uniform points and a Latin hypercube have
+# E[D^2] = O(1/N); the centred grid D ~ 1/sqrt(N) (Warnock 1972); one point per cell of a
+# square grid (jittered) E[D^2] = O(N^(-1 - 1/d)), only the cells a box's boundary cuts
+# adding variance (Beck and Chen, Irregularities of Distribution, 1987); the
+# low-discrepancy sets D = O(N^-1 log N), above Roth's lower bound sqrt(log N) / N
+# (Roth 1954), so a fitted slope near -1 up to the log factor. Others: none published.
+DISCREPANCY_RATES = {
+    "random": (-0.5, "N^-1/2"),
+    "latin_hypercube": (-0.5, "N^-1/2"),
+    "regular": (-0.5, "N^-1/2"),
+    "jittered": (-0.75, "N^-3/4"),
+    "uncorrelated_jitter": (-0.75, "N^-3/4"),
+    "halton": (-1.0, "N^-1 log N"),
+    "hammersley": (-1.0, "N^-1 log N"),
+    "sobol": (-1.0, "N^-1 log N"),
+}
+
+
+def discrepancy_rate(sampler):
+    """(exponent, text) of the known rate of a sampler's L2 discrepancy in 2-D, or None."""
+    return DISCREPANCY_RATES.get(sampler.split(":")[0])

@@ -8,7 +8,9 @@ still run and keep their results.
 
 Sections
 --------
-1. Samplers: a point set, its expected power spectrum and radial mean, per sampler.
+1. Samplers: a point set, its expected power spectrum, radial mean and pair correlation
+   function, per sampler; the radial means by family; CD and L2-star discrepancy against
+   N with fitted slopes beside the known ones.
 2. Convergence: MSE against N for a smooth and a discontinuous integrand, fitted rates
    held against the published theory (Pilleboue et al. 2015).
 3. Rendering: ambient occlusion at 96 rays per pixel with several samplers, MSE against
@@ -219,16 +221,17 @@ def tour_sampler_params(name, quick):
 
 
 def section_samplers(report, quick):
-    """Every sampler: a point set, its expected power spectrum and radial mean."""
-    from . import point_metrics, spectrum
+    """Every sampler: a point set, its expected power spectrum, radial mean and pair
+    correlation; the radial means by family; the discrepancies against N."""
+    from . import metrics, point_metrics, spectrum
     from .samplers import make_sampler, sampler_names
     plt = plots.pyplot()
     n, realizations, resolution = (256, 8, 64) if quick else (1024, 32, 128)
     known = set(sampler_names())
-    rows, data, cells, curves = [], {}, [], []
+    rows, data, cells, curves = [], {}, [], {}
     for name, _ in TOUR_SAMPLERS:
         if name not in known:
-            rows.append((name, "-", "-", "-", "-", "-", "not registered"))
+            rows.append((name, "-", "-", "-", "-", "-", "-", "not registered"))
             continue
         try:
             params = tour_sampler_params(name, quick)
@@ -245,47 +248,136 @@ def section_samplers(report, quick):
             P = spectrum.power_spectrum(points, resolution=resolution, method="direct", progress=False)
             freqs, mean = spectrum.radial_mean(P)
             _, aniso = spectrum.anisotropy(P)
+            radii, pcf = metrics.pair_correlation(points)
             rho = np.asarray(point_metrics.relative_radius(points))
             report.points(f"points_{name}", points)
             report.array(f"spectrum_{name}", P)
             plots.save_spectrum_exr(report.out / "data" / f"spectrum_{name}.exr", P,
                                     header={"sampler": name, "n": size, "realizations": realizations})
-            fig, axes = plt.subplots(1, 3, figsize=(10.5, 3.3))
+            fig, axes = plt.subplots(1, 4, figsize=(14, 3.3))
             _plot_points(axes[0], points[0], f"{name}, n = {len(points[0])}")
             plots.spectrum(axes[1], P, title=f"expected spectrum, {realizations} sets")
             plots.radial_mean(axes[2], freqs, mean, n=n)
             axes[2].set_ylim(0, 2.5)
+            plots.pair_correlation(axes[3], radii, pcf, n=size)
+            axes[3].set_ylim(0, max(2.5, float(np.max(pcf)) * 1.05))
+            axes[3].set_title(f"expected PCF, {realizations} sets", fontsize=10)
             fig.tight_layout()
             cells.append((name, report.figure(f"sampler_{name}", fig)))
-            curves.append((name, freqs, mean))
+            curves[name] = (freqs, mean)
             low = float(np.nanmean(mean[freqs <= 0.5 * np.sqrt(n)]))
+            peak = float(radii[np.argmax(pcf)] * size ** 0.5)
             rows.append((name, n if sampler.needs_n else f"{size:.0f} (maximal)", realizations,
                          seconds, float(rho.mean()), float(np.nanmean(aniso[len(aniso) // 4:])),
-                         f"{low:.3g}"))
+                         f"{low:.3g}", f"{float(np.max(pcf)):.3g} at {peak:.2f}"))
             data[name] = {"n": size, "realizations": realizations, "seconds": seconds,
                           "params": params, "rho": rho, "radial_mean": mean, "frequencies": freqs,
-                          "anisotropy_db": aniso}
+                          "anisotropy_db": aniso, "pcf": pcf, "pcf_radii": radii}
         except Exception as error:  # one sampler failing leaves the others in the report
-            rows.append((name, n, realizations, "-", "-", "-", f"failed: {error}"))
+            rows.append((name, n, realizations, "-", "-", "-", "-", f"failed: {error}"))
             data[name] = {"error": traceback.format_exc()}
-    fig, ax = plt.subplots(figsize=(8, 4.5))
-    for name, freqs, mean in curves:
-        plots.radial_mean(ax, freqs, mean, n=n).set_label(name)
-    ax.set_ylim(0, 2.5)
-    ax.legend(fontsize=8, ncol=2)
-    ax.set_title(f"radial means of expected spectra (n = {n}, {realizations} realizations)")
-    overlay = report.figure("radial_means", fig)
+    overlay = report.figure("radial_means", _family_overlay(plt, curves, n, realizations))
     body = (f"<p>Each sampler makes {realizations} sets of n = {n} points (seed 1); the spectrum is the mean "
-            "periodogram over the sets (exact, <code>method='direct'</code>), DC at the centre. "
+            "periodogram over the sets (exact, <code>method='direct'</code>), DC at the centre; "
+            "the pair correlation function (PCF) is the mean over the sets of the Gaussian-smoothed "
+            "pair-distance density on the torus (&sigma; = 0.05 mean spacings), 1 for white noise. "
             "&rho; is the relative radius (minimum toroidal distance over the hexagonal packing's, "
             "Lagae &amp; Dutr&eacute; 2008); the low-frequency power is the radial mean below "
-            "2&nu;/&radic;N = 1 (white noise: 1; blue noise: near 0). Poisson disk makes "
+            "2&nu;/&radic;N = 1 (white noise: 1; blue noise: near 0); the PCF peak is its largest "
+            "value and where (in mean spacings). Poisson disk makes "
             f"maximal sets at radius {MAXIMAL_RHO} d<sub>max</sub>(n), each of its own size; "
-            "their spectrum is the mean of the sets' periodograms.</p>")
+            "their spectrum and PCF are means over the sets.</p>")
     body += _table(("sampler", "n", "sets", "seconds", "ρ (mean)", "anisotropy dB (mean)",
-                    "low-freq. power"), rows)
-    body += _img(overlay, "radial means of all samplers", 700)
-    body += "".join(f"<div>{_img(src, name, 900)}</div>" for name, src in cells)
+                    "low-freq. power", "PCF peak"), rows)
+    body += _img(overlay, "radial means of all samplers, by family", 1000)
+    body += "".join(f"<div>{_img(src, name, 1100)}</div>" for name, src in cells)
+    disc_body, data["discrepancy_against_n"] = _discrepancy_against_n(report, quick)
+    body += disc_body
+    return body, data
+
+
+# Section 1's families, one panel each in the overlay of radial means (white noise, the
+# reference, in every panel).
+FAMILIES = (
+    ("stratified", ("regular", "jittered", "uncorrelated_jitter", "latin_hypercube",
+                    "multijittered", "correlated_multijittered")),
+    ("low discrepancy", ("halton", "hammersley", "sobol")),
+    ("blue noise", ("poisson_disk", "lloyd", "ccvt")),
+)
+# Discrepancy against N: the sweep, and where the optimizers stop (full, quick).
+DISCREPANCY_NS = ((16, 64, 256, 1024, 4096, 16384), (16, 64, 256, 1024))
+DISCREPANCY_REALIZATIONS = (8, 4)
+DISCREPANCY_CAPS = {"lloyd": (4096, 256), "ccvt": (1024, 256)}
+
+
+def _family_overlay(plt, curves, n, realizations):
+    fig, axes = plt.subplots(1, len(FAMILIES), figsize=(5.2 * len(FAMILIES), 3.8), sharey=True)
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for ax, (family, members) in zip(axes, FAMILIES, strict=True):
+        if "random" in curves:
+            plots.radial_mean(ax, *curves["random"], n=n, color="0.55", linewidth=1.0,
+                              label="random")
+        for k, name in enumerate(m for m in members if m in curves):
+            plots.radial_mean(ax, *curves[name], n=n, color=colours[k % len(colours)], label=name)
+        ax.set_ylim(0, 2.5)
+        ax.set_title(f"{family} (n = {n}, {realizations} sets)", fontsize=10)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def _discrepancy_against_n(report, quick):
+    """CD and L2-star discrepancy of every sampler's sets against N, slopes against the
+    known rates (theory.DISCREPANCY_RATES)."""
+    from . import theory
+    from .metrics import discrepancy_sweep
+    from .samplers import make_sampler, sampler_names
+    plt = plots.pyplot()
+    ns_all = DISCREPANCY_NS[1 if quick else 0]
+    realizations = DISCREPANCY_REALIZATIONS[1 if quick else 0]
+    methods = ("CD", "L2-star")
+    fig, axes = plt.subplots(1, 2, figsize=(13, 5.2))
+    rows, data = [], {}
+    known = set(sampler_names())
+    colours = plt.get_cmap("tab20").colors      # thirteen samplers: no colour twice
+    for index, (name, _) in enumerate(TOUR_SAMPLERS):
+        if name not in known:
+            continue
+        try:
+            params = tour_sampler_params(name, quick)
+            cap = DISCREPANCY_CAPS.get(name, (None, None))[1 if quick else 0]
+            ns = [m for m in ns_all if cap is None or m <= cap]
+            sampler = make_sampler(name, d=2, seed=3, **params)
+            t0 = time.perf_counter()
+            sweeps = discrepancy_sweep(sampler, ns, realizations=realizations, methods=methods)
+            seconds = time.perf_counter() - t0
+            expected = theory.discrepancy_rate(sampler.label)
+            for ax, method in zip(axes, methods, strict=True):
+                plots.discrepancy(ax, sweeps[method], expected, color=colours[index % 20],
+                                  marker="os^vD<>"[index % 7])
+            slopes = {m: sweeps[m].slope() for m in methods}
+            rows.append((sampler.label, f"{sweeps['CD'].ns[0]}..{sweeps['CD'].ns[-1]}",
+                         *(f"{slopes[m][0]:+.2f} ± {slopes[m][1]:.2f}" for m in methods),
+                         expected[1] if expected else "-", seconds))
+            data[sampler.label] = {m: sweeps[m].to_dict() for m in methods}
+        except Exception as error:  # one sampler failing leaves the others in the report
+            rows.append((name, "-", "-", "-", "-", f"failed: {error}"))
+            data[name] = {"error": traceback.format_exc()}
+    for ax, method in zip(axes, methods, strict=True):
+        ax.set_title(f"{method} discrepancy (RMS of D over {realizations} sets; dashed: known)")
+        ax.grid(True, which="both", alpha=0.2)
+        ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    src = report.figure("discrepancy_against_n", fig)
+    body = ("<h3>Discrepancy against N</h3><p>The centred (CD) and L2-star discrepancies D "
+            "(<code>clsamp.discrepancy</code>; the root of scipy's CD), root-mean-square over "
+            f"{realizations} sets per N (seed 3), with the slope of log D against log N fitted "
+            "over the larger half of each sweep. Known in 2-D: N<sup>-1/2</sup> for independent "
+            "points, a Latin hypercube and the grid, N<sup>-3/4</sup> for one point per square "
+            "cell (jittered), N<sup>-1</sup> up to a log factor for low-discrepancy sets. The "
+            "optimizers' sweeps stop earlier (their points cost most).</p>")
+    body += _table(("sampler", "N", "CD slope", "L2-star slope", "known", "seconds"), rows)
+    body += _img(src, "discrepancy against N", 1100)
     return body, data
 
 
@@ -669,7 +761,8 @@ def section_device(report, quick, timings):
 
 
 SECTIONS = (
-    ("samplers", "1. Samplers, their spectra and radial means", section_samplers),
+    ("samplers", "1. Samplers: spectra, radial means, pair correlation, discrepancy",
+     section_samplers),
     ("convergence", "2. Convergence against theory", section_convergence),
     ("render", "3. Ambient occlusion at 96 rays: samplers in images", section_render),
     ("cost", "4. What accuracy costs in time", section_cost),

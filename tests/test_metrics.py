@@ -328,3 +328,19 @@ def test_nearest_neighbors_bad_input():
         clsamp.nearest_neighbor_distances(np.array([[0.5, 0.5]]))
     with pytest.raises(InvalidArgumentError, match="backend"):
         clsamp.nearest_neighbor_distances(np.random.default_rng(0).random((5, 2)), backend="gpu")
+
+
+def test_discrepancy_sweep_slopes_match_the_known_rates():
+    from clsamp import theory
+    from clsamp.metrics import discrepancy_sweep
+    ns = [64, 256, 1024, 4096, 16384]
+    for name in ("random", "jittered", "sobol"):
+        sweeps = discrepancy_sweep(clsamp.make_sampler(name, d=2, seed=5), ns, realizations=8)
+        known, _ = theory.discrepancy_rate(name)
+        for method, sweep in sweeps.items():
+            slope, stderr = sweep.slope()
+            assert sweep.ns.tolist() == ns and np.all(sweep.values > 0)
+            # low discrepancy: the log factor keeps the slope a little above -1
+            assert known - 0.08 < slope < known + (0.15 if known == -1.0 else 0.08), (name, method, slope)
+    regular = discrepancy_sweep(clsamp.make_sampler("regular", d=2), [60, 250], realizations=1)
+    assert regular["CD"].ns.tolist() == [64, 256]      # moved to valid counts (squares)

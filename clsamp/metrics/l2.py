@@ -10,6 +10,7 @@ the cancellation between the three terms costs no more than the terms' own round
 The NumPy reference (``backend="numpy"``) evaluates the same formulas in blocks.
 """
 
+import dataclasses
 import math
 from fractions import Fraction
 
@@ -224,3 +225,78 @@ def check_method(method):
         raise InvalidArgumentError(
             f"'method' must be one of {', '.join(repr(m) for m in METHODS)}; got {method!r}")
     return method
+
+
+@dataclasses.dataclass
+class DiscrepancySweep:
+    """A discrepancy against the number of points (:func:`discrepancy_sweep`).
+
+    ``values[k]`` is the root-mean-square over the realizations of the discrepancy D
+    (not D^2, for every method) of ``ns[k]`` points; ``stderr`` its standard error.
+    """
+
+    sampler: str
+    method: str
+    ns: np.ndarray
+    values: np.ndarray
+    stderr: np.ndarray
+    realizations: int
+
+    def slope(self):
+        """(slope, standard error) of log D against log N over the larger half of the
+        sweep (least squares), the rate to hold against N^-1/2 (random) or N^-1 up to
+        log factors (low discrepancy)."""
+        idx = np.arange(len(self.ns) // 2, len(self.ns))
+        idx = idx[self.values[idx] > 0]
+        if len(idx) < 2:
+            return float("nan"), float("nan")
+        x, y = np.log(self.ns[idx].astype(np.float64)), np.log(self.values[idx])
+        fit, cov = np.polyfit(x, y, 1, cov=True) if len(idx) > 2 else (np.polyfit(x, y, 1), None)
+        return float(fit[0]), float(math.sqrt(cov[0, 0])) if cov is not None else float("nan")
+
+    def to_dict(self):
+        slope, stderr = self.slope()
+        return {"sampler": self.sampler, "method": self.method, "ns": self.ns.tolist(),
+                "values": self.values.tolist(), "stderr": self.stderr.tolist(),
+                "realizations": int(self.realizations), "slope": slope, "slope_stderr": stderr}
+
+
+def discrepancy_sweep(sampler, ns, realizations=8, methods=("CD", "L2-star")):
+    """Discrepancies of a sampler's sets as N grows: {method: DiscrepancySweep}.
+
+    Parameters
+    ----------
+    sampler : Sampler
+        Any sampler (:func:`clsamp.make_sampler`); each n is moved to its nearest valid
+        count (``sampler.valid_n``), so a grid takes squares.
+    ns : sequence of int
+    realizations : int
+        Sets per n (randomized samplers differ between them, deterministic ones repeat).
+    methods : sequence of str
+        Any of :data:`METHODS`.
+
+    Examples
+    --------
+    >>> import clsamp
+    >>> from clsamp.metrics import discrepancy_sweep
+    >>> sweep = discrepancy_sweep(clsamp.make_sampler("random", seed=1), [64, 256, 1024, 4096])
+    >>> slope, _ = sweep["L2-star"].slope()
+    >>> bool(-0.7 < slope < -0.3)
+    True
+    """
+    for method in methods:
+        check_method(method)
+    counts = sorted({int(sampler.valid_n(int(n))) for n in ns})
+    values = {m: [] for m in methods}
+    errors = {m: [] for m in methods}
+    for n in counts:
+        points = sampler.sample(n, realizations=realizations)
+        for method in methods:
+            v = np.atleast_1d(discrepancy(points, method))
+            squares = v if method not in ROOTED else v * v
+            values[method].append(math.sqrt(float(np.mean(squares))))
+            spread = float(np.std(squares, ddof=1)) / math.sqrt(len(v)) if len(v) > 1 else 0.0
+            # the delta method: sd(sqrt(m)) = sd(m) / (2 sqrt(m))
+            errors[method].append(spread / (2.0 * values[method][-1]) if values[method][-1] else 0.0)
+    return {m: DiscrepancySweep(sampler.label, m, np.array(counts), np.array(values[m]),
+                                np.array(errors[m]), realizations) for m in methods}

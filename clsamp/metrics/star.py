@@ -321,7 +321,8 @@ def star_discrepancy(points, bounds=False, backend="opencl", delta=None):
         if d not in EXACT_DIMENSIONS:
             raise InvalidArgumentError(
                 f"the exact star discrepancy is implemented for d = 1, 2, 3, got d = {d}; "
-                "star_discrepancy(points, bounds=True) gives certified (lower, upper) bounds")
+                "star_discrepancy(points, bounds=True) (clsamp metrics --bounds) gives certified "
+                "(lower, upper) bounds")
         if d == 3 and n > MAX_EXACT_3D:
             raise InvalidArgumentError(
                 f"the exact 3-D star discrepancy costs O(n^3): n = {n} is more than "
