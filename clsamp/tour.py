@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from . import io, plots, runtime
+from .report import Report, Section, fmt, img, json_safe, table, versions, write_html
 
 # Samplers shown in section 1, with the parameters that make each one its textbook self.
 TOUR_SAMPLERS = (
@@ -64,141 +65,6 @@ TOUR_SWEEPS = {
     "poisson_disk": ([16, 64, 256, 1024, 4096], 512),
     "ccvt": ([16, 64, 256, 1024], 64),
 }
-
-
-@dataclasses.dataclass
-class Section:
-    """One part of the report: its HTML body, its numbers and how long it took."""
-
-    key: str
-    title: str
-    body: str = ""
-    data: dict = dataclasses.field(default_factory=dict)
-    seconds: float = 0.0
-    error: str | None = None
-
-
-class Report:
-    """Collects sections, figures and data files under one output folder."""
-
-    def __init__(self, out):
-        self.out = Path(out)
-        (self.out / "img").mkdir(parents=True, exist_ok=True)
-        (self.out / "data").mkdir(parents=True, exist_ok=True)
-        self.sections = []
-        self.results = {}   # objects a later section reuses (convergence results, renders)
-
-    def figure(self, name, fig):
-        """Save a matplotlib figure as img/<name>.png; return its relative path."""
-        path = io.save_figure(self.out / "img" / f"{name}.png", fig)
-        return path.relative_to(self.out).as_posix()
-
-    def points(self, name, points):
-        """data/<name>.npy, or for sets of different sizes data/<name>.txt (realizations
-        separated by a line ``#``)."""
-        suffix = ".txt" if isinstance(points, list) else ".npy"
-        if isinstance(points, list):
-            path = self.out / "data" / f"{name}{suffix}"
-            io.write_text(path, "#\n".join(io.format_points(p) for p in points))
-        else:
-            path = io.save_points(self.out / "data" / f"{name}{suffix}", points)
-        return path.relative_to(self.out).as_posix()
-
-    def array(self, name, array):
-        from io import BytesIO
-        buffer = BytesIO()
-        np.save(buffer, np.asarray(array))
-        path = self.out / "data" / f"{name}.npy"
-        io.write_bytes(path, buffer.getvalue())
-        return path.relative_to(self.out).as_posix()
-
-    def exr(self, name, image, header=None):
-        path = io.write_exr(self.out / "data" / f"{name}.exr", image, header)
-        return path.relative_to(self.out).as_posix()
-
-    def png(self, name, image, **tone):
-        path = io.write_png(self.out / "img" / f"{name}.png", image, **tone)
-        return path.relative_to(self.out).as_posix()
-
-
-def _table(headers, rows):
-    head = "".join(f"<th>{html.escape(str(h))}</th>" for h in headers)
-    body = "".join("<tr>" + "".join(f"<td>{html.escape(_fmt(c))}</td>" for c in row) + "</tr>"
-                   for row in rows)
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
-
-
-def _fmt(value):
-    if isinstance(value, float):
-        if value == 0 or 1e-3 <= abs(value) < 1e4:
-            return f"{value:.4g}"
-        return f"{value:.3e}"
-    return str(value)
-
-
-def _img(src, alt, width=None):
-    w = f' width="{width}"' if width else ""
-    return f'<img src="{html.escape(src)}" alt="{html.escape(alt)}"{w}>'
-
-
-def _json_safe(value):
-    if isinstance(value, dict):
-        return {str(k): _json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _json_safe(value.tolist())
-    if isinstance(value, (np.floating, float)):
-        value = float(value)
-        return value if np.isfinite(value) else str(value)
-    if isinstance(value, np.integer):
-        return int(value)
-    return value
-
-
-_CSS = """
-body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1200px; color: #222; }
-h1 { margin-bottom: 0; } h2 { border-bottom: 1px solid #ccc; margin-top: 2em; }
-table { border-collapse: collapse; margin: 1em 0; font-size: 0.9em; }
-td, th { border: 1px solid #ddd; padding: 3px 8px; text-align: right; }
-th { background: #f4f4f4; } td:first-child { text-align: left; }
-.grid { display: flex; flex-wrap: wrap; gap: 12px; }
-.cell { text-align: center; font-size: 0.85em; }
-.error { background: #fee; border: 1px solid #c00; padding: 0.5em; white-space: pre-wrap; }
-.note { color: #555; font-size: 0.9em; }
-.matches { color: #070; font-weight: bold; } .differs { color: #b00; font-weight: bold; }
-.pre-asymptotic { color: #a60; font-weight: bold; }
-"""
-
-
-def _write_html(report, meta):
-    parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>clsamp tour</title>"
-             f"<style>{_CSS}</style></head><body>",
-             "<h1>clsamp tour</h1>",
-             f"<p class='note'>Measured in this run on {html.escape(meta['device'])}, "
-             f"{html.escape(meta['date'])}; mode {'quick' if meta['quick'] else 'full'}. "
-             "Raw numbers: <a href='tour.json'>tour.json</a>; point sets and images in "
-             "<a href='data/'>data/</a>.</p><ol>"]
-    parts += [f"<li><a href='#{s.key}'>{html.escape(s.title)}</a></li>" for s in report.sections]
-    parts.append("</ol>")
-    for s in report.sections:
-        parts.append(f"<section id='{s.key}'><h2>{html.escape(s.title)}</h2>")
-        if s.error:
-            parts.append(f"<div class='error'>This section failed:\n{html.escape(s.error)}</div>")
-        parts.append(s.body)
-        parts.append(f"<p class='note'>{s.seconds:.1f} s</p></section>")
-    parts.append("</body></html>")
-    io.write_text(report.out / "index.html", "\n".join(parts))
-
-
-def _versions():
-    import matplotlib
-    import pyopencl
-    versions = {"python": platform.python_version(), "numpy": np.__version__,
-                "pyopencl": pyopencl.VERSION_TEXT, "matplotlib": matplotlib.__version__}
-    from . import __version__
-    versions["clsamp"] = __version__
-    return versions
 
 
 def _plot_points(ax, points, title):
@@ -287,10 +153,10 @@ def section_samplers(report, quick):
             "value and where (in mean spacings). Poisson disk makes "
             f"maximal sets at radius {MAXIMAL_RHO} d<sub>max</sub>(n), each of its own size; "
             "their spectrum and PCF are means over the sets.</p>")
-    body += _table(("sampler", "n", "sets", "seconds", "ρ (mean)", "anisotropy dB (mean)",
+    body += table(("sampler", "n", "sets", "seconds", "ρ (mean)", "anisotropy dB (mean)",
                     "low-freq. power", "PCF peak"), rows)
-    body += _img(overlay, "radial means of all samplers, by family", 1000)
-    body += "".join(f"<div>{_img(src, name, 1100)}</div>" for name, src in cells)
+    body += img(overlay, "radial means of all samplers, by family", 1000)
+    body += "".join(f"<div>{img(src, name, 1100)}</div>" for name, src in cells)
     disc_body, data["discrepancy_against_n"] = _discrepancy_against_n(report, quick)
     body += disc_body
     return body, data
@@ -376,8 +242,8 @@ def _discrepancy_against_n(report, quick):
             "points, a Latin hypercube and the grid, N<sup>-3/4</sup> for one point per square "
             "cell (jittered), N<sup>-1</sup> up to a log factor for low-discrepancy sets. The "
             "optimizers' sweeps stop earlier (their points cost most).</p>")
-    body += _table(("sampler", "N", "CD slope", "L2-star slope", "known", "seconds"), rows)
-    body += _img(src, "discrepancy against N", 1100)
+    body += table(("sampler", "N", "CD slope", "L2-star slope", "known", "seconds"), rows)
+    body += img(src, "discrepancy against N", 1100)
     return body, data
 
 
@@ -451,12 +317,12 @@ def section_convergence(report, quick):
 
     def cell(i, value):
         css = f" class='{html.escape(str(value).split()[0])}'" if i == verdict_column else ""
-        return f"<td{css}>{html.escape(_fmt(value))}</td>"
+        return f"<td{css}>{html.escape(fmt(value))}</td>"
 
     verdicts = "".join("<tr>" + "".join(cell(i, v) for i, v in enumerate(r)) + "</tr>" for r in rows)
     body += ("<table><thead><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in headers)
              + f"</tr></thead><tbody>{verdicts}</tbody></table>")
-    body += _img(Path(picture).relative_to(report.out).as_posix(), "MSE against N", 1000)
+    body += img(Path(picture).relative_to(report.out).as_posix(), "MSE against N", 1000)
     return body, data
 
 
@@ -509,13 +375,13 @@ def section_render(report, quick):
             "reference rendered with the random sampler at many more samples. 2-D samplers are "
             "padded pairwise with random permutations, as pbrt pads; expensive samplers reuse a "
             "pool of realizations with a per-pixel random toroidal shift.</p>")
-    body += _table(("sampler", "spp", "MSE", "PSNR dB", "SSIM", "seconds"), rows)
+    body += table(("sampler", "spp", "MSE", "PSNR dB", "SSIM", "seconds"), rows)
     if images:
         side = plots.render_comparison(report.out / "img" / "render_comparison.png", ref, images,
                                        columns=len(images) + 1)
-        body += _img(side.relative_to(report.out).as_posix(), "renders beside the reference", 1100)
+        body += img(side.relative_to(report.out).as_posix(), "renders beside the reference", 1100)
     body += "<div class='grid'>" + "".join(
-        f"<div class='cell'>{_img(src, label, 220)}<br>{html.escape(label)}</div>" for label, src in cells)
+        f"<div class='cell'>{img(src, label, 220)}<br>{html.escape(label)}</div>" for label, src in cells)
     body += "</div>"
     return body, data
 
@@ -559,7 +425,7 @@ def section_cost(report, quick):
                  f"{spec['n']} random points at {spec['resolution']}&sup2; frequencies: the NUFFT "
                  "path at each tolerance against the exact sum (error = max |P<sub>fast</sub> &minus; "
                  "P<sub>direct</sub>| / N).</p>")
-        body += _table(("method", "tol", "seconds", "max error / N"), rows)
+        body += table(("method", "tol", "seconds", "max error / N"), rows)
         ax = axes[0]
         ax.loglog([c["seconds"] for c in spec["fast"]], [max(c["max_error_over_n"], 1e-17)
                                                          for c in spec["fast"]], "o-", label="fast (NUFFT)")
@@ -598,10 +464,10 @@ def section_cost(report, quick):
                  "generation included, to reach a target MSE (the median MSE at the middle of the "
                  "sweep), and the N that reaches it. A sampler that converges faster per point can "
                  "still lose on time when its points are expensive.</p>")
-        body += _table(("sampler", "integrand", "target MSE", "N needed", "seconds per estimate"),
+        body += table(("sampler", "integrand", "target MSE", "N needed", "seconds per estimate"),
                        target_rows)
         front = sampler_data.get("disk", {}).get("pareto_front", [])
-        front_text = ", ".join(f"{p['sampler']} N={p['n']} ({_fmt(p['seconds'])} s, MSE {_fmt(p['mse'])})"
+        front_text = ", ".join(f"{p['sampler']} N={p['n']} ({fmt(p['seconds'])} s, MSE {fmt(p['mse'])})"
                                for p in front)
         body += f"<p>Pareto front (disk): {front_text}</p>"
     except Exception:
@@ -640,11 +506,11 @@ def section_cost(report, quick):
         data["render"] = render_data
         body += ("<h3>Rendered images</h3><p>The AO scene rendered at increasing samples per pixel: "
                  "MSE against seconds, sampling and rendering included.</p>")
-        body += _table(("sampler", "spp", "seconds", "MSE"), render_rows)
+        body += table(("sampler", "spp", "seconds", "MSE"), render_rows)
     except Exception:
         failures.append(("renders", traceback.format_exc()))
     fig.tight_layout()
-    body = _img(report.figure("accuracy_time", fig), "accuracy against time", 1100) + body
+    body = img(report.figure("accuracy_time", fig), "accuracy against time", 1100) + body
     for part, trace in failures:
         body += f"<div class='error'>The {part} part failed:\n{html.escape(trace)}</div>"
         data[f"{part}_error"] = trace
@@ -744,7 +610,7 @@ def section_stability(report, quick):
             for name, measure, value, bound, passed in cases]
     body = ("<p>Cases where a careless implementation loses precision or breaks an invariant, "
             "each with the error this run reached and the bound the tests hold it to.</p>")
-    body += _table(("case", "measure", "reached", "bound", ""), rows)
+    body += table(("case", "measure", "reached", "bound", ""), rows)
     data = {name: {"measure": m, "value": v, "bound": b, "passed": p} for name, m, v, b, p in cases}
     return body, data
 
@@ -752,12 +618,12 @@ def section_stability(report, quick):
 def section_device(report, quick, timings):
     device = runtime.current_device()
     rows = [(k, v) for k, v in dataclasses.asdict(device).items()]
-    rows += [(f"version: {k}", v) for k, v in _versions().items()]
+    rows += [(f"version: {k}", v) for k, v in versions().items()]
     rows.append(("platform", platform.platform()))
     timing_rows = [(k, f"{v:.2f}") for k, v in timings.items()]
-    body = (_table(("property", "value"), rows)
-            + "<h3>Seconds per section</h3>" + _table(("section", "seconds"), timing_rows))
-    return body, {"device": dataclasses.asdict(device), "versions": _versions(), "timings": timings}
+    body = (table(("property", "value"), rows)
+            + "<h3>Seconds per section</h3>" + table(("section", "seconds"), timing_rows))
+    return body, {"device": dataclasses.asdict(device), "versions": versions(), "timings": timings}
 
 
 SECTIONS = (
@@ -808,6 +674,6 @@ def run_tour(out, quick=False, progress=True):
         results[key] = {"title": title, "seconds": section.seconds, "error": section.error,
                         "data": section.data}
         io.write_text(report.out / "tour.json",
-                      json.dumps(_json_safe({"meta": meta, "sections": results}), indent=1))
-        _write_html(report, meta)
+                      json.dumps(json_safe({"meta": meta, "sections": results}), indent=1))
+        write_html(report, meta)
     return report.out / "index.html"

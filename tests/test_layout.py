@@ -21,7 +21,7 @@ LAYERS = [
     ("analysis", {"spectrum", "point_metrics", "metrics"}),
     ("experiments", {"integrands", "convergence", "theory"}),
     ("render", {"scene", "render"}),
-    ("report", {"plots", "tour", "cli", "__main__", "__init__"}),
+    ("report", {"plots", "report", "tour", "cli", "__main__", "__init__"}),
 ]
 
 
