@@ -71,8 +71,9 @@ def _run_devices(args):
     current = runtime.current_device()
     for device in runtime.devices():
         mark = "*" if device.index == current.index else " "
+        broken = "" if runtime.compiles(device) else "  (its compiler fails: not usable)"
         print(f"{mark} {device}  {device.compute_units} CUs, "
-              f"{device.global_memory / 2**30:.1f} GiB")
+              f"{device.global_memory / 2**30:.1f} GiB{broken}")
     return 0
 
 

@@ -8,9 +8,10 @@ Programs are cached by (device, kernel file, build options), so a kernel is comp
 per process (PoCL also keeps binaries on disk between processes); kernel objects once per
 program, and small read-only tables once per device (:func:`table`).
 
-The default device is the first CPU device (PoCL from ``pocl-binary-distribution``),
-so a fresh install works with no GPU. ``CLSAMP_DEVICE`` (an index into
-:func:`devices` or a substring of a device name) or :func:`use_device` choose another.
+The default device is the first CPU device whose compiler works (PoCL from
+``pocl-binary-distribution``, or Debian's PoCL where that one cannot compile for the CPU),
+so a fresh install works with no GPU. ``CLSAMP_DEVICE`` (an index into :func:`devices` or a
+substring of a device name) or :func:`use_device` choose another.
 """
 
 import dataclasses
@@ -27,6 +28,15 @@ _INSTALL_HINT = (
     "clsamp needs an OpenCL platform. On a machine without a GPU install PoCL, the CPU "
     "driver: 'pip install pocl-binary-distribution' (a dependency of clsamp) or Debian's "
     "'apt-get install pocl-opencl-icd'. For a GPU install its vendor's OpenCL driver.")
+
+# PoCL 3.0 from PyPI links LLVM 14, which names CPUs newer than itself (AMD Zen 5, family
+# 1Ah) 'generic', a target its own front end then refuses: every build fails on them.
+_UNKNOWN_CPU_HINT = (
+    "This PoCL's LLVM does not know this CPU ('unknown target CPU'), so it cannot compile "
+    "any kernel here. Debian's PoCL chooses its code target by CPU features and works: "
+    "'apt-get install pocl-opencl-icd' (scripts/ensure-opencl.sh does it); clsamp then "
+    "uses it by default.")
+_PROBE = "__kernel void clsamp_probe(__global int *x) { x[get_global_id(0)] += 1; }"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -59,6 +69,7 @@ _kernels = {}           # (program key, kernel name, instance) -> pyopencl.Kerne
 _tables = {}            # (device index, key) -> pyopencl.array.Array, least recently used first
 _TABLES = 64            # tables kept per process
 _build_count = 0
+_broken = {}            # device index -> why its compiler failed the probe build
 
 
 def _cl():
@@ -162,10 +173,40 @@ def current_device():
             if env:
                 _current = _resolve(env)
             else:
-                records = devices()
-                cpus = [r.index for r in records if r.type == "cpu"]
-                _current = cpus[0] if cpus else 0
+                _current = _default_device()
         return _records[_current]
+
+
+def compiles(spec):
+    """Whether the device ``spec`` (as :func:`use_device` takes it) builds a one-line kernel.
+
+    A driver can list a device it cannot compile for (PoCL 3.0's LLVM 14 on CPUs newer
+    than itself); the default choice skips such devices.
+    """
+    cl = _cl()
+    with _lock:
+        index = _resolve(spec)
+        if index in _broken:
+            return False
+        try:
+            cl.Program(_state(index)[0], _PROBE).build()
+            return True
+        except cl.Error as error:
+            _broken[index] = str(error).strip().splitlines()
+            return False
+
+
+def _default_device():
+    """The first CPU device (else the first device) whose compiler works."""
+    records = devices()
+    order = [r.index for r in records if r.type == "cpu"] + [r.index for r in records if r.type != "cpu"]
+    for index in order:
+        if compiles(index):
+            return index
+    reasons = "; ".join(f"{records[i]}: {' '.join(line for line in _broken[i] if 'error' in line)}"
+                        for i in order)
+    hint = _UNKNOWN_CPU_HINT if "unknown target CPU" in reasons else _INSTALL_HINT
+    raise NoDeviceError(f"no OpenCL device can compile a kernel ({reasons}). {hint}")
 
 
 def _state(index):
@@ -269,9 +310,10 @@ def program(file, defines=None, options=()):
         try:
             built = cl.Program(ctx, source).build(options=list(key[2]))
         except cl.RuntimeError as error:
+            hint = f"\n{_UNKNOWN_CPU_HINT}" if "unknown target CPU" in str(error) else ""
             raise BuildError(
                 f"OpenCL build of kernels/{file} failed on {device.name} "
-                f"({device.platform}) with options {' '.join(key[2]) or '(none)'}:\n{error}") from None
+                f"({device.platform}) with options {' '.join(key[2]) or '(none)'}:\n{error}{hint}") from None
         if not built.kernel_names:
             raise BuildError(
                 f"OpenCL build of kernels/{file} on {device.name} ({device.platform}) with options "

@@ -21,11 +21,30 @@ def test_devices_lists_a_cpu_device_with_fp64():
     assert str(default).startswith(f"[{default.index}]")
 
 
-def test_default_is_first_cpu_device():
+def test_default_is_first_cpu_device_that_compiles():
     if os.environ.get("CLSAMP_DEVICE"):
         pytest.skip("CLSAMP_DEVICE chooses the device")
-    first_cpu = next(r for r in clsamp.devices() if r.type == "cpu")
+    first_cpu = next(r for r in clsamp.devices() if r.type == "cpu" and runtime.compiles(r))
     assert clsamp.current_device() == first_cpu
+
+
+def test_a_device_whose_compiler_fails_is_skipped_and_explained(monkeypatch):
+    records = clsamp.devices()
+    good = clsamp.current_device()
+    # every device but the current one (or all of them) fails the probe, as PoCL 3.0 does on
+    # a CPU its LLVM does not know
+    for broken_too in (False, True):
+        failing = {r.index for r in records if broken_too or r.index != good.index}
+        log = ["clBuildProgram failed: BUILD_PROGRAM_FAILURE", "error: unknown target CPU 'generic'"]
+        monkeypatch.setattr(runtime, "_broken", {i: log for i in failing})
+        monkeypatch.setattr(runtime, "_current", None)
+        assert not any(runtime.compiles(i) for i in failing)
+        if not broken_too:
+            assert clsamp.current_device() == good
+        else:
+            with pytest.raises(NoDeviceError, match="pocl-opencl-icd") as info:
+                clsamp.current_device()
+            assert "unknown target CPU" in str(info.value)
 
 
 def test_use_device_by_index_name_and_type():
