@@ -153,3 +153,33 @@ def main(run, description):
     if args.out:
         write_json(args.out, rows)
     return rows
+
+
+def device_memory(fn):
+    """(result of ``fn()``, the peak bytes of OpenCL buffers it held at once).
+
+    Every buffer made during the call (``pyopencl.Buffer``, which ``pyopencl.array`` and
+    clsamp's runtime use) is counted from its creation until it is freed; buffers that
+    lived before the call are not. On a GPU this is device memory; on PoCL the same bytes
+    are host memory.
+    """
+    import weakref
+
+    import pyopencl as cl
+    live, peak = [0], [0]
+    original = cl.Buffer
+
+    class Counted(original):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            size = self.size
+            live[0] += size
+            peak[0] = max(peak[0], live[0])
+            weakref.finalize(self, lambda: live.__setitem__(0, live[0] - size))
+
+    cl.Buffer = Counted
+    try:
+        result = fn()
+    finally:
+        cl.Buffer = original
+    return result, peak[0]

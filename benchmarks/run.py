@@ -22,6 +22,7 @@ MODULES = (
     "bench_stratified",
     "bench_lowdiscrepancy",
     "bench_spectrum",
+    "bench_metrics",
     "bench_convergence",
     "bench_poisson_disk",
     "bench_render",

@@ -65,15 +65,48 @@ inline void cell_coordinates(uint flat, const int G, int *c)
 }
 
 #ifdef NR
-/* Grid (items, realizations). For the points [w PPI, (w + 1) PPI) of a realization and
- * every partner after them in sorted order (each unordered pair once) within reach:
+#if UNIFORM
+/* Add one pair's Gaussian to the radii k0 .. k1: e = exp(-t^2 / 2 sigma^2) at radius k0
+ * (t = radius_k0 - s), then e_{k+1} = e_k a_k, a_{k+1} = a_k b along the uniform radii. */
+inline void add_gaussian(double *hist, double e, double a, const double b, const int k0, const int k1)
+{
+    for (int k = k0; k <= k1; ++k) {
+        hist[k] += e;
+        e *= a;
+        a *= b;
+    }
+}
+
+/* The pairs waiting in (tb, kb0, kb1): their two exp as one double4 exp each (PoCL's
+ * vector exp costs about what one scalar exp does), then the recurrence per pair. A lane
+ * with kb0 > kb1 adds nothing. */
+inline void flush_pairs(double *hist, const double *tb, const int *kb0, const int *kb1,
+                        const double step, const double inv2s2, const double b)
+{
+    const double4 t = (double4)(tb[0], tb[1], tb[2], tb[3]);
+    const double4 e = exp(-(t * t) * inv2s2);
+    const double4 a = exp(-(2.0 * t * step + step * step) * inv2s2);
+    add_gaussian(hist, e.s0, a.s0, b, kb0[0], kb1[0]);
+    add_gaussian(hist, e.s1, a.s1, b, kb0[1], kb1[1]);
+    add_gaussian(hist, e.s2, a.s2, b, kb0[2], kb1[2]);
+    add_gaussian(hist, e.s3, a.s3, b, kb0[3], kb1[3]);
+}
+#endif
+
+/* Grid (items, realizations). For the points [w PPI, (w + 1) PPI) of a realization, every
+ * unordered pair within reach once: the partners after the point in its own cell and
+ * every point of the forward half of the neighbouring cells (offsets after the centre in
+ * the 3^D stencil; with G >= 3 cell c + o and c - o are distinct, so each pair of cells
+ * is met from one side):
  * out[r][w][k] += exp(-(radius_k - s)^2 / (2 sigma^2)) for the radii with
  * |radius_k - s| <= cut (s the pair's distance). UNIFORM radii take the Gaussian along
- * k by a recurrence (three exp a pair, not one a radius). */
+ * k by a recurrence (two exp a pair, four pairs to a vector exp; b = exp(-2 step^2 /
+ * 2 sigma^2) from the host). */
 __kernel void pcf_sums(__global const double *pts, __global const uint *cell,
                        __global const uint *start, const uint n, const int G, const uint noff,
                        const double reach2, __global const double *radii, const double r0,
-                       const double step, const double inv2s2, const double cut,
+                       const double step, const double inv_step, const double inv2s2, const double cut,
+                       const double b,
                        const uint items, __global double *out)
 {
     const uint w = get_global_id(0), r = get_global_id(1);
@@ -82,10 +115,16 @@ __kernel void pcf_sums(__global const double *pts, __global const uint *cell,
     double hist[NR];
     for (int k = 0; k < NR; ++k)
         hist[k] = 0.0;
+#if UNIFORM
+    double tb[4] = {0.0, 0.0, 0.0, 0.0};
+    int kb0[4] = {0, 0, 0, 0}, kb1[4] = {-1, -1, -1, -1};
+    int waiting = 0;
+#endif
     const uint cells = (uint)G;
     uint total_cells = 1;
     for (int k = 0; k < D; ++k)
         total_cells *= cells;
+    const uint centre = (noff - 1) / 2;
     const size_t base = (size_t)r * n;
     const uint stop = (w + 1) * PPI < n ? (w + 1) * PPI : n;
     for (uint i = w * PPI; i < stop; ++i) {
@@ -95,30 +134,34 @@ __kernel void pcf_sums(__global const double *pts, __global const uint *cell,
             x[k] = pts[gi * D + k];
         int c[D];
         cell_coordinates(cell[gi], G, c);
-        for (uint o = 0; o < noff; ++o) {
+        for (uint o = centre; o < noff; ++o) {
             const size_t slot = (size_t)r * total_cells + neighbour(c, o, G);
             const uint s1 = start[slot + 1];
-            for (uint j = start[slot]; j < s1; ++j) {
-                if (j <= gi)
-                    continue;
+            for (uint j = o == centre ? (uint)gi + 1 : start[slot]; j < s1; ++j) {
                 const double d2 = distance2(x, pts + (size_t)j * D);
                 if (d2 >= reach2)
                     continue;
                 const double s = sqrt(d2);
 #if UNIFORM
-                const double lo = ceil((s - cut - r0) / step), hi = floor((s + cut - r0) / step);
-                const int k0 = lo < 0.0 ? 0 : (int)lo;
+                /* k0 = max(0, ceil(lo)), k1 = min(NR - 1, floor(hi)) by conversions:
+                 * PoCL calls ceil and floor out of line */
+                const double lo = (s - cut - r0) * inv_step, hi = (s + cut - r0) * inv_step;
+                if (hi < 0.0)
+                    continue;
+                int k0 = 0;
+                if (lo > 0.0) {
+                    k0 = (int)lo;
+                    k0 += (double)k0 < lo;
+                }
                 const int k1 = hi > (double)(NR - 1) ? NR - 1 : (int)hi;
                 if (k0 > k1)
                     continue;
-                const double t = (r0 + (double)k0 * step) - s;
-                double e = exp(-(t * t) * inv2s2);
-                double a = exp(-(2.0 * t * step + step * step) * inv2s2);
-                const double b = exp(-2.0 * step * step * inv2s2);
-                for (int k = k0; k <= k1; ++k) {
-                    hist[k] += e;
-                    e *= a;
-                    a *= b;
+                tb[waiting] = (r0 + (double)k0 * step) - s;
+                kb0[waiting] = k0;
+                kb1[waiting] = k1;
+                if (++waiting == 4) {
+                    flush_pairs(hist, tb, kb0, kb1, step, inv2s2, b);
+                    waiting = 0;
                 }
 #else
                 for (int k = 0; k < NR; ++k) {
@@ -130,6 +173,13 @@ __kernel void pcf_sums(__global const double *pts, __global const uint *cell,
             }
         }
     }
+#if UNIFORM
+    for (int l = waiting; l < 4; ++l) {
+        kb0[l] = 0;
+        kb1[l] = -1;
+    }
+    flush_pairs(hist, tb, kb0, kb1, step, inv2s2, b);
+#endif
     __global double *row = out + ((size_t)r * items + w) * NR;
     for (int k = 0; k < NR; ++k)
         row[k] = hist[k];

@@ -241,6 +241,15 @@ def test_pcf_of_random_points_is_one():
         assert abs(np.mean(g[20:]) - 1) < 0.01
 
 
+@pytest.mark.parametrize("d,n", [(1, 300), (1, 8), (2, 64), (3, 2000)])
+def test_pcf_kernel_equals_numpy_twin_in_every_dimension(d, n):
+    # (1, 8) and (2, 64) reach past a third of the torus: one cell, every pair
+    pts = clsamp.make_sampler("random", d=d, seed=5).sample(n, realizations=2)
+    _, g1 = clsamp.pair_correlation(pts)
+    _, g2 = clsamp.pair_correlation(pts, backend="numpy")
+    np.testing.assert_allclose(g1, g2, rtol=1e-12, atol=1e-12)
+
+
 def test_pcf_kernel_equals_numpy_twin():
     pts = clsamp.make_sampler("jittered", d=2, seed=1).sample(1024, realizations=3)
     r1, g1 = clsamp.pair_correlation(pts)

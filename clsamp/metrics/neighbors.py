@@ -128,13 +128,14 @@ def _pcf_sums_device(sets, radii, sigma, cut, uniform):
     kernel = runtime.kernel("neighbors.cl", "pcf_sums", defines)
     q = runtime.queue()
     step = float(radii[1] - radii[0]) if len(radii) > 1 else 1.0
+    inv2s2 = 1.0 / (2.0 * sigma * sigma)
     out = runtime.Output((r, items, len(radii)), np.float64,
                          host=np.empty((r, items, len(radii))))
     kernel(q, (items, r), None, *(runtime.to_device(a).data for a in (pts, cell, start)),
            np.uint32(n), np.int32(cells), np.uint32(3 ** d if cells > 1 else 1),
            np.float64(reach * reach), runtime.to_device(radii).data, np.float64(radii[0]),
-           np.float64(step), np.float64(1.0 / (2.0 * sigma * sigma)), np.float64(cut * sigma),
-           np.uint32(items), out.buffer)
+           np.float64(step), np.float64(1.0 / step), np.float64(inv2s2), np.float64(cut * sigma),
+           np.float64(math.exp(-2.0 * step * step * inv2s2)), np.uint32(items), out.buffer)
     return out.finish().sum(axis=1)
 
 
@@ -197,8 +198,9 @@ def pair_correlation(points, radii=None, sigma=None, backend="opencl"):
     points divided by n (n - 1). Dividing by N(r) rather than by the surface at r keeps
     g = 1 for a Poisson process even at radii below a few sigma. Pairs come from the
     neighbouring cells of a grid as wide as the largest radius plus the cut, so the work
-    is O(n) per set for radii of a few mean spacings; on the device each pair adds its
-    Gaussian to the radii within the cut by a recurrence (three exp per pair).
+    is O(n) per set for radii of a few mean spacings; on the device each unordered pair
+    is met once (a half stencil of cells) and adds its Gaussian to the radii within the
+    cut by a recurrence (two exp per pair, evaluated four pairs at a time).
 
     References
     ----------
