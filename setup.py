@@ -24,7 +24,7 @@ setup(
     ],
     extras_require={
         "test": ["pytest>=7", "hypothesis>=6", "scipy>=1.10"],
-        "bench": ["scipy>=1.10", "finufft>=2.2", "bridson>=0.1"],
+        "bench": ["scipy>=1.10", "finufft>=2.2", "bridson>=0.1", "qmcpy>=2.0"],
     },
     entry_points={"console_scripts": ["clsamp=clsamp.cli:main"]},
 )

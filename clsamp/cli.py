@@ -327,10 +327,17 @@ def _add_convergence(sub):
     p.add_argument("--integrand", default="gaussian",
                    help="comma-separated integrands: gaussian, disk, heaviside, pmj_disk, "
                    "pmj_gaussian, pmj_bilinear, pmj_step, pmj_triangle (default gaussian)")
+    p.add_argument("--family", default=None,
+                   help="comma-separated integrand families instead of --integrand: "
+                   "random_gaussians, random_heavisides, random_disks, random_boxes, "
+                   "random_clipped_gaussians (or gaussians, heavisides, disks, boxes); the plot "
+                   "shows the spread of the MSE across members")
+    p.add_argument("--members", type=int, default=256, help="members per family (default 256)")
     p.add_argument("--ns", default="16..16384",
                    help="sample counts: 'a..b' is a, 4a, 16a, ... <= b (powers of 4 from a, squares "
                    "for jittered); 'a..b:2' uses ratio 2; or a list '16,64,256' (default 16..16384)")
-    p.add_argument("--realizations", type=int, default=1000, help="estimates per n (default 1000)")
+    p.add_argument("--realizations", type=int, default=None,
+                   help="estimates per n (default 1000; 64 for families)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--no-homogenize", action="store_true",
                    help="no random toroidal shift per realization")
@@ -350,14 +357,24 @@ def _run_convergence(args):
     time_path = output.with_name(output.stem + "_time" + output.suffix)
     json_path = output.with_suffix(".json")
     samplers = [s.strip() for s in args.samplers.split(",") if s.strip()]
+    if args.family is not None:
+        return _run_family_convergence(args, samplers, output, json_path)
     integrands = [s.strip() for s in args.integrand.split(",") if s.strip()]
+    from .families import is_family
+    if integrands and all(is_family(name) for name in integrands):
+        args.family = ",".join(integrands)            # family names work in --integrand too
+        return _run_family_convergence(args, samplers, output, json_path)
+    if any(is_family(name) for name in integrands):
+        raise InvalidArgumentError(
+            "'--integrand' mixes integrand families and single integrands; run them apart")
     if not samplers or not integrands:
         raise InvalidArgumentError("'--samplers' and '--integrand' must each name at least one")
     ns = parse_ns(args.ns)
+    realizations = 1000 if args.realizations is None else args.realizations
     results, records = [], []
     for integrand in integrands:
         for name in samplers:
-            res = convergence(name, integrand, ns, realizations=args.realizations,
+            res = convergence(name, integrand, ns, realizations=realizations,
                               homogenize=not args.no_homogenize, seed=args.seed,
                               progress=not args.no_progress, backend=args.backend)
             verdict = theory.compare(res)
@@ -369,11 +386,106 @@ def _run_convergence(args):
     plots.convergence(results, output)
     plots.accuracy_time(results, time_path)
     fronts = {f: pareto_front([r for r in results if r.integrand == f]) for f in integrands}
-    document = {"ns": ns, "realizations": args.realizations, "seed": args.seed,
+    document = {"ns": ns, "realizations": realizations, "seed": args.seed,
                 "homogenize": not args.no_homogenize, "backend": args.backend,
                 "results": records, "pareto_front": fronts}
     io.write_text(json_path, json.dumps(document, indent=1, default=str))
     _wrote([output, time_path, json_path])
+
+
+def _run_family_convergence(args, samplers, output, json_path):
+    import json
+
+    from . import families, io, plots, variance
+    from .convergence import convergence, parse_ns
+    names = [f.strip() for f in args.family.split(",") if f.strip()]
+    if not samplers or not names:
+        raise InvalidArgumentError("'--samplers' and '--family' must each name at least one")
+    names = [families.make_family(name, members=1).name for name in names]   # unknown: fails now
+    ns = parse_ns(args.ns)
+    realizations = 64 if args.realizations is None else args.realizations
+    results, records = [], []
+    for family in names:
+        for name in samplers:
+            res = convergence(name, family, ns, realizations=realizations, members=args.members,
+                              homogenize=not args.no_homogenize, seed=args.seed,
+                              progress=not args.no_progress, backend=args.backend)
+            verdict = variance.compare(res)
+            results.append(res)
+            records.append({**res.to_dict(), "comparison": verdict})
+            lo, hi = verdict["ci"]
+            expected = "-" if verdict["expected"] is None else f"N^{verdict['expected']:g}"
+            print(f"{name:>26} {res.family:<26} mean slope {verdict['slope']:+.2f} [{lo:+.2f}, {hi:+.2f}]"
+                  f"  theory {expected:<8} {verdict['verdict']}  mean MSE(N={res.ns[-1]}) "
+                  f"{res.mean[-1]:.3g}, worst {res.max[-1]:.3g}  {res.seconds.sum():.2f} s")
+    plots.family_convergence(results, output)
+    document = {"ns": ns, "realizations": realizations, "members": args.members, "seed": args.seed,
+                "homogenize": not args.no_homogenize, "backend": args.backend, "results": records}
+    io.write_text(json_path, json.dumps(document, indent=1, default=str))
+    _wrote([output, json_path])
+
+
+# -- integrate -----------------------------------------------------------------
+def _add_integrate(sub):
+    p = sub.add_parser(
+        "integrate", help="an integral to a tolerance, with its confidence interval",
+        description="Replicated randomized QMC: doubles the points per replication until the "
+        "Student-t interval over the replications is as narrow as asked.")
+    p.add_argument("function", help="a clsamp integrand name (gaussian, disk, heaviside, pmj_...) "
+                   "or module:function, a vectorised Python function of an (m, d) array")
+    p.add_argument("--d", type=int, default=2, help="dimension (default 2)")
+    p.add_argument("--sampler", default="sobol:owen", help="a randomized sampler (default sobol:owen)")
+    p.add_argument("--abs-tol", type=float, default=None)
+    p.add_argument("--rel-tol", type=float, default=None)
+    p.add_argument("--max-n", type=int, default=2**24, help="points per replication at most")
+    p.add_argument("--replications", type=int, default=16)
+    p.add_argument("--confidence", type=float, default=0.95)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("-o", "--output", default=None, help="also write the result as JSON (.json)")
+    p.set_defaults(run=_run_integrate)
+
+
+def _load_function(text):
+    if ":" not in text:
+        return text                                       # an integrand name
+    import importlib
+    import os
+    module, _, name = text.partition(":")
+    sys.path.insert(0, os.getcwd())
+    try:
+        found = getattr(importlib.import_module(module), name)
+    except (ImportError, AttributeError) as error:
+        raise InvalidArgumentError(f"'function' {text!r} cannot be loaded: {error}") from None
+    finally:
+        sys.path.pop(0)
+    if not callable(found):
+        raise InvalidArgumentError(f"'function' {text!r} is not callable")
+    return found
+
+
+def _run_integrate(args):
+    import dataclasses
+    import json
+    import warnings
+
+    from . import io
+    from .integration import integrate
+    output = _output(args.output, (".json",), "integrate") if args.output else None
+    f = _load_function(args.function)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = integrate(f, args.d, sampler=args.sampler, abs_tol=args.abs_tol, rel_tol=args.rel_tol,
+                        max_n=args.max_n, replications=args.replications,
+                        confidence=args.confidence, seed=args.seed)
+    for w in caught:
+        print(f"clsamp integrate: warning: {w.message}", file=sys.stderr)
+    print(f"{res.estimate:.12g} +- {res.half_width:.3g} ({100 * res.confidence:g} % interval; "
+          f"{res.replications} x {res.n} points of {res.sampler}, {res.evaluations} evaluations, "
+          f"{res.seconds:.3f} s; {'converged' if res.converged else 'NOT converged'})")
+    if output is not None:
+        io.write_text(output, json.dumps(dataclasses.asdict(res), indent=1))
+        _wrote([output])
+    return 0 if res.converged else 1
 # -- render --------------------------------------------------------------------
 def _add_render(sub):
     p = sub.add_parser("render", help="render a scene with a sampler; OpenEXR plus a PNG preview",
@@ -432,6 +544,7 @@ _COMMANDS = (
     _add_spectrum,
     _add_metrics,
     _add_convergence,
+    _add_integrate,
     _add_render,
     _add_tour,
 )

@@ -36,7 +36,7 @@ import time
 
 import numpy as np
 
-from . import philox, runtime
+from . import families, philox, runtime, variance
 from .errors import InvalidArgumentError
 from .geometry import torus
 from .integrands import Integrand, make_integrand
@@ -52,7 +52,8 @@ HOST_CHUNK = 2**22      # doubles per chunk of the NumPy path (32 MB)
 # items in flight.
 DEVICE_CHUNK = {"cpu": 2**21, "gpu": 2**25, "other": 2**23}
 
-__all__ = ["ConvergenceResult", "convergence", "pareto_front", "time_to_mse", "parse_ns"]
+__all__ = ["ConvergenceResult", "convergence", "pareto_front", "time_to_mse", "parse_ns",
+           "IntegrandKernel", "combine_sums"]
 
 
 # -- the result ------------------------------------------------------------------------
@@ -257,11 +258,7 @@ def _check_ns(ns, sampler, label):
 
 
 # -- points ----------------------------------------------------------------------------
-def homogenization_shifts(seed, realizations, d):
-    """The toroidal shift of each realization: (len(realizations), d) doubles in [0, 1),
-    ``philox.uniform(seed, Stream.EXPERIMENT, k, 0, j)`` (the kernel draws the same)."""
-    k = np.asarray(realizations, dtype=np.uint32)[:, None]
-    return philox.uniform(seed, philox.Stream.EXPERIMENT, k, 0, np.arange(d, dtype=np.uint32)[None, :])
+homogenization_shifts = torus.homogenization_shifts
 
 
 def _errors_numpy(sampler, f, n, r, homogenize, seed):
@@ -278,8 +275,9 @@ def _errors_numpy(sampler, f, n, r, homogenize, seed):
     return out
 
 
-class _Kernel:
-    """The integrand's program and parameters on the current device, built once."""
+class IntegrandKernel:
+    """The integrand's program and parameters on the current device, built once
+    (``kernels/integrands.cl``; ``homogenize`` shifts realization k by its own vector)."""
 
     def __init__(self, f, homogenize, seed):
         import pyopencl.array as cla
@@ -339,8 +337,9 @@ def _errors_opencl(kernel, sampler, n, r):
 
 # -- the experiment --------------------------------------------------------------------
 def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed=0, progress=True,
-                backend="opencl"):
-    """MSE, bias^2 and variance of a sampler's integral estimates for every n in ``ns``.
+                backend="opencl", members=None):
+    """MSE, bias^2 and variance of a sampler's integral estimates for every n in ``ns``;
+    over a family of integrands, the spread of the MSE across its members.
 
     Parameters
     ----------
@@ -348,10 +347,14 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
         A sampler object (any registered sampler, its own seed and parameters), or a
         name such as ``"jittered"`` or ``"sobol:owen"``, made with
         ``make_sampler(name, d=integrand.d, seed=seed, backend=backend)``.
-    integrand : Integrand or str
+    integrand : Integrand, Family or str
         An :mod:`clsamp.integrands` object or a name: ``"gaussian"``, ``"disk"``,
         ``"heaviside"``, ``"pmj_disk"``, ``"pmj_gaussian"``, ``"pmj_bilinear"``,
-        ``"pmj_step"``, ``"pmj_triangle"`` (default parameters).
+        ``"pmj_step"``, ``"pmj_triangle"`` (default parameters); or a family of random
+        integrands (:mod:`clsamp.families`): ``"random_gaussians"``,
+        ``"random_heavisides"``, ``"random_disks"``, ``"random_boxes"``,
+        ``"random_clipped_gaussians"`` (drawn from ``seed``, in the sampler's dimension),
+        or a :class:`~clsamp.families.Family`.
     ns : sequence of int
         Sample counts (sorted; each must be one the sampler can make).
     realizations : int
@@ -366,10 +369,15 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
     backend : {"opencl", "numpy"}
         ``"numpy"``: the NumPy reference (points from ``sampler.sample``, evaluation and
         sums in NumPy; a sampler given by name uses its NumPy reference too).
+    members : int, optional
+        For a family given by name: how many members to draw (default 256).
 
     Returns
     -------
-    ConvergenceResult
+    ConvergenceResult, or FamilyResult for a family
+        A :class:`~clsamp.variance.FamilyResult` has ``.mse`` of shape (len(ns),
+        members), the summaries ``mean``, ``median``, ``q90`` and ``max`` per n, and
+        ``rate(statistic)`` with a bootstrap confidence interval.
 
     Raises
     ------
@@ -398,11 +406,17 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
     r = check_int(realizations, "realizations", minimum=2, maximum=MAX_UINT32)
     if not isinstance(homogenize, (bool, np.bool_)):
         raise InvalidArgumentError(f"'homogenize' must be True or False, got {homogenize!r}")
+    if families.is_family(integrand):
+        return _family_sweep(sampler, integrand, ns, r, homogenize, seed, progress, backend, members)
+    if members is not None:
+        raise InvalidArgumentError(
+            f"'members' is for integrand families ({', '.join(families.family_names())}); "
+            f"integrand {integrand!r} is one function")
     s, f, label = _resolve(sampler, integrand, seed, backend)
     values = _check_ns(ns, s, label)
     kernel = None
     if backend == "opencl":
-        kernel = _Kernel(f, homogenize, seed)
+        kernel = IntegrandKernel(f, homogenize, seed)
         # builds the sampler's and the integrand's programs before any timing
         _errors_opencl(kernel, s, values[0], 1)
 
@@ -426,6 +440,33 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
                              homogenize=bool(homogenize), seed=seed, backend=backend, device=device,
                              kind=s.label, randomized=bool(s.randomized), d=f.d, traits=traits,
                              rates=sampler_rates(s))
+
+
+def _family_sweep(sampler, integrand, ns, r, homogenize, seed, progress, backend, members):
+    if isinstance(sampler, str):
+        d = integrand.d if isinstance(integrand, families.Family) else 2
+        s, label = make_sampler(sampler, d=d, seed=seed, backend=backend), sampler
+    elif isinstance(sampler, Sampler):
+        s, label = sampler, sampler.label
+    else:
+        raise InvalidArgumentError(
+            f"'sampler' must be a Sampler or a sampler name such as 'jittered' or 'sobol:owen', "
+            f"got {sampler!r}")
+    if isinstance(integrand, families.Family):
+        if members is not None and members != integrand.members:
+            raise InvalidArgumentError(
+                f"'members'={members!r} differs from the family's own {integrand.members} members")
+        fam = integrand
+    else:
+        fam = families.make_family(integrand, d=s.d, members=256 if members is None else members,
+                                   seed=seed)
+    if fam.d != s.d:
+        raise InvalidArgumentError(
+            f"'integrand' family {fam.name!r} is {fam.d}-dimensional but 'sampler' {label!r} makes "
+            f"{s.d}-dimensional points")
+    values = _check_ns(ns, s, label)
+    return variance.family_convergence(s, fam, values, r, homogenize, seed, progress, backend, label,
+                                       sampler_rates(s))
 
 
 # -- accuracy against time -------------------------------------------------------------

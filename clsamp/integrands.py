@@ -243,11 +243,14 @@ class Disk(Integrand):
 
 
 def halfspace_volume(normal, offset):
-    """Exact volume of {x in [0, 1]^d : normal . x < offset}, from the float inputs.
+    """Exact volume of {x in [0, 1]^d : normal . x < offset}, from the float inputs,
+    correctly rounded.
 
     The inclusion-exclusion over the cube's vertices, in rational arithmetic:
     V = sum_v (-1)^|v| max(0, offset - n.v)^m / (m! prod n_j) over the m non-zero
     components (the others contribute a factor 1), after flipping negative components.
+    Every float is an integer over a power of two, so the sum runs in Python integers
+    scaled by one common power of two, and one division rounds it.
     """
     n = [Fraction(float(v)) for v in normal]
     b = Fraction(float(offset))
@@ -259,13 +262,15 @@ def halfspace_volume(normal, offset):
     m = len(active)
     if m == 0:
         return 1.0 if b > 0 else 0.0
-    total = Fraction(0)
+    scale = max(v.denominator for v in active + [b])          # a power of two
+    ints = [int(v * scale) for v in active]
+    top = int(b * scale)
+    total = 0
     for corner in itertools.product((0, 1), repeat=m):
-        t = b - sum(v for v, c in zip(active, corner, strict=True) if c)
+        t = top - sum(v for v, c in zip(ints, corner, strict=True) if c)
         if t > 0:
             total += (-1) ** sum(corner) * t**m
-    denominator = math.factorial(m) * math.prod(active)
-    return float(total / denominator)
+    return float(Fraction(total, math.factorial(m) * math.prod(ints)))
 
 
 class Heaviside(Integrand):

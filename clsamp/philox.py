@@ -38,6 +38,7 @@ class Stream:
     PIXEL = 5           # per-pixel decorrelation in the renderer
     INIT = 6            # initial sites of optimizing samplers
     EXPERIMENT = 7      # convergence experiments
+    FAMILY = 8          # the members of integrand families
 
 
 def seed_key(seed):

@@ -16,7 +16,8 @@ from .errors import InvalidArgumentError
 from .validation import check_choice, check_real
 
 __all__ = ["spectrum", "radial_mean", "anisotropy", "spectrum_figure", "pair_correlation",
-           "pcf_figure", "discrepancy", "convergence", "accuracy_time", "render_comparison",
+           "pcf_figure", "discrepancy", "convergence", "family_spread", "family_convergence",
+           "accuracy_time", "render_comparison",
            "spectrum_image", "save_spectrum_png", "save_spectrum_exr", "pyplot"]
 
 
@@ -270,6 +271,42 @@ def convergence(results, path):
         ax.set_xscale("log")
         ax.set_yscale("log")
         _label(ax, "N (samples)", f"{name}: MSE against N (dashed: theory)")
+    fig.tight_layout()
+    return io.save_figure(path, fig)
+
+
+def family_spread(ax, res, color=None, label=None):
+    """One family result on ``ax``: the mean MSE over members as a line, the band between
+    the members' 10 % and 90 % quantiles shaded, the worst member dotted, and the
+    published rate (:func:`clsamp.variance.compare`) dashed through the largest N."""
+    from . import variance
+    n = res.ns.astype(np.float64)
+    lo, hi = np.quantile(res.mse, [0.1, 0.9], axis=1)
+    cmp = variance.compare(res)
+    text = label or res.sampler
+    if np.isfinite(cmp["slope"]):
+        text += f": {cmp['slope']:.2f} [{cmp['ci'][0]:.2f}, {cmp['ci'][1]:.2f}]"
+        if cmp["expected"] is not None:
+            text += f" (theory {cmp['expected']:g})"
+    (line,) = ax.loglog(n, res.mean, "o-", markersize=3, color=color, label=text)
+    color = line.get_color()
+    ax.fill_between(n, np.maximum(lo, np.finfo(float).tiny), hi, color=color, alpha=0.2, linewidth=0)
+    ax.loglog(n, res.max, ":", color=color, linewidth=0.9)
+    if cmp["expected"] is not None and res.mean[-1] > 0:
+        ax.loglog(n, res.mean[-1] * (n / n[-1]) ** cmp["expected"], "--", color=color,
+                  linewidth=0.9, alpha=0.7)
+    return line
+
+
+def family_convergence(results, path):
+    """MSE against N over integrand families, one panel per family: per sampler the mean
+    over members (line), the 10-90 % band across members (shaded), the worst member
+    (dotted) and the theory (dashed). ``results``: :class:`clsamp.variance.FamilyResult`."""
+    fig, panels = _panels(results)
+    for ax, name, group in panels:
+        for res in group:
+            family_spread(ax, res)
+        _label(ax, "N (samples)", f"{name} ({group[0].members} members): MSE against N")
     fig.tight_layout()
     return io.save_figure(path, fig)
 

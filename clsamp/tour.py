@@ -12,7 +12,8 @@ Sections
    function, per sampler; the radial means by family; CD and L2-star discrepancy against
    N with fitted slopes beside the known ones.
 2. Convergence: MSE against N for a smooth and a discontinuous integrand, fitted rates
-   held against the published theory (Pilleboue et al. 2015).
+   held against the published theory (Pilleboue et al. 2015); then over families of
+   random integrands, with the spread across members.
 3. Rendering: ambient occlusion at 96 rays per pixel with several samplers, MSE against
    a reference render.
 4. What accuracy costs in time: spectrum error against seconds (fast against direct),
@@ -323,6 +324,53 @@ def section_convergence(report, quick):
     body += ("<table><thead><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in headers)
              + f"</tr></thead><tbody>{verdicts}</tbody></table>")
     body += img(Path(picture).relative_to(report.out).as_posix(), "MSE against N", 1000)
+    family_body, data["families"] = _family_sweeps(report, quick)
+    return body + family_body, data
+
+
+TOUR_FAMILIES = ("random_heavisides", "random_gaussians", "random_disks")
+TOUR_FAMILY_SAMPLERS = ("random", "regular", "jittered", "sobol:owen")
+
+
+def _family_sweeps(report, quick):
+    """Section 2's second part: MSE over families of random integrands, the spread across
+    members shaded, the worst member dotted."""
+    from . import variance
+    from .convergence import convergence
+    ns, realizations, members = (([16, 64, 256, 1024], 32, 32) if quick
+                                  else ([16, 64, 256, 1024, 4096, 16384], 64, 256))
+    results, rows, data = [], [], {}
+    for family in TOUR_FAMILIES:
+        for name in TOUR_FAMILY_SAMPLERS:
+            try:
+                res = convergence(name, family, ns, realizations=realizations, members=members,
+                                  seed=3, progress=False)
+                results.append(res)
+                cmp = variance.compare(res)
+                worst = res.rate("max")
+                rows.append((name, family, f"{cmp['slope']:.2f} [{cmp['ci'][0]:.2f}, {cmp['ci'][1]:.2f}]",
+                             "-" if cmp["expected"] is None else f"N^{cmp['expected']:g}", cmp["verdict"],
+                             f"{worst[0]:.2f}", float(res.mean[-1]), float(res.max[-1]),
+                             float(np.sum(res.seconds))))
+                data[f"{name} / {family}"] = {"comparison": cmp, **res.to_dict()}
+            except Exception as error:
+                rows.append((name, family, f"failed: {error}", "-", "-", "-", "-", "-", "-"))
+                data[f"{name} / {family}"] = {"error": traceback.format_exc()}
+    body = (f"<h3>Over families of random integrands</h3><p>One integrand hides a sampler's weak "
+            f"directions, so each family draws {members} random members (half-planes with a "
+            "quarter of them along or near an axis; anisotropic Gaussians; disks) and every "
+            f"realization ({realizations} per N) estimates all of them. The line is the mean MSE "
+            "over members, the band the members' 10&ndash;90 % range, the dotted line the worst "
+            "member; the slope's interval is a bootstrap over members and realizations. The "
+            "verdict holds the mean's slope against the published rate: it matches when the "
+            "rate lies in the interval. A regular grid's worst half-planes fall as N^-1, no "
+            "faster than random points; on the smooth periodic Gaussians the grid is the "
+            "trapezoid rule and converges faster than any power.</p>")
+    body += table(("sampler", "family", "mean MSE slope [95 % CI]", "theory", "verdict",
+                   "worst member's slope", "mean MSE at largest N", "worst MSE", "seconds"), rows)
+    if results:
+        picture = plots.family_convergence(results, report.out / "img" / "families.png")
+        body += img(Path(picture).relative_to(report.out).as_posix(), "MSE over integrand families", 1100)
     return body, data
 
 

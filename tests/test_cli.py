@@ -85,3 +85,45 @@ def test_metrics_bad_input_is_a_clear_error(tmp_path):
                      "-o", str(tmp_path / "m.json"))
     assert out.returncode == 2 and "--bounds" in out.stderr and "Traceback" not in out.stderr
     assert not (tmp_path / "m.json").exists()
+
+
+def test_convergence_over_a_family_writes_the_plot_and_json(tmp_path):
+    import json
+    out = clsamp_cli("convergence", "--samplers", "jittered,regular", "--family", "heavisides",
+                     "--members", "8", "--ns", "16..1024", "--realizations", "8", "--no-progress",
+                     "-o", str(tmp_path / "fam.png"))
+    assert out.returncode == 0, out.stderr
+    assert "random_heavisides" in out.stdout and "mean slope" in out.stdout
+    document = json.loads((tmp_path / "fam.json").read_text())
+    assert document["members"] == 8 and len(document["results"]) == 2
+    assert np.array(document["results"][0]["mse"]).shape == (4, 8)
+    assert (tmp_path / "fam.png").stat().st_size > 0
+    # a family name in --integrand runs the same sweep; mixing refuses
+    same = clsamp_cli("convergence", "--samplers", "jittered", "--integrand", "random_disks",
+                      "--members", "4", "--ns", "16,64", "--realizations", "4", "--no-progress",
+                      "-o", str(tmp_path / "d.png"))
+    assert same.returncode == 0, same.stderr
+    mixed = clsamp_cli("convergence", "--integrand", "disk,random_disks", "-o", str(tmp_path / "m.png"))
+    assert mixed.returncode == 2 and "mixes" in mixed.stderr
+    unknown = clsamp_cli("convergence", "--family", "random_planes", "-o", str(tmp_path / "u.png"))
+    assert unknown.returncode == 2 and "unknown 'family'" in unknown.stderr
+
+
+def test_integrate_a_named_integrand_and_a_python_function(tmp_path):
+    import json
+    out = clsamp_cli("integrate", "gaussian", "--d", "2", "--abs-tol", "1e-6", "-o", str(tmp_path / "i.json"))
+    assert out.returncode == 0, out.stderr
+    assert "converged" in out.stdout
+    result = json.loads((tmp_path / "i.json").read_text())
+    assert result["converged"] and result["half_width"] <= 1e-6
+    (tmp_path / "userf.py").write_text("import numpy as np\n\ndef f(x):\n    return x[:, 0] * x[:, 1]\n")
+    env_dir = str(tmp_path)
+    user = subprocess.run([sys.executable, "-m", "clsamp", "integrate", "userf:f", "--d", "2",
+                           "--abs-tol", "1e-5"], capture_output=True, text=True, cwd=env_dir,
+                          env=dict(os.environ, PYTHONPATH=ROOT), timeout=300)
+    assert user.returncode == 0, user.stderr
+    assert abs(float(user.stdout.split()[0]) - 0.25) < 1e-4
+    missing = clsamp_cli("integrate", "gaussian", "--d", "2")
+    assert missing.returncode == 2 and "abs_tol" in missing.stderr
+    stuck = clsamp_cli("integrate", "disk", "--d", "2", "--abs-tol", "1e-12", "--max-n", "1024")
+    assert stuck.returncode == 1 and "max_n" in stuck.stderr and "NOT converged" in stuck.stdout

@@ -19,7 +19,7 @@ LAYERS = [
     ("geometry", {"geometry"}),
     ("samplers", {"samplers"}),
     ("analysis", {"spectrum", "point_metrics", "metrics"}),
-    ("experiments", {"integrands", "convergence", "theory"}),
+    ("experiments", {"integrands", "families", "variance", "convergence", "theory", "integration"}),
     ("render", {"scene", "render"}),
     ("report", {"plots", "report", "tour", "cli", "__main__", "__init__"}),
 ]

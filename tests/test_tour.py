@@ -57,5 +57,12 @@ def test_every_stability_case_holds_and_every_sampler_is_shown(tour):
     for name, _ in TOUR_SAMPLERS:
         assert name in sampler_names(), name
         assert "error" not in shown[name], shown[name].get("error")
-    verdicts = [c["comparison"]["verdict"].split()[0] for c in sections["convergence"]["data"].values()]
+    convergence = dict(sections["convergence"]["data"])
+    families = convergence.pop("families")
+    verdicts = [c["comparison"]["verdict"].split()[0] for c in convergence.values()]
     assert verdicts and set(verdicts) <= {"matches", "pre-asymptotic", "differs", "unknown"}
+    # the family sweeps: every family and sampler of the plan, each with its verdict
+    from clsamp.tour import TOUR_FAMILIES, TOUR_FAMILY_SAMPLERS
+    assert set(families) == {f"{s} / {f}" for f in TOUR_FAMILIES for s in TOUR_FAMILY_SAMPLERS}
+    assert all(c["comparison"]["verdict"] in ("matches", "pre-asymptotic", "differs", "unknown")
+               for c in families.values())

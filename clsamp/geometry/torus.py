@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from .. import philox
 from ..errors import InvalidArgumentError
 from ..validation import check_positive_int
 
@@ -61,6 +62,14 @@ def shift(points, offsets):
     y = points + offsets
     return np.where(y >= 1.0, y - 1.0, y)
 
+
+
+def homogenization_shifts(seed, realizations, d):
+    """The toroidal shift of each realization of an experiment: (len(realizations), d)
+    doubles in [0, 1), ``philox.uniform(seed, Stream.EXPERIMENT, k, 0, j)`` (the
+    integrand kernels draw the same)."""
+    k = np.asarray(realizations, dtype=np.uint32)[:, None]
+    return philox.uniform(seed, philox.Stream.EXPERIMENT, k, 0, np.arange(d, dtype=np.uint32)[None, :])
 
 def wrapped_delta(a, b):
     """``min(|a - b|, 1 - |a - b|)``: the toroidal distance of coordinates, broadcast."""

@@ -1,0 +1,311 @@
+"""Integration to a tolerance with an error bar: replicated randomized quasi-Monte Carlo.
+
+:func:`integrate` estimates the integral of f over [0, 1)^d with ``replications``
+independent randomizations of a sampler (an Owen-scrambled Sobol' sequence by default),
+and doubles the points per replication until the Student-t confidence interval of the
+replications' mean is as narrow as asked. The replications are independent and each is an
+unbiased estimate, so the interval is honest whatever the integrand (the t interval
+assumes the replication means are close to normal, which a few dozen points per
+replication already give for bounded f; L'Ecuyer et al. 2023 measure its coverage).
+
+References
+----------
+.. [1] A. B. Owen, "Practical Quasi-Monte Carlo Integration", 2023, ch. 17 (replicated
+   RQMC and its t intervals).
+.. [2] P. L'Ecuyer, M. K. Nakayama, A. B. Owen, B. Tuffin, "Confidence intervals for
+   randomized quasi-Monte Carlo estimators", Winter Simulation Conference, 2023.
+"""
+
+import dataclasses
+import math
+import time
+import warnings
+
+import numpy as np
+
+from . import runtime
+from .convergence import IntegrandKernel, combine_sums
+from .errors import InvalidArgumentError
+from .integrands import Integrand, make_integrand
+from .samplers import Sampler, make_sampler
+from .validation import check_int, check_real, check_seed
+
+BLOCK = 2**20           # points one call of a Python integrand gets at most
+SEQUENCES = ("sobol", "halton", "van_der_corput")   # sample(n, start=k) continues sample(k)
+
+__all__ = ["IntegrationResult", "integrate", "t_quantile"]
+
+
+@dataclasses.dataclass
+class IntegrationResult:
+    """What :func:`integrate` reached.
+
+    Attributes
+    ----------
+    estimate : float
+        The mean of the replications' estimates.
+    half_width : float
+        Half the width of the ``confidence`` interval: the integral lies in
+        estimate +- half_width with that confidence.
+    n : int
+        Points per replication at the end.
+    evaluations : int
+        Integrand evaluations in all (every replication, every doubling).
+    seconds : float
+        Wall time of the call.
+    converged : bool
+        Whether the half-width met the tolerance before ``max_n``.
+    replications, confidence, sampler, tolerance
+        How it was asked (``tolerance``: the half-width that was the target).
+    history : list of (n, estimate, half_width)
+        One row per doubling.
+    """
+
+    estimate: float
+    half_width: float
+    n: int
+    evaluations: int
+    seconds: float
+    converged: bool
+    replications: int
+    confidence: float
+    sampler: str
+    tolerance: float
+    history: list = dataclasses.field(default_factory=list)
+
+
+# -- Student's t -----------------------------------------------------------------------
+def _beta_fraction(a, b, x):
+    """The continued fraction of the incomplete beta function (modified Lentz)."""
+    tiny = 1e-300
+    c, d = 1.0, 1.0 - (a + b) * x / (a + 1.0)
+    d = 1.0 / (d if abs(d) > tiny else tiny)
+    h = d
+    for m in range(1, 500):
+        for numerator in (m * (b - m) * x / ((a + 2 * m - 1) * (a + 2 * m)),
+                          -(a + m) * (a + b + m) * x / ((a + 2 * m) * (a + 2 * m + 1))):
+            d = 1.0 + numerator * d
+            d = 1.0 / (d if abs(d) > tiny else tiny)
+            c = 1.0 + numerator / c
+            c = c if abs(c) > tiny else tiny
+            h *= d * c
+        if abs(d * c - 1.0) < 1e-16:
+            break
+    return h
+
+
+def _beta_regularized(a, b, x):
+    if x <= 0.0:
+        return 0.0
+    if x >= 1.0:
+        return 1.0
+    front = math.exp(math.lgamma(a + b) - math.lgamma(a) - math.lgamma(b)
+                     + a * math.log(x) + b * math.log1p(-x))
+    if x < (a + 1.0) / (a + b + 2.0):
+        return front * _beta_fraction(a, b, x) / a
+    return 1.0 - front * _beta_fraction(b, a, 1.0 - x) / b
+
+
+def _t_upper_tail(t, dof):
+    """P(T > t) for t >= 0."""
+    return 0.5 * _beta_regularized(dof / 2.0, 0.5, dof / (dof + t * t))
+
+
+def t_quantile(p, dof):
+    """The p quantile of Student's t with ``dof`` degrees of freedom, p in (0, 1)
+    (bisection on the distribution function, to about 1e-12 relative)."""
+    if not 0.0 < p < 1.0:
+        raise InvalidArgumentError(f"'p' must be in (0, 1), got {p!r}")
+    if p < 0.5:
+        return -t_quantile(1.0 - p, dof)
+    if p == 0.5:
+        return 0.0
+    tail = 1.0 - p
+    lo, hi = 0.0, 1.0
+    while _t_upper_tail(hi, dof) > tail:
+        lo, hi = hi, 2.0 * hi
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if _t_upper_tail(mid, dof) > tail:
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo <= 1e-13 * hi:
+            break
+    return 0.5 * (lo + hi)
+
+
+# -- the integrand ---------------------------------------------------------------------
+def _python_sums(f, points, count):
+    """Per replication, the sum of f over its ``count`` points (points: (R, count, d))."""
+    r, _, d = points.shape
+    flat = np.ascontiguousarray(points.reshape(-1, d))
+    total = np.empty(r)
+    per_call = max(1, BLOCK // count) if count <= BLOCK else 1
+    for lo in range(0, r, per_call):
+        hi = min(r, lo + per_call)
+        block = flat[lo * count:hi * count]
+        values = []
+        for a in range(0, len(block), BLOCK):
+            x = block[a:a + BLOCK]
+            v = np.asarray(f(x), dtype=np.float64)
+            if v.shape != (len(x),):
+                raise InvalidArgumentError(
+                    f"'f' must return one value per point, shape ({len(x)},) for points "
+                    f"({len(x)}, {d}); it returned shape {v.shape}")
+            if not np.all(np.isfinite(v)):
+                bad = int(np.count_nonzero(~np.isfinite(v)))
+                raise InvalidArgumentError(
+                    f"'f' returned {bad} NaN or infinite values (of {len(x)}); the first at "
+                    f"x = {x[np.flatnonzero(~np.isfinite(v))[0]].tolist()}")
+            values.append(v)
+        total[lo:hi] = np.sum(np.concatenate(values).reshape(hi - lo, count), axis=1)
+    return total
+
+
+def _check_tolerance(value, name):
+    if value is None:
+        return 0.0
+    return check_real(value, name, minimum=0.0, open_minimum=True)
+
+
+def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**24, replications=16,
+              confidence=0.95, seed=0, n_start=1024, progress=True):
+    """The integral of ``f`` over [0, 1)^d, with a confidence interval, to a tolerance.
+
+    Parameters
+    ----------
+    f : callable, Integrand or str
+        A vectorised function taking an (m, d) float64 array and returning m values
+        (float64 of shape (m,)); or a :mod:`clsamp.integrands` integrand (or its name),
+        evaluated by its OpenCL kernel.
+    d : int
+        The dimension.
+    sampler : str or Sampler
+        A randomized sampler (each replication is one of its realizations); default
+        Owen-scrambled Sobol', whose points extend when n doubles (the replications keep
+        their first n points and add n more).
+    abs_tol, rel_tol : float, optional
+        Stop when the half-width is at most max(abs_tol, rel_tol |estimate|); at least
+        one is needed.
+    max_n : int
+        Points per replication at most; reaching it without meeting the tolerance warns
+        (``UserWarning``) and returns ``converged=False``.
+    replications : int
+        Independent randomizations, at least 2 (the interval has replications - 1
+        degrees of freedom).
+    confidence : float
+        Of the two-sided Student-t interval, in (0, 1).
+    seed : int
+        The sampler's seed when it is given by name.
+    n_start : int
+        Points per replication of the first round (rounded to a count the sampler makes).
+    progress : bool
+        A progress bar (one step per doubling, with the estimate and its half-width) once
+        the call has run 2 s.
+
+    Returns
+    -------
+    IntegrationResult
+
+    Raises
+    ------
+    InvalidArgumentError
+        No tolerance or a non-positive one; a deterministic sampler; ``f`` returning the
+        wrong shape, NaN or infinities (the message says which and where).
+
+    Examples
+    --------
+    >>> import numpy as np, clsamp
+    >>> res = clsamp.integrate(lambda x: np.prod(x, axis=1), 3, abs_tol=1e-6, progress=False)
+    >>> bool(abs(res.estimate - 0.125) < 1e-5), res.converged
+    (True, True)
+    """
+    t0 = time.perf_counter()
+    d = check_int(d, "d", minimum=1)
+    abs_tol = _check_tolerance(abs_tol, "abs_tol")
+    rel_tol = _check_tolerance(rel_tol, "rel_tol")
+    if abs_tol == 0.0 and rel_tol == 0.0:
+        raise InvalidArgumentError("give 'abs_tol' or 'rel_tol' (or both): the half-width to reach")
+    max_n = check_int(max_n, "max_n", minimum=2)
+    r = check_int(replications, "replications", minimum=2, maximum=2**16)
+    confidence = check_real(confidence, "confidence", minimum=0.0, maximum=1.0,
+                            open_minimum=True, open_maximum=True)
+    seed = check_seed(seed)
+    n_start = check_int(n_start, "n_start", minimum=1)
+    if isinstance(sampler, str):
+        s = make_sampler(sampler, d=d, seed=seed)
+    elif isinstance(sampler, Sampler):
+        s = sampler
+    else:
+        raise InvalidArgumentError(f"'sampler' must be a Sampler or a sampler name, got {sampler!r}")
+    if s.d != d:
+        raise InvalidArgumentError(f"'sampler' makes {s.d}-dimensional points but 'd' is {d}")
+    if not s.randomized:
+        raise InvalidArgumentError(
+            f"'sampler' {s.label!r} is deterministic: its replications would all be equal and "
+            "the interval would be 0 wide. Use a randomized one, e.g. 'sobol:owen' or "
+            "'halton:owen'")
+    kernel = None
+    if isinstance(f, str) or isinstance(f, Integrand):
+        integrand = make_integrand(f, d=d)
+        if integrand.d != d:
+            raise InvalidArgumentError(
+                f"integrand {integrand.name!r} is {integrand.d}-dimensional, 'd' is {d}")
+        kernel = IntegrandKernel(integrand, False, seed)
+    elif not callable(f):
+        raise InvalidArgumentError(
+            f"'f' must be a callable, an Integrand or an integrand name, got {f!r}")
+    extends = s.name in SEQUENCES and s.accepts_start
+    t_value = t_quantile(0.5 + confidence / 2.0, r - 1)
+
+    def sums(count, start):
+        """Per replication, the sum of f over points start .. start + count - 1."""
+        if kernel is not None:
+            out = np.zeros(r)
+            for lo, hi in runtime.chunk_ranges(r, 8 * count * d, 2**27):
+                pts = s.sample_device(count, realizations=range(lo, hi), start=start)
+                out[lo:hi] = combine_sums(kernel.error_sums(pts, count, lo)) + count * kernel.f.integral
+            return out
+        return _python_sums(f, s.sample(count, realizations=r, start=start), count)
+
+    from tqdm import tqdm
+    bar = tqdm(desc=f"integrate ({s.label})", unit="round", disable=not progress, delay=2)
+    n = s.valid_n(min(n_start, max_n))
+    total = sums(n, 0)
+    evaluations = r * n
+    history = []
+    while True:
+        estimates = total / n
+        mean = math.fsum(estimates) / r
+        spread = math.sqrt(math.fsum((estimates - mean) ** 2) / (r - 1))
+        half = t_value * spread / math.sqrt(r)
+        tolerance = max(abs_tol, rel_tol * abs(mean))
+        history.append((n, mean, half))
+        bar.set_postfix_str(f"n={n}, {mean:.8g} +- {half:.2g} (target {tolerance:.2g})")
+        bar.update(1)
+        if half <= tolerance:
+            converged = True
+            break
+        bigger = s.valid_n(2 * n)
+        if bigger <= n:
+            bigger = s.valid_n(4 * n)
+        if bigger > max_n or bigger <= n:
+            converged = False
+            warnings.warn(
+                f"integrate stopped at max_n = {max_n} points per replication (n = {n}) with "
+                f"half-width {half:.3g}, above the tolerance {tolerance:.3g}: the estimate "
+                f"{mean:.10g} is not as accurate as asked", UserWarning, stacklevel=2)
+            break
+        if extends:
+            total = total + sums(bigger - n, n)
+            evaluations += r * (bigger - n)
+        else:
+            total = sums(bigger, 0)
+            evaluations += r * bigger
+        n = bigger
+    bar.close()
+    return IntegrationResult(estimate=mean, half_width=half, n=n, evaluations=evaluations,
+                             seconds=time.perf_counter() - t0, converged=converged, replications=r,
+                             confidence=confidence, sampler=s.label, tolerance=tolerance,
+                             history=history)
