@@ -24,6 +24,7 @@ MODULES = (
     "bench_spectrum",
     "bench_metrics",
     "bench_convergence",
+    "bench_families",
     "bench_poisson_disk",
     "bench_render",
     "bench_voronoi",
