@@ -10,7 +10,7 @@ See README.md for a tour and ``clsamp --help`` for the command line.
 
 # clsamp.render is the module (its function is clsamp.render.render); clsamp.convergence is the
 # function, while `from clsamp.convergence import x` still reads the module.
-from . import families, integrands, metrics, plots, render, theory, variance
+from . import families, integrands, metrics, parallel, plots, render, theory, variance
 from .convergence import convergence
 from .errors import (
                      BuildError,
@@ -25,7 +25,7 @@ from .integration import IntegrationResult, integrate
 from .metrics import StarBounds, discrepancy, nearest_neighbor_distances, pair_correlation, star_discrepancy
 from .runtime import current_device, devices, use_device
 from .samplers import Rate, SampleInfo, Sampler, as_qmc_engine, make_sampler, sampler_names
-from .spectrum import anisotropy, power_spectrum, radial_mean
+from .spectrum import anisotropy, expected_spectrum, power_spectrum, radial_mean
 
 __version__ = "0.1.0"
 
@@ -33,8 +33,8 @@ __all__ = [
     "BuildError", "ClsampError", "DeviceMemoryError", "IntegrationResult",
     "InvalidArgumentError", "NoDeviceError", "Rate", "SampleInfo", "Sampler", "SamplingError",
     "StarBounds", "anisotropy", "as_qmc_engine", "convergence", "current_device", "devices",
-    "discrepancy", "families", "family_names", "integrands", "integrate", "make_family",
-    "make_sampler", "metrics", "nearest_neighbor_distances", "pair_correlation", "plots",
+    "discrepancy", "expected_spectrum", "families", "family_names", "integrands", "integrate", "make_family",
+    "make_sampler", "metrics", "nearest_neighbor_distances", "pair_correlation", "parallel", "plots",
     "power_spectrum", "radial_mean", "render", "sampler_names", "star_discrepancy", "theory",
     "use_device", "variance",
 ]

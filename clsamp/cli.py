@@ -120,14 +120,34 @@ def _add_tour(sub):
     p.add_argument("--out", default="tour", help="output folder (default: tour)")
     p.add_argument("--quick", action="store_true", help="smaller sizes (CI; under two minutes)")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    _add_scheduler(p)
     p.set_defaults(run=_run_tour)
+
+
+def _add_scheduler(p):
+    p.add_argument("--scheduler", default=None,
+                   help="run the sweeps on a Dask cluster: a scheduler address (tcp://host:8786) "
+                   "or local:N for N local worker processes (needs clsamp[dask]); same numbers")
+
+
+def _client(args):
+    """The Dask client of ``--scheduler``, or None."""
+    if getattr(args, "scheduler", None) is None:
+        return None
+    from .parallel import connect
+    return connect(args.scheduler)
 
 
 def _run_tour(args):
     from .tour import run_tour
     if Path(args.out).exists() and not Path(args.out).is_dir():
         raise InvalidArgumentError(f"'--out' {args.out!r} is a file, not a folder")
-    index = run_tour(args.out, quick=args.quick, progress=not args.no_progress)
+    client = _client(args)
+    try:
+        index = run_tour(args.out, quick=args.quick, progress=not args.no_progress, client=client)
+    finally:
+        if client is not None:
+            client.close()
     print(f"wrote {index}")
     return 0
 
@@ -343,12 +363,31 @@ def _add_convergence(sub):
                    help="no random toroidal shift per realization")
     p.add_argument("--backend", default="opencl", choices=("opencl", "numpy"))
     p.add_argument("--no-progress", action="store_true", help="hide the progress bars")
+    p.add_argument("--checkpoint", default=None,
+                   help="a folder keeping every finished block of the sweeps, to resume them")
+    _add_scheduler(p)
     p.add_argument("-o", "--output", default="conv.png",
                    help=f"the MSE plot ({', '.join(FIGURES)}; default conv.png)")
     p.set_defaults(run=_run_convergence)
 
 
 def _run_convergence(args):
+    client = _client(args)
+    try:
+        return _convergence_runs(args, client)
+    finally:
+        if client is not None:
+            client.close()
+
+
+def _checkpoint(args, *labels):
+    """A checkpoint folder per sweep under ``--checkpoint``."""
+    if args.checkpoint is None:
+        return None
+    return Path(args.checkpoint) / "-".join(label.replace(":", "_").replace("/", "_") for label in labels)
+
+
+def _convergence_runs(args, client):
     import json
 
     from . import io, plots, theory
@@ -358,12 +397,12 @@ def _run_convergence(args):
     json_path = output.with_suffix(".json")
     samplers = [s.strip() for s in args.samplers.split(",") if s.strip()]
     if args.family is not None:
-        return _run_family_convergence(args, samplers, output, json_path)
+        return _run_family_convergence(args, samplers, output, json_path, client)
     integrands = [s.strip() for s in args.integrand.split(",") if s.strip()]
     from .families import is_family
     if integrands and all(is_family(name) for name in integrands):
         args.family = ",".join(integrands)            # family names work in --integrand too
-        return _run_family_convergence(args, samplers, output, json_path)
+        return _run_family_convergence(args, samplers, output, json_path, client)
     if any(is_family(name) for name in integrands):
         raise InvalidArgumentError(
             "'--integrand' mixes integrand families and single integrands; run them apart")
@@ -376,7 +415,8 @@ def _run_convergence(args):
         for name in samplers:
             res = convergence(name, integrand, ns, realizations=realizations,
                               homogenize=not args.no_homogenize, seed=args.seed,
-                              progress=not args.no_progress, backend=args.backend)
+                              progress=not args.no_progress, backend=args.backend, client=client,
+                              checkpoint=_checkpoint(args, name, integrand))
             verdict = theory.compare(res)
             results.append(res)
             records.append({**res.to_dict(), "comparison": verdict})
@@ -393,7 +433,7 @@ def _run_convergence(args):
     _wrote([output, time_path, json_path])
 
 
-def _run_family_convergence(args, samplers, output, json_path):
+def _run_family_convergence(args, samplers, output, json_path, client):
     import json
 
     from . import families, io, plots, variance
@@ -409,7 +449,8 @@ def _run_family_convergence(args, samplers, output, json_path):
         for name in samplers:
             res = convergence(name, family, ns, realizations=realizations, members=args.members,
                               homogenize=not args.no_homogenize, seed=args.seed,
-                              progress=not args.no_progress, backend=args.backend)
+                              progress=not args.no_progress, backend=args.backend, client=client,
+                              checkpoint=_checkpoint(args, name, family))
             verdict = variance.compare(res)
             results.append(res)
             records.append({**res.to_dict(), "comparison": verdict})

@@ -36,7 +36,7 @@ import time
 
 import numpy as np
 
-from . import families, philox, runtime, variance
+from . import families, parallel, philox, runtime, variance
 from .errors import InvalidArgumentError
 from .geometry import torus
 from .integrands import Integrand, make_integrand
@@ -261,17 +261,18 @@ def _check_ns(ns, sampler, label):
 homogenization_shifts = torus.homogenization_shifts
 
 
-def _errors_numpy(sampler, f, n, r, homogenize, seed):
-    """The NumPy reference of one n: the r errors (1/n) sum_i (f(x_ki) - integral)."""
+def _errors_numpy(sampler, f, n, r, homogenize, seed, r0=0):
+    """The NumPy reference of one n: the errors (1/n) sum_i (f(x_ki) - integral) of
+    realizations r0 .. r0 + r - 1."""
     step = max(1, HOST_CHUNK // (n * f.d))
     out = np.empty(r)
-    for lo in range(0, r, step):
-        hi = min(r, lo + step)
+    for lo in range(r0, r0 + r, step):
+        hi = min(r0 + r, lo + step)
         x = sampler.sample(n, realizations=range(lo, hi))
         if homogenize:
             x = torus.shift(x, homogenization_shifts(seed, np.arange(lo, hi), f.d)[:, None, :])
         # numpy sums a contiguous row pairwise: error ~ eps log2(n) of sum |f - I|
-        out[lo:hi] = np.sum(f._evaluate(x) - f.integral, axis=1) / n
+        out[lo - r0:hi - r0] = np.sum(f._evaluate(x) - f.integral, axis=1) / n
     return out
 
 
@@ -326,18 +327,39 @@ def combine_sums(parts):
     return hi + lo
 
 
-def _errors_opencl(kernel, sampler, n, r):
+def _errors_opencl(kernel, sampler, n, r, r0=0):
     limit = 8 * DEVICE_CHUNK[runtime.current_device().type]
     out = np.empty(r)
     for lo, hi in runtime.chunk_ranges(r, 8 * n * sampler.d, limit):
-        points = sampler.sample_device(n, realizations=range(lo, hi))
-        out[lo:hi] = combine_sums(kernel.error_sums(points, n, lo)) / n
+        points = sampler.sample_device(n, realizations=range(r0 + lo, r0 + hi))
+        out[lo:hi] = combine_sums(kernel.error_sums(points, n, r0 + lo)) / n
     return out
+
+
+def errors_block(sampler, f, n, lo, hi, homogenize, seed, backend):
+    """The errors of realizations lo .. hi - 1 at n: one task of a sweep (see
+    :mod:`clsamp.parallel`); each realization's error does not depend on the block."""
+    if backend == "opencl":
+        return _errors_opencl(IntegrandKernel(f, homogenize, seed), sampler, n, hi - lo, lo)
+    return _errors_numpy(sampler, f, n, hi - lo, homogenize, seed, lo)
+
+
+def sweep_tasks(sampler, f, ns, r, homogenize, seed, backend, cost=1):
+    """The tasks of a sweep (one block of realizations of one n each), and per n the
+    indices of its tasks in order."""
+    tasks, owners = [], []
+    for n in ns:
+        mine = []
+        for lo, hi in parallel.block_ranges(r, n * cost):
+            mine.append(len(tasks))
+            tasks.append((sampler, f, n, lo, hi, homogenize, seed, backend))
+        owners.append(mine)
+    return tasks, owners
 
 
 # -- the experiment --------------------------------------------------------------------
 def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed=0, progress=True,
-                backend="opencl", members=None):
+                backend="opencl", members=None, client=None, checkpoint=None):
     """MSE, bias^2 and variance of a sampler's integral estimates for every n in ``ns``;
     over a family of integrands, the spread of the MSE across its members.
 
@@ -371,6 +393,13 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
         sums in NumPy; a sampler given by name uses its NumPy reference too).
     members : int, optional
         For a family given by name: how many members to draw (default 256).
+    client : dask.distributed.Client, optional
+        Run the sweep on a Dask cluster, in tasks of whole realization blocks
+        (:mod:`clsamp.parallel`): the same errors, bit for bit, as in-process. ``seconds``
+        are then the tasks' compute seconds per n, summed over workers.
+    checkpoint : str or Path, optional
+        A folder that keeps every finished block; calling again with the same sweep
+        resumes from it (with or without a client).
 
     Returns
     -------
@@ -407,13 +436,21 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
     if not isinstance(homogenize, (bool, np.bool_)):
         raise InvalidArgumentError(f"'homogenize' must be True or False, got {homogenize!r}")
     if families.is_family(integrand):
-        return _family_sweep(sampler, integrand, ns, r, homogenize, seed, progress, backend, members)
+        return _family_sweep(sampler, integrand, ns, r, homogenize, seed, progress, backend, members,
+                             client, checkpoint)
     if members is not None:
         raise InvalidArgumentError(
             f"'members' is for integrand families ({', '.join(families.family_names())}); "
             f"integrand {integrand!r} is one function")
     s, f, label = _resolve(sampler, integrand, seed, backend)
     values = _check_ns(ns, s, label)
+    if client is not None or checkpoint is not None:
+        tasks, owners = sweep_tasks(s, f, values, r, homogenize, seed, backend)
+        blocks, spent = parallel.run(errors_block, tasks, client=client, checkpoint=checkpoint,
+                                     progress=progress, desc=f"convergence {label} / {f.name}")
+        errors = [np.concatenate([blocks[i] for i in mine]) for mine in owners]
+        seconds = [float(np.sum(spent[mine])) for mine in owners]
+        return _result(s, f, label, values, errors, seconds, r, homogenize, seed, backend)
     kernel = None
     if backend == "opencl":
         kernel = IntegrandKernel(f, homogenize, seed)
@@ -431,6 +468,10 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
         seconds.append(time.perf_counter() - t0)
         errors.append(e)
     bar.close()
+    return _result(s, f, label, values, errors, seconds, r, homogenize, seed, backend)
+
+
+def _result(s, f, label, values, errors, seconds, r, homogenize, seed, backend):
     edges = f.edges_when_shifted() if homogenize else f.edges
     traits = {"smooth": bool(f.smooth and (f.periodic or not homogenize)), "periodic": f.periodic,
               "edges": edges}
@@ -442,7 +483,8 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
                              rates=sampler_rates(s))
 
 
-def _family_sweep(sampler, integrand, ns, r, homogenize, seed, progress, backend, members):
+def _family_sweep(sampler, integrand, ns, r, homogenize, seed, progress, backend, members, client,
+                  checkpoint):
     if isinstance(sampler, str):
         d = integrand.d if isinstance(integrand, families.Family) else 2
         s, label = make_sampler(sampler, d=d, seed=seed, backend=backend), sampler
@@ -465,6 +507,17 @@ def _family_sweep(sampler, integrand, ns, r, homogenize, seed, progress, backend
             f"'integrand' family {fam.name!r} is {fam.d}-dimensional but 'sampler' {label!r} makes "
             f"{s.d}-dimensional points")
     values = _check_ns(ns, s, label)
+    if client is not None or checkpoint is not None:
+        # a point costs about as much to make as 100 member evaluations (docs/performance.md)
+        tasks, owners = sweep_tasks(s, fam, values, r, homogenize, seed, backend,
+                                    cost=1 + fam.members / 100)
+        blocks, spent = parallel.run(variance.family_errors_block, tasks, client=client,
+                                     checkpoint=checkpoint, progress=progress,
+                                     desc=f"convergence {label} / {fam.name}")
+        errors = [np.concatenate([blocks[i] for i in mine]) for mine in owners]
+        seconds = [float(np.sum(spent[mine])) for mine in owners]
+        return variance.family_result(s, fam, values, errors, seconds, r, homogenize, seed, backend,
+                                      label, sampler_rates(s))
     return variance.family_convergence(s, fam, values, r, homogenize, seed, progress, backend, label,
                                        sampler_rates(s))
 

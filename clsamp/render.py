@@ -55,7 +55,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import io, permutation, philox, runtime
+from . import io, parallel, permutation, philox, runtime
 from .errors import InvalidArgumentError
 from .geometry import torus
 from .samplers import Sampler, make_sampler, sampler_class
@@ -568,6 +568,55 @@ def render(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=Tru
                                                       resolution, spp, width)
             bar.update(len(pixels))
     return image.reshape(resolution, resolution)
+
+
+def render_task(scene, sampler, spp, resolution, seed, sampler_params):
+    """One task of :func:`render_sweep`: the image of one (sampler, spp)."""
+    return render(scene, sampler, spp, resolution, seed=seed, sampler_params=sampler_params,
+                  progress=False)
+
+
+def render_sweep(scene, samplers, spps, resolution, seed=0, sampler_params=None, reference=None,
+                 client=None, checkpoint=None, progress=True):
+    """Renders of ``scene`` for every sampler and sample count, here or on a Dask cluster.
+
+    Parameters
+    ----------
+    scene : Scene, dict or path
+    samplers : sequence of str
+        Sampler names (``sampler_params[name]``, a dict, gives one its parameters).
+    spps : sequence of int
+    resolution, seed
+        As :func:`render`.
+    reference : ndarray, optional
+        When given, the MSE of every render against it is returned too.
+    client : dask.distributed.Client, optional
+        One task a render (:mod:`clsamp.parallel`); the images are those :func:`render`
+        makes in-process, bit for bit on workers of the same kind of device (the kernel
+        casts rays in float32, so another kind of device agrees to the tolerance
+        docs/design.md states).
+    checkpoint : str or Path, optional
+        A folder keeping every finished image.
+
+    Returns
+    -------
+    images : dict
+        ``{(sampler, spp): image}``.
+    mse : dict
+        ``{(sampler, spp): float}`` against ``reference`` (empty without one).
+    """
+    scene = _as_scene(scene)
+    params = dict(sampler_params or {})
+    keys = [(str(name), check_int(spp, "spps", minimum=1, maximum=2**31))
+            for name in samplers for spp in spps]
+    if not keys:
+        raise InvalidArgumentError("'samplers' and 'spps' must each hold at least one value")
+    tasks = [(scene, name, spp, resolution, seed, params.get(name)) for name, spp in keys]
+    images, _ = parallel.run(render_task, tasks, client=client, checkpoint=checkpoint, progress=progress,
+                             desc=f"render {scene.name}")
+    out = dict(zip(keys, images, strict=True))
+    errors = {key: mse(image, reference) for key, image in out.items()} if reference is not None else {}
+    return out, errors
 
 
 def _render_random(scene, spp, resolution, seed, block, blocks):

@@ -36,6 +36,7 @@ class Report:
         (self.out / "data").mkdir(parents=True, exist_ok=True)
         self.sections = []
         self.results = {}   # objects a later section reuses (convergence results, renders)
+        self.client = None  # a dask.distributed.Client for the sweeps, or None (in-process)
 
     def figure(self, name, fig):
         """Save a matplotlib figure as img/<name>.png; return its relative path."""

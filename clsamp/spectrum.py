@@ -34,12 +34,12 @@ import os
 
 import numpy as np
 
-from . import runtime
+from . import parallel, runtime
 from .errors import InvalidArgumentError
 from .validation import check_choice, check_int, check_points, check_real, point_sets
 
 __all__ = [
-    "power_spectrum", "radial_mean", "anisotropy", "normalized_frequency", "frequencies",
+    "power_spectrum", "expected_spectrum", "radial_mean", "anisotropy", "normalized_frequency", "frequencies",
     "direct_reference", "spread_reference", "twiddles_reference", "nufft_parameters",
     "check_spectrum",
 ]
@@ -202,6 +202,75 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
         return _fast(batch, resolution, DEFAULT_FAST_TOL if tol is None else max(tol, MIN_TOL),
                      backend, progress)
     return _direct(batch, resolution, backend, progress)
+
+
+def spectrum_block(sampler, n, lo, hi, resolution, method, tol, backend):
+    """One task of :func:`expected_spectrum`: the sum of the periodograms of realizations
+    lo .. hi - 1 (the block's mean times its size)."""
+    if backend == "opencl":
+        points = sampler.sample_device(n, realizations=range(lo, hi))
+    else:
+        points = sampler.sample(n, realizations=range(lo, hi))
+    return power_spectrum(points, resolution, method, tol, backend, progress=False) * float(hi - lo)
+
+
+def expected_spectrum(sampler, n, realizations, resolution=256, method="auto", tol=None,
+                      backend="opencl", client=None, checkpoint=None, progress=True):
+    """The expected power spectrum of a sampler: the mean periodogram of ``realizations``
+    sets of ``n`` points, in blocks of realizations, here or on a Dask cluster.
+
+    Parameters
+    ----------
+    sampler : Sampler or str
+        A sampler, or a name (``make_sampler(name, d=2)``).
+    n, realizations : int
+    resolution, method, tol, backend
+        As :func:`power_spectrum` (``method="auto"`` is decided once for the whole sweep).
+    client : dask.distributed.Client, optional
+        Compute the blocks there (:mod:`clsamp.parallel`). The blocks' sums are added in
+        block order, so the result is the same bits here and on any cluster (of one kind
+        of device: the direct spectrum's fused arithmetic may differ across devices).
+    checkpoint : str or Path, optional
+        A folder keeping every finished block, to resume a stopped sweep.
+    progress : bool
+
+    Returns
+    -------
+    P : ndarray (R, R) (or (R,) in 1-D)
+
+    Examples
+    --------
+    >>> import clsamp
+    >>> P = clsamp.expected_spectrum("jittered", 256, 8, resolution=32, progress=False)
+    >>> P.shape, float(P[16, 16])
+    ((32, 32), 256.0)
+    """
+    from .samplers import Sampler, make_sampler
+    check_choice(backend, "backend", BACKENDS)
+    if isinstance(sampler, str):
+        sampler = make_sampler(sampler, d=2, backend=backend)
+    elif not isinstance(sampler, Sampler):
+        raise InvalidArgumentError(f"'sampler' must be a Sampler or a sampler name, got {sampler!r}")
+    if sampler.d not in (1, 2):
+        raise InvalidArgumentError(f"'sampler' makes {sampler.d}-dimensional points; spectra need d = 1 or 2")
+    n = check_int(n, "n", minimum=1)
+    if sampler.valid_n(n) != n:
+        raise InvalidArgumentError(
+            f"sampler {sampler.label!r} cannot make n={n} points; the nearest valid n is "
+            f"{sampler.valid_n(n)}")
+    realizations = check_int(realizations, "realizations", minimum=1)
+    resolution = _check_resolution(resolution)
+    check_choice(method, "method", METHODS)
+    if method == "auto":
+        method = _choose_method((realizations, n, sampler.d), resolution, tol)
+    tasks = [(sampler, n, lo, hi, resolution, method, tol, backend)
+             for lo, hi in parallel.block_ranges(realizations, n * resolution)]
+    blocks, _ = parallel.run(spectrum_block, tasks, client=client, checkpoint=checkpoint,
+                             progress=progress, desc=f"spectrum {sampler.label}")
+    total = blocks[0].copy()
+    for block in blocks[1:]:
+        total += block
+    return total / float(realizations)
 
 
 def _sets_spectrum(sets, resolution, method, tol, backend, progress):

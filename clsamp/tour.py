@@ -288,7 +288,7 @@ def section_convergence(report, quick):
                 sampler, params = _sampler_for_convergence(name, quick)
                 sweep, realizations = sweeps[name]
                 result = convergence(sampler, integrand, sweep, realizations=realizations, seed=3,
-                                     progress=False)
+                                     progress=False, client=report.client)
                 result.sampler = name
                 results.append(result)
                 verdict = theory.compare(result)
@@ -344,7 +344,7 @@ def _family_sweeps(report, quick):
         for name in TOUR_FAMILY_SAMPLERS:
             try:
                 res = convergence(name, family, ns, realizations=realizations, members=members,
-                                  seed=3, progress=False)
+                                  seed=3, progress=False, client=report.client)
                 results.append(res)
                 cmp = variance.compare(res)
                 worst = res.rate("max")
@@ -685,7 +685,7 @@ SECTIONS = (
 )
 
 
-def run_tour(out, quick=False, progress=True):
+def run_tour(out, quick=False, progress=True, client=None):
     """Run every section into the folder ``out``; return the path of index.html.
 
     Parameters
@@ -696,10 +696,13 @@ def run_tour(out, quick=False, progress=True):
         Smaller sizes, for CI (under two minutes on 2 cores).
     progress : bool
         Show a progress bar over the sections.
+    client : dask.distributed.Client, optional
+        Run section 2's sweeps there (:mod:`clsamp.parallel`: the same numbers).
     """
     from tqdm import tqdm
 
     report = Report(out)
+    report.client = client
     timings = {}
     meta = {"device": str(runtime.current_device()), "quick": bool(quick),
             "date": time.strftime("%Y-%m-%d %H:%M:%S %Z")}

@@ -161,39 +161,53 @@ class FamilyResult:
         return out
 
 
+def _errors(kernel, sampler, fam, n, lo, hi, homogenize, seed):
+    """The (hi - lo, members) errors of realizations lo .. hi - 1 at n (kernel None: NumPy)."""
+    out = np.empty((hi - lo, fam.members))
+    # a chunk's points and its (realizations x members) sums stay modest
+    per_realization = 8 * max(n * fam.d, 4 * fam.members)
+    for a, b in runtime.chunk_ranges(hi - lo, per_realization, 2**24):
+        run = range(lo + a, lo + b)
+        if kernel is not None:
+            out[a:b] = kernel.errors(sampler.sample_device(n, realizations=run), n, lo + a)
+        else:
+            x = sampler.sample(n, realizations=run)
+            if homogenize:
+                u = torus.homogenization_shifts(seed, np.arange(run.start, run.stop), fam.d)
+                x = torus.shift(x, u[:, None, :])
+            out[a:b] = errors_numpy(fam, x)
+    return out
+
+
+def family_errors_block(sampler, fam, n, lo, hi, homogenize, seed, backend):
+    """One task of a family sweep (:mod:`clsamp.parallel`): the errors of every member for
+    realizations lo .. hi - 1 at n; a realization's errors do not depend on the block."""
+    kernel = FamilyKernel(fam, homogenize, seed) if backend == "opencl" else None
+    return _errors(kernel, sampler, fam, n, lo, hi, homogenize, seed)
+
+
 def family_convergence(sampler, fam, ns, realizations, homogenize, seed, progress, backend, label,
                        rates):
-    """The sweep behind :func:`clsamp.convergence` for a family: ``sampler`` a Sampler of
-    ``fam.d`` dimensions, ``ns`` checked sample counts (see there)."""
+    """The sweep behind :func:`clsamp.convergence` for a family, in-process: ``sampler`` a
+    Sampler of ``fam.d`` dimensions, ``ns`` checked sample counts (see there)."""
     from tqdm import tqdm
     r = realizations
     kernel = None
     if backend == "opencl":
         kernel = FamilyKernel(fam, homogenize, seed)
         kernel.errors(sampler.sample_device(ns[0], realizations=1), ns[0], 0)   # builds before timing
-
-    def errors_at(n):
-        out = np.empty((r, fam.members))
-        # a chunk's points and its (realizations x members) work stay modest
-        per_realization = 8 * max(n * fam.d, 4 * fam.members)
-        for lo, hi in runtime.chunk_ranges(r, per_realization, 2**24):
-            if kernel is not None:
-                out[lo:hi] = kernel.errors(sampler.sample_device(n, realizations=range(lo, hi)), n, lo)
-            else:
-                x = sampler.sample(n, realizations=range(lo, hi))
-                if homogenize:
-                    u = torus.homogenization_shifts(seed, np.arange(lo, hi), fam.d)
-                    x = torus.shift(x, u[:, None, :])
-                out[lo:hi] = errors_numpy(fam, x)
-        return out
-
     errors, seconds = [], []
     bar = tqdm(ns, desc=f"convergence {label} / {fam.name}", unit="n", disable=not progress, delay=2)
     for n in bar:
         t0 = time.perf_counter()
-        errors.append(errors_at(n))
+        errors.append(_errors(kernel, sampler, fam, n, 0, r, homogenize, seed))
         seconds.append(time.perf_counter() - t0)
     bar.close()
+    return family_result(sampler, fam, ns, errors, seconds, r, homogenize, seed, backend, label, rates)
+
+
+def family_result(sampler, fam, ns, errors, seconds, r, homogenize, seed, backend, label, rates):
+    """The :class:`FamilyResult` of a finished sweep."""
     edges = fam.edges_when_shifted() if homogenize else fam.edges
     traits = {"smooth": bool(fam.smooth and (fam.periodic or not homogenize)), "periodic": fam.periodic,
               "edges": edges}

@@ -127,3 +127,22 @@ def test_integrate_a_named_integrand_and_a_python_function(tmp_path):
     assert missing.returncode == 2 and "abs_tol" in missing.stderr
     stuck = clsamp_cli("integrate", "disk", "--d", "2", "--abs-tol", "1e-12", "--max-n", "1024")
     assert stuck.returncode == 1 and "max_n" in stuck.stderr and "NOT converged" in stuck.stdout
+
+
+def test_convergence_on_a_local_cluster_from_the_command_line(tmp_path):
+    import json
+
+    import pytest
+    pytest.importorskip("distributed")
+    args = ["convergence", "--samplers", "jittered", "--integrand", "disk", "--ns", "16,64",
+            "--realizations", "16", "--no-progress"]
+    here = clsamp_cli(*args, "-o", str(tmp_path / "a.png"))
+    there = clsamp_cli(*args, "--scheduler", "local:1", "--checkpoint", str(tmp_path / "ck"),
+                       "-o", str(tmp_path / "b.png"))
+    assert here.returncode == 0 and there.returncode == 0, there.stderr
+    a = json.loads((tmp_path / "a.json").read_text())["results"][0]["mse"]
+    b = json.loads((tmp_path / "b.json").read_text())["results"][0]["mse"]
+    assert a == b
+    assert any((tmp_path / "ck").iterdir())
+    bad = clsamp_cli(*args, "--scheduler", "tcp://127.0.0.1:9", "-o", str(tmp_path / "c.png"))
+    assert bad.returncode == 2 and "cannot reach a Dask scheduler" in bad.stderr

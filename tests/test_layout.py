@@ -15,7 +15,8 @@ PACKAGE = ROOT / "clsamp"
 
 # docs/design.md, "Layers": a module may import its own layer and the layers before it.
 LAYERS = [
-    ("core", {"errors", "validation", "runtime", "philox", "number_theory", "permutation", "io"}),
+    ("core", {"errors", "validation", "runtime", "philox", "number_theory", "permutation", "io",
+              "parallel"}),
     ("geometry", {"geometry"}),
     ("samplers", {"samplers"}),
     ("analysis", {"spectrum", "point_metrics", "metrics"}),

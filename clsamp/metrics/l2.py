@@ -261,7 +261,15 @@ class DiscrepancySweep:
                 "realizations": int(self.realizations), "slope": slope, "slope_stderr": stderr}
 
 
-def discrepancy_sweep(sampler, ns, realizations=8, methods=("CD", "L2-star")):
+def discrepancy_block(sampler, n, lo, hi, methods):
+    """One task of :func:`discrepancy_sweep`: (len(methods), hi - lo) discrepancies of
+    realizations lo .. hi - 1 of n points."""
+    points = sampler.sample(n, realizations=range(lo, hi))
+    return np.stack([np.atleast_1d(discrepancy(points, method)) for method in methods])
+
+
+def discrepancy_sweep(sampler, ns, realizations=8, methods=("CD", "L2-star"), client=None,
+                      checkpoint=None, progress=False):
     """Discrepancies of a sampler's sets as N grows: {method: DiscrepancySweep}.
 
     Parameters
@@ -274,6 +282,12 @@ def discrepancy_sweep(sampler, ns, realizations=8, methods=("CD", "L2-star")):
         Sets per n (randomized samplers differ between them, deterministic ones repeat).
     methods : sequence of str
         Any of :data:`METHODS`.
+    client : dask.distributed.Client, optional
+        Compute the blocks of realizations there (:mod:`clsamp.parallel`): the same values,
+        bit for bit.
+    checkpoint : str or Path, optional
+        A folder keeping every finished block.
+    progress : bool
 
     Examples
     --------
@@ -286,13 +300,23 @@ def discrepancy_sweep(sampler, ns, realizations=8, methods=("CD", "L2-star")):
     """
     for method in methods:
         check_method(method)
+    from .. import parallel
+    methods = tuple(methods)
     counts = sorted({int(sampler.valid_n(int(n))) for n in ns})
     values = {m: [] for m in methods}
     errors = {m: [] for m in methods}
+    tasks, owners = [], []
     for n in counts:
-        points = sampler.sample(n, realizations=realizations)
-        for method in methods:
-            v = np.atleast_1d(discrepancy(points, method))
+        owners.append([])
+        for lo, hi in parallel.block_ranges(realizations, n * n // 64):
+            owners[-1].append(len(tasks))
+            tasks.append((sampler, n, lo, hi, methods))
+    blocks, _ = parallel.run(discrepancy_block, tasks, client=client, checkpoint=checkpoint,
+                             progress=progress, desc=f"discrepancy {sampler.label}")
+    for mine in owners:
+        found = np.concatenate([blocks[i] for i in mine], axis=1)
+        for row, method in enumerate(methods):
+            v = found[row]
             squares = v if method not in ROOTED else v * v
             values[method].append(math.sqrt(float(np.mean(squares))))
             spread = float(np.std(squares, ddof=1)) / math.sqrt(len(v)) if len(v) > 1 else 0.0
