@@ -31,7 +31,6 @@ from .samplers import Sampler, make_sampler
 from .validation import check_int, check_real, check_seed
 
 BLOCK = 2**20           # points one call of a Python integrand gets at most
-SEQUENCES = ("sobol", "halton", "van_der_corput")   # sample(n, start=k) continues sample(k)
 
 __all__ = ["IntegrationResult", "integrate", "t_quantile"]
 
@@ -256,7 +255,7 @@ def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**2
     elif not callable(f):
         raise InvalidArgumentError(
             f"'f' must be a callable, an Integrand or an integrand name, got {f!r}")
-    extends = s.name in SEQUENCES and s.accepts_start
+    extends = s.splits_along_n         # sample(n, start=k) continues sample(k)
     t_value = t_quantile(0.5 + confidence / 2.0, r - 1)
 
     def sums(count, start):

@@ -145,11 +145,22 @@ def save_points(path, points):
 def load_points(path):
     """Read points written by :func:`save_points` (or by UTK/PSA as text), validated."""
     path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no point file at {str(path)!r}")
     if path.suffix == ".npy":
-        array = np.load(path, allow_pickle=False)
+        try:
+            array = np.load(path, allow_pickle=False)
+        except (ValueError, EOFError, OSError) as error:
+            raise InvalidArgumentError(f"{str(path)!r} is not a readable .npy file: {error}") from None
+        if not isinstance(array, np.ndarray):
+            raise InvalidArgumentError(f"{str(path)!r} holds several arrays, not one point array")
         batch, single = check_points(array, name=str(path))
         return batch[0] if single else batch
-    return parse_points(path.read_text(), name=str(path))
+    try:
+        text = path.read_text()
+    except UnicodeDecodeError as error:
+        raise InvalidArgumentError(f"{str(path)!r} is not a text point file (not UTF-8: {error})") from None
+    return parse_points(text, name=str(path))
 
 
 # -- images ----------------------------------------------------------------------
@@ -184,13 +195,29 @@ def write_exr(path, image, header=None):
 
 
 def read_exr(path, with_header=False):
-    """Read an OpenEXR image written by :func:`write_exr` as float32 (h, w) or (h, w, c)."""
+    """Read an OpenEXR image written by :func:`write_exr` as float32 (h, w) or (h, w, c).
+
+    Raises ``FileNotFoundError`` for a missing file and :class:`InvalidArgumentError`
+    ("not an OpenEXR file") for one the library cannot read.
+    """
     import OpenEXR
-    with OpenEXR.File(str(path), separate_channels=True) as exr:
-        channels = exr.channels()
-        header = dict(exr.header())
-        order = [n for n in ("R", "G", "B", "A", "Y") if n in channels] or sorted(channels)
-        planes = [np.asarray(channels[n].pixels, dtype=np.float32) for n in order]
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no OpenEXR file at {str(path)!r}")
+    with open(path, "rb") as f:
+        magic = f.read(4)
+    if magic != b"\x76\x2f\x31\x01":
+        raise InvalidArgumentError(f"{str(path)!r} is not an OpenEXR file (its first bytes are {magic!r})")
+    try:
+        with OpenEXR.File(str(path), separate_channels=True) as exr:
+            channels = exr.channels()
+            header = dict(exr.header())
+            order = [n for n in ("R", "G", "B", "A", "Y") if n in channels] or sorted(channels)
+            planes = [np.asarray(channels[n].pixels, dtype=np.float32) for n in order]
+    except RuntimeError as error:
+        raise InvalidArgumentError(f"{str(path)!r} is not a readable OpenEXR file: {error}") from None
+    if not planes:
+        raise InvalidArgumentError(f"{str(path)!r} is an OpenEXR file without channels")
     image = planes[0] if len(planes) == 1 else np.stack(planes, axis=-1)
     return (image, header) if with_header else image
 

@@ -326,18 +326,20 @@ def program(file, defines=None, options=()):
 
 
 def kernel(file, name, defines=None, options=(), instance=None):
-    """A kernel object from :func:`program`, fetched once per program.
+    """A kernel object from :func:`program`, fetched once per program and thread.
 
-    Callers share the object, so each launch sets all its arguments. A loop that sets
-    arguments once and launches many times asks for its own ``instance`` (any hashable
-    key): a distinct object per key, kept with the program.
+    Callers in one thread share the object, so each launch sets all its arguments. A loop
+    that sets arguments once and launches many times asks for its own ``instance`` (any
+    hashable key): a distinct object per key, kept with the program. Each thread gets
+    objects of its own: setting a kernel's arguments and launching it are two steps, which
+    two threads must not interleave on one object.
     """
     prog = program(file, defines, options)
-    key = (id(prog), name, instance)
+    key = (id(prog), name, instance, threading.get_ident())
     with _lock:
         k = _kernels.get(key)
         if k is None:
-            k = _cl().Kernel(prog, name) if instance is not None else getattr(prog, name)
+            k = _cl().Kernel(prog, name)
             _kernels[key] = k
         return k
 
@@ -470,6 +472,27 @@ def require_fp64():
             f"device {device.name} has no double precision (cl_khr_fp64); clsamp's kernels "
             "need it. Choose another with clsamp.use_device or CLSAMP_DEVICE.")
     return device
+
+
+def host_memory_available():
+    """Bytes of host memory free for new allocations (Linux: MemAvailable), or None where
+    the system does not say."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def gib(nbytes):
+    """Bytes as a message shows them."""
+    return f"{nbytes / 2**30:.1f} GiB" if nbytes >= 2**30 else f"{nbytes / 2**20:.1f} MiB"
 
 
 def work_budget():

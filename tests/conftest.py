@@ -10,7 +10,16 @@ import pytest
 # Import the checkout's clsamp even when another copy is installed.
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
+from hypothesis import HealthCheck, settings  # noqa: E402
+
 import clsamp  # noqa: E402
+
+# hypothesis: "ci" (the default here) keeps the fuzzing inside CI's time; pass
+# --hypothesis-profile=long for the run before a release (50 times the examples)
+_quiet = [HealthCheck.too_slow, HealthCheck.filter_too_much, HealthCheck.function_scoped_fixture]
+settings.register_profile("ci", max_examples=25, deadline=None, suppress_health_check=_quiet)
+settings.register_profile("long", max_examples=1250, deadline=None, suppress_health_check=_quiet)
+settings.load_profile("ci")
 
 
 @pytest.fixture(scope="session")

@@ -35,6 +35,7 @@ _REGISTRY = {}   # name -> class
 _ALIASES = {}    # alias -> name
 
 BACKENDS = ("opencl", "numpy")
+MAX_D = 1 << 16        # dimensions any sampler makes at most (Sobol' has 21201)
 CASES = ("best", "worst", "axis")   # the integrand cases of clsamp.theory
 PILLEBOUE = "Pilleboue et al. 2015"
 
@@ -130,7 +131,24 @@ def make_sampler(name, d=2, seed=0, **params):
             raise InvalidArgumentError(
                 f"'name' {name!r} names a randomization and 'randomize' is given too")
         params["randomize"] = variant
+    accepted = _parameters(cls)
+    unknown = sorted(set(params) - accepted) if accepted is not None else []
+    if unknown:
+        close = difflib.get_close_matches(unknown[0], sorted(accepted), n=1)
+        hint = f" Did you mean {close[0]!r}?" if close else ""
+        raise InvalidArgumentError(
+            f"sampler {cls.name!r} has no parameter {unknown[0]!r}.{hint} Its parameters: "
+            f"{', '.join(sorted(accepted - {'d', 'seed'}))}")
     return cls(d=d, seed=seed, **params)
+
+
+def _parameters(cls):
+    """The keyword parameters ``cls(...)`` accepts, or None if it takes any (**kwargs)."""
+    import inspect
+    signature = inspect.signature(cls.__init__)
+    if any(p.kind is p.VAR_KEYWORD for p in signature.parameters.values()):
+        return None
+    return {name for name in signature.parameters if name != "self"}
 
 
 def _merge_field(values, how):
@@ -228,7 +246,7 @@ class Sampler:
     rates = {}              # case -> Rate for d = 2 (see convergence_rate)
 
     def __init__(self, d=2, seed=0, backend="opencl"):
-        self.d = check_positive_int(d, "d")
+        self.d = check_positive_int(d, "d", maximum=MAX_D)
         if self.dimensions is not None and self.d not in self.dimensions:
             allowed = ", ".join(str(x) for x in self.dimensions)
             raise InvalidArgumentError(
@@ -304,6 +322,8 @@ class Sampler:
             ``realizations`` or ``start``, or ``return_info`` where there is no info.
         """
         n, runs, single, start = self._check_call(n, realizations, start, return_info)
+        self._check_size(n, runs, device=False)
+        self._warn_weaker(n, start)
         points, infos = self._generate(n, runs, start)
         if single:
             points = points[0]
@@ -323,6 +343,8 @@ class Sampler:
             Only with ``return_info``.
         """
         n, runs, single, start = self._check_call(n, realizations, start, return_info)
+        self._check_size(n, runs, device=True)
+        self._warn_weaker(n, start)
         parts, infos = [], []
         for run in runs:
             for chunk in self._chunks(run, n):
@@ -337,6 +359,57 @@ class Sampler:
         return points, self.info.merge(infos)
 
     # -- what the entry points share --------------------------------------------------
+    @property
+    def splits_along_n(self):
+        """Whether a set can be made in pieces of consecutive points (``start`` continues a
+        sequence): how a set larger than one device buffer is streamed."""
+        return self.sequence and self.accepts_start
+
+    def _check_size(self, n, runs, device):
+        """Refuse, before any work, an output that cannot fit: on the host (``sample``) or
+        in the device's memory (``sample_device``), or one set larger than the device's
+        largest buffer where the sampler cannot stream it in pieces."""
+        if n is None:
+            return
+        total = sum(len(run) for run in runs)
+        need = total * n * self.d * 8
+        what = f"{total} x {n} points in {self.d}-D of {self.label!r}"
+        if device:
+            room = runtime.current_device().global_memory
+            if need > room:
+                raise InvalidArgumentError(
+                    f"sample_device of {what} needs {runtime.gib(need)} of device memory; the device "
+                    f"has {runtime.gib(room)}. Ask for fewer realizations or points at a time")
+        elif need > 2**28:                  # small requests skip reading the system's figure
+            room = runtime.host_memory_available()
+            if room is not None and need > room:
+                raise InvalidArgumentError(
+                    f"sample of {what} needs {runtime.gib(need)} for its output alone; this machine "
+                    f"has {runtime.gib(room)} available. Ask for fewer realizations or points at a time")
+        if self.backend == "numpy":
+            return
+        one = n * self.d * 8
+        largest = runtime.current_device().max_allocation
+        if one > largest and (device or not self.splits_along_n):
+            hint = ("the points stay on the device in one buffer" if device else
+                    f"{self.label!r} makes a set whole, not in pieces")
+            raise InvalidArgumentError(
+                f"one set of {n} points in {self.d}-D of {self.label!r} needs {runtime.gib(one)} in "
+                f"one device buffer, above the device's largest, {runtime.gib(largest)} ({hint}); "
+                "use a smaller n, or backend='numpy'")
+
+    def _warn_weaker(self, n, start):
+        """Warn (UserWarning) where a legal request gives a weaker set than the sampler
+        promises; nothing by default."""
+
+    def _pieces(self, n):
+        """[(offset, count)] of a set made in pieces of consecutive points, each fitting the
+        device's work budget (one piece unless the set is larger)."""
+        if self.backend == "numpy" or not self.splits_along_n:
+            return [(0, n)]
+        step = max(1, runtime.work_budget() // (8 * self.d))
+        return [(lo, min(n, lo + step) - lo) for lo in range(0, n, step)]
+
     def _chunks(self, run, n):
         """``run`` in consecutive pieces whose output fits the device (the runtime's rule);
         the NumPy reference takes it whole."""
@@ -363,6 +436,15 @@ class Sampler:
                 and runtime.current_device().type == "cpu")
         out = np.empty((total, n, self.d), dtype=np.float64) if n is not None else None
         infos, row, single_set = [], 0, None
+        pieces = self._pieces(n) if n is not None else [(0, None)]
+        if len(pieces) > 1:                     # sets larger than a device buffer, in pieces
+            for run in runs:
+                for k in run:
+                    for offset, count in pieces:
+                        points = self._make(count, range(k, k + 1), start + offset)
+                        out[row, offset:offset + count] = runtime.to_host(self._split(points)[0])[0]
+                    row += 1
+            return out, [None]
         for run in runs:
             for chunk in self._chunks(run, n):
                 target = out[row:row + len(chunk)] if out is not None else None

@@ -16,6 +16,8 @@ depend on how many realizations were asked for, and the OpenCL kernels
 :mod:`clsamp.number_theory`) give bit-identical points.
 """
 
+import warnings
+
 import numpy as np
 
 from .. import number_theory as nt
@@ -115,7 +117,9 @@ class SobolSampler(_LowDiscrepancy):
     Notes
     -----
     Points are integers times 2^-32 (32 bits of resolution after scrambling too).
-    ``sample(n, start=k)`` continues ``sample(k)``.
+    ``sample(n, start=k)`` continues ``sample(k)``. As scipy does, asking for a prefix
+    whose length (start + n) is not a power of two warns (``UserWarning``): such a prefix
+    is not a net, and the balance properties are lost.
 
     References
     ----------
@@ -134,6 +138,13 @@ class SobolSampler(_LowDiscrepancy):
     >>> clsamp.make_sampler("sobol:owen", d=3, seed=1).sample(256, realizations=8).shape
     (8, 256, 3)
     """
+
+    def _warn_weaker(self, n, start):
+        total = start + (n or 0)
+        if total & (total - 1):
+            warnings.warn(f"the balance properties of Sobol' points need a power of two points: "
+                          f"{self.label!r} asked for start + n = {total}, which is not, so the "
+                          "set is not a net", UserWarning, stacklevel=3)
 
     def __init__(self, d=2, seed=0, backend="opencl", randomize=None):
         limit = nt.sobol_max_dimension()

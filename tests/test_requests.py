@@ -1,0 +1,65 @@
+"""Requests sized before any work: outputs that cannot fit are refused at once with the
+bytes needed and available; sets larger than one device buffer stream in pieces; a
+legal but weaker request warns."""
+
+import dataclasses
+import time
+import warnings
+
+import numpy as np
+import pytest
+
+import clsamp
+from clsamp import runtime
+from clsamp.errors import InvalidArgumentError
+
+
+@pytest.mark.parametrize("name,d,n,r", [("random", 2, 2**31, None), ("random", 2, 10, 2**30),
+                                        ("jittered", 2, 2**26, 64), ("sobol:owen", 16, 2**30, 4)])
+def test_huge_outputs_are_refused_at_once(name, d, n, r):
+    sampler = clsamp.make_sampler(name, d=d)
+    t0 = time.perf_counter()
+    with pytest.raises(InvalidArgumentError, match=r"needs .* GiB .* available"):
+        sampler.sample(n, realizations=r)
+    assert time.perf_counter() - t0 < 1.0
+
+
+@pytest.fixture
+def small_device(monkeypatch):
+    """The current device as if its largest buffer were 64 KiB (global memory 1 MiB)."""
+    record = dataclasses.replace(runtime.current_device(), max_allocation=2**16, global_memory=2**20)
+    monkeypatch.setattr(runtime, "current_device", lambda: record)
+    return record
+
+
+def test_sets_larger_than_a_buffer_stream_in_pieces(small_device):
+    for name in ("random", "sobol:owen", "halton"):
+        sampler = clsamp.make_sampler(name, d=3, seed=4)
+        assert len(sampler._pieces(16384)) > 1
+        streamed = sampler.sample(16384, realizations=2)
+        reference = clsamp.make_sampler(name, d=3, seed=4, backend="numpy").sample(16384, realizations=2)
+        assert np.array_equal(streamed, reference), name
+
+
+def test_sets_that_cannot_stream_are_refused_clearly(small_device):
+    with pytest.raises(InvalidArgumentError, match="one set of 16384 points .* one device buffer"):
+        clsamp.make_sampler("jittered", d=2).sample(16384)
+    with pytest.raises(InvalidArgumentError, match="device memory"):
+        clsamp.make_sampler("random", d=2).sample_device(4096, realizations=64)
+    with pytest.raises(InvalidArgumentError, match="one device buffer"):
+        clsamp.make_sampler("random", d=2).sample_device(8192)
+    # the NumPy reference has no device buffer to outgrow
+    assert clsamp.make_sampler("jittered", d=2, backend="numpy").sample(16384).shape == (16384, 2)
+
+
+def test_sobol_warns_where_the_prefix_is_not_a_net():
+    sobol = clsamp.make_sampler("sobol:owen", d=2, seed=1)
+    with pytest.warns(UserWarning, match="power of two"):
+        sobol.sample(100)
+    with pytest.warns(UserWarning, match="power of two"):
+        sobol.sample_device(64, start=1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sobol.sample(256)
+        sobol.sample(256, start=256)
+        clsamp.make_sampler("halton", d=2).sample(100)
