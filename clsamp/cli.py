@@ -604,12 +604,26 @@ def build_parser():
     return parser
 
 
+class Terminated(BaseException):
+    """SIGTERM, raised where the program is so that files being written are cleaned up."""
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated()
+
+
 def main(argv=None):
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "run", None):
         parser.print_help()
         return 2
+    import signal
+    import threading
+    if threading.current_thread() is threading.main_thread():
+        # SIGTERM unwinds like Ctrl-C: every output is written whole (temporary file, then
+        # rename) or not at all, and the temporary file of one cut short is removed
+        signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         if args.device is not None:
             from . import runtime
@@ -618,6 +632,13 @@ def main(argv=None):
     except ClsampError as error:
         print(f"clsamp {args.command}: error: {error}", file=sys.stderr)
         return 2
+    except (KeyboardInterrupt, Terminated) as stop:
+        why = "terminated" if isinstance(stop, Terminated) else "interrupted"
+        print(f"clsamp {args.command}: {why}; every file written so far is whole", file=sys.stderr)
+        return 143 if isinstance(stop, Terminated) else 130
+    finally:
+        if threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)   # after the work, SIGTERM just ends it
 
 
 if __name__ == "__main__":

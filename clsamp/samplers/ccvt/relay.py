@@ -92,10 +92,15 @@ def relay(sites, points, mat, room, left, start):
         count = has.sum(axis=1)
         width = max(1, int(count.max()))
         ids = np.argsort(~has, axis=1, kind="stable")[:, :width] + (np.arange(r) * n)[:, None]
-        cand = ids[realization]
-        d2 = it.distance2(x[:, None], y[:, None], sx[cand], sy[cand])
-        d2[np.arange(width)[None, :] >= count[realization][:, None]] = np.iinfo(np.int64).max
-        return cand[np.arange(len(x)), np.argmin(d2, axis=1)]   # ties: the smaller index
+        out = np.empty(len(x), dtype=np.int64)
+        step = max(1, (1 << 22) // width)              # rows x rooms stays ~32 MB a piece
+        for lo in range(0, len(x), step):
+            q = slice(lo, lo + step)
+            cand = ids[realization[q]]
+            d2 = it.distance2(x[q, None], y[q, None], sx[cand], sy[cand])
+            d2[np.arange(width)[None, :] >= count[realization[q]][:, None]] = np.iinfo(np.int64).max
+            out[q] = cand[np.arange(len(cand)), np.argmin(d2, axis=1)]   # ties: the smaller index
+        return out
 
     # a site's 3 x 3 cells hold every site within one cell width of it, so a room found
     # among its neighbours nearer than that (or than NEAR / sqrt(n) with one cell) is the
