@@ -515,3 +515,19 @@ def test_bad_sites():
         ccvt_optimize(np.full((4, 2), 0.5), points_per_site=0)
     with pytest.raises(InvalidArgumentError, match="density"):
         lloyd.lloyd_relax(np.full((4, 2), 0.5), density=0)
+
+
+def test_ccvt_tail_in_chunks_gives_the_same_bits(monkeypatch):
+    # ccvt_solve runs in launches of SOLVE_CHUNK iterations (so Ctrl-C is honoured between
+    # them); chunks of 3, with realizations converging in between, change nothing
+    from clsamp.samplers.ccvt import device
+    cases = [(4096, 1, 16), (256, 8, 64)]          # a tail after stepwise launches; fused
+    whole = [clsamp.make_sampler("ccvt", points_per_site=p, seed=3, progress=False)
+             .sample(n, realizations=r, return_info=True) for n, r, p in cases]
+    monkeypatch.setattr(device, "SOLVE_CHUNK", 3)
+    for (n, r, p), (pts, info) in zip(cases, whole, strict=True):
+        again, info2 = clsamp.make_sampler("ccvt", points_per_site=p, seed=3, progress=False).sample(
+            n, realizations=r, return_info=True)
+        assert np.array_equal(pts, again)
+        assert np.array_equal(info.iterations, info2.iterations)
+        assert max(info.iterations) > 3

@@ -36,7 +36,8 @@ def _divisor(x, most):
     return max(d for d in range(1, most + 1) if x % d == 0)
 
 
-def ccvt_device(sites, points, members, iterations, callback=None, fused=None, tail=None):
+def ccvt_device(sites, points, members, iterations, callback=None, fused=None, tail=None,
+                progress=False):
     """OpenCL CCVT: integer sites (r, n, 2), points (r, M, 2) (host or device), members
     (r, n, p); returns (sites, energies, members, converged) as :func:`ccvt_reference`.
 
@@ -48,10 +49,12 @@ def ccvt_device(sites, points, members, iterations, callback=None, fused=None, t
     n / TAIL_SHARE; -1: never, and never with a callback): then ``ccvt_solve`` takes
     the rest in one launch, since a dozen launches cost more than the few exchanges left.
     All of these give the same bits. The members come back as sets: the kernels keep
-    each site's slots grouped by bucket.
+    each site's slots grouped by bucket. ``progress`` shows a bar over the iterations once
+    the run has taken 2 s.
     """
     import pyopencl as cl
     import pyopencl.array as cla
+    from tqdm import tqdm
     runtime.require_fp64()
     q = runtime.queue()
     r, n, p = members.shape
@@ -73,8 +76,10 @@ def ccvt_device(sites, points, members, iterations, callback=None, fused=None, t
     active_host = np.ones(r, dtype=np.uint32)
     active = cla.to_device(q, active_host)
     energies = [[] for _ in range(r)]
+    bar = tqdm(total=iterations, desc=f"ccvt {r} x {n} sites", unit="it", disable=not progress, delay=2)
     if fused:
-        converged = solve_device(b, n, p, iterations, active, np.arange(r), 0, energies)
+        converged = solve_device(b, n, p, iterations, active, np.arange(r), 0, energies, bar)
+        bar.close()
         return b["sites"].get(), energies, b["ids"].get(), converged
     slots = (b["ids"].data, b["xy"].data, b["tids"].data, b["txy"].data)
     swaps = cla.zeros(q, (r,), np.uint32)
@@ -107,6 +112,7 @@ def ccvt_device(sites, points, members, iterations, callback=None, fused=None, t
     status = np.zeros((r, 3), dtype=np.int64)
     converged = np.zeros(r, dtype=bool)
     for t in range(iterations):
+        bar.update(1)
         cl.enqueue_nd_range_kernel(q, build, (r,), None)
         for k, size, local in phases:
             cl.enqueue_nd_range_kernel(q, k, size, local)
@@ -128,33 +134,58 @@ def ccvt_device(sites, points, members, iterations, callback=None, fused=None, t
             active.set(active_host)
         if t + 1 < iterations and made[active_host == 1].max() <= tail:
             tail_converged = solve_device(b, n, p, iterations - t - 1, active,
-                                          np.flatnonzero(active_host), 1, energies)
+                                          np.flatnonzero(active_host), 1, energies, bar)
             converged |= tail_converged & (active_host == 1)
             break
+    bar.close()
     return b["sites"].get(), energies, b["ids"].get(), converged
 
 
-def solve_device(b, n, p, iterations, active, running, resume, energies):
+SOLVE_CHUNK = 64       # iterations of ccvt_solve per launch: Python (and Ctrl-C) runs between
+
+
+def solve_device(b, n, p, iterations, active, running, resume, energies, bar=None):
     """``ccvt_solve`` over the buffers ``b`` of :func:`ccvt_device`: one work-group per
-    active realization (``active`` on the device, ``running`` their indices), one launch
-    for ``iterations`` at most; from the start, or with ``resume`` from where the
-    stepwise launches left them. Appends each iteration's energy to ``energies`` and
-    returns which realizations converged (the sites and members stay on the device)."""
+    active realization (``active`` on the device, ``running`` their indices), for
+    ``iterations`` at most; from the start, or with ``resume`` from where the stepwise
+    launches left them. Appends each iteration's energy to ``energies`` and returns which
+    realizations converged (the sites and members stay on the device).
+
+    The iterations run in launches of at most :data:`SOLVE_CHUNK`, each resuming where the
+    last stopped (every piece of state is in the buffers, the energy in ``status``), with
+    the realizations that converged taken out: the same bits as one launch, and a Ctrl-C
+    waits for one chunk at most."""
     import pyopencl.array as cla
     q = runtime.queue()
     r = b["ids"].shape[0]
     G = ccvt_grid_size(n)
-    history = cla.zeros(q, (r, iterations, 2), np.int64)
-    state = cla.zeros(q, (r, 2), np.uint32)
     local = runtime.local_size(64)
     solve = runtime.kernel("ccvt.cl", "ccvt_solve", ccvt_defines())
-    solve(q, (local * r,), (local,), b["ids"].data, b["xy"].data, b["tids"].data,
-          b["txy"].data, np.uint32(n), np.uint32(p), b["sites"].data, b["meta"].data,
-          b["bstart"].data, b["cell_start"].data, b["cell_sites"].data, np.uint32(G),
-          b["dirty"].data, b["touched"].data, b["site_energy"].data,
-          np.int64(ccvt_near2(n)), np.uint32(iterations), np.uint32(resume), active.data,
-          b["status"].data, history.data, state.data)
-    h, st = history.get(), state.get()
-    for k in running:
-        energies[k].extend(it.exact_total(h[k, :st[k, 0], 0], h[k, :st[k, 0], 1]))
-    return st[:, 1].astype(bool)
+    running = np.asarray(running)
+    converged = np.zeros(r, dtype=bool)
+    left = iterations
+    while left > 0 and running.size:
+        chunk = min(SOLVE_CHUNK, left)
+        history = cla.zeros(q, (r, chunk, 2), np.int64)
+        state = cla.zeros(q, (r, 2), np.uint32)
+        solve(q, (local * r,), (local,), b["ids"].data, b["xy"].data, b["tids"].data,
+              b["txy"].data, np.uint32(n), np.uint32(p), b["sites"].data, b["meta"].data,
+              b["bstart"].data, b["cell_start"].data, b["cell_sites"].data, np.uint32(G),
+              b["dirty"].data, b["touched"].data, b["site_energy"].data,
+              np.int64(ccvt_near2(n)), np.uint32(chunk), np.uint32(resume), active.data,
+              b["status"].data, history.data, state.data)
+        h, st = history.get(), state.get()
+        for k in running:
+            energies[k].extend(it.exact_total(h[k, :st[k, 0], 0], h[k, :st[k, 0], 1]))
+        done = st[running, 1].astype(bool)
+        converged[running[done]] = True
+        running = running[~done]
+        left -= chunk
+        resume = 1
+        if bar is not None:
+            bar.update(int(st[:, 0].max()) if r else 0)
+        if done.any() and running.size and left > 0:
+            flags = np.zeros(r, dtype=np.uint32)
+            flags[running] = 1
+            active.set(flags)
+    return converged

@@ -99,7 +99,7 @@ def _check_points_per_site(points_per_site, n):
 
 
 def _run(sites, realizations, p, iterations, seed, backend, callback=None, density="jittered",
-         relax=0):
+         relax=0, progress=False):
     r, n, _ = sites.shape
     M = n * p
     results = []
@@ -113,7 +113,7 @@ def _run(sites, realizations, p, iterations, seed, backend, callback=None, densi
             on_device = density_points_device(seed, realizations[lo:hi], M, density)
             points = on_device.get()
             members = start_partition(start, points, p, backend, weight, on_device)
-            run = ccvt_device(start, on_device, members, iterations, callback)
+            run = ccvt_device(start, on_device, members, iterations, callback, progress=progress)
         results.append(run)
     length = max(len(e) for part in results for e in part[1])
     history, capacities, counts = [], [], []
@@ -239,8 +239,9 @@ class CCVTSampler(OptimizerSampler):
     rates = {"best": Rate(-3.0, PILLEBOUE), "worst": Rate(-1.5, PILLEBOUE)}
 
     def __init__(self, d=2, seed=0, points_per_site=1024, iterations=1000, backend="opencl",
-                 density="jittered", relax=0):
+                 density="jittered", relax=0, progress=True):
         super().__init__(d=d, seed=seed, backend=backend)
+        self.progress = bool(progress)
         self.points_per_site = check_positive_int(points_per_site, "points_per_site",
                                                   maximum=MAX_POINTS_PER_SITE)
         self.iterations = check_positive_int(iterations, "iterations")
@@ -255,4 +256,5 @@ class CCVTSampler(OptimizerSampler):
     def _optimize(self, sites, realizations, backend):
         p = _check_points_per_site(self.points_per_site, sites.shape[1])
         return _run(sites, np.arange(realizations.start, realizations.stop, dtype=np.int64), p,
-                    self.iterations, self.seed, backend, density=self.density, relax=self.relax)
+                    self.iterations, self.seed, backend, density=self.density, relax=self.relax,
+                    progress=self.progress)
