@@ -164,3 +164,37 @@ def test_files(tmp_path_factory, data, suffix):
     with pytest.raises(FileNotFoundError):
         reader(path.with_name("missing" + suffix))
 
+
+
+COMMANDS = ["devices", "sample", "spectrum", "metrics", "convergence", "integrate", "render", "tour"]
+FLAGS = ["-n", "-d", "--realizations", "--seed", "--metric", "--resolution", "--ns", "--samplers",
+         "--integrand", "--family", "--members", "--spp", "--sampler", "--abs-tol", "--max-n",
+         "--method", "--tol", "--param", "--quick", "--scheduler", "--checkpoint", "--bogus"]
+VALUES = ["0", "-1", "3", "1e400", "nan", "x", "16..4", "1,2,,", "random", "disk", "cd,zz", "sobol:owen",
+          "local:0", "a=b", "strata=0x0", ""]
+
+
+@given(command=st.sampled_from(COMMANDS),
+       positional=st.sampled_from(["random", "jittered", "sobol:owen", "ao", "gaussian", "nope", ""]),
+       words=st.lists(st.one_of(st.sampled_from(FLAGS), st.sampled_from(VALUES)), max_size=6))
+def test_command_line(tmp_path_factory, command, positional, words):
+    # every subcommand with hostile arguments: a result, a clear error (exit 2 with a
+    # message) or argparse's usage error, never a traceback
+    from clsamp import cli
+    out = tmp_path_factory.mktemp("cli")
+    args = [command, *([positional] if positional else []), *words]
+    if command in ("sample", "spectrum", "metrics", "convergence", "render", "integrate"):
+        args += ["-o", str(out / "o.json" if command in ("metrics", "integrate") else out / "o.npy"
+                           if command == "sample" else out / "o.png" if command != "render" else
+                           out / "o.exr")]
+    if command == "tour":
+        return      # minutes a call; its arguments are checked in tests/test_cli.py
+    if "--scheduler" in words:
+        return      # starting clusters is tests/test_parallel.py's business
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            code = cli.main(args)
+        except SystemExit as exit_:               # argparse: usage error or --help
+            code = exit_.code
+    assert code in (0, 1, 2), code
