@@ -444,6 +444,7 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
             f"integrand {integrand!r} is one function")
     s, f, label = _resolve(sampler, integrand, seed, backend)
     values = _check_ns(ns, s, label)
+    runtime.check_host_bytes(8 * r * len(values), f"the errors of {r} realizations x {len(values)} n")
     if client is not None or checkpoint is not None:
         tasks, owners = sweep_tasks(s, f, values, r, homogenize, seed, backend)
         blocks, spent = parallel.run(errors_block, tasks, client=client, checkpoint=checkpoint,
@@ -507,6 +508,8 @@ def _family_sweep(sampler, integrand, ns, r, homogenize, seed, progress, backend
             f"'integrand' family {fam.name!r} is {fam.d}-dimensional but 'sampler' {label!r} makes "
             f"{s.d}-dimensional points")
     values = _check_ns(ns, s, label)
+    runtime.check_host_bytes(8 * r * fam.members * len(values),
+                             f"the errors of {r} realizations x {fam.members} members x {len(values)} n")
     if client is not None or checkpoint is not None:
         # a point costs about as much to make as 100 member evaluations (docs/performance.md)
         tasks, owners = sweep_tasks(s, fam, values, r, homogenize, seed, backend,

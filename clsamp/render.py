@@ -541,6 +541,8 @@ def render(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=Tru
     pool = check_positive_int(pool, "pool")
     if not isinstance(pad, bool):
         raise InvalidArgumentError(f"'pad' must be True or False, got {pad!r}")
+    runtime.check_host_bytes(4 * resolution * resolution + TILE_BYTES,
+                             f"a {resolution} x {resolution} render")
     sets = _plan(scene, sampler, spp, sampler_params, pad, pool)
     total = resolution * resolution
     dims = scene.sample_dimensions

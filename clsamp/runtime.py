@@ -490,6 +490,18 @@ def host_memory_available():
         return None
 
 
+def check_host_bytes(need, what):
+    """Refuse, before any work, a result of ``need`` bytes that the host's available
+    memory cannot hold (the figure is read only for requests above 256 MiB)."""
+    if need <= 2**28:
+        return
+    room = host_memory_available()
+    if room is not None and need > room:
+        raise InvalidArgumentError(
+            f"{what} needs {gib(need)}; this machine has {gib(room)} available. Ask for less "
+            "at a time")
+
+
 def gib(nbytes):
     """Bytes as a message shows them."""
     return f"{nbytes / 2**30:.1f} GiB" if nbytes >= 2**30 else f"{nbytes / 2**20:.1f} MiB"

@@ -189,6 +189,9 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
         return _sets_spectrum(sets, resolution, method, tol, backend, progress)
     batch, _ = check_points(points, "points", d=(1, 2), keep_device=backend == "opencl")
     resolution = _check_resolution(resolution)
+    # the spectrum and the working copies of its halves
+    runtime.check_host_bytes(3 * 8 * resolution ** batch.shape[-1],
+                             f"a power spectrum at resolution {resolution} in {batch.shape[-1]}-D")
     check_choice(method, "method", METHODS)
     if tol is not None:
         tol = check_real(tol, "tol", minimum=0.0, maximum=0.1, open_minimum=True)
@@ -260,6 +263,8 @@ def expected_spectrum(sampler, n, realizations, resolution=256, method="auto", t
             f"{sampler.valid_n(n)}")
     realizations = check_int(realizations, "realizations", minimum=1)
     resolution = _check_resolution(resolution)
+    runtime.check_host_bytes(3 * 8 * resolution ** sampler.d,
+                             f"a power spectrum at resolution {resolution} in {sampler.d}-D")
     check_choice(method, "method", METHODS)
     if method == "auto":
         method = _choose_method((realizations, n, sampler.d), resolution, tol)

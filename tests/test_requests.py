@@ -19,7 +19,7 @@ from clsamp.errors import InvalidArgumentError
 def test_huge_outputs_are_refused_at_once(name, d, n, r):
     sampler = clsamp.make_sampler(name, d=d)
     t0 = time.perf_counter()
-    with pytest.raises(InvalidArgumentError, match=r"needs .* GiB .* available"):
+    with pytest.raises(InvalidArgumentError, match=r"needs .* GiB.* available"):
         sampler.sample(n, realizations=r)
     assert time.perf_counter() - t0 < 1.0
 
@@ -63,3 +63,17 @@ def test_sobol_warns_where_the_prefix_is_not_a_net():
         sobol.sample(256)
         sobol.sample(256, start=256)
         clsamp.make_sampler("halton", d=2).sample(100)
+
+
+@pytest.mark.parametrize("call", [
+    lambda: clsamp.power_spectrum(np.full((8, 2), 0.5), resolution=2**20, progress=False),
+    lambda: clsamp.expected_spectrum("random", 16, 4, resolution=2**18, progress=False),
+    lambda: clsamp.convergence("random", "disk", [16], realizations=2**32 - 1, progress=False),
+    lambda: clsamp.convergence("random", "random_boxes", [16], realizations=2**20, members=2**16,
+                               progress=False),
+])
+def test_huge_analyses_are_refused_at_once(call):
+    t0 = time.perf_counter()
+    with pytest.raises(InvalidArgumentError, match=r"needs .* GiB; this machine has"):
+        call()
+    assert time.perf_counter() - t0 < 1.0

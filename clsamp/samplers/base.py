@@ -380,12 +380,8 @@ class Sampler:
                 raise InvalidArgumentError(
                     f"sample_device of {what} needs {runtime.gib(need)} of device memory; the device "
                     f"has {runtime.gib(room)}. Ask for fewer realizations or points at a time")
-        elif need > 2**28:                  # small requests skip reading the system's figure
-            room = runtime.host_memory_available()
-            if room is not None and need > room:
-                raise InvalidArgumentError(
-                    f"sample of {what} needs {runtime.gib(need)} for its output alone; this machine "
-                    f"has {runtime.gib(room)} available. Ask for fewer realizations or points at a time")
+        else:
+            runtime.check_host_bytes(need, f"sample of {what} (its output alone)")
         if self.backend == "numpy":
             return
         one = n * self.d * 8
