@@ -193,3 +193,16 @@ def test_benchmark_sizes_hold_their_promises():
     assert uncovered(pts, 0.01215, probes).size == 0
     fixed = clsamp.make_sampler("poisson_disk", rho=0.75, seed=2).sample(1024, realizations=128)
     assert np.all(relative_radius(fixed) >= 0.75)
+
+
+def test_a_maximal_set_that_ends_on_a_gap_of_no_measure():
+    # at this radius and seed two subcells at the crossing of two circles stay after 30
+    # levels: no disk alone covers them, the union does; the set is maximal (it raised
+    # "did not finish in 2048 rounds / 30 levels" before)
+    from scipy.spatial import cKDTree
+    r = 0.0004653110621747719
+    pts = clsamp.make_sampler("poisson_disk", radius=r, seed=1).sample_sets(1)[0]
+    tree = cKDTree(pts, boxsize=1.0)
+    assert tree.query(pts, k=2)[0][:, 1].min() >= r
+    probe = clsamp.make_sampler("random", seed=5).sample(200_000)
+    assert tree.query(probe, k=1)[0].max() < r
