@@ -84,3 +84,29 @@ def test_an_interrupted_tour_links_only_pictures_that_exist(tmp_path, after):
         missing = [link for link in links if not link.startswith("http") and not (folder / link).exists()]
         assert not missing, missing
         json.loads((folder / "tour.json").read_text())
+
+
+@pytest.mark.parametrize("work", ["spectrum", "ccvt"])
+def test_long_work_stops_within_two_seconds_of_ctrl_c(work):
+    import threading
+
+    import clsamp
+    if work == "spectrum":
+        pts = clsamp.make_sampler("random", seed=1).sample(4096, realizations=64)
+
+        def call():
+            clsamp.power_spectrum(pts, resolution=1024, method="direct", progress=False)
+    else:
+        def call():
+            clsamp.make_sampler("ccvt", points_per_site=16, seed=1, progress=False).sample(131072)
+    fired = []
+
+    def ctrl_c():
+        time.sleep(1.0)
+        fired.append(time.perf_counter())
+        os.kill(os.getpid(), signal.SIGINT)
+
+    threading.Thread(target=ctrl_c, daemon=True).start()
+    with pytest.raises(KeyboardInterrupt):
+        call()
+    assert fired and time.perf_counter() - fired[0] < 2.0
