@@ -76,6 +76,20 @@ def _wrapped(x, c):
     return np.where(w < -0.5, w + 1.0, w)
 
 
+def _range(value, name, top, top_included=True):
+    """A range (lo, hi) of floats with 0 < lo <= hi <= top (< top when not included)."""
+    try:
+        lo, hi = (float(v) for v in value)
+    except (TypeError, ValueError):
+        lo = hi = math.nan
+    ok = 0 < lo <= hi and (hi <= top if top_included else hi < top)
+    if not ok:
+        bound = "<=" if top_included else "<"
+        raise InvalidArgumentError(
+            f"'{name}' must be a range (lo, hi) with 0 < lo <= hi {bound} {top:g}, got {value!r}")
+    return lo, hi
+
+
 class Family:
     """Base: ``members`` random integrands in ``d`` dimensions with exact integrals.
 
@@ -167,11 +181,7 @@ class RandomGaussians(Family):
     MAX_SIGMA = 0.055
 
     def __init__(self, d=2, members=256, seed=0, sigma=(0.025, 0.055)):
-        lo, hi = (float(v) for v in sigma)
-        if not (0 < lo <= hi <= self.MAX_SIGMA):
-            raise InvalidArgumentError(
-                f"'sigma' must be a range (lo, hi) with 0 < lo <= hi <= {self.MAX_SIGMA}, got {sigma!r}")
-        self.sigma = (lo, hi)
+        self.sigma = _range(sigma, "sigma", self.MAX_SIGMA)
         super().__init__(d, members, seed)
 
     def _draw(self):
@@ -293,11 +303,7 @@ class RandomDisks(Family):
     edges = "curved"
 
     def __init__(self, d=2, members=256, seed=0, radius=(0.1, 0.45)):
-        lo, hi = (float(v) for v in radius)
-        if not (0 < lo <= hi < 0.5):
-            raise InvalidArgumentError(
-                f"'radius' must be a range (lo, hi) with 0 < lo <= hi < 0.5, got {radius!r}")
-        self.radius = (lo, hi)
+        self.radius = _range(radius, "radius", 0.5, top_included=False)
         super().__init__(d, members, seed)
 
     def _draw(self):
@@ -332,11 +338,7 @@ class RandomBoxes(Family):
     edges = "axis"
 
     def __init__(self, d=2, members=256, seed=0, length=(0.1, 0.9)):
-        lo, hi = (float(v) for v in length)
-        if not (0 < lo <= hi <= 1):
-            raise InvalidArgumentError(
-                f"'length' must be a range (lo, hi) with 0 < lo <= hi <= 1, got {length!r}")
-        self.length = (lo, hi)
+        self.length = _range(length, "length", 1.0)
         super().__init__(d, members, seed)
 
     def _draw(self):

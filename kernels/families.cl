@@ -14,6 +14,7 @@
  * contraction; only exp may differ by an ulp.
  */
 #include "philox.h"
+#include "two_sum.h"
 
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -137,9 +138,9 @@ __kernel void family_error_sums(__global const double *points, const uint n,
             x[j] = c;
         }
         const vec v = members_at(x, params, mp, q) - integral;
-        const vec s = sum + v;               /* TwoSum */
-        const vec bb = s - sum;
-        err = err + ((sum - (s - bb)) + (v - bb));
+        vec s, e;
+        TWO_SUM(vec, sum, v, s, e);
+        err = err + e;
         sum = s;
     }
     const vec hi = sum + err;

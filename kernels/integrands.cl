@@ -16,6 +16,7 @@
  * The order of every addition depends on (n, slice, local size) only, never on timing.
  */
 #include "philox.h"
+#include "two_sum.h"
 
 /* numpy evaluates a*b + c with two roundings; so does this file, on every device */
 #pragma OPENCL FP_CONTRACT OFF
@@ -99,12 +100,6 @@ inline vec integrand(const vec *x, __global const double *p)
 #endif
 }
 
-/* a + b = s + e exactly (Knuth's TwoSum, no branch, any magnitudes) */
-#define TWO_SUM(T, a, b, s, e) do {                   \
-        s = (a) + (b);                                \
-        const T bb_ = s - (a);                        \
-        e = ((a) - (s - bb_)) + ((b) - bb_);          \
-    } while (0)
 
 inline double2 dd_add(double2 a, double2 b)
 {
