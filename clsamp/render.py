@@ -5,47 +5,13 @@ with ``kernels/render.cl`` and returns a float32 image of shape (resolution, res
 (one channel: the scenes are gray). ``reference`` renders (and caches) a high-spp
 reference, ``compare`` and ``mse`` measure an image against it.
 
-Sample dimensions (docs/design.md, "Rendering")
--------------------------------------------------
-Each pixel sample has exactly the dimensions of the scene's effects, in the fixed order
-pixel 2, lens 2, time 1, 2 per AO ray, light 2 (``scene.sample_groups``). With
-``pad=True`` (the default) the sampler is asked, for each pixel, for one set of ``spp``
-2-D points per pair of dimensions (a 1-D set for time: ``d=1`` where the sampler has
-it, else the first coordinate of a 2-D set), and the sets are *padded* as pbrt pads
-(Pharr et al., PBR 3rd ed., 7.2.3): the samples of every set are reordered by an
-independent, exactly uniform random permutation, so that no correlation links the
-order of one set to another's (Fisher–Yates on the Philox stream ``PIXEL``,
-realization = pixel number, permutation = set number; see :mod:`clsamp.permutation`).
-A pixel sample made of a single set is not permuted: its order cannot change the
-pixel's mean. With ``pad=False`` the sampler makes all ``d = scene.sample_dimensions``
-dimensions at once (random, latin_hypercube, halton, sobol, ...), unpermuted;
-``random`` with ``pad=False`` (the reference's sampler) draws the very same Philox
-numbers inside the kernel instead of through a sample buffer.
-
-Decorrelation across pixels
----------------------------
-Every pixel uses its own independent realization of the sampler. Pixels are grouped
-in *seed blocks* of :func:`block_size` consecutive pixels (row-major); the sampler of
-set ``g`` in block ``b`` is created with the seed ``philox(seed, PIXEL, index=b,
-realization=g)`` and pixel ``b * B + k`` takes its realization ``k``. The block size
-follows only from ``spp`` and the dimensions, never from the device, so the same seed
-gives the same samples on every device, and the same image up to float rounding
-(the ray math is float32; on one device the image is bit-identical run to run).
-
-*Expensive* samplers (``Sampler.expensive``: optimizers and dart throwing) cannot afford
-one realization per pixel. For them a pool of ``pool`` realizations (default
-:data:`DEFAULT_POOL`) per set is made once (seeded per set),
-and pixel ``p`` takes pool member ``j(p)`` shifted by its own random toroidal vector
-``u(p)``: ``x -> (x + u) mod 1`` (Cranley–Patterson). The shift keeps the set's
-blue-noise and stratification on the torus and makes each pixel's estimate unbiased
-(every point uniform); ``j`` and ``u`` are Philox draws keyed by (seed, pixel, set),
-so pixels sharing a pool member still see different point positions.
-
-Images are rendered in tiles of whole seed blocks that fit one launch
-(:func:`clsamp.runtime.chunk_ranges`) and at most :data:`TILE_BYTES` of samples, so large
-images never exceed device (or host) memory; the tiling does not change the image.
-Samples cross to the kernel as float32, rounded toward zero (so they stay below 1); the
-pixel mean is accumulated in double.
+Which samples each pixel gets (dimensions, padding, seeds per block, pools of
+expensive samplers) is :mod:`clsamp.pixel_sampling`; the NumPy twin of the kernel is
+:mod:`clsamp.render_numpy`. Images are rendered in tiles of whole seed blocks that fit
+one launch (:func:`clsamp.runtime.chunk_ranges`) and at most :data:`TILE_BYTES` of
+samples, so large images never exceed device (or host) memory; the tiling does not
+change the image. Samples cross to the kernel as float32, rounded toward zero (so they
+stay below 1); the pixel mean is accumulated in double.
 """
 
 import hashlib
@@ -55,208 +21,31 @@ from pathlib import Path
 
 import numpy as np
 
-from . import io, parallel, permutation, philox, runtime
+from . import io, parallel, philox, runtime
 from .errors import InvalidArgumentError
-from .geometry import torus
-from .samplers import Sampler, make_sampler, sampler_class
+from .pixel_sampling import (  # noqa: F401  (block_size, float32_samples: public here too)
+    DEFAULT_POOL,
+    PURPOSE_PASS,
+    block_size,
+    derived_seed,
+    float32_samples,
+    pixel_samples,
+    sample_plan,
+)
+from .render_numpy import camera_frame, render_reference
 from .scene import Scene
 from .validation import check_int, check_positive_int, check_seed
 
-DEFAULT_POOL = 8                    # realizations per set of an expensive sampler
-MAX_BLOCK = 1024                    # pixels per seed block at most
-BLOCK_BYTES = 64 * 2**20            # float64 sample bytes of one block at most
 TILE_BYTES = 128 * 2**20            # float32 sample bytes of one tile at most (host memory)
 REFERENCE_PASS = 256                # spp per pass of a reference render
 REFERENCE_SEED = 0x5EED_0F_2EF
 RENDER_VERSION = "1"                # bump when the renderer's output changes (cache key)
 
-_SEED_BLOCK = 0x40000000            # Philox block word of derived seeds (above every perm << 8)
-_PURPOSE_SEED, _PURPOSE_POOL, _PURPOSE_SHIFT, _PURPOSE_PASS = 0, 1, 2, 3
-
-
-# -- randomness of the renderer ----------------------------------------------------------
-def _words(seed, index, realization, purpose):
-    """Four Philox words per (index, realization) on the PIXEL stream, one block per purpose."""
-    index, realization = np.broadcast_arrays(np.asarray(index, dtype=np.uint32),
-                                             np.asarray(realization, dtype=np.uint32))
-    counter = np.stack([index, realization,
-                        np.full(index.shape, _SEED_BLOCK + purpose, dtype=np.uint32),
-                        np.full(index.shape, philox.Stream.PIXEL, dtype=np.uint32)], axis=-1)
-    return philox.philox4x32(counter, np.stack(philox.seed_key(seed)))
-
-
-def derived_seed(seed, index, realization, purpose=_PURPOSE_SEED):
-    """A 64-bit seed drawn from (seed, index, realization): the seed of one sampler."""
-    w = _words(seed, index, realization, purpose)
-    return int(w[..., 0]) | (int(w[..., 1]) << 32)
-
-
-def block_size(spp, dimensions):
-    """Pixels per seed block: a power of two up to 1024, smaller when one block's float64
-    samples would pass 64 MiB. Depends on ``spp`` and ``dimensions`` only (never the device)."""
-    per_pixel = 8 * spp * max(1, dimensions)
-    b = MAX_BLOCK
-    while b > 1 and b * per_pixel > BLOCK_BYTES:
-        b //= 2
-    return b
-
-
-def float32_samples(x):
-    """Samples as the kernel reads them: float64 in [0, 1) to float32 rounded toward zero
-    (round-to-nearest could give 1.0), so they stay in [0, 1)."""
-    f = x.astype(np.float32)
-    up = f > x
-    f[up] = np.nextafter(f[up], np.float32(0))
-    return f
-
-
-# -- the plan: which sampler makes which dimensions ------------------------------------------
-class _Set:
-    """One sampler set of a pixel: dimensions [offset, offset + width) from a d-D sampler."""
-
-    def __init__(self, offset, width, d, factory, pooled):
-        self.offset, self.width, self.d, self.factory, self.pooled = offset, width, d, factory, pooled
-        self.pool = None
-
-
-def _sampler_factory(sampler, sampler_params):
-    """(name, make(d, seed) -> Sampler, supports(d) -> bool, expensive)."""
-    if isinstance(sampler, Sampler):
-        if sampler_params:
-            raise InvalidArgumentError("'sampler_params' can only be given with a sampler name, "
-                                       "not with a Sampler object")
-        base = sampler
-
-        def make(d, seed):
-            if d != base.d:
-                raise InvalidArgumentError(
-                    f"'sampler' has d={base.d}; this render needs d={d} (pairs of dimensions "
-                    "with pad=True, scene.sample_dimensions with pad=False)")
-            return base.with_seed(seed)
-
-        return base.label, make, lambda d: d == base.d, base.expensive
-    if not isinstance(sampler, str):
-        raise InvalidArgumentError(f"'sampler' must be a sampler name or a Sampler, got {sampler!r}")
-    params = dict(sampler_params or {})
-    cls = sampler_class(sampler)        # raises, naming the unknown sampler and the known ones
-
-    def make(d, seed):
-        return make_sampler(sampler, d=d, seed=seed, **dict(params))
-
-    def supports(d):
-        try:
-            make(d, 0)
-            return True
-        except InvalidArgumentError:
-            return False
-
-    return sampler, make, supports, cls.expensive
-
-
-def _plan(scene, sampler, spp, sampler_params, pad, pool):
-    name, make, supports, expensive = _sampler_factory(sampler, sampler_params)
-    sets, offset = [], 0
-    if pad:
-        for _, width in scene.sample_groups:
-            d = width
-            if width == 1 and not supports(1):
-                d = 2          # a 2-D-only sampler: time is the first coordinate of a 2-D set
-            sets.append(_Set(offset, width, d, make, expensive))
-            offset += width
-    elif scene.sample_dimensions:
-        sets.append(_Set(0, scene.sample_dimensions, scene.sample_dimensions, make, expensive))
-    for s in sets:
-        probe = make(s.d, 0)
-        valid = probe.valid_n(spp)
-        if valid != spp:
-            raise InvalidArgumentError(
-                f"'spp'={spp}: sampler {name!r} cannot make {spp} points in d={s.d} "
-                f"(the renderer asks for one {s.d}-D set of spp points per pixel"
-                f"{' and pair of dimensions' if pad else ''}); the nearest valid spp is {valid}")
-        if spp > probe.max_n:
-            raise InvalidArgumentError(f"'spp'={spp} exceeds what sampler {name!r} can make "
-                                       f"({probe.max_n})")
-    for s in sets:
-        if s.pooled:
-            s.pool_size = pool
-    return sets
-
-
-def pixel_samples(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=True,
-                  pixels=None, pool=DEFAULT_POOL, _sets=None, _into=None):
-    """The samples the renderer feeds the kernel: float64 array (pixels, dimensions, spp).
-
-    Parameters are those of :func:`render`; ``pixels`` is a range of row-major pixel
-    numbers (default: all ``resolution**2``), starting on a seed-block boundary
-    (:func:`block_size`) unless it is the whole image. Values are in [0, 1).
-    """
-    resolution = check_positive_int(resolution, "resolution", maximum=65535)
-    spp = check_positive_int(spp, "spp", maximum=2**31)
-    seed = check_seed(seed)
-    total = resolution * resolution
-    pixels = range(total) if pixels is None else pixels
-    sets = _sets if _sets is not None else _plan(scene, sampler, spp, sampler_params, pad, pool)
-    dims = scene.sample_dimensions
-    # _into: the kernel's float32 buffer (pixels, >= dims, >= spp), filled set by set
-    out = np.empty((len(pixels), dims, spp), dtype=np.float64) if _into is None else _into
-    if not dims or not len(pixels):
-        return out
-    block = block_size(spp, dims)
-    if pixels.start % block:
-        raise InvalidArgumentError(f"'pixels' must start on a seed block boundary ({block}), "
-                                   f"got {pixels!r}")
-    lo, hi = pixels.start, pixels.stop
-    perms = None
-    if pad and len(sets) > 1:   # one set alone: its order cannot change the pixel's mean
-        perms = permutation.random_permutations_device(
-            seed, philox.Stream.PIXEL, range(lo, hi), spp, range(len(sets))).get()
-    for g, s in enumerate(sets):
-        if s.pooled:
-            if s.pool is None:
-                count = min(s.pool_size, total)
-                s.pool = s.factory(s.d, derived_seed(seed, 0xFFFFFFFF, g)).sample(
-                    spp, realizations=count)
-            w = _words(seed, np.arange(lo, hi), g, _PURPOSE_POOL)
-            # Lemire's multiply-shift: bias below pool / 2^32, negligible and deterministic
-            choice = ((w[:, 0].astype(np.uint64) * np.uint64(len(s.pool))) >> np.uint64(32)).astype(np.intp)
-            w = _words(seed, np.arange(lo, hi), g, _PURPOSE_SHIFT)
-            shift = np.stack([philox.words_to_unit(w[:, 0], w[:, 1]),
-                              philox.words_to_unit(w[:, 2], w[:, 3])], axis=-1)[:, :s.d]
-            points = torus.shift(s.pool[choice], shift[:, None, :])
-        else:
-            points = np.empty((hi - lo, spp, s.d))
-            for b in range(lo // block, -(-hi // block)):
-                b_lo, b_hi = max(lo, b * block), min(hi, (b + 1) * block)
-                sampler_b = s.factory(s.d, derived_seed(seed, b, g))
-                # realization k of block b is pixel b * block + k
-                points[b_lo - lo:b_hi - lo] = sampler_b.sample(
-                    spp, realizations=range(b_lo - b * block, b_hi - b * block))
-        if perms is not None:
-            flat = perms[:, g, :].astype(np.intp) + (np.arange(hi - lo, dtype=np.intp) * spp)[:, None]
-            points = points.reshape(-1, s.d)[flat.ravel()].reshape(hi - lo, spp, s.d)
-        columns = points[:, :, :s.width].transpose(0, 2, 1)
-        if _into is None:
-            out[:, s.offset:s.offset + s.width, :] = columns
-        else:
-            out[:, s.offset:s.offset + s.width, :spp] = float32_samples(columns)
-    return out
-
 
 # -- the kernel and its NumPy reference ------------------------------------------------------
-def _camera_frame(scene):
-    cam = scene.camera
-    eye = np.array(cam["eye"], dtype=np.float64)
-    forward = np.array(cam["look_at"]) - eye
-    forward /= np.linalg.norm(forward)
-    right = np.cross(forward, np.array(cam["up"], dtype=np.float64))
-    right /= np.linalg.norm(right)
-    up = np.cross(right, forward)
-    return eye, forward, right, up
-
-
 def _scene_arrays(scene):
     """The float32 buffers of render.cl: camera, shading, spheres, planes, boxes, light."""
-    eye, forward, right, up = _camera_frame(scene)
+    eye, forward, right, up = camera_frame(scene)
     cam = scene.camera
     lens = cam.get("lens") or {"aperture": 0.0, "focus_distance": 1.0}
     camera = np.concatenate([eye, forward, right, up, [math.tan(math.radians(cam["fov"]) / 2),
@@ -335,147 +124,6 @@ def _launch(scene, host, pixel0, npix, resolution, spp, width=None, keys=None, b
     return out.get()
 
 
-def _concentric(u1, u2):
-    a, b = 2.0 * u1 - 1.0, 2.0 * u2 - 1.0
-    wide = np.abs(a) > np.abs(b)
-    r = np.where(wide, a, b)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        num = np.where(wide, b, a)
-        den = np.where(wide, a, np.where(b == 0, 1.0, b))
-        phi = np.where(wide, np.pi / 4 * (num / den), np.pi / 2 - np.pi / 4 * (num / den))
-    zero = (a == 0) & (b == 0)
-    return np.where(zero, 0.0, r * np.cos(phi)), np.where(zero, 0.0, r * np.sin(phi))
-
-
-def _trace(scene, o, d, time, tmax, nearest):
-    """NumPy twin of nearest_hit / occluded: (t, normal, albedo) or the occlusion mask."""
-    best = np.broadcast_to(np.asarray(tmax, dtype=np.float64), o.shape[:-1]).copy()
-    normal = np.zeros(o.shape)
-    albedo = np.zeros(o.shape[:-1])
-    blocked = np.zeros(o.shape[:-1], dtype=bool)
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        for s in scene.shapes:
-            if s["type"] == "sphere":
-                c = np.array(s["center"]) + np.array(s["velocity"]) * time[..., None]
-                oc = o - c
-                b = np.sum(oc * d, -1)
-                cc = np.sum(oc * oc, -1) - s["radius"] ** 2
-                disc = b * b - cc
-                root = np.sqrt(np.maximum(disc, 0))
-                t0 = -b - root
-                t = np.where(t0 > 0, t0, -b + root)
-                hit = (disc >= 0) & (t > 0)
-                n = (oc + t[..., None] * d) / s["radius"]
-            elif s["type"] == "plane":
-                pn = np.array(s["normal"])
-                den = d @ pn
-                t = ((np.array(s["point"]) - o) @ pn) / den
-                hit = (den != 0) & (t > 0)
-                n = np.broadcast_to(pn, o.shape)
-            else:
-                ia = 1.0 / d
-                a = (np.array(s["min"]) - o) * ia
-                bb = (np.array(s["max"]) - o) * ia
-                lo, hi = np.minimum(a, bb), np.maximum(a, bb)
-                t = lo.max(-1)
-                hit = (t <= hi.min(-1)) & (t > 0)
-                onx = t == lo[..., 0]
-                ony = ~onx & (t == lo[..., 1])
-                n = np.stack([onx, ony, ~onx & ~ony], -1).astype(np.float64)
-            if nearest:
-                take = hit & (t < best)
-                best = np.where(take, t, best)
-                normal = np.where(take[..., None], n, normal)
-                albedo = np.where(take, s["albedo"], albedo)
-            else:
-                blocked |= hit & (t < tmax)
-    if not nearest:
-        return blocked
-    flip = np.where(np.sum(normal * d, -1) > 0, -1.0, 1.0)
-    return best, normal * flip[..., None], albedo
-
-
-def render_reference(scene, samples, resolution, pixel0=0):
-    """NumPy reference of ``render_pixels`` (float64): pixel values for the given samples.
-
-    ``samples``: (pixels, scene.sample_dimensions, spp) in [0, 1). Follows
-    kernels/render.cl step by step; for checks on small images (it holds every ray of
-    the tile in memory).
-    """
-    samples = np.asarray(samples, dtype=np.float64)
-    npix, dims, spp = samples.shape
-    eye, forward, right, up = _camera_frame(scene)
-    cam = scene.camera
-    tan_half = math.tan(math.radians(cam["fov"]) / 2)
-    pixel = pixel0 + np.arange(npix)
-    col = (pixel % resolution).astype(np.float64)[:, None]
-    row = (pixel // resolution).astype(np.float64)[:, None]
-    offsets, k = {}, 0
-    for g, w in scene.sample_groups:
-        offsets[g] = k
-        k += w
-
-    def dim(name, j=0):
-        return samples[:, offsets[name] + j, :]
-
-    px, py = (dim("pixel"), dim("pixel", 1)) if "pixel" in offsets else (0.5, 0.5)
-    sx = (2 * (col + px) / resolution - 1) * tan_half
-    sy = (1 - 2 * (row + py) / resolution) * tan_half
-    sx, sy = (np.broadcast_to(a, (npix, spp)) for a in (sx, sy))
-    d = forward + sx[..., None] * right + sy[..., None] * up
-    o = np.broadcast_to(eye, d.shape).copy()
-    if "lens" in offsets:
-        lens = cam["lens"]
-        lx, ly = _concentric(dim("lens"), dim("lens", 1))
-        focus = o + d * lens["focus_distance"]
-        o = o + (lx * lens["aperture"])[..., None] * right + (ly * lens["aperture"])[..., None] * up
-        d = focus - o
-    d = d / np.linalg.norm(d, axis=-1, keepdims=True)
-    if "time" in offsets:
-        time = cam["shutter"][0] + (cam["shutter"][1] - cam["shutter"][0]) * dim("time")
-    else:
-        time = np.zeros(d.shape[:-1])
-    t, n, albedo = _trace(scene, o, d, time, np.inf, nearest=True)
-    hit = np.isfinite(t)
-    with np.errstate(invalid="ignore"):
-        x = o + t[..., None] * d + scene.epsilon * n
-    if scene.ao_rays:
-        sign = np.where(np.signbit(n[..., 2]), -1.0, 1.0)
-        ia = -1.0 / (sign + n[..., 2])
-        bb = n[..., 0] * n[..., 1] * ia
-        b1 = np.stack([1 + sign * n[..., 0] ** 2 * ia, sign * bb, -sign * n[..., 0]], -1)
-        b2 = np.stack([bb, sign + n[..., 1] ** 2 * ia, -n[..., 1]], -1)
-        open_ = np.zeros(t.shape)
-        for a in range(scene.ao_rays):
-            hx, hy = _concentric(dim(f"ao{a}"), dim(f"ao{a}", 1))
-            hz = np.sqrt(np.maximum(1 - hx * hx - hy * hy, 0))
-            w = hx[..., None] * b1 + hy[..., None] * b2 + hz[..., None] * n
-            open_ += ~_trace(scene, x, w, time, scene.ao_distance, nearest=False)
-        ambient = scene.ambient * open_ / scene.ao_rays
-    else:
-        ambient = scene.ambient
-    direct = 0.0
-    if scene.light is not None:
-        light = scene.light
-        e1, e2 = np.array(light["edge1"]), np.array(light["edge2"])
-        lu, lv = (dim("light"), dim("light", 1)) if "light" in offsets else (0.5, 0.5)
-        lu, lv = np.broadcast_arrays(lu, lv, t)[:2]
-        q = np.array(light["corner"]) + lu[..., None] * e1 + lv[..., None] * e2
-        w = q - x
-        dist2 = np.sum(w * w, -1)
-        dist = np.sqrt(dist2)
-        with np.errstate(invalid="ignore"):     # missed rays: inf - inf, masked below
-            w = w / dist[..., None]
-        cos_light = -(w @ np.cross(e1, e2))
-        cos_surf = np.sum(n * w, -1)
-        lit = (cos_light > 0) & (cos_surf > 0)
-        shadow = _trace(scene, x, w, time, dist, nearest=False)
-        with np.errstate(invalid="ignore"):
-            direct = np.where(lit & ~shadow, light["emission"] * cos_light * cos_surf / dist2 / np.pi, 0)
-    radiance = np.where(hit, albedo * (ambient + direct), scene.background)
-    return radiance.mean(axis=1).astype(np.float32)
-
-
 # -- the public entry points ----------------------------------------------------------------
 def _as_scene(scene):
     if isinstance(scene, Scene):
@@ -543,7 +191,7 @@ def render(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=Tru
         raise InvalidArgumentError(f"'pad' must be True or False, got {pad!r}")
     runtime.check_host_bytes(4 * resolution * resolution + TILE_BYTES,
                              f"a {resolution} x {resolution} render")
-    sets = _plan(scene, sampler, spp, sampler_params, pad, pool)
+    sets = sample_plan(scene, sampler, spp, sampler_params, pad, pool)
     total = resolution * resolution
     dims = scene.sample_dimensions
     block = block_size(spp, dims)
@@ -691,7 +339,7 @@ def reference(scene, resolution, spp=None, progress=True, seed=REFERENCE_SEED, c
     passes = -(-spp // REFERENCE_PASS)
     for k in tqdm(range(passes), desc=f"reference {scene.name}", unit="pass", disable=not progress):
         n = min(REFERENCE_PASS, spp - k * REFERENCE_PASS)
-        image = render(scene, "random", n, resolution, seed=derived_seed(seed, k, 0, _PURPOSE_PASS),
+        image = render(scene, "random", n, resolution, seed=derived_seed(seed, k, 0, PURPOSE_PASS),
                        pad=False, progress=False)
         total += n * image.astype(np.float64)
     result = (total / spp).astype(np.float32)

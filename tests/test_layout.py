@@ -21,7 +21,7 @@ LAYERS = [
     ("samplers", {"samplers"}),
     ("analysis", {"spectrum", "point_metrics", "metrics"}),
     ("experiments", {"integrands", "families", "variance", "convergence", "theory", "integration"}),
-    ("render", {"scene", "render"}),
+    ("render", {"scene", "pixel_sampling", "render_numpy", "render"}),
     ("report", {"plots", "report", "tour", "cli", "__main__", "__init__"}),
 ]
 
