@@ -164,11 +164,16 @@ def load_points(path):
 
 
 # -- images ----------------------------------------------------------------------
-def _check_image(image, name="image"):
+def _check_image(image, name="image", channels=None):
     image = np.asarray(image)
     if image.ndim == 2:
         image = image[:, :, None]
-    if image.ndim != 3 or image.shape[2] not in (1, 3, 4):
+    if channels is not None:
+        if image.ndim != 3 or image.shape[2] != len(channels):
+            raise InvalidArgumentError(
+                f"'{name}' must have shape (h, w, {len(channels)}) for the channels {channels}, "
+                f"got {image.shape}")
+    elif image.ndim != 3 or image.shape[2] not in (1, 3, 4):
         raise InvalidArgumentError(
             f"'{name}' must have shape (h, w), (h, w, 1), (h, w, 3) or (h, w, 4), got {image.shape}")
     if not np.issubdtype(image.dtype, np.floating):
@@ -176,14 +181,21 @@ def _check_image(image, name="image"):
     return image
 
 
-def write_exr(path, image, header=None):
+def write_exr(path, image, header=None, channel_names=None):
     """Write a float image as OpenEXR (float32 channels; Y for one channel, RGB(A) else).
 
-    ``header`` entries are stored as string attributes (sampler, spp, seed, ...).
+    ``header`` entries are stored as string attributes (sampler, spp, seed, ...);
+    ``channel_names`` names the channels of an (h, w, c) image instead (e.g. a reference
+    render and its standard error: ``("Y", "stderr")``). The file appears whole or not at
+    all (written beside it, then renamed).
     """
     import OpenEXR
-    image = _check_image(image)
-    names = {1: ("Y",), 3: ("R", "G", "B"), 4: ("R", "G", "B", "A")}[image.shape[2]]
+    if channel_names is not None:
+        channel_names = tuple(str(n) for n in channel_names)
+        if len(set(channel_names)) != len(channel_names) or not channel_names:
+            raise InvalidArgumentError(f"'channel_names' must be distinct names, got {channel_names!r}")
+    image = _check_image(image, channels=channel_names)
+    names = channel_names or {1: ("Y",), 3: ("R", "G", "B"), 4: ("R", "G", "B", "A")}[image.shape[2]]
     channels = {n: np.ascontiguousarray(image[:, :, i], dtype=np.float32) for i, n in enumerate(names)}
     attributes = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     for key, value in (header or {}).items():
@@ -194,11 +206,12 @@ def write_exr(path, image, header=None):
     return Path(path)
 
 
-def read_exr(path, with_header=False):
+def read_exr(path, with_header=False, channel_names=None):
     """Read an OpenEXR image written by :func:`write_exr` as float32 (h, w) or (h, w, c).
 
+    ``channel_names`` picks those channels, in that order (an image written with them).
     Raises ``FileNotFoundError`` for a missing file and :class:`InvalidArgumentError`
-    ("not an OpenEXR file") for one the library cannot read.
+    ("not an OpenEXR file", or a channel it lacks) for one the library cannot read.
     """
     import OpenEXR
     path = Path(path)
@@ -213,6 +226,12 @@ def read_exr(path, with_header=False):
             channels = exr.channels()
             header = dict(exr.header())
             order = [n for n in ("R", "G", "B", "A", "Y") if n in channels] or sorted(channels)
+            if channel_names is not None:
+                missing = [n for n in channel_names if n not in channels]
+                if missing:
+                    raise InvalidArgumentError(
+                        f"{str(path)!r} has no channel {missing[0]!r} (it has {sorted(channels)})")
+                order = list(channel_names)
             planes = [np.asarray(channels[n].pixels, dtype=np.float32) for n in order]
     except RuntimeError as error:
         raise InvalidArgumentError(f"{str(path)!r} is not a readable OpenEXR file: {error}") from None

@@ -1,5 +1,6 @@
 """Which samples each pixel of a render gets: the plan, the seeds and the padding.
 
+Sample dimensions (docs/design.md, "Rendering")
 -------------------------------------------------
 Each pixel sample has exactly the dimensions of the scene's effects, in the fixed order
 pixel 2, lens 2, time 1, 2 per AO ray, light 2 (``scene.sample_groups``). With
@@ -35,7 +36,12 @@ blue-noise and stratification on the torus and makes each pixel's estimate unbia
 (every point uniform); ``j`` and ``u`` are Philox draws keyed by (seed, pixel, set),
 so pixels sharing a pool member still see different point positions.
 
-Images are rendered in tiles of whole seed blocks that fit one launch
+*Pixel-indexed* samplers (``pixel_indexed = True``: ``zsobol``) decorrelate pixels
+themselves, by handing each pixel its part of one sequence: set ``g`` is one sampler for
+the whole image (seed ``philox(seed, PIXEL, index=0xFFFFFFFE, realization=g)``, made
+for the image's size by ``for_image``), pixel p takes its realization p, and its sets
+are not permuted (pbrt does not pad its ZSobolSampler either: each pair of dimensions
+has its own digit permutations and scrambles).
 """
 
 import numpy as np
@@ -49,6 +55,7 @@ from .validation import check_positive_int, check_seed
 DEFAULT_POOL = 8                    # realizations per set of an expensive sampler
 MAX_BLOCK = 1024                    # pixels per seed block at most
 BLOCK_BYTES = 64 * 2**20            # float64 sample bytes of one block at most
+_IMAGE_INDEX = 0xFFFFFFFE           # derived-seed index of a pixel-indexed sampler's one seed
 
 _SEED_BLOCK = 0x40000000            # Philox block word of derived seeds (above every perm << 8)
 PURPOSE_SEED, PURPOSE_POOL, PURPOSE_SHIFT, PURPOSE_PASS = 0, 1, 2, 3
@@ -97,6 +104,7 @@ class _Set:
     def __init__(self, offset, width, d, factory, pooled):
         self.offset, self.width, self.d, self.factory, self.pooled = offset, width, d, factory, pooled
         self.pool = None
+        self.indexed = False    # a pixel-indexed sampler (zsobol): one sampler, realization = pixel
 
 
 def _sampler_factory(sampler, sampler_params):
@@ -147,6 +155,7 @@ def sample_plan(scene, sampler, spp, sampler_params, pad, pool):
         sets.append(_Set(0, scene.sample_dimensions, scene.sample_dimensions, make, expensive))
     for s in sets:
         probe = make(s.d, 0)
+        s.indexed = bool(getattr(probe, "pixel_indexed", False))
         valid = probe.valid_n(spp)
         if valid != spp:
             raise InvalidArgumentError(
@@ -162,18 +171,33 @@ def sample_plan(scene, sampler, spp, sampler_params, pad, pool):
     return sets
 
 
+def image_size(resolution, name="resolution"):
+    """(width, height) of an image from ``resolution``: an int r (an r x r image) or a pair
+    (width, height), each in [1, 65535], as pbrt's film takes it."""
+    if isinstance(resolution, (tuple, list)) or (isinstance(resolution, np.ndarray)
+                                                 and resolution.ndim == 1):
+        if len(resolution) != 2:
+            raise InvalidArgumentError(
+                f"'{name}' must be an int or a pair (width, height), got {resolution!r}")
+        width = check_positive_int(resolution[0], f"{name}[0] (width)", maximum=65535)
+        height = check_positive_int(resolution[1], f"{name}[1] (height)", maximum=65535)
+        return width, height
+    side = check_positive_int(resolution, name, maximum=65535)
+    return side, side
+
+
 def pixel_samples(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=True,
                   pixels=None, pool=DEFAULT_POOL, _sets=None, _into=None):
     """The samples the renderer feeds the kernel: float64 array (pixels, dimensions, spp).
 
     Parameters are those of :func:`render`; ``pixels`` is a range of row-major pixel
-    numbers (default: all ``resolution**2``), starting on a seed-block boundary
+    numbers (pixel ``row * width + col``; default: all of them), starting on a seed-block boundary
     (:func:`block_size`) unless it is the whole image. Values are in [0, 1).
     """
-    resolution = check_positive_int(resolution, "resolution", maximum=65535)
+    width, height = image_size(resolution)
     spp = check_positive_int(spp, "spp", maximum=2**31)
     seed = check_seed(seed)
-    total = resolution * resolution
+    total = width * height
     pixels = range(total) if pixels is None else pixels
     sets = _sets if _sets is not None else sample_plan(scene, sampler, spp, sampler_params, pad, pool)
     dims = scene.sample_dimensions
@@ -187,7 +211,7 @@ def pixel_samples(scene, sampler, spp, resolution, seed=0, sampler_params=None, 
                                    f"got {pixels!r}")
     lo, hi = pixels.start, pixels.stop
     perms = None
-    if pad and len(sets) > 1:   # one set alone: its order cannot change the pixel's mean
+    if pad and sum(not s.indexed for s in sets) > 1:   # one set alone: its order cannot change the mean
         perms = permutation.random_permutations_device(
             seed, philox.Stream.PIXEL, range(lo, hi), spp, range(len(sets))).get()
     for g, s in enumerate(sets):
@@ -203,6 +227,9 @@ def pixel_samples(scene, sampler, spp, resolution, seed=0, sampler_params=None, 
             shift = np.stack([philox.words_to_unit(w[:, 0], w[:, 1]),
                               philox.words_to_unit(w[:, 2], w[:, 3])], axis=-1)[:, :s.d]
             points = torus.shift(s.pool[choice], shift[:, None, :])
+        elif s.indexed:          # one sampler for the image; its realizations are the pixels
+            points = s.factory(s.d, derived_seed(seed, _IMAGE_INDEX, g)).for_image(width, height).sample(
+                spp, realizations=range(lo, hi))
         else:
             points = np.empty((hi - lo, spp, s.d))
             for b in range(lo // block, -(-hi // block)):
@@ -211,7 +238,7 @@ def pixel_samples(scene, sampler, spp, resolution, seed=0, sampler_params=None, 
                 # realization k of block b is pixel b * block + k
                 points[b_lo - lo:b_hi - lo] = sampler_b.sample(
                     spp, realizations=range(b_lo - b * block, b_hi - b * block))
-        if perms is not None:
+        if perms is not None and not s.indexed:
             flat = perms[:, g, :].astype(np.intp) + (np.arange(hi - lo, dtype=np.intp) * spp)[:, None]
             points = points.reshape(-1, s.d)[flat.ravel()].reshape(hi - lo, spp, s.d)
         columns = points[:, :, :s.width].transpose(0, 2, 1)

@@ -1,9 +1,10 @@
 """The renderer: a scene, a sampler and a number of samples per pixel in, an image out.
 
 ``render(scene, sampler, spp, resolution, seed)`` ray-casts a :class:`~clsamp.scene.Scene`
-with ``kernels/render.cl`` and returns a float32 image of shape (resolution, resolution)
-(one channel: the scenes are gray). ``reference`` renders (and caches) a high-spp
-reference, ``compare`` and ``mse`` measure an image against it.
+with ``kernels/render.cl`` and returns a float32 image of shape (height, width) (one
+channel: the scenes are gray). ``reference`` renders (and caches) a high-spp reference
+with its measured noise; ``compare``, ``mse`` and ``error_spectrum`` measure an image
+against it.
 
 Which samples each pixel gets (dimensions, padding, seeds per block, pools of
 expensive samplers) is :mod:`clsamp.pixel_sampling`; the NumPy twin of the kernel is
@@ -29,27 +30,31 @@ from .pixel_sampling import (  # noqa: F401  (block_size, float32_samples: publi
     block_size,
     derived_seed,
     float32_samples,
+    image_size,
     pixel_samples,
     sample_plan,
 )
-from .render_numpy import camera_frame, render_reference
+from .render_numpy import camera_frame, render_reference, screen_window
 from .scene import Scene
 from .validation import check_int, check_positive_int, check_seed
 
 TILE_BYTES = 128 * 2**20            # float32 sample bytes of one tile at most (host memory)
-REFERENCE_PASS = 256                # spp per pass of a reference render
+REFERENCE_SAMPLER = "sobol:owen"    # what a reference render is made with...
+REFERENCE_PASSES = 16               # ...in this many independent passes (its noise estimate)
 REFERENCE_SEED = 0x5EED_0F_2EF
-RENDER_VERSION = "1"                # bump when the renderer's output changes (cache key)
+RENDER_VERSION = "2"                # bump when the renderer's output changes (cache key)
 
 
 # -- the kernel and its NumPy reference ------------------------------------------------------
-def _scene_arrays(scene):
-    """The float32 buffers of render.cl: camera, shading, spheres, planes, boxes, light."""
+def _scene_arrays(scene, size):
+    """The float32 buffers of render.cl for a (width, height) image: camera, shading, spheres,
+    planes, boxes, light."""
     eye, forward, right, up = camera_frame(scene)
     cam = scene.camera
     lens = cam.get("lens") or {"aperture": 0.0, "focus_distance": 1.0}
     camera = np.concatenate([eye, forward, right, up, [math.tan(math.radians(cam["fov"]) / 2),
-                             lens["aperture"], lens["focus_distance"], *cam["shutter"]]])
+                             lens["aperture"], lens["focus_distance"], *cam["shutter"],
+                             *screen_window(scene, *size)]])
     shading = np.array([scene.ambient, scene.background, scene.ao_distance, scene.epsilon])
     spheres = [[*s["center"], s["radius"], *s["velocity"], s["albedo"]]
                for s in scene.shapes if s["type"] == "sphere"]
@@ -73,11 +78,12 @@ def render_samples(scene, samples, resolution, pixel0=0, backend="opencl", width
     """Render given samples: float32 pixel values for pixels [pixel0, pixel0 + len(samples)).
 
     ``samples`` has shape (pixels, scene.sample_dimensions, spp) in [0, 1) (as from
-    :func:`pixel_samples`); float64 samples are rounded toward zero to float32 first on
-    both backends, float32 samples are taken as they are. ``backend="numpy"`` is the
-    NumPy reference (float64 ray math); ``width`` overrides the kernel's vector width
-    (1, 4 or 8).
+    :func:`pixel_samples`); ``resolution`` is as in :func:`render`; float64 samples are
+    rounded toward zero to float32 first on both backends, float32 samples are taken as
+    they are. ``backend="numpy"`` is the NumPy reference (float64 ray math); ``width``
+    overrides the kernel's vector width (1, 4 or 8).
     """
+    size = image_size(resolution)
     samples = np.asarray(samples)
     npix, dims, spp = samples.shape
     if dims != scene.sample_dimensions:
@@ -85,22 +91,23 @@ def render_samples(scene, samples, resolution, pixel0=0, backend="opencl", width
                                    f"(axis 1), got {dims}")
     f32 = samples if samples.dtype == np.float32 else float32_samples(samples)
     if backend == "numpy":
-        return render_reference(scene, f32.astype(np.float64), resolution, pixel0)
+        return render_reference(scene, f32.astype(np.float64), size, pixel0)
     spp_pad = -(-spp // (width or vector_width())) * (width or vector_width())
     host = np.full((npix, max(dims, 1), spp_pad), 0.5, dtype=np.float32)
     host[:, :dims, :spp] = f32
-    return _launch(scene, host, pixel0, npix, resolution, spp, width)
+    return _launch(scene, host, pixel0, npix, size, spp, width)
 
 
-def _launch(scene, host, pixel0, npix, resolution, spp, width=None, keys=None, block=1):
-    """Run render_pixels on ``host`` samples (npix, dims, spp_pad) float32, or, with
+def _launch(scene, host, pixel0, npix, size, spp, width=None, keys=None, block=1):
+    """Run render_pixels of a (width, height) image on ``host`` samples (npix, dims, spp_pad)
+    float32, or, with
     ``keys`` ((blocks, 2) uint32 seeds of the seed blocks), on Philox draws made in the kernel."""
     import pyopencl.array as cla
     width = width or vector_width()
     runtime.require_fp64()
     queue = runtime.queue()
     spp_pad = -(-spp // width) * width
-    arrays = _scene_arrays(scene)
+    arrays = _scene_arrays(scene, size)
     camera, shading, spheres, planes, boxes, light = (
         cla.to_device(queue, np.ascontiguousarray(a).reshape(-1) if a.size else np.zeros(1, np.float32))
         for a in arrays)
@@ -117,7 +124,7 @@ def _launch(scene, host, pixel0, npix, resolution, spp, width=None, keys=None, b
     kernel = runtime.kernel("render.cl", "render_pixels", defines=defines, options=("-cl-mad-enable",))
     local = runtime.local_size(64 if width == 1 else 8)
     kernel(queue, (-(-npix // local) * local,), (local,), out.data, samples_d.data,
-           np.uint32(pixel0), np.uint32(npix), np.uint32(resolution), np.uint32(spp),
+           np.uint32(pixel0), np.uint32(npix), np.uint32(size[0]), np.uint32(size[1]), np.uint32(spp),
            np.uint32(spp_pad), camera.data, shading.data, spheres.data, np.uint32(counts[0]),
            planes.data, np.uint32(counts[1]), boxes.data, np.uint32(counts[2]), light.data,
            keys_d.data, np.uint32(block))
@@ -151,8 +158,9 @@ def render(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=Tru
     spp : int
         Samples per pixel (>= 1); the sampler must be able to make spp points
         (jittered in 2-D needs k^2 or its ``strata`` product).
-    resolution : int
-        The image is resolution x resolution pixels.
+    resolution : int or (int, int)
+        The image is resolution x resolution pixels, or (width, height) pixels; the
+        camera's fov spans the shorter side (as pbrt's film and perspective camera).
     seed : int
         Seed in [0, 2^64); the same seed gives the same image.
     sampler_params : dict, optional
@@ -167,8 +175,9 @@ def render(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=Tru
 
     Returns
     -------
-    ndarray of float32, shape (resolution, resolution)
-        Row 0 is the top of the image; values are linear radiance.
+    ndarray of float32, shape (height, width)
+        Row 0 is the top of the image; values are linear radiance. Pixel ``(row, col)`` is
+        pixel number ``row * width + col`` of the seed blocks.
 
     Notes
     -----
@@ -184,20 +193,19 @@ def render(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=Tru
     """
     scene = _as_scene(scene)
     spp = check_int(spp, "spp", minimum=1, maximum=2**31)
-    resolution = check_positive_int(resolution, "resolution", maximum=65535)
+    size = image_size(resolution)
     seed = check_seed(seed)
     pool = check_positive_int(pool, "pool")
     if not isinstance(pad, bool):
         raise InvalidArgumentError(f"'pad' must be True or False, got {pad!r}")
-    runtime.check_host_bytes(4 * resolution * resolution + TILE_BYTES,
-                             f"a {resolution} x {resolution} render")
+    runtime.check_host_bytes(4 * size[0] * size[1] + TILE_BYTES, f"a {size[0]} x {size[1]} render")
     sets = sample_plan(scene, sampler, spp, sampler_params, pad, pool)
-    total = resolution * resolution
+    total = size[0] * size[1]
     dims = scene.sample_dimensions
     block = block_size(spp, dims)
     blocks = -(-total // block)
     if sampler == "random" and not sampler_params and not pad:
-        return _render_random(scene, spp, resolution, seed, block, blocks)
+        return _render_random(scene, spp, size, seed, block, blocks)
     width = vector_width()
     spp_pad = -(-spp // width) * width
     # device bytes per block: float32 samples (padded to the vector width) and the output
@@ -212,12 +220,12 @@ def render(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=Tru
         for b_lo, b_hi in tiles:
             pixels = range(b_lo * block, min(total, b_hi * block))
             host = np.full((len(pixels), max(dims, 1), spp_pad), 0.5, dtype=np.float32)
-            pixel_samples(scene, sampler, spp, resolution, seed, pixels=pixels, pad=pad, _sets=sets,
+            pixel_samples(scene, sampler, spp, size, seed, pixels=pixels, pad=pad, _sets=sets,
                           _into=host)
-            image[pixels.start:pixels.stop] = _launch(scene, host, pixels.start, len(pixels),
-                                                      resolution, spp, width)
+            image[pixels.start:pixels.stop] = _launch(scene, host, pixels.start, len(pixels), size, spp,
+                                                      width)
             bar.update(len(pixels))
-    return image.reshape(resolution, resolution)
+    return image.reshape(size[1], size[0])
 
 
 def render_task(scene, sampler, spp, resolution, seed, sampler_params):
@@ -269,17 +277,17 @@ def render_sweep(scene, samplers, spps, resolution, seed=0, sampler_params=None,
     return out, errors
 
 
-def _render_random(scene, spp, resolution, seed, block, blocks):
+def _render_random(scene, spp, size, seed, block, blocks):
     """``random`` with ``pad=False``, its draws made in the kernel: the same samples as
     :func:`pixel_samples` gives (the same Philox doubles, the same seeds per block), so the
     same image, without sample buffers."""
-    total = resolution * resolution
+    total = size[0] * size[1]
     keys = np.array([philox.seed_key(derived_seed(seed, b, 0)) for b in range(blocks)],
                     dtype=np.uint32)
     image = np.empty(total, dtype=np.float32)
     for lo, hi in runtime.chunk_ranges(total, 4):
-        image[lo:hi] = _launch(scene, None, lo, hi - lo, resolution, spp, keys=keys, block=block)
-    return image.reshape(resolution, resolution)
+        image[lo:hi] = _launch(scene, None, lo, hi - lo, size, spp, keys=keys, block=block)
+    return image.reshape(size[1], size[0])
 
 
 def cache_folder():
@@ -289,64 +297,128 @@ def cache_folder():
 
 
 def reference_key(scene, resolution, spp, seed=REFERENCE_SEED):
-    """The cache key of a reference: SHA-256 of the scene's content, resolution, spp, seed."""
-    text = f"render-{RENDER_VERSION}|{scene.content_hash()}|{resolution}|{spp}|{seed}"
+    """The cache key of a reference: SHA-256 of the scene's content, image size, spp, seed and
+    the reference's sampler and passes."""
+    width, height = image_size(resolution)
+    text = (f"render-{RENDER_VERSION}|{scene.content_hash()}|{width}x{height}|{spp}|{seed}|"
+            f"{REFERENCE_SAMPLER}|{REFERENCE_PASSES}")
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-def reference(scene, resolution, spp=None, progress=True, seed=REFERENCE_SEED, cache=True):
-    """A high-spp reference render, cached as OpenEXR.
+def reference_spp(spp, passes=None):
+    """Check a reference's total ``spp``: :data:`REFERENCE_PASSES` passes of a power of two
+    samples each (Sobol' nets); the error names the nearest valid total."""
+    passes = REFERENCE_PASSES if passes is None else passes
+    spp = check_positive_int(spp, "spp", maximum=2**40)
+    per = spp // passes
+    if spp % passes or per & (per - 1):
+        low = passes << max(0, (max(per, 1)).bit_length() - 1)
+        nearest = min((low, 2 * low), key=lambda v: abs(v - spp))
+        raise InvalidArgumentError(
+            f"'spp'={spp}: a reference is {passes} passes of a power of two samples per pixel "
+            f"each, so spp must be {passes} x 2^k; the nearest is {nearest}")
+    return spp
 
-    The reference is the mean of passes of :data:`REFERENCE_PASS` samples per pixel
-    from the ``random`` sampler with all dimensions at once (``pad=False``), each pass
-    with its own derived seed: an unbiased estimate whose variance is 1/spp of one
-    sample's. It is cached in :func:`cache_folder` under a name holding
-    :func:`reference_key` (scene content, resolution, spp, seed); a missing, unreadable or
-    mismatching cache file is rendered again and rewritten atomically.
+
+def reference(scene, resolution, spp=None, progress=True, seed=REFERENCE_SEED, cache=True,
+              return_noise=False):
+    """A high-spp reference render and its own noise, cached as OpenEXR.
+
+    The reference is the mean of :data:`REFERENCE_PASSES` independent renders with
+    Owen-scrambled Sobol' (``"sobol:owen"``, padded as :func:`render` pads), each of
+    ``spp / passes`` samples per pixel under its own derived seed. Every pass is unbiased
+    (nested scrambling makes each point uniform), the passes are independent, and a
+    scrambled net's error falls much faster than random sampling's, so the reference is far
+    less noisy than ``random`` at the same cost. What noise is left is *measured*: the
+    spread of the passes gives each pixel's standard error ``s / sqrt(passes)``, and the
+    mean of its square is the MSE floor the reference adds to every MSE measured against
+    it (``E[mse(image, ref)] = MSE(image) + floor`` for an image independent of it).
+    :func:`compare` reports it beside the MSE.
+
+    It is cached in :func:`cache_folder` under a name holding :func:`reference_key`
+    (scene content, image size, spp, seed); a missing, unreadable or mismatching cache
+    file is rendered again and rewritten atomically (channels ``Y`` and ``stderr``).
 
     Parameters
     ----------
     scene : Scene, dict or path
-    resolution : int
+    resolution : int or (int, int)
+        As :func:`render`.
     spp : int, optional
-        Samples per pixel (default 64 x ``scene.default_spp``).
+        Total samples per pixel: ``passes x 2^k`` (default: 16 passes of the power of two
+        at or above 4 x ``scene.default_spp``).
     progress : bool
         Show a progress bar over the passes.
     seed : int
         Seed of the reference.
     cache : bool
         Read and write the cache (False: always render, write nothing).
+    return_noise : bool
+        Also return the per-pixel standard error.
 
     Returns
     -------
-    ndarray of float32, shape (resolution, resolution)
+    image : ndarray of float32, shape (height, width)
+    stderr : ndarray of float32, shape (height, width)
+        Only with ``return_noise``.
+
+    Examples
+    --------
+    >>> from clsamp import render as rendering
+    >>> ref, stderr = rendering.reference("ao", 8, spp=256, progress=False, cache=False,
+    ...                                   return_noise=True)
+    >>> ref.shape, bool((stderr >= 0).all())
+    ((8, 8), True)
     """
     scene = _as_scene(scene)
-    resolution = check_positive_int(resolution, "resolution", maximum=65535)
-    spp = 64 * scene.default_spp if spp is None else check_positive_int(spp, "spp", maximum=2**40)
+    width, height = image_size(resolution)
+    if spp is None:
+        spp = REFERENCE_PASSES * (1 << (4 * scene.default_spp - 1).bit_length())
+    spp = reference_spp(spp)
     seed = check_seed(seed)
-    key = reference_key(scene, resolution, spp, seed)
-    path = cache_folder() / f"reference-{scene.name}-{resolution}px-{spp}spp-{key[:16]}.exr"
+    key = reference_key(scene, (width, height), spp, seed)
+    path = cache_folder() / f"reference-{scene.name}-{width}x{height}px-{spp}spp-{key[:16]}.exr"
+    result = None
     if cache and path.is_file():
         try:
-            image, header = io.read_exr(path, with_header=True)
-            if image.shape == (resolution, resolution) and _header_text(header.get("key")) == key:
-                return np.ascontiguousarray(image, dtype=np.float32)
+            image, header = io.read_exr(path, with_header=True, channel_names=("Y", "stderr"))
+            if image.shape == (height, width, 2) and _header_text(header.get("key")) == key:
+                result = np.ascontiguousarray(image.transpose(2, 0, 1), dtype=np.float32)
         except Exception:  # a corrupt or foreign file: render again and overwrite it
             pass
+    if result is None:
+        result = _render_reference(scene, (width, height), spp, seed, progress)
+        if cache:
+            io.write_exr(path, result.transpose(1, 2, 0), channel_names=("Y", "stderr"),
+                         header={"key": key, "scene": scene.name, "spp": spp, "seed": seed,
+                                 "sampler": f"{REFERENCE_SAMPLER} (reference, {REFERENCE_PASSES} passes)",
+                                 "resolution": f"{width}x{height}"})
+    return (result[0], result[1]) if return_noise else result[0]
+
+
+def _render_reference(scene, size, spp, seed, progress):
     from tqdm import tqdm
-    total = np.zeros((resolution, resolution), dtype=np.float64)
-    passes = -(-spp // REFERENCE_PASS)
-    for k in tqdm(range(passes), desc=f"reference {scene.name}", unit="pass", disable=not progress):
-        n = min(REFERENCE_PASS, spp - k * REFERENCE_PASS)
-        image = render(scene, "random", n, resolution, seed=derived_seed(seed, k, 0, PURPOSE_PASS),
-                       pad=False, progress=False)
-        total += n * image.astype(np.float64)
-    result = (total / spp).astype(np.float32)
-    if cache:
-        io.write_exr(path, result, {"key": key, "scene": scene.name, "sampler": "random (reference)",
-                                    "spp": spp, "seed": seed, "resolution": resolution})
-    return result
+    per = spp // REFERENCE_PASSES
+    total = np.zeros((size[1], size[0]), dtype=np.float64)
+    square = np.zeros_like(total)
+    for k in tqdm(range(REFERENCE_PASSES), desc=f"reference {scene.name}", unit="pass",
+                  disable=not progress):
+        image = render(scene, REFERENCE_SAMPLER, per, size, seed=derived_seed(seed, k, 0, PURPOSE_PASS),
+                       progress=False).astype(np.float64)
+        total += image
+        square += image * image
+    mean = total / REFERENCE_PASSES
+    spread = np.maximum(square - REFERENCE_PASSES * mean * mean, 0.0) / (REFERENCE_PASSES - 1)
+    return np.stack([mean, np.sqrt(spread / REFERENCE_PASSES)]).astype(np.float32)
+
+
+def noise_floor(stderr):
+    """The MSE a reference with per-pixel standard error ``stderr`` adds to any MSE measured
+    against it: the mean of ``stderr**2``."""
+    stderr = np.asarray(stderr, dtype=np.float64)
+    if stderr.size == 0 or not np.all(np.isfinite(stderr)) or np.any(stderr < 0):
+        raise InvalidArgumentError("'stderr' must be a non-empty array of finite values >= 0")
+    return float(np.mean(stderr * stderr))
 
 
 def _header_text(value):
@@ -373,12 +445,16 @@ def mse(image, ref):
     return float(np.mean((image - ref) ** 2))
 
 
-def compare(image, ref):
+def compare(image, ref, stderr=None):
     """MSE, PSNR (dB) and SSIM of ``image`` against the reference ``ref`` (scikit-image).
 
     ``data_range`` is the reference's max - min (1 when the reference is constant). SSIM
     uses scikit-image's default 7 x 7 window, shrunk to the largest odd size the image
-    allows; it is NaN for images smaller than 3 x 3.
+    allows; it is NaN for images smaller than 3 x 3. With ``stderr``, the reference's
+    per-pixel standard error (``reference(..., return_noise=True)``), the result also holds
+    ``floor``, the MSE the reference's own noise adds (:func:`noise_floor`), and
+    ``mse_excess = mse - floor``, an unbiased estimate of the image's MSE against the true
+    image.
     """
     from skimage.metrics import mean_squared_error, peak_signal_noise_ratio, structural_similarity
     image, ref = _check_pair(image, ref)
@@ -390,7 +466,90 @@ def compare(image, ref):
     ssim = (float(structural_similarity(ref, image, data_range=data_range, win_size=win,
                                         channel_axis=2 if ref.ndim == 3 else None))
             if win >= 3 else math.nan)
-    return {"mse": error, "psnr": psnr, "ssim": ssim}
+    out = {"mse": error, "psnr": psnr, "ssim": ssim}
+    if stderr is not None:
+        if np.shape(stderr) != ref.shape:
+            raise InvalidArgumentError(f"'stderr' must have the reference's shape {ref.shape}, "
+                                       f"got {np.shape(stderr)}")
+        floor = noise_floor(stderr)
+        out.update(floor=floor, mse_excess=error - floor)
+    return out
+
+
+def error_spectrum(image, reference, bins=None):
+    """The power spectrum of a render's error image, radially averaged.
+
+    The error e = image - reference is transformed with a 2-D FFT and its periodogram
+    P(f) = |E(f)|^2 / (width height) averaged over rings of equal frequency |f| (cycles
+    per pixel, 0 to 0.5). P is normalized so that white error of variance s^2 is flat at
+    s^2, and its mean over all frequencies is the MSE (Parseval). Independent per-pixel
+    sampling gives a flat (white) spectrum; samplers that decorrelate neighbouring pixels'
+    errors (``zsobol``, Ahmed and Wonka 2020; Heitz and Belcour 2019) push the error
+    power to high frequencies (blue noise), which the eye forgives.
+
+    Parameters
+    ----------
+    image, reference : ndarray (height, width)
+        The render and the reference (:func:`reference`).
+    bins : int, optional
+        Number of rings (default min(width, height) // 2).
+
+    Returns
+    -------
+    frequencies : ndarray (bins,)
+        The centre of each ring, in cycles per pixel.
+    power : ndarray (bins,)
+        The mean periodogram in each ring (NaN for an empty ring).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clsamp import render as rendering
+    >>> rng = np.random.default_rng(0)
+    >>> ref = np.zeros((64, 64), np.float32)
+    >>> f, p = rendering.error_spectrum(ref + rng.normal(0, 0.1, ref.shape).astype(np.float32), ref)
+    >>> bool(abs(np.nanmean(p) - 0.01) < 0.002)
+    True
+    """
+    image, reference = _check_pair(image, reference)
+    if image.ndim != 2:
+        raise InvalidArgumentError(f"'image' must be a gray image (height, width), got {image.shape}")
+    height, width = image.shape
+    if min(height, width) < 4:
+        raise InvalidArgumentError(f"'image' must be at least 4 x 4 pixels, got {image.shape}")
+    bins = min(width, height) // 2 if bins is None else check_positive_int(bins, "bins", maximum=65535)
+    power = np.abs(np.fft.fft2(image - reference)) ** 2 / (width * height)
+    fy = np.fft.fftfreq(height)[:, None]
+    fx = np.fft.fftfreq(width)[None, :]
+    radius = np.hypot(fx, fy)
+    ring = np.minimum((radius / 0.5 * bins).astype(np.intp), bins)
+    inside = ring < bins
+    counts = np.bincount(ring[inside], minlength=bins)
+    sums = np.bincount(ring[inside], weights=power[inside], minlength=bins)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = np.where(counts > 0, sums / np.maximum(counts, 1), np.nan)
+    return (np.arange(bins) + 0.5) * 0.5 / bins, mean
+
+
+def low_frequency_power(image, reference, cutoff=0.125):
+    """How much of a render's error sits at low frequencies, relative to white error.
+
+    The mean periodogram of the error image (as :func:`error_spectrum`) over the
+    frequencies with |f| < ``cutoff`` cycles per pixel, divided by its mean over all
+    frequencies (the MSE, by Parseval). White (independent per-pixel) error gives 1 up to
+    noise; blue error, below 1.
+    """
+    image, reference = _check_pair(image, reference)
+    if image.ndim != 2 or min(image.shape) < 4:
+        raise InvalidArgumentError(f"'image' must be a gray image of at least 4 x 4, got {image.shape}")
+    if not 0 < cutoff <= 0.5:
+        raise InvalidArgumentError(f"'cutoff' must be in (0, 0.5] cycles per pixel, got {cutoff!r}")
+    height, width = image.shape
+    power = np.abs(np.fft.fft2(image - reference)) ** 2
+    radius = np.hypot(np.fft.fftfreq(height)[:, None], np.fft.fftfreq(width)[None, :])
+    low = (radius < cutoff) & (radius > 0)       # the DC term is the bias, not noise
+    total = power.mean()
+    return float(power[low].mean() / total) if total > 0 else math.nan
 
 
 def save(path, image, sampler, spp, seed, scene=None, preview=True):

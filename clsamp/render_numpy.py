@@ -77,21 +77,30 @@ def _trace(scene, o, d, time, tmax, nearest):
     return best, normal * flip[..., None], albedo
 
 
+def screen_window(scene, width, height):
+    """Half the width and height of the screen window at distance 1 from the eye: the
+    camera's fov spans the shorter side of the image, as in pbrt's perspective camera."""
+    tan_half = math.tan(math.radians(scene.camera["fov"]) / 2)
+    aspect = width / height
+    return (tan_half * aspect, tan_half) if aspect > 1 else (tan_half, tan_half / aspect)
+
+
 def render_reference(scene, samples, resolution, pixel0=0):
     """NumPy reference of ``render_pixels`` (float64): pixel values for the given samples.
 
     ``samples``: (pixels, scene.sample_dimensions, spp) in [0, 1). Follows
     kernels/render.cl step by step; for checks on small images (it holds every ray of
-    the tile in memory).
+    the tile in memory). ``resolution`` is (width, height).
     """
+    width, height = resolution
     samples = np.asarray(samples, dtype=np.float64)
     npix, dims, spp = samples.shape
     eye, forward, right, up = camera_frame(scene)
     cam = scene.camera
-    tan_half = math.tan(math.radians(cam["fov"]) / 2)
+    half_w, half_h = screen_window(scene, width, height)
     pixel = pixel0 + np.arange(npix)
-    col = (pixel % resolution).astype(np.float64)[:, None]
-    row = (pixel // resolution).astype(np.float64)[:, None]
+    col = (pixel % width).astype(np.float64)[:, None]
+    row = (pixel // width).astype(np.float64)[:, None]
     offsets, k = {}, 0
     for g, w in scene.sample_groups:
         offsets[g] = k
@@ -101,8 +110,8 @@ def render_reference(scene, samples, resolution, pixel0=0):
         return samples[:, offsets[name] + j, :]
 
     px, py = (dim("pixel"), dim("pixel", 1)) if "pixel" in offsets else (0.5, 0.5)
-    sx = (2 * (col + px) / resolution - 1) * tan_half
-    sy = (1 - 2 * (row + py) / resolution) * tan_half
+    sx = (2 * (col + px) / width - 1) * half_w
+    sy = (1 - 2 * (row + py) / height) * half_h
     sx, sy = (np.broadcast_to(a, (npix, spp)) for a in (sx, sy))
     d = forward + sx[..., None] * right + sy[..., None] * up
     o = np.broadcast_to(eye, d.shape).copy()

@@ -340,11 +340,14 @@ inline vint occluded(vec3 o, vec3 d, vfloat time, vfloat tmax, const float eps,
  * samples: (npix, SAMPLE_DIMS, spp_pad) float in [0, 1); spp_pad = spp rounded up to VW
  *   (unused with SAMPLES_PHILOX, which reads the seed of each block of `block` pixels
  *   from block_keys as (low, high) words instead).
- * camera: eye(3) forward(3) right(3) up(3) tan(fov/2) aperture focus shutter0 shutter1.
+ * camera: eye(3) forward(3) right(3) up(3) tan(fov/2) aperture focus shutter0 shutter1
+ *   half-width half-height (of the screen window at distance 1: tan(fov/2) times the
+ *   aspect ratio along the longer side, as pbrt's film).
  * shading: ambient background ao_distance epsilon.
  * light: corner(3) edge1(3) edge2(3) emission. */
 __kernel void render_pixels(__global float *out, __global const float *samples,
-                            const uint pixel0, const uint npix, const uint resolution,
+                            const uint pixel0, const uint npix, const uint width,
+                            const uint height,
                             const uint spp, const uint spp_pad,
                             __global const float *camera, __global const float *shading,
                             __global const float *spheres, const uint nspheres,
@@ -357,8 +360,8 @@ __kernel void render_pixels(__global float *out, __global const float *samples,
     if (i >= npix)
         return;
     const uint pixel = pixel0 + i;
-    const float col = (float)(pixel % resolution), row = (float)(pixel / resolution);
-    const float inv_res = 1.0f / (float)resolution;
+    const float col = (float)(pixel % width), row = (float)(pixel / width);
+    const float inv_w = 1.0f / (float)width, inv_h = 1.0f / (float)height;
     const float eps = shading[3];
     __global const float *mine = samples + (size_t)i * SAMPLE_DIMS * spp_pad;
     double sum = 0.0;
@@ -389,8 +392,8 @@ __kernel void render_pixels(__global float *out, __global const float *samples,
 #else
         const vfloat px = 0.5f, py = 0.5f;
 #endif
-        const vfloat sx = (2.0f * (col + px) * inv_res - 1.0f) * camera[12];
-        const vfloat sy = (1.0f - 2.0f * (row + py) * inv_res) * camera[12];
+        const vfloat sx = (2.0f * (col + px) * inv_w - 1.0f) * camera[17];
+        const vfloat sy = (1.0f - 2.0f * (row + py) * inv_h) * camera[18];
         /* direction through the pixel, unnormalized: forward + sx right + sy up */
         vec3 d = v3(camera[3] + sx * camera[6] + sy * camera[9],
                     camera[4] + sx * camera[7] + sy * camera[10],
