@@ -8,6 +8,7 @@ from . import (  # noqa: F401
     poisson_disk,  # poisson_disk (dart throwing)
     random,  # random
     stratified,  # regular, jittered, uncorrelated_jitter, latin_hypercube, (correlated_)multijittered
+    zsobol,  # zsobol (Morton-ordered Owen-scrambled Sobol' for renderers)
 )
 from .base import (
     Rate,
