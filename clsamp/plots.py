@@ -373,3 +373,32 @@ def render_comparison(path, reference, images, columns=4):
         ax.set_title(label if error is None else f"{label}\nMSE {error:.3g}", fontsize=9)
     fig.tight_layout()
     return io.save_figure(path, fig)
+
+
+def error_spectra(path, curves, title=None):
+    """Radially averaged error spectra of renders (:func:`clsamp.render.error_spectrum`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The figure, written whole.
+    curves : dict
+        ``{label: (frequencies, power)}``, drawn on log power against frequency (cycles
+        per pixel); a flat curve is white error, one rising with frequency blue.
+    title : str, optional
+
+    Returns
+    -------
+    Path
+    """
+    fig, ax = pyplot().subplots(figsize=(6.0, 4.0))
+    for label, (f, p) in curves.items():
+        ax.semilogy(f, p, label=label, lw=1.4)
+    ax.set_xlabel("frequency (cycles per pixel)")
+    ax.set_ylabel("error power")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    if title:
+        ax.set_title(title, fontsize=10)
+    fig.tight_layout()
+    return io.save_figure(path, fig)

@@ -27,6 +27,8 @@ poisson_disk                -1      -1      Pilleboue et al. 2015
 ccvt                        -3      -1.5    Pilleboue et al. 2015
 sobol:owen                  -3      -1.5    Owen 1997 (smooth, up to log N); He and
                                             Wang 2015 (indicators)
+zsobol                      -3      -1.5    as sobol:owen: each pixel's set is an
+                                            Owen-scrambled (0, m, 2)-net
 ==========================  ======  ======  ======================================
 
 Random sampling is -1 in the ``"axis"`` case too and jittered -1.5 (the cells of one
@@ -38,6 +40,9 @@ a deterministic sampler that is not shifted, has no published rate here: the ver
 ``"unknown"``. That includes samplers with no theorem for their rate, such as
 multijittered, correlated_multijittered and Owen-scrambled Halton (bases 2 and 3, not a
 base-2 net), whatever slope a measurement shows (docs/performance.md lists measured ones).
+Shifted rank-1 lattices (``lattice``) reach O(N^(-2α+ε)) for periodic integrands of
+smoothness α in a Korobov space (Sloan and Joe 1994), which the integrands here do not
+have as a finite α; ``kronecker`` has no published MSE rate: both say unknown.
 
 The verdict holds the fitted slope s (standard error sigma) against the published exponent
 a, at the distance s - a, in slope units and in standard errors:

@@ -47,6 +47,8 @@ TOUR_SAMPLERS = (
     ("halton", {}),
     ("hammersley", {}),
     ("sobol", {"randomize": "owen"}),
+    ("lattice", {}),
+    ("kronecker", {}),
     ("poisson_disk", {}),
     ("lloyd", {}),
     ("ccvt", {}),
@@ -168,7 +170,7 @@ def section_samplers(report, quick):
 FAMILIES = (
     ("stratified", ("regular", "jittered", "uncorrelated_jitter", "latin_hypercube",
                     "multijittered", "correlated_multijittered")),
-    ("low discrepancy", ("halton", "hammersley", "sobol")),
+    ("low discrepancy", ("halton", "hammersley", "sobol", "lattice", "kronecker")),
     ("blue noise", ("poisson_disk", "lloyd", "ccvt")),
 )
 # Discrepancy against N: the sweep, and where the optimizers stop (full, quick).
@@ -391,9 +393,11 @@ def section_render(report, quick):
     resolution = 48 if quick else 192
     scene = Scene.from_file("ao")
     spp = scene.default_spp
-    ref = rendering.reference(scene, resolution=resolution, spp=2048 if quick else 8192,
-                              progress=False)
-    report.exr("render_reference", ref, {"scene": scene.name, "sampler": "random (reference)"})
+    ref, stderr = rendering.reference(scene, resolution=resolution, spp=2048 if quick else 8192,
+                                      progress=False, return_noise=True)
+    floor = rendering.noise_floor(stderr)
+    report.exr("render_reference", ref, {"scene": scene.name, "sampler": "sobol:owen (reference)",
+                                         "mse_floor": floor})
     rows, data, cells, timings, images = [], {}, [], [], {}
     cells.append(("reference", report.png("render_reference", ref)))
     for name, params in TOUR_RENDER_SAMPLERS:
@@ -404,26 +408,32 @@ def section_render(report, quick):
             image = rendering.render(scene, name, spp=spp, resolution=resolution, seed=4,
                                      sampler_params=params or None, progress=False)
             seconds = time.perf_counter() - t0
-            metrics = rendering.compare(image, ref)
+            metrics = rendering.compare(image, ref, stderr)
             safe = name.replace(":", "_")
             report.exr(f"render_{safe}", image, {"scene": scene.name, "sampler": name, "spp": spp,
                                                  "seed": 4})
             cells.append((f"{name}: MSE {metrics['mse']:.3g}", report.png(f"render_{safe}", image)))
             images[name] = image
-            rows.append((name, spp, metrics["mse"], metrics["psnr"], metrics["ssim"], seconds))
+            rows.append((name, spp, metrics["mse"], metrics["mse_excess"], metrics["psnr"],
+                         metrics["ssim"], seconds))
             data[name] = {"spp": spp, "seconds": seconds, "params": params, **metrics}
             timings.append((name, seconds, metrics["mse"]))
         except Exception as error:
-            rows.append((name, spp, f"failed: {error}", "-", "-", "-"))
+            rows.append((name, spp, f"failed: {error}", "-", "-", "-", "-"))
             data[name] = {"error": traceback.format_exc()}
     report.results["render"] = {"scene": scene, "resolution": resolution, "reference": ref,
                                 "timings": timings}
+    data["reference"] = {"sampler": rendering.REFERENCE_SAMPLER, "passes": rendering.REFERENCE_PASSES,
+                         "mse_floor": floor, "max_stderr": float(stderr.max())}
     body = (f"<p>The scene <code>{html.escape(scene.name)}</code> ({html.escape(scene.description)}) "
             f"at {resolution}&times;{resolution}, {spp} samples per pixel, seed 4, against a "
-            "reference rendered with the random sampler at many more samples. 2-D samplers are "
-            "padded pairwise with random permutations, as pbrt pads; expensive samplers reuse a "
-            "pool of realizations with a per-pixel random toroidal shift.</p>")
-    body += table(("sampler", "spp", "MSE", "PSNR dB", "SSIM", "seconds"), rows)
+            f"reference of {rendering.REFERENCE_PASSES} independent Owen-scrambled Sobol' passes. "
+            "The spread of the passes measures the reference's own noise: its MSE floor is "
+            f"{floor:.3g} (largest per-pixel standard error {float(stderr.max()):.3g}), which every "
+            "MSE below includes; <i>MSE - floor</i> estimates the error against the true image. "
+            "2-D samplers are padded pairwise with random permutations, as pbrt pads; expensive "
+            "samplers reuse a pool of realizations with a per-pixel random toroidal shift.</p>")
+    body += table(("sampler", "spp", "MSE", "MSE - floor", "PSNR dB", "SSIM", "seconds"), rows)
     if images:
         side = plots.render_comparison(report.out / "img" / "render_comparison.png", ref, images,
                                        columns=len(images) + 1)
@@ -431,6 +441,34 @@ def section_render(report, quick):
     body += "<div class='grid'>" + "".join(
         f"<div class='cell'>{img(src, label, 220)}<br>{html.escape(label)}</div>" for label, src in cells)
     body += "</div>"
+    blue_body, data["error_spectra"] = _error_spectra(report, scene, ref, resolution, quick)
+    return body + blue_body, data
+
+
+def _error_spectra(report, scene, ref, resolution, quick):
+    """Where in screen space the error sits: zsobol against independent pixels."""
+    from . import render as rendering
+    spp = 16
+    curves, rows, data = {}, [], {}
+    for name in ("random", "sobol:owen", "zsobol"):
+        image = rendering.render(scene, name, spp, resolution, seed=4, progress=False)
+        curves[name] = rendering.error_spectrum(image, ref)
+        low = rendering.low_frequency_power(image, ref)
+        error = rendering.mse(image, ref)
+        rows.append((name, spp, error, low))
+        data[name] = {"spp": spp, "mse": error, "low_frequency_share": low}
+    path = plots.error_spectra(report.out / "img" / "render_error_spectra.png", curves,
+                               title=f"error spectra, {scene.name}, {spp} spp")
+    body = ("<h3>Error in screen space</h3><p>The power spectrum of each render's error image, "
+            "radially averaged (<code>clsamp.render.error_spectrum</code>). Independent "
+            "per-pixel sampling (random, sobol:owen) leaves white error, flat across "
+            "frequencies; zsobol hands neighbouring pixels complementary parts of one "
+            "Owen-scrambled Sobol' sequence along a Morton curve (Ahmed and Wonka 2020, pbrt-v4's "
+            "ZSobolSampler), so their errors cancel at low frequencies and the error turns blue. "
+            "<i>Low-frequency share</i>: mean error power below 1/8 cycle per pixel over the "
+            "mean at all frequencies (1 for white error).</p>")
+    body += table(("sampler", "spp", "MSE", "low-frequency share"), rows)
+    body += img(path.relative_to(report.out).as_posix(), "error spectra", 700)
     return body, data
 
 
