@@ -13,6 +13,9 @@ Cases, on each device:
 - ``sampler <name>``: the AO scene at 96 spp, full render against the cached reference
   (MSE); the quality column also gives MSE x seconds (lower is better), the peer is
   the random sampler.
+- ``zsobol``: the AO scene at 256 x 256 (quick 64 x 64), 64 spp, against ``sobol:owen`` at the
+  same size (target: at most 1.2x its time), with the MSE and the low-frequency share of the
+  error (1 for white error, below 1 for blue) of both.
 
 Sizes: 192 x 192 pixels (``--quick``: 48 x 48) at 96 spp for rays/s and samplers, 64 spp
 for the effects; the reference at 8192 spp (quick: 2048).
@@ -85,7 +88,8 @@ def run(devices, quick):
         ref = rendering.reference(ao, res, spp=ref_spp, progress=False)
         ref_seconds = time.perf_counter() - t0
         rows.append(Row("reference ao", f"{res}^2x{ref_spp}spp", dev, ref_seconds,
-                        quality="random, pad=False (cached after the first run)"))
+                        quality=f"{rendering.REFERENCE_SAMPLER} x {rendering.REFERENCE_PASSES} passes "
+                        "(cached after the first run)"))
         t_random = None
         for name, params in SAMPLERS:
             if name.partition(":")[0] not in known:
@@ -100,7 +104,23 @@ def run(devices, quick):
             rows.append(Row(f"sampler {name}", f"{res}^2x{ao.default_spp}spp", dev, seconds,
                             "random" if t_random else "", t_random,
                             f"MSE {mse:.3g}, MSE x s {mse * seconds:.3g}"))
+        rows.append(_zsobol(ao, dev, quick))
     return rows
+
+
+def _zsobol(ao, dev, quick):
+    side, spp = (64, 64) if quick else (256, 64)
+    ref = rendering.reference(ao, side, spp=1024 if quick else 4096, progress=False)
+    out = {}
+    for name in ("sobol:owen", "zsobol"):
+        rendering.render(ao, name, spp, 8, seed=4, progress=False)            # build first
+        seconds, image = timed(lambda: rendering.render(ao, name, spp, side, seed=4,  # noqa: B023
+                                                        progress=False), repeats=3)
+        out[name] = (seconds, rendering.mse(image, ref), rendering.low_frequency_power(image, ref))
+    (t_z, mse_z, low_z), (t_o, mse_o, low_o) = out["zsobol"], out["sobol:owen"]
+    return Row("zsobol AO render", f"{side}^2x{spp}spp", dev, t_z, "sobol:owen render", t_o,
+               f"MSE {mse_z:.3g} vs {mse_o:.3g}; low-freq share {low_z:.2f} vs {low_o:.2f}",
+               extra={"time_over_sobol_owen": t_z / t_o})
 
 
 if __name__ == "__main__":

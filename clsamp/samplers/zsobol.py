@@ -35,6 +35,19 @@ def morton2(x, y):
     return spread(x) | (spread(y) << _U64(1))
 
 
+def _sobol1_bytes():
+    """(4 x 256,) uint32: entry 256 k + b is the xor of Sobol' dimension 1's direction numbers
+    of the set bits of byte b at bit 8 k (the kernel's table)."""
+    v1 = nt.sobol_matrices(2)[1]
+    out = np.zeros((4, 256), dtype=_U32)
+    for k in range(4):
+        for b in range(256):
+            for c in range(8):
+                if b >> c & 1:
+                    out[k, b] ^= v1[8 * k + c]
+    return out.ravel()
+
+
 @register("zsobol")
 class ZSobolSampler(Sampler):
     """Z-ordered Owen-scrambled Sobol' (Ahmed and Wonka 2020; pbrt-v4's ZSobolSampler).
@@ -198,12 +211,13 @@ class ZSobolSampler(Sampler):
         words = self._pair_words()
         table = runtime.to_device(words)
         perms = runtime.table(("zsobol", "perms"), lambda: PERMUTATIONS)
-        v1 = runtime.table(("zsobol", "v1"), lambda: nt.sobol_matrices(2)[1].copy())
+        v1 = runtime.table(("zsobol", "bytes"), _sobol1_bytes)
         r = len(realizations)
         target = runtime.Output((r, n, self.d), host=out)
         local = runtime.local_size()
         kernel = runtime.kernel("zsobol.cl", "zsobol_points")
-        kernel(runtime.queue(), (-(-n // local) * local, r), (local, 1), target.buffer, table.data,
+        items = -(-n // 16)                                 # ZS_BLOCK samples a work-item
+        kernel(runtime.queue(), (-(-items // local) * local, r), (local, 1), target.buffer, table.data,
                perms.data, v1.data, np.uint32(n), np.uint32(n.bit_length() - 1), np.uint32(self.d),
                np.uint32(realizations.start), np.uint32(self.width), np.uint32(self.log2_side))
         return target.finish()
