@@ -53,6 +53,7 @@ _PHASE = 2.0 * np.pi * 2.0**-64     # radians per unit of 64-bit fixed-point pha
 _FINE = 16                          # twiddles per exact sincos, as FINE in spectrum.cl
 _TILE = 4                           # TILE_U = TILE_V in spectrum.cl
 _SUPER = 4
+HOST_GEMM = True                    # 2-D direct sums on a CPU device: product in the host BLAS
 WORKING_SET = 256 * 2**20           # device bytes a chunk of work holds at most (runtime.fit)
 
 
@@ -279,24 +280,21 @@ def expected_spectrum(sampler, n, realizations, resolution=256, method="auto", t
 
 
 def _sets_spectrum(sets, resolution, method, tol, backend, progress):
-    """The expected periodogram of sets of different sizes: the mean over the sets of
-    |S_k|^2 / n_k, as batches of the sets of each size, weighted by their counts."""
+    """Mean over sets of different sizes of |S_k|^2 / n_k: a batch per size, by counts."""
     groups = {}
     for k, s in enumerate(sets):
         groups.setdefault(s.shape[0], []).append(k)
     total = None
     for size in sorted(groups):
         members = groups[size]
-        P = power_spectrum(np.stack([sets[k] for k in members]), resolution, method, tol, backend,
-                           progress)
+        P = power_spectrum(np.stack([sets[k] for k in members]), resolution, method, tol, backend, progress)
         part = P * (len(members) / len(sets)) if len(groups) > 1 else P
         total = part if total is None else total + part
     return total
 
 
 def _direct_seconds(r, n, resolution, d):
-    """Rough cost of the exact sum: its flops at the direct kernel's rate on a 2-core CPU
-    (the figure is in docs/performance.md), plus the twiddles."""
+    """Rough cost of the exact sum at the direct path's rate on 2 CPU cores, plus twiddles."""
     flops = 8.0 * r * n * resolution * (resolution / 2 + 1) if d == 2 else 8.0 * r * n * resolution
     return flops / 35e9 + r * n * resolution * d * 2e-9
 
@@ -380,7 +378,7 @@ def direct_reference(points, resolution):
 
 
 # -- direct: OpenCL ----------------------------------------------------------------------
-def _pad(count, multiple):
+def _pad(count, multiple):  # count rounded up to a multiple
     return -(-count // multiple) * multiple
 
 
@@ -397,6 +395,8 @@ def _direct(batch, resolution, backend, progress):
         return direct_reference(batch, resolution)
     import pyopencl.array as cla
     runtime.require_fp64()
+    if HOST_GEMM and batch.shape[-1] == 2 and runtime.current_device().type == "cpu":
+        return _direct_host_gemm(batch, resolution, progress)
     queue = runtime.queue()
     r, n, d = batch.shape
     half = resolution // 2
@@ -454,11 +454,56 @@ def _direct(batch, resolution, backend, progress):
     H = power.get()
     if d == 1:
         return H[:resolution]
-    H = H.reshape(count_u, count_v)
+    return _unfold(H.reshape(count_u, count_v), resolution)
+
+
+def _unfold(H, resolution):
+    """The whole spectrum from its half u <= 0 (rows u = -R/2..0, columns v = -R/2..R/2)."""
+    half = resolution // 2
     P = np.empty((resolution, resolution))
     P[:half + 1] = H[:half + 1, :resolution]
     P[half + 1:] = H[half - 1:0:-1, resolution:0:-1]
     return P
+
+
+def _direct_host_gemm(batch, resolution, progress):
+    """The 2-D direct sum on a CPU device: ``spectrum_twiddles`` panels in host memory, then
+    the product in the host's BLAS (docs/performance.md says why), the half u <= 0 only."""
+    (r, n, _), half = batch.shape, resolution // 2
+    count_u, count_v = half + 1, resolution + 1      # u in [-R/2, 0], v in [-R/2, R/2]
+    per_point = (count_u + count_v) * 16 + 16
+    points_per_chunk = min(n, runtime.fit(per_point, WORKING_SET))
+    reals_per_chunk = min(r, runtime.fit(per_point * points_per_chunk + count_u * count_v * 16, WORKING_SET))
+    twiddles = runtime.kernel("spectrum.cl", "spectrum_twiddles",
+                              {"SUPER": _SUPER, "KBLOCK": 128, "FINE": _FINE}, _MAD)
+    queue, local = runtime.queue(), runtime.local_size(64)
+    chunks = [(a, min(r, a + reals_per_chunk)) for a in range(0, r, reals_per_chunk)]
+    point_chunks = [(a, min(n, a + points_per_chunk)) for a in range(0, n, points_per_chunk)]
+    bar = _progress(len(chunks) * len(point_chunks), progress, _direct_seconds(r, n, resolution, 2),
+                    "spectrum (direct)")
+    H = np.zeros((count_u, count_v))
+    for r0, r1 in chunks:
+        rc = r1 - r0
+        S = np.zeros((rc, count_u, count_v), np.complex128)
+        for k0, k1 in point_chunks:
+            nc = k1 - k0
+            pts = _block(batch, r0, r1, k0, k1)
+            panels = [runtime.Output(None, host=np.empty((rc, nc, 2, count))) for count in (count_u, count_v)]
+            for axis, out in enumerate(panels):     # one tile of all frequencies: contiguous writes
+                m = np.uint32(out.host.shape[-1])
+                twiddles(queue, (_pad(nc, local), rc), (local, 1), pts.data, out.buffer, np.uint32(nc),
+                         np.uint32(2), np.uint32(axis), np.int64(-half), m, m)
+            A, B = (panel.finish() for panel in panels)
+            for k in range(rc):
+                ar, ai, br, bi = A[k, :, 0].T, A[k, :, 1].T, B[k, :, 0], B[k, :, 1]
+                S[k].real += ar @ br - ai @ bi
+                S[k].imag += ar @ bi + ai @ br
+            if bar is not None:
+                bar.update(1)
+        H += np.sum(S.real**2 + S.imag**2, axis=0)
+    if bar is not None:
+        bar.close()
+    return _unfold(H / (r * n), resolution)
 
 
 # -- fast: parameters, kernel transform ---------------------------------------------------
@@ -470,12 +515,9 @@ MAX_WIDTH = 16                # nufft.cl holds a point's weights on one axis in 
 def kernel_error(sigma, width):
     """Worst relative error of one point's Fourier sum after spreading, FFT and deconvolution.
 
-    Measured, not modelled: single points at 64 offsets across a grid cell are spread
-    (:func:`spread_reference`), transformed and deconvolved on a grid of M = 128σ nodes,
-    and max |S̃(k)/S(k) - 1| is taken over |k| <= M/(2σ). A set of N points has
-    |S̃ - S| <= N times this, so |P̃ - P| <= (2e + e²)·N. The error depends on M/R
-    (which is >= σ in use) and not on R itself.
-    """
+    Measured: points at 64 offsets in a cell, spread, transformed and deconvolved on
+    M = 128σ nodes; max |S̃(k)/S(k) - 1| over |k| <= M/(2σ). N points: |P̃ - P| <= (2e + e²)·N
+    (the error depends on M/R, >= σ in use, not on R)."""
     beta = _beta(sigma, width)
     M = int(round(128 * sigma))
     half = int(M / (2 * sigma))
@@ -554,9 +596,8 @@ def kernel_transform(freqs, grid, width, beta):
 def spread_reference(points, grid, width, beta):
     """Spread a batch (r, n, d) onto r periodic grids of ``grid`` nodes per axis.
 
-    NumPy reference of ``spectrum_spread``: node j of an axis gets φ((j - xM)·2/w) from
-    every point within w/2 nodes, and a 2-D node the product of its axes' weights.
-    Returns (r, M) or (r, M, M) float64.
+    NumPy reference of ``spectrum_spread``: node j of an axis gets φ((j - xM)·2/w) from every
+    point within w/2 nodes, a 2-D node the product of its axes' weights: (r, M) or (r, M, M).
     """
     batch = np.asarray(points, dtype=np.float64)
     r, n, d = batch.shape

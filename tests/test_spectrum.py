@@ -357,3 +357,29 @@ def test_bad_device_points_are_refused_on_the_device():
         clsamp.power_spectrum(cla.to_device(runtime.queue(), good.astype(np.float32)), 16)
     with pytest.raises(InvalidArgumentError, match="shape"):
         clsamp.power_spectrum(cla.to_device(runtime.queue(), good.ravel()), 16)
+
+
+def test_recurrence_twiddles_need_reseeding():
+    # 4096 frequencies by recurrence: re-seeded every 32 rows the error stays at a few ulps;
+    # never re-seeded it grows with the row count, far past that
+    x = white(1, 512, 1, seed=12)[0, :, 0]
+    f0, count = -2048, 4096
+    exact = spectrum.twiddles_reference(x, np.arange(f0, f0 + count)).T
+    import sys
+    from pathlib import Path
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    from bench_spectrum import twiddles_by_recurrence  # the benchmark's NumPy peer
+    reseeded = twiddles_by_recurrence(x, f0, count, reseed=32)
+    drifting = twiddles_by_recurrence(x, f0, count, reseed=None)
+    assert np.abs(reseeded - exact).max() < 2e-14
+    assert np.abs(drifting - exact).max() > 1e-13
+
+
+def test_host_gemm_path_equals_kernel_path(monkeypatch):
+    # the CPU device's BLAS product and the OpenCL product give the same spectrum
+    pts = white(3, 700, 2, seed=13)
+    blas = clsamp.power_spectrum(pts, 48, method="direct")
+    monkeypatch.setattr(spectrum, "HOST_GEMM", False)
+    kernel = clsamp.power_spectrum(pts, 48, method="direct")
+    assert np.abs(blas - kernel).max() <= 1e-13 * 700
+    assert np.abs(blas - brute_force(pts, 48)).max() <= 1e-11 * 700
