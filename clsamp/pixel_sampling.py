@@ -50,7 +50,7 @@ from . import permutation, philox
 from .errors import InvalidArgumentError
 from .geometry import torus
 from .samplers import Sampler, make_sampler, sampler_class
-from .validation import check_positive_int, check_seed
+from .validation import check_image_size, check_positive_int, check_seed
 
 DEFAULT_POOL = 8                    # realizations per set of an expensive sampler
 MAX_BLOCK = 1024                    # pixels per seed block at most
@@ -172,18 +172,8 @@ def sample_plan(scene, sampler, spp, sampler_params, pad, pool):
 
 
 def image_size(resolution, name="resolution"):
-    """(width, height) of an image from ``resolution``: an int r (an r x r image) or a pair
-    (width, height), each in [1, 65535], as pbrt's film takes it."""
-    if isinstance(resolution, (tuple, list)) or (isinstance(resolution, np.ndarray)
-                                                 and resolution.ndim == 1):
-        if len(resolution) != 2:
-            raise InvalidArgumentError(
-                f"'{name}' must be an int or a pair (width, height), got {resolution!r}")
-        width = check_positive_int(resolution[0], f"{name}[0] (width)", maximum=65535)
-        height = check_positive_int(resolution[1], f"{name}[1] (height)", maximum=65535)
-        return width, height
-    side = check_positive_int(resolution, name, maximum=65535)
-    return side, side
+    """(width, height) of an image from ``resolution`` (:func:`clsamp.validation.check_image_size`)."""
+    return check_image_size(resolution, name)
 
 
 def pixel_samples(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=True,

@@ -45,6 +45,21 @@ def check_positive_int(value, name, maximum=None):
     return check_int(value, name, minimum=1, maximum=maximum)
 
 
+def check_image_size(resolution, name="resolution"):
+    """(width, height) of an image from ``resolution``: an int r (an r x r image) or a pair
+    (width, height), each in [1, 65535], as pbrt's film takes it."""
+    if isinstance(resolution, (tuple, list)) or (isinstance(resolution, np.ndarray)
+                                                 and resolution.ndim == 1):
+        if len(resolution) != 2:
+            raise InvalidArgumentError(
+                f"'{name}' must be an int or a pair (width, height), got {resolution!r}")
+        width = check_positive_int(resolution[0], f"{name}[0] (width)", maximum=65535)
+        height = check_positive_int(resolution[1], f"{name}[1] (height)", maximum=65535)
+        return width, height
+    side = check_positive_int(resolution, name, maximum=65535)
+    return side, side
+
+
 def check_seed(seed):
     """A seed is an integer in [0, 2^64): the two 32-bit words of the Philox key."""
     return check_int(seed, "seed", minimum=0, maximum=2**64 - 1)

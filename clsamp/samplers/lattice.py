@@ -17,8 +17,8 @@ from .. import runtime
 from ..errors import InvalidArgumentError
 from ..geometry import torus
 from ..validation import check_choice, check_int
-from .base import Sampler, register
-from .lowdiscrepancy import shift_vectors
+from .base import register
+from .lowdiscrepancy import LowDiscrepancySampler, shift_vectors
 
 LATTICE_TABLE = "lattice_kuo_33002.npz"
 _U32, _U64 = np.uint32, np.uint64
@@ -47,19 +47,10 @@ def fibonacci(count):
     return out[:count]
 
 
-class _Shifted(Sampler):
-    sequence = True
-    host_output = True
+class _Shifted(LowDiscrepancySampler):
+    """Sequences whose one randomization is the Cranley-Patterson shift."""
+
     randomizations = (None, "shift")
-
-    def __init__(self, d=2, seed=0, backend="opencl", randomize=None):
-        super().__init__(d=d, seed=seed, backend=backend)
-        self.randomize = check_choice(randomize, "randomize", self.randomizations)
-        self.randomized = randomize is not None
-
-    def __repr__(self):
-        return (f"{type(self).__name__}(name={self.name!r}, d={self.d}, seed={self.seed}, "
-                f"randomize={self.randomize!r})")
 
     def _shift(self, points, realizations):
         if self.randomize is None:
@@ -67,7 +58,7 @@ class _Shifted(Sampler):
         u = shift_vectors(self.seed, np.arange(realizations.start, realizations.stop), self.d)
         return torus.shift(points[None], u[:, None, :])
 
-    def _launch(self, kernel_name, table, n, realizations, start, scalars, out):
+    def _run(self, kernel_name, table, n, realizations, start, scalars, out):
         runtime.require_fp64()
         r = len(realizations)
         target = runtime.Output((r, n, self.d), host=out)
@@ -171,10 +162,10 @@ class LatticeSampler(_Shifted):
     def _device(self, n, realizations, start, out=None):
         if self.generator == "kuo":
             table = runtime.table(("lattice kuo", self.d), lambda: kuo_vector(self.d))
-            return self._launch("lattice_points", table, n, realizations, start, (), out)
+            return self._run("lattice_points", table, n, realizations, start, (), out)
         size, step = self._fibonacci_pair(n)
         table = runtime.table(("lattice fibonacci",), lambda: np.zeros(1, dtype=_U32))
-        return self._launch("fibonacci_points", table, n, realizations, start,
+        return self._run("fibonacci_points", table, n, realizations, start,
                             (np.uint32(size), np.uint32(step)), out)
 
 
@@ -249,4 +240,4 @@ class KroneckerSampler(_Shifted):
     def _device(self, n, realizations, start, out=None):
         alphas = kronecker_alphas(self.d)
         table = runtime.table(("kronecker", self.d), lambda: alphas.view(_U32))
-        return self._launch("kronecker_points", table, n, realizations, start, (), out)
+        return self._run("kronecker_points", table, n, realizations, start, (), out)

@@ -46,8 +46,9 @@ def shift_vectors(seed, realizations, d):
     return philox.uniform(seed, philox.Stream.SHIFT, r, 0, np.arange(d, dtype=np.uint32)[None, :])
 
 
-class _LowDiscrepancy(Sampler):
-    """What the four samplers share: ``randomize=``, the launch and the Philox draws."""
+class LowDiscrepancySampler(Sampler):
+    """What the low-discrepancy samplers share (also lattice.py's): ``randomize=``, the launch and
+    the Philox draws."""
 
     sequence = True
     host_output = True
@@ -88,7 +89,7 @@ class _LowDiscrepancy(Sampler):
 
 
 @register("sobol")
-class SobolSampler(_LowDiscrepancy):
+class SobolSampler(LowDiscrepancySampler):
     """Sobol' sequence with Joe-Kuo direction numbers, 32-bit, up to 21201 dimensions.
 
     Point i, dimension j is x_ij = 2^-32 ⊕_c g_c(i) V_jc, where g(i) = i ⊕ (i >> 1) is
@@ -200,7 +201,7 @@ class SobolSampler(_LowDiscrepancy):
                             out)
 
 
-class _RadicalInverse(_LowDiscrepancy):
+class _RadicalInverse(LowDiscrepancySampler):
     """Samplers whose coordinates are radical inverses in per-dimension bases."""
 
     randomizations = (None, "shift", "xor", "owen", "permute")

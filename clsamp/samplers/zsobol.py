@@ -13,7 +13,7 @@ import numpy as np
 from .. import number_theory as nt
 from .. import philox, runtime
 from ..errors import InvalidArgumentError
-from ..validation import check_positive_int
+from ..validation import check_image_size
 from .base import Rate, Sampler, register
 
 _U32, _U64 = np.uint32, np.uint64
@@ -114,16 +114,8 @@ class ZSobolSampler(Sampler):
         self._set_resolution(resolution)
 
     def _set_resolution(self, resolution):
-        if isinstance(resolution, (tuple, list)):
-            if len(resolution) != 2:
-                raise InvalidArgumentError(
-                    f"'resolution' must be an int or (width, height), got {resolution!r}")
-            width = check_positive_int(resolution[0], "resolution[0] (width)", maximum=65535)
-            height = check_positive_int(resolution[1], "resolution[1] (height)", maximum=65535)
-        else:
-            width = height = check_positive_int(resolution, "resolution", maximum=65535)
-        self.width, self.height = width, height
-        self.log2_side = (max(width, height) - 1).bit_length()
+        self.width, self.height = check_image_size(resolution)
+        self.log2_side = (max(self.width, self.height) - 1).bit_length()
         self.max_n = 1 << (32 - 2 * self.log2_side)
 
     def for_image(self, width, height):
