@@ -29,6 +29,11 @@ sobol:owen                  -3      -1.5    Owen 1997 (smooth, up to log N); He 
                                             Wang 2015 (indicators)
 zsobol                      -3      -1.5    as sobol:owen: each pixel's set is an
                                             Owen-scrambled (0, m, 2)-net
+pmj02                       -3      -1.5    as sobol:owen: equivalent to an
+                                            Owen-scrambled (0, 2)-sequence (Helmer
+                                            et al. 2021)
+pmj02bn                     -3      -1.5    as pmj02: its prefixes 2^k are the same
+                                            nets, the jitter chosen otherwise
 ==========================  ======  ======  ======================================
 
 Random sampling is -1 in the ``"axis"`` case too and jittered -1.5 (the cells of one

@@ -49,6 +49,8 @@ TOUR_SAMPLERS = (
     ("sobol", {"randomize": "owen"}),
     ("lattice", {}),
     ("kronecker", {}),
+    ("pmj02", {}),
+    ("pmj02bn", {}),
     ("poisson_disk", {}),
     ("lloyd", {}),
     ("ccvt", {}),
@@ -170,7 +172,8 @@ def section_samplers(report, quick):
 FAMILIES = (
     ("stratified", ("regular", "jittered", "uncorrelated_jitter", "latin_hypercube",
                     "multijittered", "correlated_multijittered")),
-    ("low discrepancy", ("halton", "hammersley", "sobol", "lattice", "kronecker")),
+    ("low discrepancy", ("halton", "hammersley", "sobol", "lattice", "kronecker", "pmj02",
+                         "pmj02bn")),
     ("blue noise", ("poisson_disk", "lloyd", "ccvt")),
 )
 # Discrepancy against N: the sweep, and where the optimizers stop (full, quick).
@@ -262,7 +265,7 @@ def tour_convergence_plan(quick):
         sweeps = {name: (ns, realizations) for name in samplers}
     else:
         samplers = ("random", "jittered", "latin_hypercube", "sobol:owen", "halton:owen",
-                    "poisson_disk", "ccvt")
+                    "pmj02", "poisson_disk", "ccvt")
         ns, realizations = [16, 64, 256, 1024, 4096, 16384], 512
         sweeps = {name: TOUR_SWEEPS.get(name, (ns, realizations)) for name in samplers}
     return samplers, ("gaussian", "disk"), sweeps
@@ -383,6 +386,7 @@ TOUR_RENDER_SAMPLERS = (
     ("poisson_disk", {}),
     ("ccvt", {"points_per_site": 256}),
     ("sobol:owen", {}),
+    ("pmj02", {}),
 )
 
 

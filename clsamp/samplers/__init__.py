@@ -6,6 +6,7 @@ from . import (  # noqa: F401
     lattice,  # lattice (rank-1: Kuo's extensible sequence, Fibonacci), kronecker (R_d)
     lloyd,  # lloyd
     lowdiscrepancy,  # van_der_corput, halton, hammersley, sobol
+    pmj,  # pmj02, pmj02bn (progressive multi-jittered (0, 2) sequences)
     poisson_disk,  # poisson_disk (dart throwing)
     random,  # random
     stratified,  # regular, jittered, uncorrelated_jitter, latin_hypercube, (correlated_)multijittered
