@@ -21,6 +21,7 @@ MODULES = (
     "bench_random",
     "bench_stratified",
     "bench_lowdiscrepancy",
+    "bench_pmj",
     "bench_spectrum",
     "bench_metrics",
     "bench_convergence",
