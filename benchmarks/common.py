@@ -41,14 +41,95 @@ class Row:
             return None
         return self.peer_seconds / self.seconds
 
+    def __post_init__(self):
+        if _PROFILE["on"] and _PROFILE["last"] is not None and "profile" not in self.extra:
+            self.extra["profile"] = _PROFILE["last"]
+        _PROFILE["last"] = None
+
     def as_dict(self):
         d = dataclasses.asdict(self)
         d["ratio"] = self.ratio
         return d
 
 
+# --profile: where one more call of each timed function spends its time
+_PROFILE = {"on": False, "last": None}
+
+
+def enable_profile():
+    """Profile every timed call from now on (before any device is used)."""
+    runtime.enable_profiling()
+    _PROFILE["on"] = True
+
+
+def profile(fn):
+    """Where one call of ``fn`` spends its time: a dict of seconds, or None if it used no OpenCL.
+
+    ``launch``: host time inside kernel enqueue calls (setting arguments, submitting);
+    ``kernel``: the device's START..END of every kernel; ``transfer``: the same for every
+    copy and map (``enqueue_copy``, ``enqueue_map_buffer``: reads, writes, the zero-copy
+    output's map); ``host``: the rest of the wall time (NumPy work, Python, waits).
+    Launches through ``pyopencl.Kernel.__call__`` and ``enqueue_nd_range_kernel`` are seen.
+    """
+    import pyopencl as cl
+    kernels, copies, launch = [], [], [0.0]
+    originals = (cl.Kernel.__call__, cl.enqueue_nd_range_kernel, cl.enqueue_copy,
+                 cl.enqueue_map_buffer)
+
+    def call(self, *args, **kwargs):
+        t0 = time.perf_counter()
+        event = originals[0](self, *args, **kwargs)
+        launch[0] += time.perf_counter() - t0
+        kernels.append(event)
+        return event
+
+    def nd_range(*args, **kwargs):
+        t0 = time.perf_counter()
+        event = originals[1](*args, **kwargs)
+        launch[0] += time.perf_counter() - t0
+        kernels.append(event)
+        return event
+
+    def copy(*args, **kwargs):
+        event = originals[2](*args, **kwargs)
+        copies.append(event)
+        return event
+
+    def map_buffer(*args, **kwargs):
+        result = originals[3](*args, **kwargs)
+        copies.append(result[1])
+        return result
+
+    cl.Kernel.__call__, cl.enqueue_nd_range_kernel = call, nd_range
+    cl.enqueue_copy, cl.enqueue_map_buffer = copy, map_buffer
+    try:
+        t0 = time.perf_counter()
+        fn()
+        wall = time.perf_counter() - t0
+    finally:
+        cl.Kernel.__call__, cl.enqueue_nd_range_kernel, cl.enqueue_copy, cl.enqueue_map_buffer = originals
+    if not kernels and not copies:
+        return None
+
+    def device_seconds(events):
+        total = 0.0
+        for event in events:
+            if event is None:
+                continue
+            event.wait()
+            total += (event.profile.end - event.profile.start) * 1e-9
+        return total
+
+    kernel, transfer = device_seconds(kernels), device_seconds(copies)
+    return {"wall": wall, "launches": len(kernels), "launch": launch[0], "kernel": kernel,
+            "transfer": transfer, "host": max(0.0, wall - launch[0] - kernel - transfer)}
+
+
 def timed(fn, repeats=5, warmup=1, min_time=0.0):
-    """Median seconds of ``fn()`` over ``repeats`` calls after ``warmup`` calls; and its last result."""
+    """Median seconds of ``fn()`` over ``repeats`` calls after ``warmup`` calls; and its last result.
+
+    With ``--profile`` one more call is profiled (:func:`profile`) and the next :class:`Row`
+    made carries the breakdown (calls that use no OpenCL, a peer's, leave none)."""
     result = None
     for _ in range(warmup):
         result = fn()
@@ -60,6 +141,10 @@ def timed(fn, repeats=5, warmup=1, min_time=0.0):
         times.append(time.perf_counter() - t0)
         if min_time and i >= 1 and time.perf_counter() - start_all > min_time:
             break
+    if _PROFILE["on"]:
+        breakdown = profile(fn)
+        if breakdown is not None:
+            _PROFILE["last"] = breakdown
     return statistics.median(times), result
 
 
@@ -120,6 +205,60 @@ def print_table(rows, file=sys.stdout):
         print(fmt.format(*line), file=file)
 
 
+def print_profile(rows, file=sys.stdout):
+    """The --profile table: per row, where one call's time went."""
+    headers = ("case", "size", "device", "wall s", "launches", "launch s", "kernel s",
+               "transfer s", "host s")
+    lines = []
+    for r in rows:
+        p = r.extra.get("profile")
+        if p is None:
+            continue
+        lines.append((r.case, r.size, r.device, f"{p['wall']:.4g}", str(p["launches"]),
+                      f"{p['launch']:.3g}", f"{p['kernel']:.4g}", f"{p['transfer']:.3g}",
+                      f"{p['host']:.3g}"))
+    if not lines:
+        return
+    widths = [max(len(h), *(len(line[i]) for line in lines)) for i, h in enumerate(headers)]
+    fmt = "  ".join(f"{{:<{w}}}" for w in widths)
+    print("\nwhere the time goes (one more call of each, profiled):", file=file)
+    print(fmt.format(*headers), file=file)
+    print(fmt.format(*("-" * w for w in widths)), file=file)
+    for line in lines:
+        print(fmt.format(*line), file=file)
+
+
+def markdown_table(rows):
+    """The README's benchmark table from one run: machine, versions, date, then the rows."""
+    m = machine()
+    cpu = m["processor"]
+    try:
+        with open("/proc/cpuinfo") as f:
+            cpu = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    versions = ", ".join(f"{k} {m[k]}" for k in ("clsamp", "numpy", "pyopencl", "python"))
+    peers = []
+    for module in ("scipy", "finufft", "bridson", "qmcpy"):
+        try:
+            peers.append(f"{module} {__import__(module).__version__}")
+        except Exception:
+            continue
+    command = " ".join(["python", "benchmarks/" + os.path.basename(sys.argv[0]), *sys.argv[1:]])
+    lines = [f"Measured {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} in one run of "
+             f"`{command}` on {cpu} ({m['cpus']} CPUs); {versions}"
+             + (f"; peers {', '.join(peers)}" if peers else "") + "; devices: "
+             + "; ".join(m["devices"]) + ".", "",
+             "| case | size | device | clsamp s | peer | peer s | ratio | quality |",
+             "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        cells = (r.case, r.size, r.device, f"{r.seconds:.3g}", r.peer or "-",
+                 "-" if r.peer_seconds is None else f"{r.peer_seconds:.3g}",
+                 "-" if r.ratio is None else f"{r.ratio:.2f}×", r.quality)
+        lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def machine():
     """What the numbers were measured on."""
     import numpy
@@ -142,17 +281,35 @@ def parser(description):
     p.add_argument("--device", default=None, help="'all', an index or a name substring")
     p.add_argument("--quick", action="store_true", help="CI-sized problems")
     p.add_argument("--out", default=None, help="write the rows as JSON here")
+    p.add_argument("--profile", action="store_true",
+                   help="also print where each row's time goes (launch, kernel, transfer, host)")
+    p.add_argument("--markdown", nargs="?", const="benchmarks/results.md", default=None,
+                   metavar="FILE", help="write the README's table from this run (default "
+                   "benchmarks/results.md)")
     return p
 
 
 def main(run, description):
     """Entry point shared by the bench_*.py scripts."""
     args = parser(description).parse_args()
+    if args.profile:
+        enable_profile()
     rows = run(select_devices(args.device), args.quick)
+    finish(args, rows)
+    return rows
+
+
+def finish(args, rows):
+    """Print the table (and the profile); write the JSON and the markdown when asked."""
     print_table(rows)
+    if args.profile:
+        print_profile(rows)
     if args.out:
         write_json(args.out, rows)
-    return rows
+    if args.markdown:
+        from clsamp.io import write_text
+        write_text(args.markdown, markdown_table(rows))
+        print(f"wrote {args.markdown}", file=sys.stderr)
 
 
 def device_memory(fn):

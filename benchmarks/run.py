@@ -1,6 +1,11 @@
 """Run every capability's benchmark against its peer and print one table.
 
-    python benchmarks/run.py [--device all] [--quick] [--out results.json]
+    python benchmarks/run.py [--device all] [--quick] [--out results.json] [--profile]
+                             [--markdown [FILE]]
+
+``--profile`` adds a table of where each row's time goes (one more call, profiled:
+launch, kernel, transfer, host); ``--markdown`` writes the README's table from this run
+(machine, versions, date and every row).
 
 Each ``bench_<concern>.py`` listed in ``MODULES`` defines ``run(devices, quick)``.
 A module that fails is reported and the others still run; the exit status is
@@ -15,7 +20,7 @@ import traceback
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from common import parser, print_table, select_devices, write_json  # noqa: E402
+from common import enable_profile, finish, parser, select_devices  # noqa: E402
 
 MODULES = (
     "bench_random",
@@ -34,6 +39,8 @@ MODULES = (
 
 def main():
     args = parser(__doc__).parse_args()
+    if args.profile:
+        enable_profile()
     devices = select_devices(args.device)
     rows, failed = [], []
     for name in MODULES:
@@ -45,9 +52,7 @@ def main():
         except Exception:
             failed.append(name)
             traceback.print_exc()
-    print_table(rows)
-    if args.out:
-        write_json(args.out, rows)
+    finish(args, rows)
     if failed:
         print("failed: " + ", ".join(failed), file=sys.stderr)
         return 1

@@ -70,6 +70,7 @@ _tables = {}            # (device index, key) -> pyopencl.array.Array, least rec
 _TABLES = 64            # tables kept per process
 _build_count = 0
 _broken = {}            # device index -> why its compiler failed the probe build
+_profiling = False      # queues made with profiling enabled (benchmarks/run.py --profile)
 
 
 def _cl():
@@ -214,8 +215,26 @@ def _state(index):
     with _lock:
         if index not in _contexts:
             context = cl.Context([_cl_devices[index]])
-            _contexts[index] = (context, cl.CommandQueue(context))
+            properties = cl.command_queue_properties.PROFILING_ENABLE if _profiling else 0
+            _contexts[index] = (context, cl.CommandQueue(context, properties=properties))
         return _contexts[index]
+
+
+def enable_profiling():
+    """Make every queue record OpenCL profiling times (``benchmarks/run.py --profile``).
+
+    Must be called before the first device is used: queues are made once per device.
+
+    Raises
+    ------
+    RuntimeError
+        When a queue exists already.
+    """
+    global _profiling
+    with _lock:
+        if _contexts and not _profiling:
+            raise RuntimeError("enable_profiling() must be called before any device is used")
+        _profiling = True
 
 
 def context():
