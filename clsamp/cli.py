@@ -71,9 +71,13 @@ def _run_devices(args):
     current = runtime.current_device()
     for device in runtime.devices():
         mark = "*" if device.index == current.index else " "
-        broken = "" if runtime.compiles(device) else "  (its compiler fails: not usable)"
+        broken = "" if runtime.compiles(device.index) else "  (its compiler fails: not usable)"
         print(f"{mark} {device}  {device.compute_units} CUs, "
               f"{device.global_memory / 2**30:.1f} GiB{broken}")
+        print(f"    implementation: {device.implementation or 'unknown'}")
+        runs = runtime.capabilities(device.index)
+        print("    runs: " + ", ".join(
+            name if why is None else f"{name} (no: {why})" for name, why in runs.items()))
     return 0
 
 

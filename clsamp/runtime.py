@@ -53,6 +53,7 @@ class Device:
     global_memory: int   # bytes
     max_allocation: int  # bytes, largest single buffer
     local_memory: int    # bytes
+    implementation: str = ""   # the platform's version string ("OpenCL 3.0 PoCL 3.1 ...")
 
     def __str__(self):
         fp64 = "yes" if self.fp64 else "no"
@@ -113,7 +114,8 @@ def _discover():
             max_work_group_size=device.max_work_group_size,
             global_memory=device.global_mem_size,
             max_allocation=device.max_mem_alloc_size,
-            local_memory=device.local_mem_size))
+            local_memory=device.local_mem_size,
+            implementation=" ".join(device.platform.version.split())))
     _cl_devices, _records = found, records
 
 
@@ -178,6 +180,41 @@ def current_device():
         return _records[_current]
 
 
+# What each capability builds (the kernel files its code asks for), for `clsamp devices`.
+CAPABILITIES = {
+    "samplers": ("random.cl", "stratified.cl", "lowdiscrepancy.cl", "lattice.cl", "zsobol.cl",
+                 "pmj.cl", "dart_throwing.cl", "lloyd.cl", "ccvt.cl", "permutation.cl"),
+    "spectra": ("spectrum.cl", "nufft.cl"),
+    "metrics": ("discrepancy.cl", "star_discrepancy.cl", "anchored_counts.cl", "neighbors.cl"),
+    "experiments": ("integrands.cl", "families.cl"),
+    "render": ("render.cl",),
+}
+
+
+def needs_fp64(file):
+    """Whether ``kernels/<file>`` (its headers inlined) computes in double precision."""
+    return bool(_DOUBLE.search(_strip_comments(kernel_source(file))))
+
+
+def capabilities(spec=None):
+    """What runs on a device: ``{capability: None}`` where it runs, else the reason it refuses.
+
+    A capability runs where every kernel file it builds compiles for the device; on a
+    device without fp64 those that compute in double refuse with :class:`NoDeviceError`
+    (say which here) before any compiler sees them.
+    """
+    device = devices()[_resolve(spec)] if spec is not None else current_device()
+    out = {}
+    for name, files in CAPABILITIES.items():
+        if not compiles(device.index):
+            out[name] = "its compiler fails"
+        elif not device.fp64 and any(needs_fp64(f) for f in files):
+            out[name] = "needs fp64"
+        else:
+            out[name] = None
+    return out
+
+
 def compiles(spec):
     """Whether the device ``spec`` (as :func:`use_device` takes it) builds a one-line kernel.
 
@@ -198,9 +235,10 @@ def compiles(spec):
 
 
 def _default_device():
-    """The first CPU device (else the first device) whose compiler works."""
+    """The first CPU device with fp64 (else the first device with fp64, else the first CPU
+    device, else any) whose compiler works: clsamp's kernels compute in double precision."""
     records = devices()
-    order = [r.index for r in records if r.type == "cpu"] + [r.index for r in records if r.type != "cpu"]
+    order = [r.index for r in sorted(records, key=lambda r: (not r.fp64, r.type != "cpu", r.index))]
     for index in order:
         if compiles(index):
             return index
@@ -296,6 +334,13 @@ def _options(defines, extra):
     return tuple(options)
 
 
+_DOUBLE = re.compile(r"\bdouble[0-9]*\b")
+
+
+def _strip_comments(source):
+    return re.sub(r"/\*.*?\*/|//[^\n]*", " ", source, flags=re.S)
+
+
 def program(file, defines=None, options=()):
     """The built program of ``kernels/<file>`` for the current device.
 
@@ -313,6 +358,9 @@ def program(file, defines=None, options=()):
 
     Raises
     ------
+    NoDeviceError
+        When the source uses ``double`` and the device has no fp64 (``cl_khr_fp64``): the
+        kernel never reaches a compiler that lacks the type.
     BuildError
         With the file, the device and the compiler's log.
     """
@@ -326,6 +374,11 @@ def program(file, defines=None, options=()):
             return built
         ctx = _state(device.index)[0]
         source = kernel_source(file)
+        if not device.fp64 and _DOUBLE.search(_strip_comments(source)):
+            raise NoDeviceError(
+                f"kernels/{file} computes in double precision and device {device.name} "
+                f"({device.platform}) has none (no cl_khr_fp64); choose another with "
+                "clsamp.use_device or CLSAMP_DEVICE (`clsamp devices` lists them)")
         try:
             built = cl.Program(ctx, source).build(options=list(key[2]))
         except cl.RuntimeError as error:

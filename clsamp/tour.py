@@ -711,9 +711,17 @@ def section_device(report, quick, timings):
     rows += [(f"version: {k}", v) for k, v in versions().items()]
     rows.append(("platform", platform.platform()))
     timing_rows = [(k, f"{v:.2f}") for k, v in timings.items()]
+    found = []
+    for other in runtime.devices():
+        runs = runtime.capabilities(other.index)
+        found.append((str(other), other.implementation or "unknown",
+                      ", ".join(k if why is None else f"{k} (no: {why})" for k, why in runs.items())))
     body = (table(("property", "value"), rows)
+            + "<h3>Every device found</h3>" + table(("device", "implementation", "runs"), found)
             + "<h3>Seconds per section</h3>" + table(("section", "seconds"), timing_rows))
-    return body, {"device": dataclasses.asdict(device), "versions": versions(), "timings": timings}
+    return body, {"device": dataclasses.asdict(device), "versions": versions(), "timings": timings,
+                  "devices": [dict(dataclasses.asdict(d), runs=runtime.capabilities(d.index))
+                              for d in runtime.devices()]}
 
 
 SECTIONS = (

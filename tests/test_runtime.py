@@ -157,3 +157,20 @@ def test_a_program_from_the_binary_cache_has_its_kernels(tmp_path):
                              check=True, cwd=root)
         assert out.stdout.split() == ["sobol_points;radical_points", "render_pixels",
                                       "spectrum_spread;spectrum_sum_copies"]
+
+
+def test_a_double_kernel_never_reaches_a_compiler_without_fp64(monkeypatch):
+    import dataclasses
+    real = runtime.current_device()
+    monkeypatch.setattr(runtime, "current_device", lambda: dataclasses.replace(real, fp64=False))
+    before = runtime.build_count()
+    with pytest.raises(NoDeviceError, match=r"kernels/random\.cl .*no cl_khr_fp64"):
+        runtime.program("random.cl", defines={"CLSAMP_FP64_PROBE": 1})
+    assert runtime.build_count() == before
+    assert runtime.needs_fp64("random.cl")
+
+
+def test_capabilities_of_the_default_device():
+    runs = runtime.capabilities()
+    assert set(runs) == set(runtime.CAPABILITIES)
+    assert all(why is None for why in runs.values()) == runtime.current_device().fp64

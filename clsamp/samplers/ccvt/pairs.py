@@ -37,9 +37,15 @@ def ccvt_grid_size(n):
 
 def ccvt_defines():
     """Build options of ``kernels/ccvt*.cl`` on the current device: the shared constants,
-    and CCVT_PREFETCH (software prefetch of the records and points a pair reads) on CPU
-    devices, where the scans wait on memory; it never changes a result."""
+    and CCVT_PREFETCH (software prefetch of the records and points a pair reads) under PoCL
+    on a CPU, where it was measured to help the scans that wait on memory (other
+    implementations may lower ``prefetch`` differently, or not at all); it never changes a
+    result."""
     return {**it.DEFINES, "CCVT_TOP": CCVT_TOP, "CCVT_SECTORS": CCVT_SECTORS,
             "CCVT_BANDS": CCVT_BANDS, "CCVT_META": CCVT_META, "CCVT_NO_OWNER": f"{NO_OWNER}u",
             "CCVT_NO_SECOND": f"{NO_SECOND}L",
-            "CCVT_PREFETCH": runtime.current_device().type == "cpu"}
+            "CCVT_PREFETCH": _pocl_cpu(runtime.current_device())}
+
+
+def _pocl_cpu(device):
+    return device.type == "cpu" and device.platform == "Portable Computing Language"
