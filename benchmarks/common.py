@@ -283,9 +283,8 @@ def parser(description):
     p.add_argument("--out", default=None, help="write the rows as JSON here")
     p.add_argument("--profile", action="store_true",
                    help="also print where each row's time goes (launch, kernel, transfer, host)")
-    p.add_argument("--markdown", nargs="?", const="benchmarks/results.md", default=None,
-                   metavar="FILE", help="write the README's table from this run (default "
-                   "benchmarks/results.md)")
+    p.add_argument("--markdown", default=None, metavar="FILE",
+                   help="write the README's table from this run (markdown) to FILE")
     return p
 
 

@@ -1,7 +1,7 @@
 """Run every capability's benchmark against its peer and print one table.
 
     python benchmarks/run.py [--device all] [--quick] [--out results.json] [--profile]
-                             [--markdown [FILE]]
+                             [--markdown FILE]
 
 ``--profile`` adds a table of where each row's time goes (one more call, profiled:
 launch, kernel, transfer, host); ``--markdown`` writes the README's table from this run

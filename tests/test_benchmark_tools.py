@@ -11,7 +11,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_profile_and_markdown_of_one_benchmark(tmp_path):
-    out = tmp_path / "table.md"
+    out = tmp_path / "table.markdown"
     done = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_random.py"), "--quick",
                            "--profile", "--markdown", str(out)],
                           capture_output=True, text=True, timeout=600, cwd=ROOT)
