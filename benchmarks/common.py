@@ -174,7 +174,15 @@ def machine_gauge():
 def select_devices(spec):
     """``None`` -> the default device; ``"all"`` -> every device; else one index/name."""
     if spec == "all":
-        return list(runtime.devices())
+        usable = []
+        for device in runtime.devices():
+            if not runtime.compiles(device.index):
+                print(f"skipping {device}: its compiler fails", file=sys.stderr)
+            elif not device.fp64:
+                print(f"skipping {device}: no fp64, which clsamp's kernels need", file=sys.stderr)
+            else:
+                usable.append(device)
+        return usable
     if spec is None:
         return [runtime.current_device()]
     return [runtime.use_device(spec)]
@@ -186,7 +194,38 @@ def on_device(device):
 
 
 def short_name(device):
-    return f"{device.name[:28]} ({device.type})"
+    return f"[{device.index}] {device.name[:28]} ({device.type})"
+
+
+def print_tables(rows, file=sys.stdout):
+    """One table per device, then (with several) a cross-device summary of clsamp's seconds."""
+    devices = list(dict.fromkeys(r.device for r in rows))
+    if len(devices) <= 1:
+        print_table(rows, file)
+        return
+    for device in devices:
+        print(f"\n{device}:", file=file)
+        print_table([r for r in rows if r.device == device], file)
+    cases = list(dict.fromkeys((r.case, r.size, r.peer) for r in rows))
+    seconds = {(r.case, r.size, r.peer, r.device): r.seconds for r in rows}
+    headers = ("case", "size", *devices, f"vs {devices[0]}")
+    lines = []
+    for case, size, peer in cases:
+        times = [seconds.get((case, size, peer, d)) for d in devices]
+        if None in times:
+            continue
+        lines.append((case, size, *(f"{t:.4g}" for t in times),
+                      " ".join(f"{times[0] / t:.2f}x" for t in times[1:])))
+    lines = list(dict.fromkeys(lines))
+    widths = [max(len(h), *(len(line[i]) for line in lines)) if lines else len(h)
+              for i, h in enumerate(headers)]
+    fmt = "  ".join(f"{{:<{w}}}" for w in widths)
+    print("\nacross devices (clsamp seconds; the last column: the first device's time over each "
+          "other's, > 1 means that one is faster):", file=file)
+    print(fmt.format(*headers), file=file)
+    print(fmt.format(*("-" * w for w in widths)), file=file)
+    for line in lines:
+        print(fmt.format(*line), file=file)
 
 
 def print_table(rows, file=sys.stdout):
@@ -299,8 +338,8 @@ def main(run, description):
 
 
 def finish(args, rows):
-    """Print the table (and the profile); write the JSON and the markdown when asked."""
-    print_table(rows)
+    """Print the tables (and the profile); write the JSON and the markdown when asked."""
+    print_tables(rows)
     if args.profile:
         print_profile(rows)
     if args.out:
