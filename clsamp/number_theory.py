@@ -339,6 +339,19 @@ def owen_permutation_element(key, base, digit):
     out = np.empty(d.shape, dtype=np.int64)
     if d.size == 0:
         return out.astype(_U64).reshape(shape)
+    if base >= 256:
+        # a node that many points share (the root): shuffle it whole, once
+        nodes, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
+        shared = np.flatnonzero(counts >= 8)
+        if shared.size:
+            whole = np.isin(inverse, shared)
+            for u in shared:
+                at = inverse == u
+                out[at] = owen_permutation(nodes[u], base).astype(np.int64)[d[at]]
+            rest = ~whole
+            if rest.any():
+                out[rest] = owen_permutation_element(key[rest], base, d[rest]).astype(np.int64)
+            return out.astype(_U64).reshape(shape)
     width = int(d.max()) + 1
     batch = max(1, 2**21 // width)
     for lo in range(0, d.size, batch):

@@ -46,8 +46,8 @@ def shift_vectors(seed, realizations, d):
     return philox.uniform(seed, philox.Stream.SHIFT, r, 0, np.arange(d, dtype=np.uint32)[None, :])
 
 
-OWEN_TABLE_DEPTH_ENTRIES = 2**16     # a tabulated depth k >= 1 holds at most this many
-OWEN_TABLE_BYTES = 64 * 2**20        # all tables of one launch
+OWEN_TABLE_ENTRIES_PER_DIGIT = 2**13   # a depth's table: at most this times b entries
+OWEN_TABLE_BYTES = 64 * 2**20          # all tables of one launch
 
 
 def owen_table_layout(bases, n, realizations=1):
@@ -55,10 +55,10 @@ def owen_table_layout(bases, n, realizations=1):
 
     Nodes near the root are shared by many points: the root (depth 0, b entries) of
     every base b >= 3, and depth k >= 1 while its b^(k+1) entries are at most
-    min(OWEN_TABLE_DEPTH_ENTRIES, 4 n); deeper nodes are shuffled per point. If the
-    tables of ``realizations`` realizations would pass OWEN_TABLE_BYTES, only roots
-    are kept, then the roots of the largest bases are dropped. A choice of speed only:
-    a table holds the same permutations the kernel computes without it.
+    min(4 n, OWEN_TABLE_ENTRIES_PER_DIGIT b) (a point's shuffle costs about b/2 steps,
+    so a large base gains the most from a table). While the tables of ``realizations``
+    realizations pass OWEN_TABLE_BYTES, the largest deepest table goes. A choice of
+    speed only: a table holds the same permutations the kernel computes without it.
 
     Returns ``(layout, segments, nodes, entries)``: the uint32 ``owen_layout`` of
     ``kernels/lowdiscrepancy.cl`` (per dimension: first segment, tabulated depths; then per
@@ -66,28 +66,23 @@ def owen_table_layout(bases, n, realizations=1):
     table entries per realization.
     """
     bases = [int(b) for b in bases]
-    limit = min(OWEN_TABLE_DEPTH_ENTRIES, 4 * max(1, int(n)))
     depths = []
     for b in bases:
         k = 0
         if b >= 3:
+            limit = min(4 * max(1, int(n)), OWEN_TABLE_ENTRIES_PER_DIGIT * b)
             m, power = nt.digit_count(b), b
             k = 1
             while k < m and power * b <= limit:
                 power *= b
                 k += 1
         depths.append(k)
-
-    def entries(ds):
-        return sum(sum(b**(k + 1) for k in range(kk)) for b, kk in zip(bases, ds, strict=True))
-
     budget = OWEN_TABLE_BYTES // (4 * max(1, realizations))
-    if entries(depths) > budget:
-        depths = [min(k, 1) for k in depths]
-        for j in sorted(range(len(bases)), key=lambda j: -bases[j]):
-            if entries(depths) <= budget:
-                break
-            depths[j] = 0
+    total = sum(sum(b**(k + 1) for k in range(kk)) for b, kk in zip(bases, depths, strict=True))
+    while total > budget:
+        j = max(range(len(bases)), key=lambda j: bases[j]**depths[j] if depths[j] else 0)
+        total -= bases[j]**depths[j]
+        depths[j] -= 1
     dims, segs = [], []
     node = offset = 0
     for j, (b, kk) in enumerate(zip(bases, depths, strict=True)):
