@@ -28,6 +28,9 @@ References
 .. [6] N. Vegdahl, "Building a better LK hash" (2021),
    https://psychopath.io/post/2021_01_30_building_a_better_lk_hash
 .. [7] A. Kensler, "Correlated multi-jittered sampling", Pixar Technical Memo 13-01 (2013).
+.. [8] A. B. Owen, "A randomized Halton algorithm in R" (2017), arXiv:1706.02808.
+.. [9] N. Brackett-Rozinsky, D. Lemire, "Batched ranged random integer generation",
+   Software: Practice and Experience (2025), doi:10.1002/spe.3369.
 """
 
 import functools
@@ -146,8 +149,7 @@ def digit_hash(seed64, key):
     """32 random bits for one digit: the high word of ``mix64(seed64 ^ key)``.
 
     ``key`` is the digit position k for the random digit shift and permutation
-    (the same for every point) and the tree node b^k + (i mod b^k) for Owen
-    scrambling (a different permutation for each prefix of digits).
+    (the same for every point).
     """
     mixed = mix64(np.asarray(seed64, dtype=_U64) ^ np.asarray(key, dtype=_U64))
     return (mixed >> _U64(32)).astype(_U32)
@@ -246,6 +248,142 @@ def owen_scramble_base2(x, seed):
     return reverse_bits32(lk_hash(reverse_bits32(x), seed))
 
 
+# -- nested uniform scrambling in base b >= 3 ----------------------------------------
+OWEN_ATTEMPT_STRIDE = 2**27   # word slots per rejection attempt (more than any node's chunks)
+
+
+def owen_chunk_length(base):
+    """g, the draws per 32-bit word of a node's Fisher-Yates shuffle: the largest g with b^g <= 2^32."""
+    g, power = 0, 1
+    while power * int(base) <= 2**32:
+        power *= int(base)
+        g += 1
+    return g
+
+
+def owen_node_key(seed64, node):
+    """The 64-bit key of the digit-tree node ``node`` = b^k + (i mod b^k): mix64(seed64 ^ node)."""
+    return mix64(np.asarray(seed64, dtype=_U64) ^ np.asarray(node, dtype=_U64))
+
+
+def owen_word(key, slot):
+    """32-bit word number ``slot`` of a node: a half of block slot // 2, where block 0 is the
+    node key itself and block u > 0 is mix64(key ^ u); even slots take the low half."""
+    key = np.asarray(key, dtype=_U64)
+    slot = np.asarray(slot, dtype=_U64)
+    u = slot >> _U64(1)
+    block = np.where(u == 0, key, mix64(key ^ u))
+    return np.where(slot & _U64(1), block >> _U64(32), block & _U64(0xFFFFFFFF))
+
+
+def owen_chunk_draws(key, base, chunk):
+    """The Fisher-Yates draws r_j, j in [c g, c g + g), of chunk c of each node: (..., g) uint64.
+
+    Draw j is uniform on [0, b - j) (r_j = 0 for j >= b - 1). One 32-bit word x makes the
+    whole chunk without division (Brackett-Rozinsky and Lemire's batched ranged draws
+    [9]_): x s_0 = r_0 2^32 + x_1, x_1 s_1 = r_1 2^32 + x_2, ..., so (r_0, r_1, ...) are the
+    mixed-radix digits of floor(x P / 2^32), P = prod s_t <= 2^32, and rejecting
+    x_last < 2^32 mod P makes them exactly uniform and independent; a rejected word is
+    replaced by word slot c + a * OWEN_ATTEMPT_STRIDE of attempt a. ``key`` and ``chunk``
+    broadcast.
+    """
+    base = int(base)
+    g = owen_chunk_length(base)
+    key, chunk = np.broadcast_arrays(np.asarray(key, dtype=_U64), np.asarray(chunk, dtype=np.int64))
+    shape = key.shape
+    key, chunk = key.ravel(), chunk.ravel()
+    bounds = np.maximum(base - chunk[:, None] * g - np.arange(g)[None, :], 1).astype(_U64)
+    product = np.prod(bounds, axis=1)
+    threshold = (_U64(2**32) % product).astype(_U64)
+    draws = np.zeros((key.size, g), dtype=_U64)
+    todo = np.arange(key.size)
+    attempt = 0
+    low = _U64(0xFFFFFFFF)
+    while todo.size:
+        x = owen_word(key[todo], chunk[todo].astype(_U64) + _U64(attempt * OWEN_ATTEMPT_STRIDE))
+        r = np.empty((todo.size, g), dtype=_U64)
+        for t in range(g):
+            x = x * bounds[todo, t]
+            r[:, t] = x >> _U64(32)
+            x = x & low
+        ok = x >= threshold[todo]
+        draws[todo[ok]] = r[ok]
+        todo = todo[~ok]
+        attempt += 1
+    return draws.reshape(shape + (g,))
+
+
+def _node_draws(key, base, last):
+    """Draws r_0..r_(last) of each node ``key`` (1-D): (len(key), chunks * g) uint64."""
+    g = owen_chunk_length(base)
+    chunks = last // g + 1
+    c = np.arange(chunks, dtype=np.int64)
+    draws = owen_chunk_draws(key[:, None], base, c[None, :])
+    return draws.reshape(key.size, chunks * g)
+
+
+def owen_permutation_element(key, base, digit):
+    """π(d) for the uniformly random permutation π of [0, b) of each node ``key``.
+
+    π is the Fisher-Yates shuffle of the identity with the draws of
+    :func:`owen_chunk_draws`: for j = 0, 1, ..., b - 1 swap positions j and j + r_j;
+    π(d) is what position d holds at the end. Position d is final after step d, so π(d)
+    needs only r_0..r_d: start at p = d + r_d and walk back, for j = d - 1, ..., 0,
+    setting p = j where j + r_j = p (the swap that brought p's value); then π(d) = p.
+    ``key`` and ``digit`` broadcast.
+    """
+    base = int(base)
+    key, digit = np.broadcast_arrays(np.asarray(key, dtype=_U64), np.asarray(digit, dtype=_U64))
+    shape = digit.shape
+    key, d = key.ravel(), digit.ravel().astype(np.int64)
+    out = np.empty(d.shape, dtype=np.int64)
+    if d.size == 0:
+        return out.astype(_U64).reshape(shape)
+    if base >= 256:
+        # a node that many points share (the root): shuffle it whole, once
+        nodes, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
+        shared = np.flatnonzero(counts >= 8)
+        if shared.size:
+            whole = np.isin(inverse, shared)
+            for u in shared:
+                at = inverse == u
+                out[at] = owen_permutation(nodes[u], base).astype(np.int64)[d[at]]
+            rest = ~whole
+            if rest.any():
+                out[rest] = owen_permutation_element(key[rest], base, d[rest]).astype(np.int64)
+            return out.astype(_U64).reshape(shape)
+    width = int(d.max()) + 1
+    batch = max(1, 2**21 // width)
+    for lo in range(0, d.size, batch):
+        kb, db = key[lo:lo + batch], d[lo:lo + batch]
+        nodes, inverse = np.unique(kb, return_inverse=True)
+        draws = _node_draws(nodes, base, int(db.max())).astype(np.int64)
+        target = np.arange(draws.shape[1])[None, :] + draws     # j + r_j
+        p = db + draws[inverse, db]
+        bound = db.copy()
+        while True:
+            # the last swap j < bound that brought position p's value
+            hit = (target[inverse] == p[:, None]) & (np.arange(target.shape[1])[None, :] < bound[:, None])
+            found = hit.any(axis=1)
+            if not found.any():
+                break
+            last = hit.shape[1] - 1 - np.argmax(hit[:, ::-1], axis=1)
+            p = np.where(found, last, p)
+            bound = np.where(found, last, 0)
+        out[lo:lo + batch] = p
+    return out.astype(_U64).reshape(shape)
+
+
+def owen_permutation(key, base):
+    """The whole permutation [π(0), ..., π(b-1)] of one node ``key`` (scalar), by Fisher-Yates."""
+    base = int(base)
+    draws = _node_draws(np.asarray([key], dtype=_U64), base, base - 1)[0, :base].tolist()
+    a = list(range(base))
+    for j, r in enumerate(draws):
+        a[j], a[j + r] = a[j + r], a[j]
+    return np.array(a, dtype=_U64)
+
+
 def scrambled_radical_inverse_numerator(index, base, randomize, seed64):
     """Numerator v of a randomized radical inverse v / b^m (m = :func:`digit_count`).
 
@@ -257,9 +395,14 @@ def scrambled_radical_inverse_numerator(index, base, randomize, seed64):
         ``None`` and ``"shift"`` give the plain digits (a shift is applied to the
         float afterwards); ``"xor"`` adds a random digit s_k mod b at each position k
         (the base-b random digit shift, an xor in base 2); ``"permute"`` applies a
-        random permutation π_k to digit k (pbrt's PermuteDigits); ``"owen"`` applies a
-        permutation chosen by the digit's position and all digits above it (nested
-        uniform scrambling [3]_). In base 2, ``"owen"`` is :func:`owen_scramble_base2`.
+        random permutation π_k to digit k (pbrt's PermuteDigits, Kensler's hash
+        permutations); ``"owen"`` is nested uniform scrambling [3]_ [8]_: digit k of index i is
+        mapped by a permutation π_(k, i mod b^k) of its own for every node of the digit
+        tree (the depth k and the k digits below it), each node's permutation uniformly
+        random over all b! permutations and independent of the others. In base b >= 3 a
+        node's permutation is a Fisher-Yates shuffle driven by the node's key
+        mix64(seed64 ^ (b^k + i mod b^k)) (:func:`owen_permutation_element`); in base 2,
+        ``"owen"`` is :func:`owen_scramble_base2`.
     seed64 : int
         The randomization's 64-bit seed (one per realization and dimension).
         In base 2 ``"owen"`` uses its low 32 bits.
@@ -267,7 +410,8 @@ def scrambled_radical_inverse_numerator(index, base, randomize, seed64):
     Notes
     -----
     All m digits are scrambled, the index's leading zeros included, so v is uniform
-    on [0, b^m) over seeds.
+    on [0, b^m) over seeds. A node's permutation depends only on the seed and the node,
+    so the points do not depend on how many are drawn, nor from which start.
     """
     base = int(base)
     m = digit_count(base)
@@ -277,6 +421,9 @@ def scrambled_radical_inverse_numerator(index, base, randomize, seed64):
     seed64 = _U64(seed64)
     if randomize == "owen" and base == 2:
         return reverse_bits32(lk_hash(index.astype(_U32), _U32(int(seed64) & 0xFFFFFFFF))).astype(_U64)
+    if randomize not in ("xor", "permute", "owen"):
+        raise InvalidArgumentError(
+            f"'randomize' must be None, 'shift', 'xor', 'permute' or 'owen', got {randomize!r}")
     digits = index_digits(index, base, m)
     v = np.zeros(index.shape, dtype=_U64)
     prefix = np.zeros(index.shape, dtype=_U64)    # i mod b^k
@@ -287,12 +434,8 @@ def scrambled_radical_inverse_numerator(index, base, randomize, seed64):
             e = (d + digit_shift(digit_hash(seed64, k), base)) % _U64(base)
         elif randomize == "permute":
             e = permutation_element(d.astype(_U32), base, digit_hash(seed64, k)).astype(_U64)
-        elif randomize == "owen":
-            e = permutation_element(d.astype(_U32), base,
-                                    digit_hash(seed64, prefix + _U64(power))).astype(_U64)
         else:
-            raise InvalidArgumentError(
-                f"'randomize' must be None, 'shift', 'xor', 'permute' or 'owen', got {randomize!r}")
+            e = owen_permutation_element(owen_node_key(seed64, prefix + _U64(power)), base, d)
         v = v * _U64(base) + e
         prefix = prefix + d * _U64(power)
         power *= base

@@ -9,6 +9,10 @@
  *               makes the kernels fast; any value gives the same bits
  *   HAMMERSLEY  (radical_points) dimension 0 is i / n instead of a radical inverse
  *
+ * Kernels: sobol_points, radical_points, and (RANDOMIZE == LD_OWEN) owen_tables, which
+ * radical_points' Owen scrambling in base >= 3 reads: the permutations of the nodes near
+ * the roots of the digit trees, made once per launch instead of once per point.
+ *
  * Grid: (work-items padded to the local size, realizations); out is (realizations, n, d).
  * Realization r's randomization comes from Philox with counter realization0 + r, so it does
  * not depend on how many realizations one launch makes. Integer arithmetic and exactly
@@ -153,11 +157,17 @@ __kernel void sobol_points(__global double *out, __global const uint *matrices,
  * base bases[j] reversed, m the digit count of 32-bit indices (number_theory.digit_count).
  * Plain, shifted, xor and permuted digits are updated incrementally: adding one to the
  * index changes digit 0 and, on a carry, the next ones. Owen scrambling depends on every
- * digit below, so it recomputes all m digits' permutations for each point. */
+ * digit below, so it maps all m digits for each point: at the depths that owen_tables
+ * tabulated (owen_layout) by a look-up, deeper by owen_permutation_element. */
 __kernel void radical_points(__global double *out, __global const uint *bases,
                              const uint n, const uint d, const uint start, const uint realization0,
                              const uint key_lo, const uint key_hi, const uint scramble_stream,
-                             const uint shift_stream)
+                             const uint shift_stream
+#if RANDOMIZE == LD_OWEN
+                             , __global const uint *owen_table, __global const uint *owen_layout,
+                             const uint owen_entries
+#endif
+                             )
 {
     const uint g = get_global_id(0);
     const uint r = get_global_id(1);
@@ -223,10 +233,19 @@ __kernel void radical_points(__global double *out, __global const uint *bases,
             }
         }
 #if RANDOMIZE == LD_OWEN
+        const uint g = owen_chunk_length(base);
+        const uint tabulated = owen_layout[2 * j + 1];
+        __global const uint *segment = owen_layout + 2 * d + 4 * owen_layout[2 * j];
+        __global const uint *tab = owen_table + (size_t)r * owen_entries;
+        uint offset[32];
+        for (uint k = 0; k < tabulated; ++k)
+            offset[k] = segment[4 * k + 3];
         for (uint t = 0; t < count; ++t) {
             ulong v = 0, prefix = 0, power = 1;
             for (uint k = 0; k < m; ++k) {
-                const uint e = permutation_element(digit[k], base, digit_hash(seed64, prefix + power));
+                const uint e = k < tabulated
+                    ? tab[offset[k] + (uint)prefix * base + digit[k]]
+                    : owen_permutation_element(mix64(seed64 ^ (prefix + power)), base, g, digit[k]);
                 v = v * base + e;
                 prefix += (ulong)digit[k] * power;
                 power *= base;
@@ -276,3 +295,58 @@ __kernel void radical_points(__global double *out, __global const uint *bases,
 #endif
     }
 }
+
+#if RANDOMIZE == LD_OWEN
+/* The permutations of the shallow nodes of the Owen digit trees, for radical_points:
+ * node (dimension j, depth k, prefix q < b^k) of realization r gets its b entries
+ * π(0), ..., π(b-1) at owen_table[r * owen_entries + offset + q * b], made by the same
+ * Fisher-Yates shuffle as owen_permutation_element, in place.
+ * owen_layout: per dimension (first segment, number of tabulated depths), then per
+ * segment (dimension, depth, first node, offset), segments in order of their first node.
+ * Grid: (nodes of all segments, padded; realizations); one work-item per node. */
+__kernel void owen_tables(__global uint *owen_table, __global const uint *owen_layout,
+                          __global const uint *bases, const uint d, const uint segments,
+                          const uint nodes, const uint owen_entries, const uint realization0,
+                          const uint key_lo, const uint key_hi, const uint scramble_stream)
+{
+    const uint node = get_global_id(0);
+    const uint r = get_global_id(1);
+    if (node >= nodes)
+        return;
+    __global const uint *segs = owen_layout + 2 * d;
+    uint lo = 0, hi = segments;          /* the last segment whose first node <= node */
+    while (hi - lo > 1) {
+        const uint mid = (lo + hi) / 2;
+        if (segs[4 * mid + 2] <= node)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    __global const uint *seg = segs + 4 * lo;
+    const uint j = seg[0];
+    const uint depth = seg[1];
+    const uint q = node - seg[2];
+    const uint base = bases[j];
+    const uint g = owen_chunk_length(base);
+    ulong power = 1;
+    for (uint k = 0; k < depth; ++k)
+        power *= base;
+    const uint4 words = clsamp_block((uint2)(key_lo, key_hi), scramble_stream, realization0 + r, j, 0);
+    const ulong seed64 = (ulong)words.x | ((ulong)words.y << 32);
+    const ulong key = mix64(seed64 ^ (q + power));
+    __global uint *a = owen_table + (size_t)r * owen_entries + seg[3] + (size_t)q * base;
+    for (uint i = 0; i < base; ++i)
+        a[i] = i;
+    uint draws[OWEN_MAX_CHUNK];
+    for (uint c = 0; c * g < base; ++c) {
+        const uint len = owen_chunk_draws(key, base, g, c, draws);
+        for (uint t = 0; t < len; ++t) {
+            const uint i = c * g + t;
+            const uint other = i + draws[t];
+            const uint held = a[i];
+            a[i] = a[other];
+            a[other] = held;
+        }
+    }
+}
+#endif

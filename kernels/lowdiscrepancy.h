@@ -98,6 +98,74 @@ inline uint permutation_element(uint i, uint l, uint p)
     return (uint)(((ulong)i + p) % l);   /* in 64 bits: a 32-bit sum wraps for p > 2^32 - l */
 }
 
+/* Nested uniform scrambling in base b >= 3 (number_theory.owen_*): node keys, the batched
+ * Fisher-Yates draws of a node, and π(d) of the node's uniformly random permutation. */
+#define OWEN_ATTEMPT_STRIDE 0x8000000UL   /* 2^27 word slots per rejection attempt */
+#define OWEN_MAX_CHUNK 20                 /* owen_chunk_length(3): the longest chunk */
+
+inline uint owen_chunk_length(uint base)
+{
+    uint g = 0;
+    ulong power = 1;
+    while (power * base <= 0x100000000UL) {
+        power *= base;
+        ++g;
+    }
+    return g;
+}
+
+inline uint owen_word(ulong key, ulong slot)
+{
+    const ulong u = slot >> 1;
+    const ulong block = u == 0 ? key : mix64(key ^ u);
+    return (slot & 1) ? (uint)(block >> 32) : (uint)block;
+}
+
+/* The draws r_j, j in [c g, c g + len), of chunk c: r[t] uniform on [0, b - c g - t), from
+ * one 32-bit word by multiplications (a rejected word, rare, is replaced). Returns len. */
+inline uint owen_chunk_draws(ulong key, uint base, uint g, uint c, uint *r)
+{
+    const uint j0 = c * g;
+    const uint len = min(g, base - j0);
+    for (ulong a = 0;; ++a) {
+        ulong x = owen_word(key, (ulong)c + a * OWEN_ATTEMPT_STRIDE);
+        ulong product = 1;
+        for (uint t = 0; t < len; ++t) {
+            const uint s = base - j0 - t;
+            x *= s;
+            r[t] = (uint)(x >> 32);
+            x &= 0xFFFFFFFFUL;
+            product *= s;
+        }
+        /* 2^32 mod P < P: most words pass the first test without a division */
+        if (x >= product || x >= 0x100000000UL % product)
+            return len;
+    }
+}
+
+/* π(d): what position d holds after the Fisher-Yates shuffle (swap j, j + r_j for
+ * j = 0, 1, ...). Walk back from p = d + r_d through the swaps j < d, taking p = j where
+ * j + r_j = p; chunks are made from d's down to 0, so r needs one chunk of room. */
+inline uint owen_permutation_element(ulong key, uint base, uint g, uint d)
+{
+    uint r[OWEN_MAX_CHUNK];
+    const uint cd = d < g ? 0u : d / g;
+    uint p = 0;
+    for (uint c = cd + 1; c-- > 0;) {
+        owen_chunk_draws(key, base, g, c, r);
+        const uint j0 = c * g;
+        uint top = g;
+        if (c == cd) {
+            top = d - j0;
+            p = d + r[top];
+        }
+        for (uint t = top; t-- > 0;)
+            if (j0 + t + r[t] == p)
+                p = j0 + t;
+    }
+    return p;
+}
+
 /* Cranley-Patterson rotation on the torus: (x + u) mod 1 with one rounding. */
 inline double ld_shift(double x, double u)
 {

@@ -46,6 +46,55 @@ def shift_vectors(seed, realizations, d):
     return philox.uniform(seed, philox.Stream.SHIFT, r, 0, np.arange(d, dtype=np.uint32)[None, :])
 
 
+OWEN_TABLE_ENTRIES_PER_DIGIT = 2**13   # a depth's table: at most this times b entries
+OWEN_TABLE_BYTES = 64 * 2**20          # all tables of one launch
+
+
+def owen_table_layout(bases, n, realizations=1):
+    """Which nodes of the Owen digit trees the kernel tabulates before a launch of n points.
+
+    Nodes near the root are shared by many points: the root (depth 0, b entries) of
+    every base b >= 3, and depth k >= 1 while its b^(k+1) entries are at most
+    min(4 n, OWEN_TABLE_ENTRIES_PER_DIGIT b) (a point's shuffle costs about b/2 steps,
+    so a large base gains the most from a table). While the tables of ``realizations``
+    realizations pass OWEN_TABLE_BYTES, the largest deepest table goes. A choice of
+    speed only: a table holds the same permutations the kernel computes without it.
+
+    Returns ``(layout, segments, nodes, entries)``: the uint32 ``owen_layout`` of
+    ``kernels/lowdiscrepancy.cl`` (per dimension: first segment, tabulated depths; then per
+    segment: dimension, depth, first node, offset), and the counts of segments, nodes and
+    table entries per realization.
+    """
+    bases = [int(b) for b in bases]
+    depths = []
+    for b in bases:
+        k = 0
+        if b >= 3:
+            limit = min(4 * max(1, int(n)), OWEN_TABLE_ENTRIES_PER_DIGIT * b)
+            m, power = nt.digit_count(b), b
+            k = 1
+            while k < m and power * b <= limit:
+                power *= b
+                k += 1
+        depths.append(k)
+    budget = OWEN_TABLE_BYTES // (4 * max(1, realizations))
+    total = sum(sum(b**(k + 1) for k in range(kk)) for b, kk in zip(bases, depths, strict=True))
+    while total > budget:
+        j = max(range(len(bases)), key=lambda j: bases[j]**depths[j] if depths[j] else 0)
+        total -= bases[j]**depths[j]
+        depths[j] -= 1
+    dims, segs = [], []
+    node = offset = 0
+    for j, (b, kk) in enumerate(zip(bases, depths, strict=True)):
+        dims += [len(segs) // 4, kk]
+        for k in range(kk):
+            segs += [j, k, node, offset]
+            node += b**k
+            offset += b**(k + 1)
+    layout = np.array(dims + segs, dtype=np.uint32)
+    return layout, len(segs) // 4, node, offset
+
+
 class LowDiscrepancySampler(Sampler):
     """What the low-discrepancy samplers share (also lattice.py's): ``randomize=``, the launch and
     the Philox draws."""
@@ -67,15 +116,20 @@ class LowDiscrepancySampler(Sampler):
         words = scramble_words(self.seed, np.arange(realizations.start, realizations.stop), self.d)
         return words[..., 0].astype(np.uint64) | (words[..., 1].astype(np.uint64) << np.uint64(32))
 
-    def _launch(self, kernel_name, table, n, realizations, start, defines, out=None):
-        """Run a kernel into a new device array, or into the host array ``out`` (returned)."""
+    @staticmethod
+    def _block():
+        # A work-item makes `block` consecutive points by cheap increments; on a GPU fewer
+        # per item keep more items in flight. The bits do not depend on it.
+        return 64 if runtime.current_device().type == "cpu" else 4
+
+    def _launch(self, kernel_name, table, n, realizations, start, defines, out=None, extra=()):
+        """Run a kernel into a new device array, or into the host array ``out`` (returned);
+        ``extra`` are kernel arguments after the common ones."""
         runtime.require_fp64()
         r = len(realizations)
         queue = runtime.queue()
         target = runtime.Output((r, n, self.d), host=out)
-        # A work-item makes `block` consecutive points by cheap increments; on a GPU fewer
-        # per item keep more items in flight. The bits do not depend on it.
-        block = 64 if runtime.current_device().type == "cpu" else 4
+        block = self._block()
         local = runtime.local_size()
         items = -(-n // block)
         kernel = runtime.kernel("lowdiscrepancy.cl", kernel_name,
@@ -84,7 +138,7 @@ class LowDiscrepancySampler(Sampler):
         kernel(queue, (-(-items // local) * local, r), (local, 1), target.buffer, table.data,
                np.uint32(n), np.uint32(self.d), np.uint32(start), np.uint32(realizations.start),
                *runtime.key_args(self.seed), np.uint32(philox.Stream.SCRAMBLE),
-               np.uint32(philox.Stream.SHIFT))
+               np.uint32(philox.Stream.SHIFT), *extra)
         return target.finish()
 
 
@@ -242,8 +296,31 @@ class _RadicalInverse(LowDiscrepancySampler):
     def _device(self, n, realizations, start, out=None):
         bases = np.maximum(self.bases(), 2)
         table = runtime.table(("radical bases", bases.tobytes()), lambda: bases)
+        extra = ()
+        if self.randomize == "owen":
+            extra = self._owen_tables(table, bases, n, realizations)
         return self._launch("radical_points", table, n, realizations, start,
-                            {"HAMMERSLEY": self.hammersley}, out)
+                            {"HAMMERSLEY": self.hammersley}, out, extra)
+
+    def _owen_tables(self, bases_table, bases, n, realizations):
+        """The shallow nodes' permutations for ``"owen"`` (kernel ``owen_tables``): the kernel
+        arguments (table, layout, entries per realization) of ``radical_points``."""
+        import pyopencl.array as cla
+        layout, segments, nodes, entries = owen_table_layout(bases, n, len(realizations))
+        queue = runtime.queue()
+        layout_dev = runtime.table(("owen layout", bases.tobytes(), layout.tobytes()), lambda: layout)
+        tables = cla.empty(queue, (max(1, entries * len(realizations)),), np.uint32)
+        if nodes:
+            # the defines of radical_points: one program holds both kernels
+            kernel = runtime.kernel("lowdiscrepancy.cl", "owen_tables",
+                                    defines={"RANDOMIZE": _CODES["owen"], "LD_BLOCK": self._block(),
+                                             "HAMMERSLEY": self.hammersley})
+            local = runtime.local_size()
+            kernel(queue, (-(-nodes // local) * local, len(realizations)), (local, 1), tables.data,
+                   layout_dev.data, bases_table.data, np.uint32(self.d), np.uint32(segments),
+                   np.uint32(nodes), np.uint32(entries), np.uint32(realizations.start),
+                   *runtime.key_args(self.seed), np.uint32(philox.Stream.SCRAMBLE))
+        return tables.data, layout_dev.data, np.uint32(entries)
 
 
 @register("van_der_corput")
@@ -264,15 +341,34 @@ class VanDerCorputSampler(_RadicalInverse):
     randomize : {None, "shift", "xor", "owen", "permute"}
         ``"xor"``: each digit shifted by a random s_k mod b (an xor in base 2);
         ``"permute"``: each digit position k permuted by its own random permutation;
-        ``"owen"``: each digit permuted by a permutation chosen by all digits above it
-        (nested uniform scrambling; in base 2 the Laine-Karras/Vegdahl hash). All m
-        digit positions are randomized, the leading zeros of small indices included.
+        ``"owen"``: nested uniform scrambling [3]_, each digit permuted by a permutation
+        of its own for every value of the digits before it (see Notes). All m digit
+        positions are randomized, the leading zeros of small indices included.
     backend : {"opencl", "numpy"}
+
+    Notes
+    -----
+    Nested uniform scrambling (``"owen"``) treats the digits d_0, d_1, ... of the index
+    (least significant first, the order in which Φ_b reads them) as a path in a b-ary
+    tree: digit k is replaced by π_node(d_k), where the node is (k, i mod b^k), the depth
+    and the digits already read. Every node's π is a uniformly random permutation of
+    [0, b), independent of every other node's, as in Owen's definition [3]_: each point
+    is uniform in [0, 1) over seeds, and the points keep the stratification of the
+    sequence (those sharing i mod b^k share their first k scrambled digits; those that
+    differ there differ). In base b >= 3 a node's permutation is a Fisher-Yates shuffle
+    whose draws come from a hash of the seed and the node, made exactly uniform by
+    rejection (:func:`clsamp.number_theory.owen_permutation_element`); in base 2 it is the
+    Laine-Karras hash with Vegdahl's constants (Burley 2020), a hash-based approximation
+    of independent random flips. A node's permutation depends on nothing but the seed and the
+    node, so ``sample(n, start=k)`` continues ``sample(k)`` and realization r is the same
+    however many are drawn.
 
     References
     ----------
     .. [1] J. G. van der Corput, "Verteilungsfunktionen", Proc. Akad. Amsterdam 38 (1935).
     .. [2] M. Pharr, W. Jakob, G. Humphreys, *Physically Based Rendering*, 4th ed., 8.6.
+    .. [3] A. B. Owen, "Randomly permuted (t,m,s)-nets and (t,s)-sequences", Monte Carlo
+       and Quasi-Monte Carlo Methods in Scientific Computing, Springer (1995).
 
     Examples
     --------
@@ -310,9 +406,13 @@ class HaltonSampler(_RadicalInverse):
     seed : int
     randomize : {None, "shift", "xor", "owen", "permute"}
         See :class:`VanDerCorputSampler`; ``"permute"`` is pbrt's PermuteDigits
-        (Kensler's hash permutations), ``"owen"`` pbrt's OwenScrambledRadicalInverse with
-        every digit's permutation chosen by a hash of the digits above it. All keep the
-        stratification of dimension j in base p_j; ``"shift"`` does not.
+        (Kensler's hash permutations). ``"owen"`` is nested uniform scrambling of every
+        dimension's digits in its own base, the randomized Halton sequence of Owen
+        2017 [2]_: in dimension j each node of the digit tree of base p_j (the depth k and
+        the index's digits below it, i mod p_j^k) gets a uniformly random permutation of
+        [0, p_j), independent across nodes, dimensions and realizations (the method is
+        in the Notes of :class:`VanDerCorputSampler`). All keep the stratification of
+        dimension j in base p_j; ``"shift"`` does not.
     backend : {"opencl", "numpy"}
 
     References
@@ -321,6 +421,8 @@ class HaltonSampler(_RadicalInverse):
        in evaluating multi-dimensional integrals", Numer. Math. 2 (1960).
     .. [2] A. B. Owen, "A randomized Halton algorithm in R" (2017), arXiv:1706.02808.
     .. [3] M. Pharr, W. Jakob, G. Humphreys, *Physically Based Rendering*, 4th ed., 8.6.
+    .. [4] A. B. Owen, "Randomly permuted (t,m,s)-nets and (t,s)-sequences", Monte Carlo
+       and Quasi-Monte Carlo Methods in Scientific Computing, Springer (1995).
 
     Examples
     --------
