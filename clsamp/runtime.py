@@ -201,7 +201,7 @@ def capabilities(spec=None):
 
     A capability runs where every kernel file it builds compiles for the device; on a
     device without fp64 those that compute in double refuse with :class:`NoDeviceError`
-    (say which here) before any compiler sees them.
+    before any compiler sees them, and the value here is "needs fp64".
     """
     device = devices()[_resolve(spec)] if spec is not None else current_device()
     out = {}
