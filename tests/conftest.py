@@ -25,3 +25,14 @@ settings.load_profile("ci")
 @pytest.fixture(scope="session")
 def device():
     return clsamp.current_device()
+
+
+def is_net(points, m):
+    """Every elementary interval of area 2^-m (all 2^a x 2^(m-a) boxes) holds one point."""
+    import numpy as np
+    ints = np.floor(points * 2**m).astype(np.int64)
+    for a in range(m + 1):
+        boxes = (ints[:, 0] >> (m - a)) * (1 << (m - a)) + (ints[:, 1] >> a)
+        if len(np.unique(boxes)) != len(points):
+            return False
+    return True

@@ -5,20 +5,11 @@ apart than pmj02's."""
 
 import numpy as np
 import pytest
+from conftest import is_net
 
 import clsamp
 from clsamp.point_metrics import relative_radius
 from clsamp.samplers import pmj
-
-
-def is_net(points, m):
-    """Every elementary interval of area 2^-m (all 2^a x 2^(m-a) boxes) holds one point."""
-    ints = np.floor(points * 2**m).astype(np.int64)
-    for a in range(m + 1):
-        boxes = (ints[:, 0] >> (m - a)) * (1 << (m - a)) + (ints[:, 1] >> a)
-        if len(np.unique(boxes)) != len(points):
-            return False
-    return True
 
 
 @pytest.mark.parametrize("name", ["pmj02", "pmj02bn"])

@@ -4,6 +4,7 @@ blue (less low-frequency power than sobol:owen's, measured on the shipped AO sce
 
 import numpy as np
 import pytest
+from conftest import is_net
 
 import clsamp
 from clsamp import render as rendering
@@ -15,16 +16,6 @@ from clsamp.scene import Scene
 @pytest.fixture(autouse=True)
 def _cache(tmp_path, monkeypatch):
     monkeypatch.setenv("CLSAMP_CACHE", str(tmp_path / "cache"))
-
-
-def is_net(points, m):
-    """Every elementary interval of area 2^-m (all 2^a x 2^(m-a) boxes) holds one point."""
-    ints = np.floor(points * 2**m).astype(np.int64)
-    for a in range(m + 1):
-        boxes = (ints[:, 0] >> (m - a)) * (1 << (m - a)) + (ints[:, 1] >> a)
-        if len(np.unique(boxes)) != len(points):
-            return False
-    return True
 
 
 @pytest.mark.parametrize("m", range(0, 9))

@@ -159,10 +159,19 @@ class PMJ02Sampler(Sampler):
     sequence = True
     host_output = True
     rates = {"best": Rate(-3.0, "Owen 1997"), "worst": Rate(-1.5, "He and Wang 2015")}
+    integers = staticmethod(pmj02_integers)     # the NumPy reference, as 53-bit integers
 
     def _reference(self, n, realizations, start):
-        x = pmj02_integers(self.seed, realizations, start + n)[:, start:]
+        x = self.integers(self.seed, realizations, start + n)[:, start:]
         return x.astype(np.float64) * 2.0**-BITS
+
+    @staticmethod
+    def _window(target, start):
+        """The points from ``start`` on of the prefix the kernels made."""
+        points = target.finish()
+        if start == 0:
+            return points
+        return np.ascontiguousarray(runtime.to_host(points)[:, start:])
 
     def _device(self, n, realizations, start, out=None):
         runtime.require_fp64()
@@ -183,10 +192,7 @@ class PMJ02Sampler(Sampler):
                   masks.data, np.uint32(total), np.uint32(m), np.uint32(count),
                   np.uint32(realizations.start), *key)
             m, size = m + 1, size * 2
-        points = target.finish()
-        if start == 0:
-            return points
-        return np.ascontiguousarray(runtime.to_host(points)[:, start:])
+        return self._window(target, start)
 
 
 # -- pmj02bn: Christensen et al.'s construction with best-candidate sampling --------------------
@@ -380,9 +386,7 @@ class PMJ02BNSampler(PMJ02Sampler):
     True
     """
 
-    def _reference(self, n, realizations, start):
-        x = pmj02bn_integers(self.seed, realizations, start + n)[:, start:]
-        return x.astype(np.float64) * 2.0**-BITS
+    integers = staticmethod(pmj02bn_integers)
 
     def _device(self, n, realizations, start, out=None):
         import pyopencl.array as cla
@@ -405,7 +409,4 @@ class PMJ02BNSampler(PMJ02Sampler):
             k = int(np.flatnonzero(failed)[0])
             raise RuntimeError(f"pmj02bn found no valid stratum for point {int(failed[k]) - 1} "
                                f"of realization {realizations.start + k}")
-        points = target.finish()
-        if start == 0:
-            return points
-        return np.ascontiguousarray(runtime.to_host(points)[:, start:])
+        return self._window(target, start)
