@@ -149,7 +149,10 @@ def _check_radii(radii, sigma, spacing, cut):
     if radii is None:
         radii = RADII_SPAN * spacing * np.arange(1, RADII + 1) / RADII
     else:
-        radii = np.asarray(radii, dtype=np.float64)
+        try:
+            radii = np.asarray(radii, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InvalidArgumentError(f"'radii' must be a 1-D array of radii, got {radii!r}") from None
         if radii.ndim != 1 or len(radii) < 1:
             raise InvalidArgumentError(f"'radii' must be a 1-D array of radii, got shape {radii.shape}")
         if not np.all(np.isfinite(radii)) or np.any(radii <= 0) or np.any(np.diff(radii) <= 0):
