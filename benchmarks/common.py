@@ -65,39 +65,38 @@ def enable_profile():
 def profile(fn):
     """Where one call of ``fn`` spends its time: a dict of seconds, or None if it used no OpenCL.
 
-    ``launch``: host time inside kernel enqueue calls (setting arguments, submitting);
-    ``kernel``: the device's START..END of every kernel; ``transfer``: the same for every
-    copy and map (``enqueue_copy``, ``enqueue_map_buffer``: reads, writes, the zero-copy
-    output's map); ``host``: the rest of the wall time (NumPy work, Python, waits).
-    Launches through ``pyopencl.Kernel.__call__`` and ``enqueue_nd_range_kernel`` are seen.
+    The call is serialized: every kernel launch and copy is waited for before the next
+    command, so the device intervals below never overlap and add up to at most the wall
+    time (this call is one more, apart from the timed ones). ``launch``: per kernel, the
+    device's QUEUED..START (submitting, argument setup, scheduling); ``kernel``: its
+    START..END; ``transfer``: START..END of every copy and map (``enqueue_copy``,
+    ``enqueue_map_buffer``: reads, writes, the zero-copy output's map); ``host``: the rest
+    of the wall time (NumPy work, Python). Launches through ``pyopencl.Kernel.__call__``
+    and ``enqueue_nd_range_kernel`` are seen.
     """
     import pyopencl as cl
-    kernels, copies, launch = [], [], [0.0]
+    kernels, copies = [], []
     originals = (cl.Kernel.__call__, cl.enqueue_nd_range_kernel, cl.enqueue_copy,
                  cl.enqueue_map_buffer)
 
-    def call(self, *args, **kwargs):
-        t0 = time.perf_counter()
-        event = originals[0](self, *args, **kwargs)
-        launch[0] += time.perf_counter() - t0
-        kernels.append(event)
+    def seen(events, event):
+        if event is not None:
+            event.wait()
+            events.append(event)
         return event
+
+    def call(self, *args, **kwargs):
+        return seen(kernels, originals[0](self, *args, **kwargs))
 
     def nd_range(*args, **kwargs):
-        t0 = time.perf_counter()
-        event = originals[1](*args, **kwargs)
-        launch[0] += time.perf_counter() - t0
-        kernels.append(event)
-        return event
+        return seen(kernels, originals[1](*args, **kwargs))
 
     def copy(*args, **kwargs):
-        event = originals[2](*args, **kwargs)
-        copies.append(event)
-        return event
+        return seen(copies, originals[2](*args, **kwargs))
 
     def map_buffer(*args, **kwargs):
         result = originals[3](*args, **kwargs)
-        copies.append(result[1])
+        seen(copies, result[1])
         return result
 
     cl.Kernel.__call__, cl.enqueue_nd_range_kernel = call, nd_range
@@ -111,18 +110,13 @@ def profile(fn):
     if not kernels and not copies:
         return None
 
-    def device_seconds(events):
-        total = 0.0
-        for event in events:
-            if event is None:
-                continue
-            event.wait()
-            total += (event.profile.end - event.profile.start) * 1e-9
-        return total
+    def seconds(events, first, last):
+        return sum(max(0, getattr(e.profile, last) - getattr(e.profile, first)) for e in events) * 1e-9
 
-    kernel, transfer = device_seconds(kernels), device_seconds(copies)
-    return {"wall": wall, "launches": len(kernels), "launch": launch[0], "kernel": kernel,
-            "transfer": transfer, "host": max(0.0, wall - launch[0] - kernel - transfer)}
+    launch = seconds(kernels, "queued", "start")
+    kernel, transfer = seconds(kernels, "start", "end"), seconds(copies, "start", "end")
+    return {"wall": wall, "launches": len(kernels), "launch": launch, "kernel": kernel,
+            "transfer": transfer, "host": max(0.0, wall - launch - kernel - transfer)}
 
 
 def timed(fn, repeats=5, warmup=1, min_time=0.0):
