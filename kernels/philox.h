@@ -68,4 +68,39 @@ inline double clsamp_uniform(uint2 key, uint stream, uint realization, uint inde
     return (dim & 1u) ? u.y : u.x;
 }
 
+/* philox4x32_10 on four counters at once, lane l holding the counter (index.l,
+ * realization, block, stream): the same words as four calls, computed in vector lanes
+ * (PoCL does not vectorize across work-items when a kernel has a loop). 256-bit vectors
+ * only (docs/design.md, "Kernels and the runtime"). */
+inline void philox4x32_10_x4(uint4 c0, uint4 c1, uint4 c2, uint4 c3, uint2 key,
+                             uint4 *w0, uint4 *w1, uint4 *w2, uint4 *w3)
+{
+#pragma unroll
+    for (int round = 0; round < 10; ++round) {
+        if (round) {
+            key.x += CLSAMP_PHILOX_W0;
+            key.y += CLSAMP_PHILOX_W1;
+        }
+        const ulong4 p0 = convert_ulong4(c0) * (ulong)CLSAMP_PHILOX_M0;
+        const ulong4 p1 = convert_ulong4(c2) * (ulong)CLSAMP_PHILOX_M1;
+        const uint4 n0 = convert_uint4(p1 >> 32) ^ c1 ^ key.x;
+        const uint4 n2 = convert_uint4(p0 >> 32) ^ c3 ^ key.y;
+        c1 = convert_uint4(p1);
+        c3 = convert_uint4(p0);
+        c0 = n0;
+        c2 = n2;
+    }
+    *w0 = c0;
+    *w1 = c1;
+    *w2 = c2;
+    *w3 = c3;
+}
+
+/* clsamp_unit lane by lane. */
+inline double4 clsamp_unit4(uint4 hi, uint4 lo)
+{
+    return (convert_double4(hi >> 5) * 67108864.0 + convert_double4(lo >> 6))
+           * (1.0 / 9007199254740992.0);
+}
+
 #endif

@@ -36,6 +36,16 @@ def test_kernel_equals_numpy_reference_bit_for_bit():
         np.testing.assert_array_equal(cl, ref)
 
 
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 7, 9])
+def test_kernel_lanes_cover_every_tail(n):
+    # four points a work-item: n not a multiple of four leaves 1..3 lanes in the last one
+    for d in (1, 2, 5):
+        cl = clsamp.make_sampler("random", d=d, seed=3).sample(n, realizations=2, start=3)
+        ref = clsamp.make_sampler("random", d=d, seed=3, backend="numpy").sample(
+            n, realizations=2, start=3)
+        np.testing.assert_array_equal(cl, ref)
+
+
 def test_start_continues_the_sequence():
     sampler = clsamp.make_sampler("random", d=2, seed=1)
     whole = sampler.sample(300)

@@ -45,7 +45,7 @@ class RandomSampler(Sampler):
         r = len(realizations)
         target = runtime.Output((r, n, self.d), host=out)
         kernel = runtime.kernel("random.cl", "random_points")
-        kernel(runtime.queue(), (n, r), None, target.buffer, np.uint32(n), np.uint32(self.d),
+        kernel(runtime.queue(), ((n + 3) // 4, r), None, target.buffer, np.uint32(n), np.uint32(self.d),
                np.uint32(start), np.uint32(realizations.start), *runtime.key_args(self.seed),
                np.uint32(philox.Stream.POINTS))
         return target.finish()
