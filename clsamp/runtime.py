@@ -14,6 +14,7 @@ so a fresh install works with no GPU. ``CLSAMP_DEVICE`` (an index into :func:`de
 substring of a device name) or :func:`use_device` choose another.
 """
 
+import contextlib
 import dataclasses
 import os
 import re
@@ -177,7 +178,41 @@ def current_device():
                 _current = _resolve(env)
             else:
                 _current = _default_device()
-        return _records[_current]
+        record = _records[_current]
+        if _without_fp64 and record.fp64:
+            record = dataclasses.replace(record, fp64=False)
+        return record
+
+
+_without_fp64 = False
+
+
+@contextlib.contextmanager
+def without_fp64():
+    """Run as if the current device had no fp64 (``cl_khr_fp64``), to test the integer paths.
+
+    Inside the block kernels build with ``CLSAMP_FP64=0`` (the float64 bit patterns by
+    integer arithmetic, kernels/f64bits.h) and whatever needs double precision refuses
+    with :class:`NoDeviceError`, exactly as on such a device; the results of the
+    samplers that run are the same bits as outside it.
+
+    Examples
+    --------
+    >>> import clsamp
+    >>> from clsamp import runtime
+    >>> with runtime.without_fp64():
+    ...     a = clsamp.make_sampler("halton", d=3, seed=1).sample(8)
+    >>> bool((a == clsamp.make_sampler("halton", d=3, seed=1).sample(8)).all())
+    True
+    """
+    global _without_fp64
+    with _lock:
+        before, _without_fp64 = _without_fp64, True
+    try:
+        yield
+    finally:
+        with _lock:
+            _without_fp64 = before
 
 
 # What each capability builds (the kernel files its code asks for), for `clsamp devices`.
@@ -192,8 +227,9 @@ CAPABILITIES = {
 
 
 def needs_fp64(file):
-    """Whether ``kernels/<file>`` (its headers inlined) computes in double precision."""
-    return bool(_DOUBLE.search(_strip_comments(kernel_source(file))))
+    """Whether ``kernels/<file>`` (its headers inlined) computes in double precision even
+    where ``CLSAMP_FP64`` is 0 (its integer paths left out of account)."""
+    return bool(_DOUBLE.search(active_source(kernel_source(file), fp64=False)))
 
 
 def capabilities(spec=None):
@@ -341,6 +377,38 @@ def _strip_comments(source):
     return re.sub(r"/\*.*?\*/|//[^\n]*", " ", source, flags=re.S)
 
 
+_CONDITIONAL = re.compile(r"^\s*#\s*(if|ifdef|ifndef|elif|else|endif)\b(.*)$")
+
+
+def active_source(source, fp64):
+    """``source`` without comments and without the lines a compiler skips when
+    ``CLSAMP_FP64`` is ``fp64``: the branches of ``#if CLSAMP_FP64`` / ``#if !CLSAMP_FP64``
+    (and their ``#else``) that do not apply. Other conditionals are kept whole, so a
+    ``double`` left here may still be compiled."""
+    out = []
+    stack = []          # per open #if: None (not ours) or whether its branch is live
+    for line in _strip_comments(source).splitlines():
+        m = _CONDITIONAL.match(line)
+        if m:
+            word, rest = m.group(1), m.group(2).strip()
+            if word == "if" and rest in ("CLSAMP_FP64", "!CLSAMP_FP64"):
+                stack.append(fp64 if rest == "CLSAMP_FP64" else not fp64)
+                continue
+            if word in ("if", "ifdef", "ifndef"):
+                stack.append(None)
+            elif word == "else" and stack and stack[-1] is not None:
+                stack[-1] = not stack[-1]
+                continue
+            elif word == "elif" and stack and stack[-1] is not None:
+                raise BuildError("kernels: '#elif' after '#if CLSAMP_FP64' is not supported")
+            elif word == "endif" and stack:
+                if stack.pop() is not None:
+                    continue
+        if all(live is not False for live in stack):
+            out.append(line)
+    return "\n".join(out)
+
+
 def program(file, defines=None, options=()):
     """The built program of ``kernels/<file>`` for the current device.
 
@@ -367,6 +435,7 @@ def program(file, defines=None, options=()):
     global _build_count
     cl = _cl()
     device = current_device()
+    defines = {"CLSAMP_FP64": int(device.fp64), **(defines or {})}
     key = (device.index, file, _options(defines, options))
     with _lock:
         built = _programs.get(key)
@@ -374,7 +443,7 @@ def program(file, defines=None, options=()):
             return built
         ctx = _state(device.index)[0]
         source = kernel_source(file)
-        if not device.fp64 and _DOUBLE.search(_strip_comments(source)):
+        if not device.fp64 and _DOUBLE.search(active_source(source, fp64=False)):
             raise NoDeviceError(
                 f"kernels/{file} computes in double precision and device {device.name} "
                 f"({device.platform}) has none (no cl_khr_fp64); choose another with "
@@ -460,9 +529,11 @@ class Output:
         if self.host is not None:
             # mapping makes the kernel's writes visible in host memory (no copy on PoCL)
             cl = _cl()
-            # (a blocking map waits about 100 us longer on PoCL than map, unmap and finish)
+            # (a blocking map waits about 100 us longer on PoCL than map, unmap and finish;
+            # rusticl refuses to unmap a map that has not completed)
+            pocl = current_device().platform == "Portable Computing Language"
             mapped, _ = cl.enqueue_map_buffer(queue(), self.buffer, cl.map_flags.READ, 0,
-                                              self.host.shape, self.host.dtype, is_blocking=False)
+                                              self.host.shape, self.host.dtype, is_blocking=not pocl)
             mapped.base.release(queue())
             queue().finish()
         return self.array

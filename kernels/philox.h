@@ -3,12 +3,13 @@
  * Salmon et al., "Parallel random numbers: as easy as 1, 2, 3" (SC 2011).
  * Key = the 64-bit seed as (low, high); counter = (index, realization, block, stream).
  * Integer-only arithmetic, so every device gives the same words; the conversion to
- * double is exact (53 bits, scaled by a power of two).
+ * double is exact (53 bits, scaled by a power of two). The *_bits forms give the same
+ * doubles as IEEE-754 bit patterns, on devices without fp64 too (f64bits.h).
  */
 #ifndef CLSAMP_PHILOX_H
 #define CLSAMP_PHILOX_H
 
-#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#include "f64bits.h"
 
 #define CLSAMP_PHILOX_M0 0xD2511F53u
 #define CLSAMP_PHILOX_M1 0xCD9E8D57u
@@ -48,6 +49,26 @@ inline uint clsamp_bits(uint2 key, uint stream, uint realization, uint index, ui
     return lane == 0u ? b.x : lane == 1u ? b.y : lane == 2u ? b.z : b.w;
 }
 
+/* The bits of clsamp_unit(hi, lo). */
+inline ulong clsamp_unit_bits(uint hi, uint lo)
+{
+    return f64_scaled(((ulong)(hi >> 5) << 26) | (lo >> 6), -53);
+}
+
+/* The bits of clsamp_uniform2 and clsamp_uniform. */
+inline ulong2 clsamp_uniform2_bits(uint2 key, uint stream, uint realization, uint index, uint pair)
+{
+    const uint4 b = clsamp_block(key, stream, realization, index, pair);
+    return (ulong2)(clsamp_unit_bits(b.x, b.y), clsamp_unit_bits(b.z, b.w));
+}
+
+inline ulong clsamp_uniform_bits(uint2 key, uint stream, uint realization, uint index, uint dim)
+{
+    const ulong2 u = clsamp_uniform2_bits(key, stream, realization, index, dim >> 1);
+    return (dim & 1u) ? u.y : u.x;
+}
+
+#if CLSAMP_FP64
 /* A double in [0, 1) with 53 random bits (genrand_res53). */
 inline double clsamp_unit(uint hi, uint lo)
 {
@@ -67,6 +88,7 @@ inline double clsamp_uniform(uint2 key, uint stream, uint realization, uint inde
     const double2 u = clsamp_uniform2(key, stream, realization, index, dim >> 1);
     return (dim & 1u) ? u.y : u.x;
 }
+#endif
 
 /* philox4x32_10 on four counters at once, lane l holding the counter (index.l,
  * realization, block, stream): the same words as four calls, computed in vector lanes
@@ -96,11 +118,16 @@ inline void philox4x32_10_x4(uint4 c0, uint4 c1, uint4 c2, uint4 c3, uint2 key,
     *w3 = c3;
 }
 
-/* clsamp_unit lane by lane. */
-inline double4 clsamp_unit4(uint4 hi, uint4 lo)
+/* clsamp_unit_bits lane by lane. */
+inline ulong4 clsamp_unit4_bits(uint4 hi, uint4 lo)
 {
-    return (convert_double4(hi >> 5) * 67108864.0 + convert_double4(lo >> 6))
-           * (1.0 / 9007199254740992.0);
+#if CLSAMP_FP64
+    return as_ulong4((convert_double4(hi >> 5) * 67108864.0 + convert_double4(lo >> 6))
+                     * (1.0 / 9007199254740992.0));
+#else
+    return (ulong4)(clsamp_unit_bits(hi.x, lo.x), clsamp_unit_bits(hi.y, lo.y),
+                    clsamp_unit_bits(hi.z, lo.z), clsamp_unit_bits(hi.w, lo.w));
+#endif
 }
 
 #endif

@@ -3,8 +3,9 @@
 #include "philox.h"
 
 /* Grid (ceil(n / 4), realizations): work-item q makes points 4q .. 4q+3 of its
- * realization, their Philox blocks in vector lanes. out has shape (realizations, n, d). */
-__kernel void random_points(__global double *out, const uint n, const uint d,
+ * realization, their Philox blocks in vector lanes. out has shape (realizations, n, d),
+ * float64 written as its bit patterns (f64bits.h), so no device needs fp64. */
+__kernel void random_points(__global ulong *out, const uint n, const uint d,
                             const uint start, const uint realization0,
                             const uint key_lo, const uint key_hi, const uint stream)
 {
@@ -15,12 +16,12 @@ __kernel void random_points(__global double *out, const uint n, const uint d,
     const uint2 key = (uint2)(key_lo, key_hi);
     const uint4 index = (uint4)(start + i) + (uint4)(0u, 1u, 2u, 3u);
     const uint4 realization = (uint4)(realization0 + r);
-    __global double *p = out + ((size_t)r * n + i) * d;
+    __global ulong *p = out + ((size_t)r * n + i) * d;
     const uint lanes = n - i < 4u ? n - i : 4u;
     for (uint pair = 0; 2 * pair < d; ++pair) {
         uint4 w0, w1, w2, w3;
         philox4x32_10_x4(index, realization, (uint4)pair, (uint4)stream, key, &w0, &w1, &w2, &w3);
-        const double4 x = clsamp_unit4(w0, w1), y = clsamp_unit4(w2, w3);
+        const ulong4 x = clsamp_unit4_bits(w0, w1), y = clsamp_unit4_bits(w2, w3);
         const uint c = 2 * pair;
         if (lanes == 4u) {
             p[c] = x.s0;
@@ -34,7 +35,7 @@ __kernel void random_points(__global double *out, const uint n, const uint d,
                 p[3 * d + c + 1] = y.s3;
             }
         } else {
-            const double xs[4] = {x.s0, x.s1, x.s2, x.s3}, ys[4] = {y.s0, y.s1, y.s2, y.s3};
+            const ulong xs[4] = {x.s0, x.s1, x.s2, x.s3}, ys[4] = {y.s0, y.s1, y.s2, y.s3};
             for (uint l = 0; l < lanes; ++l) {
                 p[l * d + c] = xs[l];
                 if (c + 1 < d)

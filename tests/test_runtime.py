@@ -159,15 +159,42 @@ def test_a_program_from_the_binary_cache_has_its_kernels(tmp_path):
                                       "spectrum_spread;spectrum_sum_copies"]
 
 
-def test_a_double_kernel_never_reaches_a_compiler_without_fp64(monkeypatch):
-    import dataclasses
-    real = runtime.current_device()
-    monkeypatch.setattr(runtime, "current_device", lambda: dataclasses.replace(real, fp64=False))
+def test_a_double_kernel_never_reaches_a_compiler_without_fp64():
     before = runtime.build_count()
-    with pytest.raises(NoDeviceError, match=r"kernels/random\.cl .*no cl_khr_fp64"):
+    with runtime.without_fp64():
+        assert not runtime.current_device().fp64
+        with pytest.raises(NoDeviceError, match=r"kernels/spectrum\.cl .*no cl_khr_fp64"):
+            runtime.program("spectrum.cl", defines={"CLSAMP_FP64_PROBE": 1})
+        assert runtime.build_count() == before
+        # the integer path of random.cl has no double and builds
         runtime.program("random.cl", defines={"CLSAMP_FP64_PROBE": 1})
-    assert runtime.build_count() == before
-    assert runtime.needs_fp64("random.cl")
+    assert runtime.current_device().fp64 == runtime.devices()[runtime.current_device().index].fp64
+    assert runtime.needs_fp64("spectrum.cl")
+    assert not runtime.needs_fp64("random.cl")
+
+
+def test_active_source_drops_the_branch_a_device_skips():
+    source = """a
+#if CLSAMP_FP64
+double x;
+#ifdef OTHER
+double y;
+#endif
+#else
+ulong x;
+#endif
+#if !CLSAMP_FP64
+ulong z;
+#else
+double z;
+#endif
+#ifndef K
+k
+#endif
+"""
+    without = runtime.active_source(source, fp64=False).split()
+    assert without == ["a", "ulong", "x;", "ulong", "z;", "#ifndef", "K", "k", "#endif"]
+    assert "ulong" not in runtime.active_source(source, fp64=True)
 
 
 def test_capabilities_of_the_default_device():

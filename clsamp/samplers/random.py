@@ -41,7 +41,6 @@ class RandomSampler(Sampler):
                                     n, self.d, start)
 
     def _device(self, n, realizations, start, out=None):
-        runtime.require_fp64()
         r = len(realizations)
         target = runtime.Output((r, n, self.d), host=out)
         kernel = runtime.kernel("random.cl", "random_points")

@@ -1,0 +1,103 @@
+"""kernels/f64bits.h: float64 bit patterns by hardware double and by integer arithmetic.
+
+Both paths must give the correctly rounded IEEE-754 result, which Python's exact integer
+and fraction arithmetic gives here; the integer path is what devices without fp64 run.
+"""
+
+import math
+from fractions import Fraction
+
+import numpy as np
+import pyopencl.array as cla
+import pytest
+
+from clsamp import runtime
+
+rng = np.random.default_rng(20261204)
+
+
+def _doubles(count):
+    """Doubles in [0, 1) with every exponent from 2^-1 to 2^-70, random significands,
+    some with few significant bits (exact sums, halfway cases), and zeros."""
+    exponents = rng.integers(-70, 0, count)
+    significands = rng.integers(2**52, 2**53, count, dtype=np.uint64)
+    short = rng.random(count) < 0.3
+    significands[short] &= ~np.uint64(2**40 - 1)
+    x = np.ldexp(significands.astype(np.float64), exponents - 53)
+    x[rng.random(count) < 0.02] = 0.0
+    return x
+
+
+def _integers(count, bits_low=1, bits_high=53):
+    bits = rng.integers(bits_low, bits_high + 1, count)
+    return np.array([int(rng.integers(0, 2**62)) % (1 << int(k)) | (1 << (int(k) - 1)) for k in bits],
+                    dtype=np.uint64)
+
+
+def _cases(count=4000):
+    x, y = _doubles(count), _doubles(count)
+    # halfway cases of the sum: 1 + 2^-53 (to even: 1), 1 + 3 2^-53 (up), 0.5 + 2^-54 ...
+    ties = [(0.5, 2.0**-54), (0.5, 3 * 2.0**-54), (0.75, 2.0**-54), (2.0**-10, 2.0**-63),
+            (1 - 2.0**-53, 2.0**-53), (1 - 2.0**-53, 1 - 2.0**-53), (0.999, 0.5)]
+    x[:len(ties)], y[:len(ties)] = zip(*ties, strict=True)
+    a = _integers(count)
+    b = _integers(count)
+    b[b == 0] = 1
+    a[:4] = [0, 1, 2**53 - 1, 3]
+    b[:4] = [7, 3, 2**53 - 1, 1]
+    e = rng.integers(-80, 1, count).astype(np.int32)
+    # m 2^e with more than 53 bits rounds: 64-bit integers for f64_scaled
+    wide = _integers(count, 54, 64)
+    return x, y, a, b, e, wide
+
+
+def _expected(x, y, a, b, e, wide):
+    out = np.empty((len(x), 6), np.float64)
+    for i in range(len(x)):
+        s = float(Fraction(x[i]) + Fraction(y[i]))
+        out[i, 0] = s
+        out[i, 1] = float(Fraction(int(a[i]), int(b[i])) * Fraction(2) ** int(e[i])) if a[i] else 0.0
+        out[i, 2] = float(Fraction(x[i]) / int(b[i]))
+        out[i, 3] = float(Fraction(x[i]) * int(b[i]))
+        out[i, 4] = math.ldexp(float(int(wide[i])), int(e[i]))
+        out[i, 5] = s - 1.0 if s >= 1.0 else s
+    return out
+
+
+def _device(x, y, a, b, e, wide):
+    q = runtime.queue()
+    args = [cla.to_device(q, np.ascontiguousarray(v)) for v in
+            (x.view(np.uint64), y.view(np.uint64), a, b, e)]
+    out = cla.empty(q, (len(x), 6), np.uint64)
+    kernel = runtime.kernel("f64bits_probe.cl", "f64bits_ops")
+    kernel(q, (len(x),), None, *(v.data for v in args), out.data, np.uint32(len(x)))
+    first = out.get()
+    # column 4 takes the wide integers
+    args[2] = cla.to_device(q, wide)
+    kernel(q, (len(x),), None, *(v.data for v in args), out.data, np.uint32(len(x)))
+    first[:, 4] = out.get()[:, 4]
+    return first.view(np.float64)
+
+
+CASES = _cases()
+EXPECTED = _expected(*CASES)
+NAMES = ["add", "div", "div_int", "mul_int", "scaled", "shift_mod1"]
+
+
+@pytest.mark.parametrize("integer_path", [False, True], ids=["fp64", "integer"])
+def test_every_operation_is_correctly_rounded(integer_path):
+    if integer_path:
+        with runtime.without_fp64():
+            got = _device(*CASES)
+    else:
+        got = _device(*CASES)
+    for column, name in enumerate(NAMES):
+        bad = np.flatnonzero(got[:, column].view(np.uint64) != EXPECTED[:, column].view(np.uint64))
+        assert bad.size == 0, (name, [(CASES[0][i], CASES[1][i], got[i, column], EXPECTED[i, column])
+                                      for i in bad[:3]])
+
+
+def test_the_integer_path_uses_no_double():
+    source = runtime.active_source(runtime.kernel_source("f64bits_probe.cl"), fp64=False)
+    assert "double" not in source
+    assert "double" in runtime.active_source(runtime.kernel_source("f64bits_probe.cl"), fp64=True)
