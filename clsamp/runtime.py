@@ -218,7 +218,9 @@ def without_fp64():
 # What each capability builds (the kernel files its code asks for), for `clsamp devices`.
 CAPABILITIES = {
     "samplers": ("random.cl", "stratified.cl", "lowdiscrepancy.cl", "lattice.cl", "zsobol.cl",
-                 "pmj.cl", "dart_throwing.cl", "lloyd.cl", "ccvt.cl", "permutation.cl"),
+                 "pmj.cl", "permutation.cl"),
+    # poisson_disk, lloyd and ccvt: distances and energies in double precision
+    "distance samplers": ("dart_throwing.cl", "lloyd.cl", "ccvt.cl"),
     "spectra": ("spectrum.cl", "nufft.cl"),
     "metrics": ("discrepancy.cl", "star_discrepancy.cl", "anchored_counts.cl", "neighbors.cl"),
     "experiments": ("integrands.cl", "families.cl"),

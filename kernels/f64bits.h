@@ -45,6 +45,9 @@ inline ulong f64_add(ulong x, ulong y) { return as_ulong(as_double(x) + as_doubl
 /* x c, correctly rounded; c < 2^53. */
 inline ulong f64_mul_int(ulong x, ulong c) { return as_ulong(as_double(x) * (double)c); }
 
+/* x y, correctly rounded. */
+inline ulong f64_mul(ulong x, ulong y) { return as_ulong(as_double(x) * as_double(y)); }
+
 #else   /* integer arithmetic only: no double reaches the compiler */
 
 inline ulong f64_bitlength(ulong m) { return 64u - clz(m); }
@@ -172,6 +175,14 @@ inline ulong f64_mul_int(ulong x, ulong c)
         return 0;
     const ulong m = f64_significand(x);
     return f64_round128(mul_hi(m, c), m * c, f64_exponent(x));
+}
+
+inline ulong f64_mul(ulong x, ulong y)
+{
+    if (x == 0 || y == 0)
+        return 0;
+    const ulong mx = f64_significand(x), my = f64_significand(y);
+    return f64_round128(mul_hi(mx, my), mx * my, f64_exponent(x) + f64_exponent(y));
 }
 
 #endif

@@ -3,7 +3,7 @@
  * Grid: (n padded to the local size, realizations); out is (realizations, n, d).
  * shifts: (realizations, d) Cranley-Patterson shifts, applied when SHIFT is 1.
  * Integer arithmetic and exact scalings (one correctly rounded division for the Fibonacci
- * lattice): every device gives the same bits.
+ * lattice): every device gives the same bits, written as bit patterns (f64bits.h).
  */
 #pragma OPENCL FP_CONTRACT OFF
 #include "lowdiscrepancy.h"
@@ -12,32 +12,32 @@
 #define SHIFT 0
 #endif
 
-inline double shifted(double x, __global const double *shifts, uint r, uint d, uint j)
+inline ulong shifted(ulong x, __global const ulong *shifts, uint r, uint d, uint j)
 {
 #if SHIFT
-    return ld_shift(x, shifts[(size_t)r * d + j]);
+    return f64_shift_mod1(x, shifts[(size_t)r * d + j]);
 #else
     return x;
 #endif
 }
 
 /* Extensible lattice in base 2: ((reverse32(i) z_j) mod 2^32) 2^-32. */
-__kernel void lattice_points(__global double *out, __global const uint *z,
-                             __global const double *shifts, const uint n, const uint d,
+__kernel void lattice_points(__global ulong *out, __global const uint *z,
+                             __global const ulong *shifts, const uint n, const uint d,
                              const uint start)
 {
     const uint i = get_global_id(0), r = get_global_id(1);
     if (i >= n)
         return;
     const uint radical = reverse_bits32(start + i);
-    __global double *row = out + ((size_t)r * n + i) * d;
+    __global ulong *row = out + ((size_t)r * n + i) * d;
     for (uint j = 0; j < d; ++j)
-        row[j] = shifted((double)(radical * z[j]) * 0x1p-32, shifts, r, d, j);
+        row[j] = shifted(f64_scaled(radical * z[j], -32), shifts, r, d, j);
 }
 
 /* Fibonacci lattice of size points: (i / size, (i step mod size) / size). */
-__kernel void fibonacci_points(__global double *out, __global const uint *unused,
-                               __global const double *shifts, const uint n, const uint d,
+__kernel void fibonacci_points(__global ulong *out, __global const uint *unused,
+                               __global const ulong *shifts, const uint n, const uint d,
                                const uint start, const uint size, const uint step)
 {
     (void)unused;
@@ -45,23 +45,23 @@ __kernel void fibonacci_points(__global double *out, __global const uint *unused
     if (i >= n)
         return;
     const uint k = start + i;
-    __global double *row = out + ((size_t)r * n + i) * d;
-    row[0] = shifted((double)k / (double)size, shifts, r, d, 0);
-    row[1] = shifted((double)(((ulong)k * step) % size) / (double)size, shifts, r, d, 1);
+    __global ulong *row = out + ((size_t)r * n + i) * d;
+    row[0] = shifted(f64_div(k, size, 0), shifts, r, d, 0);
+    row[1] = shifted(f64_div(((ulong)k * step) % size, size, 0), shifts, r, d, 1);
 }
 
 /* Kronecker: the top 53 bits of (i A_j) mod 2^64, times 2^-53. */
-__kernel void kronecker_points(__global double *out, __global const uint *alphas,
-                               __global const double *shifts, const uint n, const uint d,
+__kernel void kronecker_points(__global ulong *out, __global const uint *alphas,
+                               __global const ulong *shifts, const uint n, const uint d,
                                const uint start)
 {
     const uint i = get_global_id(0), r = get_global_id(1);
     if (i >= n)
         return;
     const ulong k = (ulong)(start + i);
-    __global double *row = out + ((size_t)r * n + i) * d;
+    __global ulong *row = out + ((size_t)r * n + i) * d;
     for (uint j = 0; j < d; ++j) {
         const ulong a = (ulong)alphas[2u * j] | ((ulong)alphas[2u * j + 1u] << 32);
-        row[j] = shifted((double)((k * a) >> 11) * 0x1p-53, shifts, r, d, j);
+        row[j] = shifted(f64_scaled((k * a) >> 11, -53), shifts, r, d, j);
     }
 }

@@ -16,7 +16,8 @@
  * Grid: (work-items padded to the local size, realizations); out is (realizations, n, d).
  * Realization r's randomization comes from Philox with counter realization0 + r, so it does
  * not depend on how many realizations one launch makes. Integer arithmetic and exactly
- * rounded double operations only: every device gives the same bits.
+ * rounded double operations only: every device gives the same bits. out holds the doubles'
+ * bit patterns (f64bits.h), made by integer arithmetic where the device has no fp64.
  */
 #pragma OPENCL FP_CONTRACT OFF
 #include "philox.h"
@@ -40,20 +41,56 @@
 #define LD_CAT(a, b) a##b
 #define LD_XCAT(a, b) LD_CAT(a, b)
 #define uintW LD_XCAT(uint, LD_WIDTH)
-#define doubleW LD_XCAT(double, LD_WIDTH)
+#define ulongW LD_XCAT(ulong, LD_WIDTH)
+#define as_ulongW LD_XCAT(as_ulong, LD_WIDTH)
 #define longW LD_XCAT(long, LD_WIDTH)
 #define vloadW LD_XCAT(vload, LD_WIDTH)
 #define vstoreW LD_XCAT(vstore, LD_WIDTH)
 #define intW LD_XCAT(int, LD_WIDTH)
 #define as_intW LD_XCAT(as_int, LD_WIDTH)
+#if CLSAMP_FP64
+#define doubleW LD_XCAT(double, LD_WIDTH)
+#define as_doubleW LD_XCAT(as_double, LD_WIDTH)
 #define convert_doubleW LD_XCAT(convert_double, LD_WIDTH)
+#endif
 
-/* x * 2^-32 exactly. Through a signed conversion, which has a SIMD instruction where the
- * unsigned one has none (AVX2): x = (x - 2^31) + 2^31, each step exact. */
+/* The bits of x 2^-32 (exact), and of (x 2^-32 + u) mod 1, lane by lane. In double
+ * through a signed conversion, which has a SIMD instruction where the unsigned one has
+ * none (AVX2): x = (x - 2^31) + 2^31, each step exact. */
+#if CLSAMP_FP64
 inline doubleW unit32W(uintW x)
 {
     return (convert_doubleW(as_intW(x ^ 0x80000000u)) + 2147483648.0) * 0x1p-32;
 }
+
+inline ulongW unit32W_bits(uintW x) { return as_ulongW(unit32W(x)); }
+
+inline ulongW shift32W_bits(uintW x, ulongW u)
+{
+    doubleW y = unit32W(x) + as_doubleW(u);
+    return as_ulongW(select(y, y - 1.0, y >= 1.0));
+}
+#else
+inline ulongW unit32W_bits(uintW x)
+{
+    uint in[LD_WIDTH];
+    ulong out[LD_WIDTH];
+    vstoreW(x, 0, in);
+    for (uint l = 0; l < LD_WIDTH; ++l)
+        out[l] = f64_scaled(in[l], -32);
+    return vloadW(0, out);
+}
+
+inline ulongW shift32W_bits(uintW x, ulongW u)
+{
+    ulong y[LD_WIDTH], v[LD_WIDTH];
+    vstoreW(unit32W_bits(x), 0, y);
+    vstoreW(u, 0, v);
+    for (uint l = 0; l < LD_WIDTH; ++l)
+        y[l] = f64_shift_mod1(y[l], v[l]);
+    return vloadW(0, y);
+}
+#endif
 
 inline uintW reverse_bits32W(uintW x)
 {
@@ -78,7 +115,7 @@ inline uintW lk_hashW(uintW x, uintW seed)
  * i ^ (i >> 1), and x_(i+1) = x_i ^ V[ctz(i + 1)]. matrices is (32, padded d): row c holds
  * V[c] of every dimension, zero past d. For Owen scrambling V arrives bit-reversed, so the
  * state is already in the reversed order the LK hash works on. */
-__kernel void sobol_points(__global double *out, __global const uint *matrices,
+__kernel void sobol_points(__global ulong *out, __global const uint *matrices,
                            const uint n, const uint d, const uint start, const uint realization0,
                            const uint key_lo, const uint key_hi, const uint scramble_stream,
                            const uint shift_stream)
@@ -94,7 +131,7 @@ __kernel void sobol_points(__global double *out, __global const uint *matrices,
     const uint stride = (d + LD_WIDTH - 1) / LD_WIDTH * LD_WIDTH;
     const uint2 key = (uint2)(key_lo, key_hi);
     const uint realization = realization0 + r;
-    __global double *row = out + ((size_t)r * n + i0) * d;
+    __global ulong *row = out + ((size_t)r * n + i0) * d;
     for (uint j = 0; j < d; j += LD_WIDTH) {
         __global const uint *v = matrices + j;
         uint gray = first ^ (first >> 1);
@@ -104,10 +141,10 @@ __kernel void sobol_points(__global double *out, __global const uint *matrices,
             gray &= gray - 1u;
         }
 #if RANDOMIZE == LD_SHIFT
-        double lanes[LD_WIDTH];
+        ulong lanes[LD_WIDTH];
         for (uint l = 0; l < LD_WIDTH; ++l)
-            lanes[l] = j + l < d ? clsamp_uniform(key, shift_stream, realization, 0, j + l) : 0.0;
-        const doubleW u = vloadW(0, lanes);
+            lanes[l] = j + l < d ? clsamp_uniform_bits(key, shift_stream, realization, 0, j + l) : 0;
+        const ulongW u = vloadW(0, lanes);
 #elif RANDOMIZE == LD_XOR || RANDOMIZE == LD_OWEN
         uint lanes[LD_WIDTH];
         for (uint l = 0; l < LD_WIDTH; ++l)
@@ -115,23 +152,22 @@ __kernel void sobol_points(__global double *out, __global const uint *matrices,
         const uintW seed = vloadW(0, lanes);
 #endif
         const uint width = min((uint)LD_WIDTH, d - j);
-        __global double *p = row + j;
+        __global ulong *p = row + j;
         uint index = first;
         for (uint t = 0; t < count; ++t) {
 #if RANDOMIZE == LD_SHIFT
-            doubleW y = unit32W(x) + u;
-            y = select(y, y - 1.0, y >= 1.0);
+            const ulongW y = shift32W_bits(x, u);
 #elif RANDOMIZE == LD_XOR
-            const doubleW y = unit32W(x ^ seed);
+            const ulongW y = unit32W_bits(x ^ seed);
 #elif RANDOMIZE == LD_OWEN
-            const doubleW y = unit32W(reverse_bits32W(lk_hashW(x, seed)));
+            const ulongW y = unit32W_bits(reverse_bits32W(lk_hashW(x, seed)));
 #else       /* LD_NONE (LD_PERMUTE is not offered for Sobol) */
-            const doubleW y = unit32W(x);
+            const ulongW y = unit32W_bits(x);
 #endif
             if (width == LD_WIDTH) {
                 vstoreW(y, 0, p + (size_t)t * d);
             } else {
-                double tail[LD_WIDTH];
+                ulong tail[LD_WIDTH];
                 vstoreW(y, 0, tail);
                 for (uint l = 0; l < width; ++l)
                     p[(size_t)t * d + l] = tail[l];
@@ -159,7 +195,7 @@ __kernel void sobol_points(__global double *out, __global const uint *matrices,
  * index changes digit 0 and, on a carry, the next ones. Owen scrambling depends on every
  * digit below, so it maps all m digits for each point: at the depths that owen_tables
  * tabulated (owen_layout) by a look-up, deeper by owen_permutation_element. */
-__kernel void radical_points(__global double *out, __global const uint *bases,
+__kernel void radical_points(__global ulong *out, __global const uint *bases,
                              const uint n, const uint d, const uint start, const uint realization0,
                              const uint key_lo, const uint key_hi, const uint scramble_stream,
                              const uint shift_stream
@@ -179,11 +215,11 @@ __kernel void radical_points(__global double *out, __global const uint *bases,
     const uint first = start + i0;
     const uint2 key = (uint2)(key_lo, key_hi);
     const uint realization = realization0 + r;
-    __global double *row = out + ((size_t)r * n + i0) * d;
+    __global ulong *row = out + ((size_t)r * n + i0) * d;
     for (uint j = 0; j < d; ++j) {
-        __global double *p = row + j;
+        __global ulong *p = row + j;
 #if RANDOMIZE == LD_SHIFT
-        const double u = clsamp_uniform(key, shift_stream, realization, 0, j);
+        const ulong u = clsamp_uniform_bits(key, shift_stream, realization, 0, j);
 #elif RANDOMIZE != LD_NONE
         const uint4 words = clsamp_block(key, scramble_stream, realization, j, 0);
         const ulong seed64 = (ulong)words.x | ((ulong)words.y << 32);
@@ -194,15 +230,15 @@ __kernel void radical_points(__global double *out, __global const uint *bases,
             for (uint t = 0; t < count; ++t) {
                 const uint index = first + t;
 #if RANDOMIZE == LD_NONE
-                p[(size_t)t * d] = (double)index / (double)n;
+                p[(size_t)t * d] = f64_div(index, n, 0);
 #elif RANDOMIZE == LD_SHIFT
-                p[(size_t)t * d] = ld_shift((double)index / (double)n, u);
+                p[(size_t)t * d] = f64_shift_mod1(f64_div(index, n, 0), u);
 #else
                 const uint fixed = (uint)(((ulong)index << 32) / n);
 #if RANDOMIZE == LD_OWEN
-                p[(size_t)t * d] = (double)owen_scramble_base2(fixed, words.x) * 0x1p-32;
+                p[(size_t)t * d] = f64_scaled(owen_scramble_base2(fixed, words.x), -32);
 #else
-                p[(size_t)t * d] = (double)(fixed ^ words.x) * 0x1p-32;
+                p[(size_t)t * d] = f64_scaled(fixed ^ words.x, -32);
 #endif
 #endif
             }
@@ -216,11 +252,10 @@ __kernel void radical_points(__global double *out, __global const uint *bases,
             bm *= base;
             ++m;
         }
-        const double denominator = (double)bm;
 #if RANDOMIZE == LD_OWEN
         if (base == 2u) {
             for (uint t = 0; t < count; ++t)
-                p[(size_t)t * d] = (double)reverse_bits32(lk_hash(first + t, words.x)) * 0x1p-32;
+                p[(size_t)t * d] = f64_scaled(reverse_bits32(lk_hash(first + t, words.x)), -32);
             continue;
         }
 #endif
@@ -250,7 +285,7 @@ __kernel void radical_points(__global double *out, __global const uint *bases,
                 prefix += (ulong)digit[k] * power;
                 power *= base;
             }
-            p[(size_t)t * d] = (double)v / denominator;
+            p[(size_t)t * d] = f64_div(v, bm, 0);
             for (uint k = 0; k < m; ++k) {
                 if (++digit[k] < base)
                     break;
@@ -276,9 +311,9 @@ __kernel void radical_points(__global double *out, __global const uint *bases,
             v += (ulong)LD_DIGIT(digit[k], k) * weight[k];
         for (uint t = 0; t < count; ++t) {
 #if RANDOMIZE == LD_SHIFT
-            p[(size_t)t * d] = ld_shift((double)v / denominator, u);
+            p[(size_t)t * d] = f64_shift_mod1(f64_div(v, bm, 0), u);
 #else
-            p[(size_t)t * d] = (double)v / denominator;
+            p[(size_t)t * d] = f64_div(v, bm, 0);
 #endif
             if (t + 1 == count)
                 break;

@@ -7,6 +7,8 @@
 #ifndef CLSAMP_LOWDISCREPANCY_H
 #define CLSAMP_LOWDISCREPANCY_H
 
+#include "f64bits.h"
+
 /* Randomizations: the values of -DRANDOMIZE. */
 #define LD_NONE 0
 #define LD_SHIFT 1
@@ -166,11 +168,5 @@ inline uint owen_permutation_element(ulong key, uint base, uint g, uint d)
     return p;
 }
 
-/* Cranley-Patterson rotation on the torus: (x + u) mod 1 with one rounding. */
-inline double ld_shift(double x, double u)
-{
-    const double y = x + u;
-    return y >= 1.0 ? y - 1.0 : y;
-}
 
 #endif

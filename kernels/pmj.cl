@@ -1,7 +1,9 @@
 /* Progressive multi-jittered (0, 2) sequences. NumPy reference: clsamp/samplers/pmj.py.
  *
  * out is (realizations, total, 2); a coordinate is X 2^-53 with X a 53-bit integer, which
- * double holds exactly, so reading the strata back from out is exact on every device.
+ * double holds exactly, so reading the strata back from out is exact on every device. out
+ * holds the doubles' bit patterns and pmj02bn's distances are correctly rounded double
+ * operations (f64bits.h): no kernel here needs fp64.
  */
 #include "philox.h"
 
@@ -15,24 +17,24 @@ inline ulong pmj_random53(uint4 w, uint axis)
     return ((ulong)(hi >> 5) << 26) | (ulong)(lo >> 6);
 }
 
-inline ulong pmj_integer(double x) { return (ulong)(x * 0x1p53); }
-inline double pmj_double(ulong x) { return (double)x * 0x1p-53; }
+inline ulong pmj_integer(ulong x) { return f64_to_fixed(x, PMJ_BITS); }
+inline ulong pmj_bits(ulong x) { return f64_scaled(x, -PMJ_BITS); }
 
 /* Point 0 of each realization: uniform. Grid (realizations). */
-__kernel void pmj02_first(__global double *out, const uint total, const uint realization0,
+__kernel void pmj02_first(__global ulong *out, const uint total, const uint realization0,
                           const uint key_lo, const uint key_hi)
 {
     const uint r = get_global_id(0);
     const uint4 w = clsamp_block((uint2)(key_lo, key_hi), PMJ_STREAM, realization0 + r, 0u, 0u);
-    __global double *p = out + (size_t)r * total * 2;
-    p[0] = pmj_double(pmj_random53(w, 0u));
-    p[1] = pmj_double(pmj_random53(w, 1u));
+    __global ulong *p = out + (size_t)r * total * 2;
+    p[0] = pmj_bits(pmj_random53(w, 0u));
+    p[1] = pmj_bits(pmj_random53(w, 1u));
 }
 
 /* Points N + i, N = 2^m, i < count: the other half of the stratum of width 1/N they share
  * with point i ^ mask[axis][m], and their own random bits below. Grid (count padded,
  * realizations). */
-__kernel void pmj02_level(__global double *out, __global const uint *masks, const uint total,
+__kernel void pmj02_level(__global ulong *out, __global const uint *masks, const uint total,
                           const uint m, const uint count, const uint realization0,
                           const uint key_lo, const uint key_hi)
 {
@@ -41,13 +43,13 @@ __kernel void pmj02_level(__global double *out, __global const uint *masks, cons
         return;
     const uint size = 1u << m, p = size + i;
     const uint4 w = clsamp_block((uint2)(key_lo, key_hi), PMJ_STREAM, realization0 + r, p, 0u);
-    __global double *base = out + (size_t)r * total * 2;
+    __global ulong *base = out + (size_t)r * total * 2;
     const uint low = PMJ_BITS - m - 1;
     const ulong keep = ((ulong)1 << low) - 1;
     for (uint axis = 0; axis < 2; ++axis) {
         const ulong source = pmj_integer(base[(size_t)(i ^ masks[axis * 32 + m]) * 2 + axis]);
         const ulong x = (((source >> low) ^ 1ul) << low) | (pmj_random53(w, axis) & keep);
-        base[(size_t)p * 2 + axis] = pmj_double(x);
+        base[(size_t)p * 2 + axis] = pmj_bits(x);
     }
 }
 
@@ -59,7 +61,7 @@ __kernel void pmj02_level(__global double *out, __global const uint *masks, cons
 #define PMJ_CANDIDATE_STREAM 4u       /* philox.Stream.CANDIDATES */
 
 typedef struct {
-    __global double *x;
+    __global ulong *x;
     __global uint *occupied;
     __global int *grid;
     uint L, dim, log2_dim;
@@ -134,26 +136,28 @@ inline uint pmj_leaves(const pmj_state *st, uint x0, uint y0, uint s0, uint dept
     return count;
 }
 
-inline double pmj_toroidal_d2(double ax, double ay, double bx, double by)
+/* The squared toroidal distance of points with 53-bit coordinates, as double bits: the
+ * differences and wraps are exact in integers, then dx dx + dy dy rounds as in double. */
+inline ulong pmj_toroidal_d2(ulong ax, ulong ay, ulong bx, ulong by)
 {
-    /* ternaries, not fabs/fmin: PoCL calls those out of line (the same values here) */
-    double dx = ax - bx, dy = ay - by;
-    dx = dx < 0.0 ? -dx : dx;
-    dy = dy < 0.0 ? -dy : dy;
-    dx = 1.0 - dx < dx ? 1.0 - dx : dx;
-    dy = 1.0 - dy < dy ? 1.0 - dy : dy;
-    return dx * dx + dy * dy;
+    const ulong one = 1UL << PMJ_BITS;
+    ulong dx = ax > bx ? ax - bx : bx - ax, dy = ay > by ? ay - by : by - ay;
+    dx = one - dx < dx ? one - dx : dx;
+    dy = one - dy < dy ? one - dy : dy;
+    const ulong fx = f64_scaled(dx, -PMJ_BITS), fy = f64_scaled(dy, -PMJ_BITS);
+    return f64_add(f64_mul(fx, fx), f64_mul(fy, fy));
 }
 
-/* For the candidates c = 0, stride, 2 stride, ... (count of them) in grid cell (cx, cy):
- * best[c] = squared toroidal distance to the nearest point of the grid (pmj.py's
- * nearest_d2), searched together ring by ring until each candidate's nearest is known. */
-inline void pmj_nearest_d2(const pmj_state *st, int cx, int cy, const double *px,
-                           const double *py, uint stride, uint count, double *best)
+/* For the candidates c = 0, stride, 2 stride, ... (count of them) in grid cell (cx, cy),
+ * at 53-bit coordinates (px, py): best[c] = squared toroidal distance (double bits) to the
+ * nearest point of the grid (pmj.py's nearest_d2), searched together ring by ring until
+ * each candidate's nearest is known. Non-negative doubles order as their bits. */
+inline void pmj_nearest_d2(const pmj_state *st, int cx, int cy, const ulong *px,
+                           const ulong *py, uint stride, uint count, ulong *best)
 {
     const int dim = (int)st->dim;
     for (uint c = 0; c < count; ++c)
-        best[c * stride] = 8.0;
+        best[c * stride] = 0x4020000000000000UL;       /* 8.0 */
     for (int ring = 0; ring < dim; ++ring) {
         for (int gy = cy - ring; gy <= cy + ring; ++gy) {
             const int edge = (gy == cy - ring || gy == cy + ring);
@@ -163,14 +167,14 @@ inline void pmj_nearest_d2(const pmj_state *st, int cx, int cy, const double *px
                 const int q = st->grid[(size_t)wy * dim + wx];
                 if (q < 0)
                     continue;
-                const double qx = st->x[(size_t)q * 2], qy = st->x[(size_t)q * 2 + 1];
+                const ulong qx = pmj_coord(st, q, 0), qy = pmj_coord(st, q, 1);
                 for (uint c = 0; c < count; ++c) {
-                    const double d2 = pmj_toroidal_d2(px[c * stride], py[c * stride], qx, qy);
+                    const ulong d2 = pmj_toroidal_d2(px[c * stride], py[c * stride], qx, qy);
                     best[c * stride] = d2 < best[c * stride] ? d2 : best[c * stride];
                 }
             }
         }
-        const double bound = (double)ring * (double)ring / ((double)dim * (double)dim);
+        const ulong bound = f64_div((ulong)ring * ring, (ulong)dim * dim, 0);
         int done = 1;
         for (uint c = 0; c < count; ++c)
             done &= best[c * stride] <= bound;
@@ -186,8 +190,7 @@ inline int pmj_place(pmj_state *st, uint p, const uint *cx, const uint *cy, uint
 {
     const uint L = st->L, j = L / 2;
     const ulong keep = ((ulong)1 << (PMJ_BITS - L)) - 1;
-    double px[PMJ_CANDIDATES], py[PMJ_CANDIDATES], d2[PMJ_CANDIDATES];
-    ulong X[PMJ_CANDIDATES], Y[PMJ_CANDIDATES];
+    ulong X[PMJ_CANDIDATES], Y[PMJ_CANDIDATES], d2[PMJ_CANDIDATES];
     for (uint o = 0; o < cells; ++o) {
         uint sx0, sx1, sx2, sy0, sy1, sy2;
         if (L % 2 == 0) {
@@ -212,23 +215,21 @@ inline int pmj_place(pmj_state *st, uint p, const uint *cx, const uint *cy, uint
                 pmj_leaves(st, sy0, sy1, sy2, L - sy2, 0, wy, &fy);
             X[c] = ((ulong)fx << (PMJ_BITS - L)) | (pmj_random53((uint4)(a.z, a.w, 0u, 0u), 0u) & keep);
             Y[c] = ((ulong)fy << (PMJ_BITS - L)) | (pmj_random53((uint4)(0u, 0u, b.x, b.y), 1u) & keep);
-            px[c] = pmj_double(X[c]);
-            py[c] = pmj_double(Y[c]);
         }
-        pmj_nearest_d2(st, (int)cx[o], (int)cy[o], px + o, py + o, cells, count, d2 + o);
+        pmj_nearest_d2(st, (int)cx[o], (int)cy[o], X + o, Y + o, cells, count, d2 + o);
     }
     uint best = 0;
     for (uint c = 1; c < PMJ_CANDIDATES; ++c)
         if (d2[c] > d2[best])
             best = c;
-    st->x[(size_t)p * 2] = pmj_double(X[best]);
-    st->x[(size_t)p * 2 + 1] = pmj_double(Y[best]);
+    st->x[(size_t)p * 2] = pmj_bits(X[best]);
+    st->x[(size_t)p * 2 + 1] = pmj_bits(Y[best]);
     pmj_mark(st, p);
     return (int)(best % cells);
 }
 
 /* Grid (realizations). status[r] is 0, or 1 + the point that found no valid stratum. */
-__kernel void pmj02bn_points(__global double *out, __global uint *occupied, __global int *grid,
+__kernel void pmj02bn_points(__global ulong *out, __global uint *occupied, __global int *grid,
                              __global uint *status, const uint total, const ulong occupied_words,
                              const ulong grid_cells, const uint realization0,
                              const uint key_lo, const uint key_hi)
@@ -241,8 +242,8 @@ __kernel void pmj02bn_points(__global double *out, __global uint *occupied, __gl
     st.occupied = occupied + r * occupied_words;
     st.grid = grid + r * grid_cells;
     const uint4 w = clsamp_block(key, PMJ_STREAM, k, 0u, 0u);
-    st.x[0] = pmj_double(pmj_random53(w, 0u));
-    st.x[1] = pmj_double(pmj_random53(w, 1u));
+    st.x[0] = pmj_bits(pmj_random53(w, 0u));
+    st.x[1] = pmj_bits(pmj_random53(w, 1u));
     status[r] = 0u;
     for (uint n = 1, j = 0; n < total; n *= 4, ++j) {
         pmj_subdivide(&st, 2 * j + 1, n);

@@ -3,7 +3,8 @@
  * NumPy references: clsamp/samplers/stratified.py (same function names).
  *
  * Integer arithmetic and exactly rounded double operations only, so every device
- * gives the same bits. Build options: PERMUTED (cells come from a permutation
+ * gives the same bits; the doubles are written as their bit patterns (f64bits.h), by
+ * integer arithmetic where the device has no fp64. Build options: PERMUTED (cells come from a permutation
  * buffer) and CENTERED (cell centres instead of jitter) for stratified_points. */
 #pragma OPENCL FP_CONTRACT OFF
 #include "permutation.h"
@@ -25,16 +26,16 @@
  * one rarely taken test keep the kernel vectorizable. */
 #define CLSAMP_STRATUM_STEPS 4
 
-inline double stratum_point(const uint k, const double u, const uint count)
+inline ulong stratum_point(const uint k, const ulong u, const uint count)
 {
-    const double c = (double)count;
-    const double kd = (double)k;
-    double x = (kd + u) / c;
-    if (x * c >= kd + 1.0 || x * c < kd) {
+    const ulong kd = f64_from_int(k), next = f64_from_int((ulong)k + 1);
+    ulong x = f64_div_int(f64_add(kd, u), count);
+    const ulong y = f64_mul_int(x, count);
+    if (y >= next || y < kd) {      /* non-negative doubles order as their bits */
         for (int step = 0; step < CLSAMP_STRATUM_STEPS; ++step)
-            x = x * c >= kd + 1.0 ? as_double(as_long(x) - 1) : x;
+            x = f64_mul_int(x, count) >= next ? f64_next_down(x) : x;
         for (int step = 0; step < CLSAMP_STRATUM_STEPS; ++step)
-            x = x * c < kd ? as_double(as_long(x) + 1) : x;
+            x = f64_mul_int(x, count) < kd ? f64_next_up(x) : x;
     }
     return x;
 }
@@ -44,7 +45,7 @@ inline double stratum_point(const uint k, const double u, const uint count)
  * contiguous runs of dimensions). Point i of a group takes cell c = perms[r, g, i]
  * (PERMUTED) or c = i, whose mixed-radix digits (first dimension fastest) are its
  * strata in the group's dimensions. perms has shape (realizations, groups, n). */
-__kernel void stratified_points(__global double *out, const uint n, const uint d,
+__kernel void stratified_points(__global ulong *out, const uint n, const uint d,
                                 const uint start, const uint realization0,
                                 const uint key_lo, const uint key_hi, const uint stream,
                                 __global const uint *radix, __global const uint *group,
@@ -55,10 +56,10 @@ __kernel void stratified_points(__global double *out, const uint n, const uint d
     if (i >= n)
         return;
     const uint2 key = (uint2)(key_lo, key_hi);
-    __global double *p = out + ((size_t)r * n + i) * d;
+    __global ulong *p = out + ((size_t)r * n + i) * d;
     uint current = 0xFFFFFFFFu;
     uint cell = 0;
-    double2 u = (double2)(0.5, 0.5);
+    ulong2 u = (ulong2)(0x3FE0000000000000UL);   /* 0.5 */
     for (uint j = 0; j < d; ++j) {
         if (group[j] != current) {
             current = group[j];
@@ -73,7 +74,7 @@ __kernel void stratified_points(__global double *out, const uint n, const uint d
         cell /= strata;
 #if !CENTERED
         if ((j & 1u) == 0u)
-            u = clsamp_uniform2(key, stream, realization0 + r, start + i, j >> 1);
+            u = clsamp_uniform2_bits(key, stream, realization0 + r, start + i, j >> 1);
 #endif
         p[j] = stratum_point(digit, (j & 1u) ? u.y : u.x, strata);
     }
@@ -83,7 +84,7 @@ __kernel void stratified_points(__global double *out, const uint n, const uint d
  * p = row * mx + col. Its x lies in column col and in substratum col * my + colperm[col][row]
  * of the n x-slabs; its y in row row and substratum row * mx + rowperm[row][col].
  * colperm: (realizations, mx, my), rowperm: (realizations, my, mx). */
-__kernel void multijittered_points(__global double *out, const uint mx, const uint my,
+__kernel void multijittered_points(__global ulong *out, const uint mx, const uint my,
                                    const uint start, const uint realization0,
                                    const uint key_lo, const uint key_hi, const uint stream,
                                    __global const uint *colperm, __global const uint *rowperm)
@@ -95,10 +96,10 @@ __kernel void multijittered_points(__global double *out, const uint mx, const ui
         return;
     const uint col = i % mx;
     const uint row = i / mx;
-    const double2 u = clsamp_uniform2((uint2)(key_lo, key_hi), stream, realization0 + r, start + i, 0);
+    const ulong2 u = clsamp_uniform2_bits((uint2)(key_lo, key_hi), stream, realization0 + r, start + i, 0);
     const uint sx = colperm[((size_t)r * mx + col) * my + row];
     const uint sy = rowperm[((size_t)r * my + row) * mx + col];
-    __global double *p = out + ((size_t)r * n + i) * 2;
+    __global ulong *p = out + ((size_t)r * n + i) * 2;
     p[0] = stratum_point(col * my + sx, u.x, n);
     p[1] = stratum_point(row * mx + sy, u.y, n);
 }
@@ -107,7 +108,7 @@ __kernel void multijittered_points(__global double *out, const uint mx, const ui
  * m = floor(sqrt(n)) columns, rows = ceil(n / m). The pattern p of a realization is
  * Philox word 0 of (perm_stream, realization, index 0); jitter comes from Philox
  * (point_stream, index start + i) instead of Kensler's 32-bit hash. */
-__kernel void correlated_multijittered_points(__global double *out, const uint n, const uint m,
+__kernel void correlated_multijittered_points(__global ulong *out, const uint n, const uint m,
                                               const uint rows, const uint start,
                                               const uint realization0, const uint key_lo,
                                               const uint key_hi, const uint point_stream,
@@ -122,8 +123,8 @@ __kernel void correlated_multijittered_points(__global double *out, const uint n
     const uint s = clsamp_permute(i, n, p * 0x51633e2du);
     const uint sx = clsamp_permute(s % m, m, p * 0x68bc21ebu);
     const uint sy = clsamp_permute(s / m, rows, p * 0x02e5be93u);
-    const double2 u = clsamp_uniform2(key, point_stream, realization0 + r, start + i, 0);
-    __global double *q = out + ((size_t)r * n + i) * 2;
+    const ulong2 u = clsamp_uniform2_bits(key, point_stream, realization0 + r, start + i, 0);
+    __global ulong *q = out + ((size_t)r * n + i) * 2;
     q[0] = stratum_point(sx * rows + sy, u.x, m * rows);
     q[1] = stratum_point(s, u.y, n);
 }

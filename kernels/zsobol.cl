@@ -5,7 +5,8 @@
  * words: (pairs, 4) uint: Owen seeds of x and y and the low/high words of the pair's
  * 64-bit digit-permutation seed. perms: the 24 permutations of 4 digits (24 x 4).
  * bytes: Sobol' dimension 1's direction numbers as xor tables by index byte.
- * Integer arithmetic and exact scaling by 2^-32 only: every device gives the same bits.
+ * Integer arithmetic and exact scaling by 2^-32 only: every device gives the same bits,
+ * written as bit patterns (f64bits.h).
  */
 #pragma OPENCL FP_CONTRACT OFF
 #include "lowdiscrepancy.h"
@@ -70,7 +71,7 @@ inline uint sobol1(const uint a, __global const uint *bytes)
 
 /* Grid: (ceil(n / ZS_BLOCK) padded to the local size, pixels); work-item (b, r) makes samples
  * b ZS_BLOCK .. of pixel pixel0 + r. bytes: sobol1's table. */
-__kernel void zsobol_points(__global double *out, __global const uint *words,
+__kernel void zsobol_points(__global ulong *out, __global const uint *words,
                             __global const uint *perms, __global const uint *bytes, const uint n,
                             const uint m, const uint d, const uint pixel0, const uint width,
                             const uint log2_side)
@@ -89,10 +90,10 @@ __kernel void zsobol_points(__global double *out, __global const uint *words,
         const uint high = (uint)zsobol_high(code, m, digits, seed, perms);
         for (uint s = s0; s < end; ++s) {
             const uint index = high | zsobol_low(code, s, m, seed, perms);
-            __global double *row = out + ((size_t)r * n + s) * d;
-            row[2u * p] = (double)owen_scramble_base2(reverse_bits32(index), w.x) * 0x1p-32;
+            __global ulong *row = out + ((size_t)r * n + s) * d;
+            row[2u * p] = f64_scaled(owen_scramble_base2(reverse_bits32(index), w.x), -32);
             if (2u * p + 1u < d)
-                row[2u * p + 1u] = (double)owen_scramble_base2(sobol1(index, bytes), w.y) * 0x1p-32;
+                row[2u * p + 1u] = f64_scaled(owen_scramble_base2(sobol1(index, bytes), w.y), -32);
         }
     }
 }

@@ -11,7 +11,10 @@ import numpy as np
 import pyopencl.array as cla
 import pytest
 
+import clsamp
 from clsamp import runtime
+from clsamp.errors import NoDeviceError
+from clsamp.samplers import sampler_class
 
 rng = np.random.default_rng(20261204)
 
@@ -52,7 +55,7 @@ def _cases(count=4000):
 
 
 def _expected(x, y, a, b, e, wide):
-    out = np.empty((len(x), 6), np.float64)
+    out = np.empty((len(x), 7), np.float64)
     for i in range(len(x)):
         s = float(Fraction(x[i]) + Fraction(y[i]))
         out[i, 0] = s
@@ -61,6 +64,7 @@ def _expected(x, y, a, b, e, wide):
         out[i, 3] = float(Fraction(x[i]) * int(b[i]))
         out[i, 4] = math.ldexp(float(int(wide[i])), int(e[i]))
         out[i, 5] = s - 1.0 if s >= 1.0 else s
+        out[i, 6] = float(Fraction(x[i]) * Fraction(y[i]))
     return out
 
 
@@ -68,7 +72,7 @@ def _device(x, y, a, b, e, wide):
     q = runtime.queue()
     args = [cla.to_device(q, np.ascontiguousarray(v)) for v in
             (x.view(np.uint64), y.view(np.uint64), a, b, e)]
-    out = cla.empty(q, (len(x), 6), np.uint64)
+    out = cla.empty(q, (len(x), 7), np.uint64)
     kernel = runtime.kernel("f64bits_probe.cl", "f64bits_ops")
     kernel(q, (len(x),), None, *(v.data for v in args), out.data, np.uint32(len(x)))
     first = out.get()
@@ -81,7 +85,7 @@ def _device(x, y, a, b, e, wide):
 
 CASES = _cases()
 EXPECTED = _expected(*CASES)
-NAMES = ["add", "div", "div_int", "mul_int", "scaled", "shift_mod1"]
+NAMES = ["add", "div", "div_int", "mul_int", "scaled", "shift_mod1", "mul"]
 
 
 @pytest.mark.parametrize("integer_path", [False, True], ids=["fp64", "integer"])
@@ -101,3 +105,33 @@ def test_the_integer_path_uses_no_double():
     source = runtime.active_source(runtime.kernel_source("f64bits_probe.cl"), fp64=False)
     assert "double" not in source
     assert "double" in runtime.active_source(runtime.kernel_source("f64bits_probe.cl"), fp64=True)
+
+
+def _sampler_cases():
+    for name in clsamp.sampler_names():
+        cls = sampler_class(name)
+        d = 3 if cls.dimensions is None else cls.dimensions[-1] if 2 not in cls.dimensions else 2
+        for randomize in cls.randomizations:
+            yield name, d, randomize
+
+
+@pytest.mark.parametrize("name, d, randomize", list(_sampler_cases()))
+def test_every_sampler_gives_the_same_bits_without_fp64(name, d, randomize):
+    """The integer path of every sampler kernel, on this device: the same bits as its fp64
+    path (what a device without fp64 runs); the samplers that need double refuse."""
+    params = {"randomize": randomize} if randomize is not None else {}
+    s = clsamp.make_sampler(name, d=d, seed=9, **params)
+    n = s.valid_n(100)
+    start = 3 if s.sequence else 0
+
+    def points():
+        return s.sample(n, realizations=range(2, 4), **({"start": start} if start else {}))
+
+    if s.needs_fp64:
+        with runtime.without_fp64(), pytest.raises(NoDeviceError, match="fp64"):
+            points()
+        return
+    here = points()
+    with runtime.without_fp64():
+        there = points()
+    assert np.array_equal(here.view(np.uint64), there.view(np.uint64))

@@ -229,6 +229,10 @@ class Sampler:
         samplers that iterate or reject; None where there is nothing to report.
     host_output : bool
         Whether ``_device`` can write into a host array (zero copy on CPU devices).
+    needs_fp64 : bool
+        Whether the OpenCL path computes in double precision (distances, energies), so
+        that a device without fp64 refuses it with :class:`NoDeviceError`; the others
+        build their float64 coordinates by integer arithmetic there, the same bits.
     """
 
     name = None
@@ -243,6 +247,7 @@ class Sampler:
     randomizations = (None,)
     info = None
     host_output = False
+    needs_fp64 = False
     rates = {}              # case -> Rate for d = 2 (see convergence_rate)
 
     def __init__(self, d=2, seed=0, backend="opencl"):

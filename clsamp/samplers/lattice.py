@@ -59,7 +59,6 @@ class _Shifted(LowDiscrepancySampler):
         return torus.shift(points[None], u[:, None, :])
 
     def _run(self, kernel_name, table, n, realizations, start, scalars, out):
-        runtime.require_fp64()
         r = len(realizations)
         target = runtime.Output((r, n, self.d), host=out)
         shifts = (shift_vectors(self.seed, np.arange(realizations.start, realizations.stop), self.d)

@@ -125,7 +125,6 @@ class LowDiscrepancySampler(Sampler):
     def _launch(self, kernel_name, table, n, realizations, start, defines, out=None, extra=()):
         """Run a kernel into a new device array, or into the host array ``out`` (returned);
         ``extra`` are kernel arguments after the common ones."""
-        runtime.require_fp64()
         r = len(realizations)
         queue = runtime.queue()
         target = runtime.Output((r, n, self.d), host=out)

@@ -36,6 +36,7 @@ class OptimizerSampler(Sampler):
     dimensions = (2,)
     max_n = 2**31
     expensive = True
+    needs_fp64 = True
     # the density points are keyed by realization only: an offset start would move the
     # starting sites but not the density, a set that belongs to no realization
     accepts_start = False

@@ -13,6 +13,7 @@ from math import comb
 import numpy as np
 
 from .. import philox, runtime
+from ..errors import NoDeviceError
 from .base import Rate, Sampler, register
 
 _U32, _U64 = np.uint32, np.uint64
@@ -174,7 +175,6 @@ class PMJ02Sampler(Sampler):
         return np.ascontiguousarray(runtime.to_host(points)[:, start:])
 
     def _device(self, n, realizations, start, out=None):
-        runtime.require_fp64()
         r = len(realizations)
         total = start + n
         target = runtime.Output((r, total, 2), host=out if start == 0 else None)
@@ -390,7 +390,15 @@ class PMJ02BNSampler(PMJ02Sampler):
 
     def _device(self, n, realizations, start, out=None):
         import pyopencl.array as cla
-        runtime.require_fp64()
+        device = runtime.current_device()
+        if device.platform == "rusticl":
+            # measured (Mesa 22.3, llvmpipe): the sequential kernel's points differ from every
+            # other device's and from the NumPy reference from the 59th point of a 64-point
+            # set on, though its arithmetic (kernels/f64bits.h) agrees there
+            raise NoDeviceError(
+                f"pmj02bn does not run on {device.name} (Mesa's rusticl): that compiler gives "
+                "it wrong points; choose another device with clsamp.use_device or CLSAMP_DEVICE, "
+                "or backend='numpy'")
         r = len(realizations)
         total = start + n
         levels = max(total - 1, 1).bit_length()           # the finest resolution 2^levels

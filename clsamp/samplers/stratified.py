@@ -185,7 +185,6 @@ class _Stratified(Sampler):
         return _layout_reference(self, n, realizations, start, radix, group, perms)
 
     def _device(self, n, realizations, start, out=None):
-        runtime.require_fp64()
         queue = runtime.queue()
         radix, group, groups = self._layout(n)
         r = len(realizations)
@@ -574,7 +573,6 @@ class MultiJitteredSampler(Sampler):
         return out
 
     def _device(self, n, realizations, start, out=None):
-        runtime.require_fp64()
         queue = runtime.queue()
         mx, my = self.factors(n)
         r = len(realizations)
@@ -666,7 +664,6 @@ class CorrelatedMultiJitteredSampler(Sampler):
         return out
 
     def _device(self, n, realizations, start, out=None):
-        runtime.require_fp64()
         queue = runtime.queue()
         m, k = self.factors(n)
         r = len(realizations)

@@ -199,7 +199,6 @@ class ZSobolSampler(Sampler):
     # -- OpenCL ---------------------------------------------------------------------------------
     def _device(self, n, realizations, start, out=None):
         self._check_pixels(realizations)
-        runtime.require_fp64()
         words = self._pair_words()
         table = runtime.to_device(words)
         perms = runtime.table(("zsobol", "perms"), lambda: PERMUTATIONS)

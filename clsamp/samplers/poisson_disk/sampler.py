@@ -229,6 +229,7 @@ class PoissonDiskSampler(Sampler):
     dimensions = (1, 2, 3)
     accepts_start = False
     expensive = True
+    needs_fp64 = True
     info = PoissonDiskInfo
     rates = {"best": Rate(-1.0, PILLEBOUE), "worst": Rate(-1.0, PILLEBOUE)}
 
