@@ -166,14 +166,13 @@ def machine_gauge():
 
 
 def select_devices(spec):
-    """``None`` -> the default device; ``"all"`` -> every device; else one index/name."""
+    """``None`` -> the default device; ``"all"`` -> every device whose compiler works (those
+    without fp64 included: run.py reports what they refuse); else one index/name."""
     if spec == "all":
         usable = []
         for device in runtime.devices():
             if not runtime.compiles(device.index):
                 print(f"skipping {device}: its compiler fails", file=sys.stderr)
-            elif not device.fp64:
-                print(f"skipping {device}: no fp64, which clsamp's kernels need", file=sys.stderr)
             else:
                 usable.append(device)
         return usable

@@ -32,24 +32,34 @@ __kernel void pmj02_first(__global ulong *out, const uint total, const uint real
 }
 
 /* Points N + i, N = 2^m, i < count: the other half of the stratum of width 1/N they share
- * with point i ^ mask[axis][m], and their own random bits below. Grid (count padded,
- * realizations). */
+ * with point i ^ mask[axis][m], and their own random bits below. Grid (ceil(count / 4)
+ * padded, realizations): work-item q makes points N + 4q .. N + 4q + 3, their Philox blocks
+ * in vector lanes (as random_points). */
 __kernel void pmj02_level(__global ulong *out, __global const uint *masks, const uint total,
                           const uint m, const uint count, const uint realization0,
                           const uint key_lo, const uint key_hi)
 {
-    const uint i = get_global_id(0), r = get_global_id(1);
-    if (i >= count)
+    const uint i0 = 4 * get_global_id(0), r = get_global_id(1);
+    if (i0 >= count)
         return;
-    const uint size = 1u << m, p = size + i;
-    const uint4 w = clsamp_block((uint2)(key_lo, key_hi), PMJ_STREAM, realization0 + r, p, 0u);
-    __global ulong *base = out + (size_t)r * total * 2;
+    const uint size = 1u << m;
+    uint4 w0, w1, w2, w3;
+    philox4x32_10_x4((uint4)(size + i0) + (uint4)(0u, 1u, 2u, 3u), (uint4)(realization0 + r),
+                     (uint4)(0u), (uint4)(PMJ_STREAM), (uint2)(key_lo, key_hi), &w0, &w1, &w2, &w3);
     const uint low = PMJ_BITS - m - 1;
     const ulong keep = ((ulong)1 << low) - 1;
-    for (uint axis = 0; axis < 2; ++axis) {
-        const ulong source = pmj_integer(base[(size_t)(i ^ masks[axis * 32 + m]) * 2 + axis]);
-        const ulong x = (((source >> low) ^ 1ul) << low) | (pmj_random53(w, axis) & keep);
-        base[(size_t)p * 2 + axis] = pmj_bits(x);
+    ulong bits[2][4];
+    vstore4(((convert_ulong4(w0 >> 5) << 26) | convert_ulong4(w1 >> 6)) & keep, 0, bits[0]);
+    vstore4(((convert_ulong4(w2 >> 5) << 26) | convert_ulong4(w3 >> 6)) & keep, 0, bits[1]);
+    __global ulong *base = out + (size_t)r * total * 2;
+    const uint lanes = count - i0 < 4u ? count - i0 : 4u;
+    const uint mx = masks[m], my = masks[32 + m];
+    for (uint l = 0; l < lanes; ++l) {
+        const uint i = i0 + l;
+        const ulong sx = pmj_integer(base[(size_t)(i ^ mx) * 2]);
+        const ulong sy = pmj_integer(base[(size_t)(i ^ my) * 2 + 1]);
+        base[(size_t)(size + i) * 2] = pmj_bits((((sx >> low) ^ 1ul) << low) | bits[0][l]);
+        base[(size_t)(size + i) * 2 + 1] = pmj_bits((((sy >> low) ^ 1ul) << low) | bits[1][l]);
     }
 }
 

@@ -188,7 +188,8 @@ class PMJ02Sampler(Sampler):
         m, size = 0, 1
         while size < total:
             count = min(size, total - size)
-            level(runtime.queue(), (-(-count // local) * local, r), (local, 1), target.buffer,
+            items = -(-count // 4)             # four points a work-item
+            level(runtime.queue(), (-(-items // local) * local, r), (local, 1), target.buffer,
                   masks.data, np.uint32(total), np.uint32(m), np.uint32(count),
                   np.uint32(realizations.start), *key)
             m, size = m + 1, size * 2
