@@ -606,6 +606,32 @@ def concatenate(parts):
     return cla.concatenate(parts, axis=0, queue=queue())
 
 
+LLVMPIPE_LOOP_LIMIT = 65535
+
+
+def loop_limit():
+    """The most loop iterations one work-item may run on the current device, or None.
+
+    Mesa's llvmpipe (rusticl's CPU device) ends all the loops of a work-item after 65535
+    iterations in all, silently (gallivm's LP_MAX_TGSI_LOOP_ITERATIONS): a kernel that
+    loops longer gives wrong numbers there, not an error. The samplers split their
+    dimensions across work-items where there is a limit (:func:`dimension_split`).
+    """
+    return LLVMPIPE_LOOP_LIMIT if current_device().name.startswith("llvmpipe") else None
+
+
+def dimension_split(d, per_item, global_size, local_size=None):
+    """``(defines, global_size, local_size)`` of a sampler launch over ``d`` dimensions:
+    unchanged where the device has no :func:`loop_limit`; else ``-DDIMS_PER_ITEM`` and a
+    third grid axis of ``ceil(d / per_item)`` chunks (``kernels/dims.h``). The bits do
+    not depend on it."""
+    if loop_limit() is None or d <= per_item:
+        return {}, tuple(global_size), None if local_size is None else tuple(local_size)
+    chunks = -(-d // per_item)
+    local = None if local_size is None else (*local_size, 1)
+    return {"DIMS_PER_ITEM": per_item}, (*global_size, chunks), local
+
+
 def build_count():
     """How many programs this process has built (a cache hit builds nothing)."""
     return _build_count

@@ -8,6 +8,7 @@
  *               the others by an increment (Gray code step, digit carry), which is what
  *               makes the kernels fast; any value gives the same bits
  *   HAMMERSLEY  (radical_points) dimension 0 is i / n instead of a radical inverse
+ *   DIMS_PER_ITEM  dimensions per work-item, grid axis 2 (dims.h; all when undefined)
  *
  * Kernels: sobol_points, radical_points, and (RANDOMIZE == LD_OWEN) owen_tables, which
  * radical_points' Owen scrambling in base >= 3 reads: the permutations of the nodes near
@@ -22,6 +23,7 @@
 #pragma OPENCL FP_CONTRACT OFF
 #include "philox.h"
 #include "lowdiscrepancy.h"
+#include "dims.h"
 
 #ifndef RANDOMIZE
 #define RANDOMIZE LD_NONE
@@ -132,7 +134,7 @@ __kernel void sobol_points(__global ulong *out, __global const uint *matrices,
     const uint2 key = (uint2)(key_lo, key_hi);
     const uint realization = realization0 + r;
     __global ulong *row = out + ((size_t)r * n + i0) * d;
-    for (uint j = 0; j < d; j += LD_WIDTH) {
+    for (uint j = CLSAMP_DIM0; j < CLSAMP_DIM_END(d); j += LD_WIDTH) {
         __global const uint *v = matrices + j;
         uint gray = first ^ (first >> 1);
         uintW x = (uintW)(0u);
@@ -216,7 +218,7 @@ __kernel void radical_points(__global ulong *out, __global const uint *bases,
     const uint2 key = (uint2)(key_lo, key_hi);
     const uint realization = realization0 + r;
     __global ulong *row = out + ((size_t)r * n + i0) * d;
-    for (uint j = 0; j < d; ++j) {
+    for (uint j = CLSAMP_DIM0; j < CLSAMP_DIM_END(d); ++j) {
         __global ulong *p = row + j;
 #if RANDOMIZE == LD_SHIFT
         const ulong u = clsamp_uniform_bits(key, shift_stream, realization, 0, j);

@@ -1,6 +1,7 @@
 /* The `random` sampler: i.i.d. uniform points, one Philox block per dimension pair.
  * NumPy reference: clsamp.philox.uniform_block. */
 #include "philox.h"
+#include "dims.h"
 
 /* Grid (ceil(n / 4), realizations): work-item q makes points 4q .. 4q+3 of its
  * realization, their Philox blocks in vector lanes. out has shape (realizations, n, d),
@@ -18,7 +19,8 @@ __kernel void random_points(__global ulong *out, const uint n, const uint d,
     const uint4 realization = (uint4)(realization0 + r);
     __global ulong *p = out + ((size_t)r * n + i) * d;
     const uint lanes = n - i < 4u ? n - i : 4u;
-    for (uint pair = 0; 2 * pair < d; ++pair) {
+    /* dimension pairs: DIMS_PER_ITEM is even where it is defined */
+    for (uint pair = CLSAMP_DIM0 / 2; 2 * pair < CLSAMP_DIM_END(d); ++pair) {
         uint4 w0, w1, w2, w3;
         philox4x32_10_x4(index, realization, (uint4)pair, (uint4)stream, key, &w0, &w1, &w2, &w3);
         const ulong4 x = clsamp_unit4_bits(w0, w1), y = clsamp_unit4_bits(w2, w3);

@@ -8,6 +8,7 @@
  * buffer) and CENTERED (cell centres instead of jitter) for stratified_points. */
 #pragma OPENCL FP_CONTRACT OFF
 #include "permutation.h"
+#include "dims.h"
 
 #ifndef PERMUTED
 #define PERMUTED 0
@@ -60,7 +61,13 @@ __kernel void stratified_points(__global ulong *out, const uint n, const uint d,
     uint current = 0xFFFFFFFFu;
     uint cell = 0;
     ulong2 u = (ulong2)(0x3FE0000000000000UL);   /* 0.5 */
-    for (uint j = 0; j < d; ++j) {
+    /* a chunk of dimensions (dims.h) that starts inside a group walks from the group's
+     * first dimension, to take the digits before it off the cell */
+    const uint j0 = CLSAMP_DIM0;
+    uint first = j0 < d ? j0 : d;
+    while (first > 0 && first < d && group[first - 1] == group[first])
+        --first;
+    for (uint j = first; j < CLSAMP_DIM_END(d); ++j) {
         if (group[j] != current) {
             current = group[j];
 #if PERMUTED
@@ -72,8 +79,10 @@ __kernel void stratified_points(__global ulong *out, const uint n, const uint d,
         const uint strata = radix[j];
         const uint digit = cell % strata;
         cell /= strata;
+        if (j < j0)
+            continue;
 #if !CENTERED
-        if ((j & 1u) == 0u)
+        if ((j & 1u) == 0u || j == j0)
             u = clsamp_uniform2_bits(key, stream, realization0 + r, start + i, j >> 1);
 #endif
         p[j] = stratum_point(digit, (j & 1u) ? u.y : u.x, strata);

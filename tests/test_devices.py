@@ -63,8 +63,8 @@ def refusal(device, name):
     or None where it runs it."""
     if not device.fp64 and sampler_class(name).needs_fp64:
         return "fp64|double"
-    if name == "pmj02bn" and device.platform == "rusticl":
-        return "rusticl"
+    if name == "pmj02bn" and on(device, runtime.loop_limit) is not None:
+        return "loops"
     return None
 
 
@@ -81,6 +81,36 @@ def test_every_sampler_gives_the_same_bits(device, name, d, randomize):
     here = _points(name, d, randomize)
     there = on(device, lambda: _points(name, d, randomize))
     assert np.array_equal(here.view(np.uint64), there.view(np.uint64)), (name, randomize, str(device))
+
+
+# many dimensions: a work-item's loops over them exceed llvmpipe's loop limit unless the
+# runtime splits them (runtime.dimension_split)
+WIDE = [("halton", 300, None, 256), ("halton", 300, "owen", 256), ("halton", 300, "permute", 64),
+        ("sobol", 1000, "shift", 256), ("random", 3000, None, 64),
+        ("latin_hypercube", 1000, None, 100), ("uncorrelated_jitter", 1001, None, 64),
+        ("kronecker", 256, "shift", 128), ("lattice", 250, None, 128)]
+
+
+@pytest.mark.parametrize("device", OTHERS, ids=_label)
+@pytest.mark.parametrize("name, d, randomize, n", WIDE)
+def test_many_dimensions_give_the_same_bits(device, name, d, randomize, n):
+    params = {"randomize": randomize} if randomize is not None else {}
+    if name == "uncorrelated_jitter":
+        params["groups"] = (2,) * 500 + (1,)
+    s = clsamp.make_sampler(name, d=d, seed=2, **params)
+    here = s.sample(n, realizations=2)
+    there = on(device, lambda: s.sample(n, realizations=2))
+    assert np.array_equal(here.view(np.uint64), there.view(np.uint64))
+
+
+@pytest.mark.parametrize("device", OTHERS, ids=_label)
+def test_owen_halton_past_the_loop_limit_refuses_by_name(device):
+    s = clsamp.make_sampler("halton", d=310, seed=2, randomize="owen")
+    if on(device, runtime.loop_limit) is None:
+        assert on(device, lambda: s.sample(16)).shape == (16, 310)
+    else:
+        with pytest.raises(NoDeviceError, match="loops after"):
+            on(device, lambda: s.sample(16))
 
 
 def _experiment():

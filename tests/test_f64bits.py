@@ -135,3 +135,23 @@ def test_every_sampler_gives_the_same_bits_without_fp64(name, d, randomize):
     with runtime.without_fp64():
         there = points()
     assert np.array_equal(here.view(np.uint64), there.view(np.uint64))
+
+
+@pytest.mark.parametrize("name, d, params", [
+    ("random", 7, {}), ("sobol", 9, {"randomize": "shift"}), ("sobol", 6, {"randomize": "owen"}),
+    ("halton", 7, {"randomize": "owen"}), ("hammersley", 5, {"randomize": "xor"}),
+    ("latin_hypercube", 7, {}), ("uncorrelated_jitter", 7, {"groups": (2, 3, 2)}),
+    ("jittered", 4, {})])
+def test_a_dimension_split_gives_the_same_bits(monkeypatch, name, d, params):
+    """What a loop-limited device (llvmpipe) runs: a few dimensions per work-item, chunks
+    starting inside a stratification group and on odd dimensions."""
+    s = clsamp.make_sampler(name, d=d, seed=4, **params)
+    n = s.valid_n(81)
+    whole = s.sample(n, realizations=2)
+    split = runtime.dimension_split
+    monkeypatch.setattr(runtime, "loop_limit", lambda: runtime.LLVMPIPE_LOOP_LIMIT)
+    # 4 for random (pairs) and Sobol' (4-wide), 3 for the others
+    monkeypatch.setattr(runtime, "dimension_split",
+                        lambda d, per_item, *a: split(d, 4 if per_item == 256 else 3, *a))
+    parts = s.sample(n, realizations=2)
+    assert np.array_equal(whole.view(np.uint64), parts.view(np.uint64))

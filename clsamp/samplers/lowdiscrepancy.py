@@ -22,7 +22,7 @@ import numpy as np
 
 from .. import number_theory as nt
 from .. import philox, runtime
-from ..errors import InvalidArgumentError
+from ..errors import InvalidArgumentError, NoDeviceError
 from ..geometry import torus
 from ..validation import check_choice, check_int
 from .base import Rate, Sampler, register
@@ -48,6 +48,7 @@ def shift_vectors(seed, realizations, d):
 
 OWEN_TABLE_ENTRIES_PER_DIGIT = 2**13   # a depth's table: at most this times b entries
 OWEN_TABLE_BYTES = 64 * 2**20          # all tables of one launch
+OWEN_LOOP_BASE = 2048                  # largest owen base where runtime.loop_limit() applies
 
 
 def owen_table_layout(bases, n, realizations=1):
@@ -120,7 +121,9 @@ class LowDiscrepancySampler(Sampler):
     def _block():
         # A work-item makes `block` consecutive points by cheap increments; on a GPU fewer
         # per item keep more items in flight. The bits do not depend on it.
-        return 64 if runtime.current_device().type == "cpu" else 4
+        # (and where the device stops long loops: runtime.loop_limit)
+        cpu = runtime.current_device().type == "cpu" and runtime.loop_limit() is None
+        return 64 if cpu else 4
 
     def _launch(self, kernel_name, table, n, realizations, start, defines, out=None, extra=()):
         """Run a kernel into a new device array, or into the host array ``out`` (returned);
@@ -131,10 +134,13 @@ class LowDiscrepancySampler(Sampler):
         block = self._block()
         local = runtime.local_size()
         items = -(-n // block)
+        split, grid, group = runtime.dimension_split(
+            self.d, 256 if kernel_name == "sobol_points" else 4, (-(-items // local) * local, r),
+            (local, 1))
         kernel = runtime.kernel("lowdiscrepancy.cl", kernel_name,
                                 defines={"RANDOMIZE": _CODES[self.randomize], "LD_BLOCK": block,
-                                         **defines})
-        kernel(queue, (-(-items // local) * local, r), (local, 1), target.buffer, table.data,
+                                         **defines, **split})
+        kernel(queue, grid, group, target.buffer, table.data,
                np.uint32(n), np.uint32(self.d), np.uint32(start), np.uint32(realizations.start),
                *runtime.key_args(self.seed), np.uint32(philox.Stream.SCRAMBLE),
                np.uint32(philox.Stream.SHIFT), *extra)
@@ -296,6 +302,15 @@ class _RadicalInverse(LowDiscrepancySampler):
         bases = np.maximum(self.bases(), 2)
         table = runtime.table(("radical bases", bases.tobytes()), lambda: bases)
         extra = ()
+        limit = runtime.loop_limit()
+        if self.randomize == "owen" and limit is not None and bases.max() > OWEN_LOOP_BASE:
+            # a node's shuffle loops about twice its base, a point's up to m times its base
+            device = runtime.current_device()
+            raise NoDeviceError(
+                f"{self.name}:owen with base {int(bases.max())} (d={self.d}) does not run on "
+                f"{device.name}: it ends a work-item's loops after {limit} iterations, and "
+                f"bases above {OWEN_LOOP_BASE} (Halton's d > 309) need more; use another device "
+                "(clsamp.use_device, CLSAMP_DEVICE) or backend='numpy'")
         if self.randomize == "owen":
             extra = self._owen_tables(table, bases, n, realizations)
         return self._launch("radical_points", table, n, realizations, start,

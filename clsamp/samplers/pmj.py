@@ -391,15 +391,14 @@ class PMJ02BNSampler(PMJ02Sampler):
 
     def _device(self, n, realizations, start, out=None):
         import pyopencl.array as cla
-        device = runtime.current_device()
-        if device.platform == "rusticl":
-            # measured (Mesa 22.3, llvmpipe): the sequential kernel's points differ from every
-            # other device's and from the NumPy reference from the 59th point of a 64-point
-            # set on, though its arithmetic (kernels/f64bits.h) agrees there
+        limit = runtime.loop_limit()
+        if limit is not None:
+            device = runtime.current_device()
             raise NoDeviceError(
-                f"pmj02bn does not run on {device.name} (Mesa's rusticl): that compiler gives "
-                "it wrong points; choose another device with clsamp.use_device or CLSAMP_DEVICE, "
-                "or backend='numpy'")
+                f"pmj02bn does not run on {device.name}: it ends a work-item's loops after "
+                f"{limit} iterations, and pmj02bn's construction is one sequential work-item "
+                "per set; choose another device with clsamp.use_device or CLSAMP_DEVICE, or "
+                "backend='numpy'")
         r = len(realizations)
         total = start + n
         levels = max(total - 1, 1).bit_length()           # the finest resolution 2^levels

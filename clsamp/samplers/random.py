@@ -43,8 +43,9 @@ class RandomSampler(Sampler):
     def _device(self, n, realizations, start, out=None):
         r = len(realizations)
         target = runtime.Output((r, n, self.d), host=out)
-        kernel = runtime.kernel("random.cl", "random_points")
-        kernel(runtime.queue(), ((n + 3) // 4, r), None, target.buffer, np.uint32(n), np.uint32(self.d),
+        defines, grid, _ = runtime.dimension_split(self.d, 256, ((n + 3) // 4, r))
+        kernel = runtime.kernel("random.cl", "random_points", defines=defines)
+        kernel(runtime.queue(), grid, None, target.buffer, np.uint32(n), np.uint32(self.d),
                np.uint32(start), np.uint32(realizations.start), *runtime.key_args(self.seed),
                np.uint32(philox.Stream.POINTS))
         return target.finish()

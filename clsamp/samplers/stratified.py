@@ -196,11 +196,13 @@ class _Stratified(Sampler):
                 self.seed, philox.Stream.PERMUTATION, realizations, n, groups)
         else:
             perms = runtime.table("stratified unused", lambda: [0])   # the kernel reads cell = i
+        local = runtime.local_size()
+        split, grid, group = runtime.dimension_split(self.d, 64, (-(-n // local) * local, r),
+                                                     (local, 1))
         kernel = runtime.kernel("stratified.cl", "stratified_points",
                                 defines={"PERMUTED": int(self.permuted),
-                                         "CENTERED": int(self.centered)})
-        local = runtime.local_size()
-        kernel(queue, (-(-n // local) * local, r), (local, 1), target.buffer, np.uint32(n),
+                                         "CENTERED": int(self.centered), **split})
+        kernel(queue, grid, group, target.buffer, np.uint32(n),
                np.uint32(self.d), np.uint32(start), np.uint32(realizations.start),
                *runtime.key_args(self.seed), np.uint32(philox.Stream.POINTS),
                radix_d.data, group_d.data, perms.data, np.uint32(groups))
