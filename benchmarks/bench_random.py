@@ -1,7 +1,14 @@
-"""The ``random`` sampler: OpenCL kernel against its NumPy reference and NumPy's own generator."""
+"""The ``random`` sampler: OpenCL kernel against its NumPy reference and NumPy's own generator.
+
+    python benchmarks/bench_random.py [--device all] [--quick] [--out FILE]
+
+Every row also gives clsamp's output GB/s (the float64 points ``sample()`` returns, over
+its seconds) and its share of ``np.copyto``'s GB/s for the same bytes, measured in the
+same run.
+"""
 
 import numpy as np
-from common import Row, main, on_device, short_name, timed
+from common import Row, copy_bandwidth, main, on_device, short_name, timed
 
 import clsamp
 
@@ -17,12 +24,14 @@ def run(devices, quick):
             t_cl, a = timed(lambda: cl.sample(n, realizations=r), repeats=5)
             t_ref, b = timed(lambda: ref.sample(n, realizations=r), repeats=3)
             same = "bit-identical" if np.array_equal(a, b) else "DIFFERS"
+            copy = copy_bandwidth(a.nbytes)
             rows.append(Row("random", f"{r}x{n}x{d}D", short_name(device), t_cl,
-                            "numpy reference", t_ref, same))
+                            "numpy reference", t_ref, same, output_bytes=a.nbytes, copy_gbs=copy))
             rng = np.random.default_rng(1)
             t_np, _ = timed(lambda: rng.random((r, n, d)), repeats=5)
             rows.append(Row("random", f"{r}x{n}x{d}D", short_name(device), t_cl,
-                            "numpy default_rng", t_np, f"{r * n / t_cl / 1e6:.1f} Mpts/s"))
+                            "numpy default_rng", t_np, f"{r * n / t_cl / 1e6:.1f} Mpts/s",
+                            output_bytes=a.nbytes, copy_gbs=copy))
     return rows
 
 

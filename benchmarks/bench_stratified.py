@@ -5,12 +5,14 @@ scipy.stats.qmc.LatinHypercube, and the permutations against NumPy's shuffle.
 
 Cases: one set of 2^20 2-D points and 64 realizations of 4096 (``--quick``: 2^16 and
 16 x 4096). Times are for ``sample()`` returning host arrays (the transfer included).
+Every row also gives clsamp's output GB/s (the array returned, over its seconds) and its
+share of ``np.copyto``'s GB/s for the same bytes, measured in the same run.
 The NumPy references of the shuffling samplers run Fisher–Yates in a Python loop,
 so they are timed once, without warm-up.
 """
 
 import numpy as np
-from common import Row, main, on_device, short_name, timed
+from common import Row, copy_bandwidth, main, on_device, short_name, timed
 from scipy.stats import qmc
 
 import clsamp
@@ -52,6 +54,7 @@ def run(devices, quick):
         dev = short_name(device)
         for n, r in cases:
             size = f"{r}x{n}x2D"
+            copy = copy_bandwidth(r * n * 2 * 8)
             for name in SAMPLERS:
                 cl = clsamp.make_sampler(name, d=2, seed=1)
                 ref = clsamp.make_sampler(name, d=2, seed=1, backend="numpy")
@@ -61,16 +64,18 @@ def run(devices, quick):
                 strat = "stratified" if _stratified(name, a) else "NOT STRATIFIED"
                 rate = f"{r * n / t_cl / 1e6:.1f} Mpts/s"
                 rows.append(Row(name, size, dev, t_cl, "numpy reference", t_ref,
-                                f"{same}, {strat}, {rate}"))
+                                f"{same}, {strat}, {rate}", output_bytes=a.nbytes, copy_gbs=copy))
                 # scipy has no jittered or multi-jittered sampler: its LatinHypercube is
                 # the stratified peer of them all (the like-for-like one for latin_hypercube)
-                rows.append(Row(name, size, dev, t_cl, "scipy LatinHypercube", peers[(n, r)], rate))
+                rows.append(Row(name, size, dev, t_cl, "scipy LatinHypercube", peers[(n, r)], rate,
+                                output_bytes=a.nbytes, copy_gbs=copy))
             t_p, p = timed(lambda: permutation.random_permutations_device(
                 1, Stream.PERMUTATION, r, n, 2).get(), repeats=5)
             ok = np.array_equal(np.sort(p, axis=-1), np.broadcast_to(np.arange(n), p.shape))
             rows.append(Row("random_permutations", f"{r}x2x{n}", dev, t_p,
                             "numpy Generator.permutation", peers[("perm", n, r)],
-                            "permutations" if ok else "NOT PERMUTATIONS"))
+                            "permutations" if ok else "NOT PERMUTATIONS",
+                            output_bytes=p.nbytes, copy_gbs=copy_bandwidth(p.nbytes)))
     return rows
 
 

@@ -3,7 +3,9 @@
 A benchmark module ``bench_<concern>.py`` defines ``run(devices, quick) -> list[Row]``;
 ``benchmarks/run.py`` runs them all. Timings are the median of repeats after one
 warm-up call; peers are timed in the same run, so ratios compare like with like.
-Benchmarks never fail on time.
+Benchmarks never fail on time. A generator's row may also carry its output bytes and
+np.copyto's GB/s for the same size (:func:`copy_bandwidth`, measured in the same run):
+the tables then show its output GB/s and its share of the copy's.
 """
 
 import argparse
@@ -33,6 +35,8 @@ class Row:
     peer_seconds: float | None = None
     quality: str = ""          # e.g. "max err 3e-12", "N·E 0.1641", "MSE 8.5e-4"
     extra: dict = dataclasses.field(default_factory=dict)
+    output_bytes: int | None = None     # bytes one timed call returns (a generator's output)
+    copy_gbs: float | None = None       # copy_bandwidth(output_bytes), measured in the same run
 
     @property
     def ratio(self):
@@ -40,6 +44,20 @@ class Row:
         if self.peer_seconds is None or self.seconds <= 0:
             return None
         return self.peer_seconds / self.seconds
+
+    @property
+    def gbs(self):
+        """clsamp's output GB/s (1e9 bytes a second): output bytes over seconds."""
+        if self.output_bytes is None or self.seconds <= 0:
+            return None
+        return self.output_bytes / self.seconds / 1e9
+
+    @property
+    def copy_fraction(self):
+        """Output GB/s over np.copyto's GB/s for the same bytes: 1 writes as fast as a copy."""
+        if self.gbs is None or not self.copy_gbs:
+            return None
+        return self.gbs / self.copy_gbs
 
     def __post_init__(self):
         if _PROFILE["on"] and _PROFILE["last"] is not None and "profile" not in self.extra:
@@ -49,6 +67,8 @@ class Row:
     def as_dict(self):
         d = dataclasses.asdict(self)
         d["ratio"] = self.ratio
+        d["gbs"] = self.gbs
+        d["copy_fraction"] = self.copy_fraction
         return d
 
 
@@ -142,6 +162,24 @@ def timed(fn, repeats=5, warmup=1, min_time=0.0):
     return statistics.median(times), result
 
 
+def copy_bandwidth(nbytes, repeats=None):
+    """GB/s (1e9 bytes a second) of ``np.copyto(dst, src)`` for float64 arrays of ``nbytes``.
+
+    The bytes counted are the ``nbytes`` written, as a generator's output GB/s counts its
+    output, so their ratio says how near the generator writes to the rate at which this
+    machine copies that much memory (reading as much again). Both arrays are allocated and
+    written before timing, so no page fault is timed; the time is :func:`timed`'s median
+    (``repeats``: by default more for small arrays, which copy within the caches in
+    microseconds)."""
+    import numpy as np
+    n = max(1, int(nbytes) // 8)
+    src, dst = np.full(n, 0.5), np.full(n, 0.25)
+    if repeats is None:
+        repeats = max(5, min(101, 2**28 // (8 * n)))
+    seconds, _ = timed(lambda: np.copyto(dst, src), repeats=repeats, min_time=1.0)
+    return 8 * n / seconds / 1e9
+
+
 # The machine gauge: a fixed single-threaded workload that the issues also timed on the
 # project machine, when they published the figures of peers that cannot run here
 GAUGE_RADIUS = 0.01215
@@ -221,13 +259,27 @@ def print_tables(rows, file=sys.stdout):
         print(fmt.format(*line), file=file)
 
 
+def _bandwidth_cells(r):
+    """The output GB/s, np.copyto's GB/s and their fraction of a row ("-" where it has none)."""
+    return ("-" if r.gbs is None else f"{r.gbs:.3g}",
+            "-" if r.copy_gbs is None else f"{r.copy_gbs:.3g}",
+            "-" if r.copy_fraction is None else f"{100 * r.copy_fraction:.0f}%")
+
+
+BANDWIDTH_HEADERS = ("GB/s", "copyto GB/s", "of copyto")
+
+
 def print_table(rows, file=sys.stdout):
-    headers = ("case", "size", "device", "clsamp s", "peer", "peer s", "ratio", "quality")
+    # the bandwidth columns only where some row has them, so other tables read as before
+    bandwidth = any(r.gbs is not None for r in rows)
+    headers = ("case", "size", "device", "clsamp s", "peer", "peer s", "ratio",
+               *(BANDWIDTH_HEADERS if bandwidth else ()), "quality")
     lines = []
     for r in rows:
         lines.append((r.case, r.size, r.device, f"{r.seconds:.4g}", r.peer or "-",
                       "-" if r.peer_seconds is None else f"{r.peer_seconds:.4g}",
-                      "-" if r.ratio is None else f"{r.ratio:.2f}x", r.quality))
+                      "-" if r.ratio is None else f"{r.ratio:.2f}x",
+                      *(_bandwidth_cells(r) if bandwidth else ()), r.quality))
     widths = [max(len(h), *(len(line[i]) for line in lines)) if lines else len(h)
               for i, h in enumerate(headers)]
     fmt = "  ".join(f"{{:<{w}}}" for w in widths)
@@ -280,13 +332,16 @@ def markdown_table(rows):
     lines = [f"Measured {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} in one run of "
              f"`{command}` on {cpu} ({m['cpus']} CPUs); {versions}"
              + (f"; peers {', '.join(peers)}" if peers else "") + "; devices: "
-             + "; ".join(m["devices"]) + ".", "",
-             "| case | size | device | clsamp s | peer | peer s | ratio | quality |",
-             "|---|---|---|---|---|---|---|---|"]
+             + "; ".join(m["devices"]) + ".", ""]
+    bandwidth = any(r.gbs is not None for r in rows)
+    headers = ("case", "size", "device", "clsamp s", "peer", "peer s", "ratio",
+               *(BANDWIDTH_HEADERS if bandwidth else ()), "quality")
+    lines += ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]
     for r in rows:
         cells = (r.case, r.size, r.device, f"{r.seconds:.3g}", r.peer or "-",
                  "-" if r.peer_seconds is None else f"{r.peer_seconds:.3g}",
-                 "-" if r.ratio is None else f"{r.ratio:.2f}×", r.quality)
+                 "-" if r.ratio is None else f"{r.ratio:.2f}×",
+                 *(_bandwidth_cells(r) if bandwidth else ()), r.quality)
         lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |")
     return "\n".join(lines) + "\n"
 

@@ -1,19 +1,24 @@
 """benchmarks/run.py's --profile and --markdown, through one small benchmark script: the
 profile table splits a row's wall time into launch, kernel, transfer and host, and the
-markdown holds the machine, the versions, the date and every row of the run."""
+markdown holds the machine, the versions, the date and every row of the run; a generator's
+row gives its output GB/s and its share of np.copyto's for the same bytes."""
 
+import json
 import re
 import subprocess
 import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import common  # noqa: E402
 
 
 def test_profile_and_markdown_of_one_benchmark(tmp_path):
-    out = tmp_path / "table.markdown"
+    out, data = tmp_path / "table.markdown", tmp_path / "rows.json"
     done = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_random.py"), "--quick",
-                           "--profile", "--markdown", str(out)],
+                           "--profile", "--markdown", str(out), "--out", str(data)],
                           capture_output=True, text=True, timeout=600, cwd=ROOT)
     assert done.returncode == 0, done.stderr
     profile = done.stdout.split("where the time goes")[1].splitlines()
@@ -34,3 +39,46 @@ def test_profile_and_markdown_of_one_benchmark(tmp_path):
     printed = [line for line in done.stdout.split("where the time goes")[0].splitlines()
                if line.startswith("random")]
     assert len(table) == len(printed) > 0
+    assert "| GB/s | copyto GB/s | of copyto |" in text
+    # every row: the output bytes are the points' float64 bytes, its GB/s and fraction follow
+    rows = json.loads(data.read_text())["rows"]
+    assert len(rows) == len(printed)
+    for row in rows:
+        r, n, d = (int(x) for x in row["size"].removesuffix("D").split("x"))
+        assert row["output_bytes"] == r * n * d * 8 and row["copy_gbs"] > 0
+        assert abs(row["gbs"] - row["output_bytes"] / row["seconds"] / 1e9) <= 1e-9 * row["gbs"]
+        assert abs(row["copy_fraction"] - row["gbs"] / row["copy_gbs"]) <= 1e-9 * row["copy_fraction"]
+
+
+def test_row_bandwidth_and_copy_bandwidth(monkeypatch):
+    row = common.Row("random", "1x1000x2D", "cpu", 0.5, output_bytes=2 * 10**9, copy_gbs=8.0)
+    assert row.gbs == 4.0 and row.copy_fraction == 0.5
+    d = row.as_dict()
+    assert d["gbs"] == 4.0 and d["copy_fraction"] == 0.5 and d["output_bytes"] == 2 * 10**9
+    plain = common.Row("spectrum", "64x4096", "cpu", 0.5, "numpy", 1.0, "max err 1e-12")
+    assert plain.gbs is None and plain.copy_fraction is None and plain.as_dict()["gbs"] is None
+
+    # a table without a generator's row keeps its columns; with one, it has the three more
+    import io
+    buffer = io.StringIO()
+    common.print_table([plain], buffer)
+    assert "GB/s" not in buffer.getvalue() and buffer.getvalue().split()[-1] == "1e-12"
+    buffer = io.StringIO()
+    common.print_table([row, plain], buffer)
+    cells = [re.split(r"\s{2,}", line.strip()) for line in buffer.getvalue().splitlines()]
+    assert cells[0][7:] == ["GB/s", "copyto GB/s", "of copyto", "quality"]
+    assert cells[2][7:10] == ["4", "8", "50%"] and cells[3][7:10] == ["-"] * 3
+
+    # copy_bandwidth counts the bytes written once, over timed's seconds, and copies
+    seen = []
+
+    def fake_timed(fn, **kwargs):
+        seen.append(fn())
+        return 0.002, None
+
+    monkeypatch.setattr(common, "timed", fake_timed)
+    assert common.copy_bandwidth(8 * 10**6) == 8 * 10**6 / 0.002 / 1e9 == 4.0
+    assert seen == [None]
+    monkeypatch.undo()
+    measured = common.copy_bandwidth(2**20, repeats=3)
+    assert 0.1 < measured < 10**4
