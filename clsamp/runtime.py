@@ -55,6 +55,7 @@ class Device:
     max_allocation: int  # bytes, largest single buffer
     local_memory: int    # bytes
     implementation: str = ""   # the platform's version string ("OpenCL 3.0 PoCL 3.1 ...")
+    extensions: tuple = ()     # the device's OpenCL extensions ("cl_khr_fp64", ...)
 
     def __str__(self):
         fp64 = "yes" if self.fp64 else "no"
@@ -116,7 +117,8 @@ def _discover():
             global_memory=device.global_mem_size,
             max_allocation=device.max_mem_alloc_size,
             local_memory=device.local_mem_size,
-            implementation=" ".join(device.platform.version.split())))
+            implementation=" ".join(device.platform.version.split()),
+            extensions=tuple(device.extensions.split())))
     _cl_devices, _records = found, records
 
 
@@ -219,8 +221,9 @@ def without_fp64():
 CAPABILITIES = {
     "samplers": ("random.cl", "stratified.cl", "lowdiscrepancy.cl", "lattice.cl", "zsobol.cl",
                  "pmj.cl", "permutation.cl"),
-    # poisson_disk, lloyd and ccvt: distances and energies in double precision
-    "distance samplers": ("dart_throwing.cl", "lloyd.cl", "ccvt.cl"),
+    # poisson_disk and ccvt: distances and energies in double precision (lloyd's integer
+    # kernels need 64-bit atomics instead, which runtime.require_extension checks)
+    "distance samplers": ("dart_throwing.cl", "ccvt.cl"),
     "spectra": ("spectrum.cl", "nufft.cl"),
     "metrics": ("discrepancy.cl", "star_discrepancy.cl", "anchored_counts.cl", "neighbors.cl"),
     "experiments": ("integrands.cl", "families.cl"),
@@ -645,6 +648,30 @@ def require_fp64():
             f"device {device.name} has no double precision (cl_khr_fp64); clsamp's kernels "
             "need it. Choose another with clsamp.use_device or CLSAMP_DEVICE.")
     return device
+
+
+def require_extension(extension, what):
+    """Raise :class:`NoDeviceError` unless the current device has the OpenCL ``extension``
+    (``what`` names the caller in the message)."""
+    device = current_device()
+    if extension not in device.extensions:
+        raise NoDeviceError(
+            f"{what} needs the OpenCL extension {extension}, which device {device.name} "
+            f"({device.platform}) lacks; choose another with clsamp.use_device or CLSAMP_DEVICE")
+    return device
+
+
+def require_short_loops(what):
+    """Raise :class:`NoDeviceError` where the current device stops long loops
+    (:func:`loop_limit`) and ``what`` (a kernel with long per-work-item loops) would give
+    wrong numbers there."""
+    limit = loop_limit()
+    if limit is not None:
+        device = current_device()
+        raise NoDeviceError(
+            f"{what} does not run on {device.name}: it ends a work-item's loops after {limit} "
+            "iterations, and this kernel's work-items loop longer; choose another device with "
+            "clsamp.use_device or CLSAMP_DEVICE, or backend='numpy'")
 
 
 def host_memory_available():

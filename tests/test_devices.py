@@ -1,8 +1,9 @@
 """Every OpenCL device found, against the default one: the same bits where the contract says
 bits (every sampler and randomization, a convergence experiment), the stated tolerance where
 it says so (spectra, metrics, the float32 renderer). A device without fp64 gives every
-sampler's bits too, but poisson_disk, lloyd and ccvt, and refuses those and the analyses
-with NoDeviceError, never a BuildError. CI installs Debian's PoCL and Mesa's
+sampler's bits too, but poisson_disk and ccvt, and refuses those and the analyses with
+NoDeviceError, never a BuildError; so does a device that lacks what a kernel needs
+(lloyd's 64-bit atomics) or stops long loops (llvmpipe: pmj02bn, lloyd). CI installs Debian's PoCL and Mesa's
 rusticl beside PyPI's PoCL (.ci/run), so three implementations meet here; with one device
 the module is skipped."""
 
@@ -65,6 +66,9 @@ def refusal(device, name):
         return "fp64|double"
     if name == "pmj02bn" and on(device, runtime.loop_limit) is not None:
         return "loops"
+    if name == "lloyd" and ("cl_khr_int64_base_atomics" not in device.extensions
+                            or on(device, runtime.loop_limit) is not None):
+        return "cl_khr_int64_base_atomics|loops"
     return None
 
 

@@ -138,6 +138,13 @@ class DeviceAssignment:
         return [it.exact_total(e[k, :, 0], e[k, :, 1]) for k in range(self.r)]
 
 
+def require_device(what):
+    """Refuse where the assignment pass cannot run: it needs 64-bit integer atomics (not
+    fp64: every quantity is an exact integer) and loops long per work-item."""
+    runtime.require_extension("cl_khr_int64_base_atomics", what)
+    runtime.require_short_loops(what)
+
+
 def energy_scale(g):
     """The divisor that turns an exact energy sum into E: g^2 density points, each
     distance in units of 2^-BITS."""
@@ -168,7 +175,7 @@ def cvt_energy(sites, density, backend="opencl"):
         totals = [it.split_total(assign_reference(sites[k].astype(np.int64), g)[1])
                   for k in range(r)]
     else:
-        runtime.require_fp64()
+        require_device("cvt_energy")
         d_sites = runtime.to_device(sites if runtime.is_device_array(sites)
                                     else np.asarray(sites, dtype=np.uint32))
         assignment = DeviceAssignment(r, n, g, 1)

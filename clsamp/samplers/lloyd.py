@@ -88,7 +88,7 @@ def lloyd_reference(sites, g, iterations):
 def lloyd_device(sites, g, iterations):
     """OpenCL Lloyd on integer sites (r, n, 2): (sites, energies, counts) as the reference."""
     import pyopencl.array as cla
-    runtime.require_fp64()
+    voronoi.require_device("lloyd")
     q = runtime.queue()
     r, n, _ = sites.shape
     d_sites = cla.to_device(q, np.ascontiguousarray(sites, dtype=np.uint32))
@@ -233,6 +233,7 @@ class LloydSampler(OptimizerSampler):
     """
 
     info = LloydInfo
+    needs_fp64 = False        # exact integers on the torus: 64-bit atomics, no double
 
     def __init__(self, d=2, seed=0, iterations=50, density=256, backend="opencl"):
         super().__init__(d=d, seed=seed, backend=backend)
