@@ -48,6 +48,9 @@ inline ulong f64_mul_int(ulong x, ulong c) { return as_ulong(as_double(x) * (dou
 /* x y, correctly rounded. */
 inline ulong f64_mul(ulong x, ulong y) { return as_ulong(as_double(x) * as_double(y)); }
 
+/* y - 1 for 1 <= y < 2, exact (Sterbenz). */
+inline ulong f64_minus_one(ulong y) { return as_ulong(as_double(y) - 1.0); }
+
 #else   /* integer arithmetic only: no double reaches the compiler */
 
 inline ulong f64_bitlength(ulong m) { return 64u - clz(m); }
@@ -185,6 +188,8 @@ inline ulong f64_mul(ulong x, ulong y)
     return f64_round128(mul_hi(mx, my), mx * my, f64_exponent(x) + f64_exponent(y));
 }
 
+inline ulong f64_minus_one(ulong y) { return f64_scaled((y & F64_MANTISSA), -52); }
+
 #endif
 
 /* Exact conversions and moves, the same code on every device. */
@@ -193,9 +198,6 @@ inline ulong f64_from_int(ulong k) { return f64_scaled(k, 0); }
 /* The next double up or down (x > 0 finite). */
 inline ulong f64_next_up(ulong x) { return x + 1; }
 inline ulong f64_next_down(ulong x) { return x - 1; }
-
-/* y - 1 for 1 <= y < 2, exact (Sterbenz). */
-inline ulong f64_minus_one(ulong y) { return f64_scaled((y & F64_MANTISSA), -52); }
 
 /* (x + u) mod 1 for x, u in [0, 1): one rounding, then an exact wrap. */
 inline ulong f64_shift_mod1(ulong x, ulong u)

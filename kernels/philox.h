@@ -52,7 +52,12 @@ inline uint clsamp_bits(uint2 key, uint stream, uint realization, uint index, ui
 /* The bits of clsamp_unit(hi, lo). */
 inline ulong clsamp_unit_bits(uint hi, uint lo)
 {
+#if CLSAMP_FP64
+    /* two 32-bit conversions: cheaper than one of 53 bits where the CPU lacks it */
+    return as_ulong(((double)(hi >> 5) * 67108864.0 + (double)(lo >> 6)) * (1.0 / 9007199254740992.0));
+#else
     return f64_scaled(((ulong)(hi >> 5) << 26) | (lo >> 6), -53);
+#endif
 }
 
 /* The bits of clsamp_uniform2 and clsamp_uniform. */
