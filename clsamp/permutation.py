@@ -323,9 +323,25 @@ def random_permutations_device(seed, stream, realizations, length, perms):
     # Few, long work-items: small work-groups let a CPU device spread them over its cores.
     compute_units = max(1, runtime.current_device().compute_units)
     local = runtime.local_size(max(1, rows // (4 * compute_units)))
-    runtime.kernel("permutation.cl", "fisher_yates_apply")(
-        queue, (-(-rows // local) * local,), (local,), out.data, draws.data,
-        np.uint32(length), np.uint32(rows))
+    grid = (-(-rows // local) * local,)
+    limit = runtime.loop_limit()
+    if limit is None:
+        runtime.kernel("permutation.cl", "fisher_yates_apply")(
+            queue, grid, (local,), out.data, draws.data, np.uint32(length), np.uint32(rows))
+        return out
+    # a device that stops long loops: the identity in parallel, the swaps in pieces
+    fill = runtime.local_size()
+    runtime.kernel("permutation.cl", "fisher_yates_identity")(
+        queue, (-(-length // fill) * fill, rows), (fill, 1), out.data, np.uint32(length),
+        np.uint32(rows))
+    swaps = runtime.kernel("permutation.cl", "fisher_yates_swaps")
+    step = limit // 2
+    high = length - 1
+    while high > 0:
+        low = max(0, high - step)
+        swaps(queue, grid, (local,), out.data, draws.data, np.uint32(length), np.uint32(rows),
+              np.uint32(high), np.uint32(low))
+        high = low
     return out
 
 

@@ -53,6 +53,34 @@ __kernel void fisher_yates_apply(__global uint *out, __global const uint *draws,
     }
 }
 
+/* The same in pieces, for devices that stop long loops (runtime.loop_limit): identity rows
+ * over a grid (length padded, rows), then the swaps t = t_high down to t_low + 1 of every
+ * row per launch, launches in order. */
+__kernel void fisher_yates_identity(__global uint *out, const uint length, const uint rows)
+{
+    const uint t = get_global_id(0);
+    const size_t row = get_global_id(1);
+    if (t < length && row < rows)
+        out[row * length + t] = t;
+}
+
+__kernel void fisher_yates_swaps(__global uint *out, __global const uint *draws,
+                                 const uint length, const uint rows, const uint t_high,
+                                 const uint t_low)
+{
+    const size_t row = get_global_id(0);
+    if (row >= rows)
+        return;
+    __global uint *a = out + row * length;
+    __global const uint *j = draws + row * length;
+    for (uint t = t_high; t > t_low; --t) {
+        const uint s = j[t];
+        const uint swap = a[t];
+        a[t] = a[s];
+        a[s] = swap;
+    }
+}
+
 /* clsamp_permute on arrays: out[w] = permute(i[w], length, p[w]) (Kensler 2013).
  * NumPy reference: clsamp.permutation.permute. */
 __kernel void kensler_permute(__global uint *out, __global const uint *i,

@@ -87,11 +87,12 @@ def test_every_sampler_gives_the_same_bits(device, name, d, randomize):
     assert np.array_equal(here.view(np.uint64), there.view(np.uint64)), (name, randomize, str(device))
 
 
-# many dimensions: a work-item's loops over them exceed llvmpipe's loop limit unless the
-# runtime splits them (runtime.dimension_split)
+# many dimensions, or permutations longer than 65535: a work-item's loops exceed llvmpipe's
+# loop limit unless the runtime splits them (runtime.dimension_split, the swaps in pieces)
 WIDE = [("halton", 300, None, 256), ("halton", 300, "owen", 256), ("halton", 300, "permute", 64),
         ("sobol", 1000, "shift", 256), ("random", 3000, None, 64),
         ("latin_hypercube", 1000, None, 100), ("uncorrelated_jitter", 1001, None, 64),
+        ("latin_hypercube", 2, None, 70000), ("multijittered", 2, None, 2**18),
         ("kronecker", 256, "shift", 128), ("lattice", 250, None, 128)]
 
 

@@ -141,15 +141,18 @@ def test_every_sampler_gives_the_same_bits_without_fp64(name, d, randomize):
     ("random", 7, {}), ("sobol", 9, {"randomize": "shift"}), ("sobol", 6, {"randomize": "owen"}),
     ("halton", 7, {"randomize": "owen"}), ("hammersley", 5, {"randomize": "xor"}),
     ("latin_hypercube", 7, {}), ("uncorrelated_jitter", 7, {"groups": (2, 3, 2)}),
-    ("jittered", 4, {})])
+    ("jittered", 4, {}), ("latin_hypercube", 2, {"n": 5000}), ("multijittered", 2, {"n": 4900})])
 def test_a_dimension_split_gives_the_same_bits(monkeypatch, name, d, params):
     """What a loop-limited device (llvmpipe) runs: a few dimensions per work-item, chunks
-    starting inside a stratification group and on odd dimensions."""
+    starting inside a stratification group and on odd dimensions, and permutations whose
+    swaps come in pieces (a limit of 2000 here: 1000 swaps a launch)."""
+    params = dict(params)
+    n = params.pop("n", None)
     s = clsamp.make_sampler(name, d=d, seed=4, **params)
-    n = s.valid_n(81)
+    n = s.valid_n(81 if n is None else n)
     whole = s.sample(n, realizations=2)
     split = runtime.dimension_split
-    monkeypatch.setattr(runtime, "loop_limit", lambda: runtime.LLVMPIPE_LOOP_LIMIT)
+    monkeypatch.setattr(runtime, "loop_limit", lambda: 2000)
     # 4 for random (pairs) and Sobol' (4-wide), 3 for the others
     monkeypatch.setattr(runtime, "dimension_split",
                         lambda d, per_item, *a: split(d, 4 if per_item == 256 else 3, *a))

@@ -13,7 +13,6 @@ from math import comb
 import numpy as np
 
 from .. import philox, runtime
-from ..errors import NoDeviceError
 from .base import Rate, Sampler, register
 
 _U32, _U64 = np.uint32, np.uint64
@@ -391,14 +390,7 @@ class PMJ02BNSampler(PMJ02Sampler):
 
     def _device(self, n, realizations, start, out=None):
         import pyopencl.array as cla
-        limit = runtime.loop_limit()
-        if limit is not None:
-            device = runtime.current_device()
-            raise NoDeviceError(
-                f"pmj02bn does not run on {device.name}: it ends a work-item's loops after "
-                f"{limit} iterations, and pmj02bn's construction is one sequential work-item "
-                "per set; choose another device with clsamp.use_device or CLSAMP_DEVICE, or "
-                "backend='numpy'")
+        runtime.require_short_loops("pmj02bn (one sequential work-item per set)")
         r = len(realizations)
         total = start + n
         levels = max(total - 1, 1).bit_length()           # the finest resolution 2^levels
