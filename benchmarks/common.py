@@ -371,7 +371,8 @@ def parser(description):
     p.add_argument("--profile", action="store_true",
                    help="also print where each row's time goes (launch, kernel, transfer, host)")
     p.add_argument("--markdown", default=None, metavar="FILE",
-                   help="write the README's table from this run (markdown) to FILE")
+                   help="write the README's table from this run (markdown) to FILE; in a "
+                        "file with the table markers (README.md) only between them")
     return p
 
 
@@ -394,8 +395,27 @@ def finish(args, rows):
         write_json(args.out, rows)
     if args.markdown:
         from clsamp.io import write_text
-        write_text(args.markdown, markdown_table(rows))
+        write_text(args.markdown, with_table(args.markdown, markdown_table(rows)))
         print(f"wrote {args.markdown}", file=sys.stderr)
+
+
+TABLE_BEGIN = "<!-- benchmarks/run.py --markdown: begin -->"
+TABLE_END = "<!-- benchmarks/run.py --markdown: end -->"
+
+
+def with_table(path, table):
+    """The text to write to ``path``: the table alone, or, where ``path`` is a file holding
+    the two markers (README.md), that file with the table between them, the rest kept."""
+    try:
+        with open(path) as f:
+            text = f.read()
+    except OSError:
+        return table
+    if TABLE_BEGIN not in text or TABLE_END not in text:
+        return table
+    head, rest = text.split(TABLE_BEGIN, 1)
+    _, tail = rest.split(TABLE_END, 1)
+    return f"{head}{TABLE_BEGIN}\n{table}{TABLE_END}{tail}"
 
 
 def device_memory(fn):

@@ -82,3 +82,22 @@ def test_row_bandwidth_and_copy_bandwidth(monkeypatch):
     monkeypatch.undo()
     measured = common.copy_bandwidth(2**20, repeats=3)
     assert 0.1 < measured < 10**4
+
+
+def test_markdown_goes_between_the_readme_markers(tmp_path):
+    readme = tmp_path / "README.md"
+    readme.write_text(f"# title\n\nbefore\n{common.TABLE_BEGIN}\nold table\n{common.TABLE_END}\nafter\n")
+    text = common.with_table(str(readme), "| new |\n")
+    assert text == f"# title\n\nbefore\n{common.TABLE_BEGIN}\n| new |\n{common.TABLE_END}\nafter\n"
+    assert common.with_table(str(tmp_path / "table.markdown"), "| new |\n") == "| new |\n"
+    plain = tmp_path / "plain.markdown"
+    plain.write_text("no markers\n")
+    assert common.with_table(str(plain), "| new |\n") == "| new |\n"
+
+
+def test_the_readme_table_is_one_run():
+    text = (ROOT / "README.md").read_text()
+    assert text.count(common.TABLE_BEGIN) == 1 and text.count(common.TABLE_END) == 1
+    table = text.split(common.TABLE_BEGIN)[1].split(common.TABLE_END)[0]
+    assert len(re.findall(r"Measured \d{4}-\d\d-\d\d \d\d:\d\d UTC in one run of", table)) == 1
+    assert table.count("| case | size | device |") == 1
