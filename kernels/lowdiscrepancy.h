@@ -168,5 +168,4 @@ inline uint owen_permutation_element(ulong key, uint base, uint g, uint d)
     return p;
 }
 
-
 #endif
