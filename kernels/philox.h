@@ -75,23 +75,18 @@ inline ulong clsamp_uniform_bits(uint2 key, uint stream, uint realization, uint 
 
 #if CLSAMP_FP64
 /* A double in [0, 1) with 53 random bits (genrand_res53). */
-inline double clsamp_unit(uint hi, uint lo)
-{
-    return ((double)(hi >> 5) * 67108864.0 + (double)(lo >> 6)) * (1.0 / 9007199254740992.0);
-}
+inline double clsamp_unit(uint hi, uint lo) { return as_double(clsamp_unit_bits(hi, lo)); }
 
 /* Both coordinates of dimension pair b: (2b, 2b+1). */
 inline double2 clsamp_uniform2(uint2 key, uint stream, uint realization, uint index, uint pair)
 {
-    const uint4 b = clsamp_block(key, stream, realization, index, pair);
-    return (double2)(clsamp_unit(b.x, b.y), clsamp_unit(b.z, b.w));
+    return as_double2(clsamp_uniform2_bits(key, stream, realization, index, pair));
 }
 
 /* Coordinate `dim` of point `index`: the same number as clsamp.philox.uniform. */
 inline double clsamp_uniform(uint2 key, uint stream, uint realization, uint index, uint dim)
 {
-    const double2 u = clsamp_uniform2(key, stream, realization, index, dim >> 1);
-    return (dim & 1u) ? u.y : u.x;
+    return as_double(clsamp_uniform_bits(key, stream, realization, index, dim));
 }
 #endif
 
