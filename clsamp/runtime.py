@@ -641,12 +641,13 @@ def build_count():
 
 
 def require_fp64():
-    """Raise unless the current device does double precision (clsamp's kernels need it)."""
+    """Raise unless the current device does double precision (the analyses, the renderer,
+    dart throwing and CCVT compute in it; the other samplers do not need it)."""
     device = current_device()
     if not device.fp64:
         raise NoDeviceError(
-            f"device {device.name} has no double precision (cl_khr_fp64); clsamp's kernels "
-            "need it. Choose another with clsamp.use_device or CLSAMP_DEVICE.")
+            f"device {device.name} has no double precision (cl_khr_fp64); this computation "
+            "needs it. Choose another with clsamp.use_device or CLSAMP_DEVICE.")
     return device
 
 
