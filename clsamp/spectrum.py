@@ -581,15 +581,43 @@ def es_kernel(z, beta):
     """φ(z) = exp(β(√(1 - z²) - 1)) on |z| <= 1, zero outside (Barnett et al. 2019)."""
     z = np.asarray(z, dtype=np.float64)
     inside = np.abs(z) <= 1.0
-    return np.where(inside, np.exp(beta * (np.sqrt(np.where(inside, 1.0 - z * z, 0.0)) - 1.0)), 0.0)
+    z2 = np.where(inside, z * z, 1.0)
+    return np.where(inside, np.exp(-beta * z2 / (1.0 + np.sqrt(1.0 - z2))), 0.0)  # no cancellation
 
 
-def kernel_transform(freqs, grid, width, beta):
-    """ψ̂(k) = (w/2)∫_{-1}^{1} φ(z) cos(πkwz/M) dz: what spreading multiplies S(k) by."""
-    z, weight = np.polynomial.legendre.leggauss(4 * width + 60)
-    freqs = np.asarray(freqs, dtype=np.float64)
-    phase = np.cos(np.pi * width / grid * np.outer(freqs, z))
-    return 0.5 * width * (phase @ (weight * es_kernel(z, beta)))
+def kernel_transform(freqs, grid, width, beta, extended=False):
+    """ψ̂(k) = (w/2)∫_{-1}^{1} φ(z) cos(πkwz/M) dz: what spreading multiplies S(k) by.
+
+    Every point's error at k shares ψ̂(k)'s, so it adds up over the N points (at k = 0
+    always): computed to about an ulp. With z = sin θ the integrand
+    exp(-2β sin²(θ/2)) cos θ cos(πkw sin θ / M) is smooth, and 2w + 60 Gauss-Legendre
+    nodes in extended precision (where NumPy's longdouble has it, as on x86-64 Linux)
+    give it correctly rounded to float64 or one ulp off (``extended``: in longdouble)."""
+    x, weight = _gauss_legendre(2 * width + 60)
+    pi = np.arccos(np.longdouble(-1.0))
+    theta, weight = x * (pi / 2), weight * (pi / 2)
+    phi = np.exp(-2 * np.longdouble(beta) * np.sin(theta / 2) ** 2) * np.cos(theta)
+    freqs = np.asarray(freqs, dtype=np.float64).astype(np.longdouble)
+    phase = np.cos(pi * width / grid * np.outer(freqs, np.sin(theta)))
+    transform = np.longdouble(0.5) * width * (phase @ (weight * phi))
+    return transform if extended else transform.astype(np.float64)
+
+
+@functools.cache
+def _gauss_legendre(q):
+    """Gauss-Legendre nodes and weights on [-1, 1] in longdouble: NumPy's nodes, refined by
+    Newton's method on the three-term recurrence of P_q."""
+    def legendre(x):                      # P_q(x) and P_q'(x)
+        p0, p1 = np.ones_like(x), x
+        for m in range(2, q + 1):
+            p0, p1 = p1, ((2 * m - 1) * x * p1 - (m - 1) * p0) / m
+        return p1, q * (x * p1 - p0) / (x * x - 1)
+    x = np.polynomial.legendre.leggauss(q)[0].astype(np.longdouble)
+    for _ in range(3):
+        p, dp = legendre(x)
+        x = x - p / dp
+    _, dp = legendre(x)
+    return x, 2 / ((1 - x * x) * dp * dp)
 
 
 # -- fast: spreading, NumPy reference ------------------------------------------------------
@@ -628,18 +656,29 @@ def _fft_module():
 
 
 def _accumulate_power(grids, resolution, total):
-    """Add Σ_r |FFT(grid_r)|² at the frequencies [-R/2, R/2] (last axis >= 0) to ``total``."""
+    """Add Σ_r |FFT(grid_r)|² at the frequencies [-R/2, R/2] (last axis >= 0) to ``total``.
+
+    In 2-D only the columns ky <= R/2 of the row transforms go through the column
+    transforms, and only the rows |kx| <= R/2 of those are squared and summed."""
     fft, options = _fft_module()
     half = resolution // 2
     M = grids.shape[-1]
-    if grids.ndim == 2:
-        F = fft.rfft(grids, axis=-1, **options)[:, :half + 1]
-        total += np.sum(F.real**2 + F.imag**2, axis=0)
-        return
-    F = fft.rfft2(grids, axes=(-2, -1), **options)[:, :, :half + 1]
-    rows = np.r_[M - half:M, 0:half + 1]                       # kx = -R/2 .. R/2
-    F = F[:, rows]
-    total += np.sum(F.real**2 + F.imag**2, axis=0)
+    F = fft.rfft(grids, axis=-1, **options)[..., :half + 1]
+    if grids.ndim == 3:
+        F = fft.fft(F, axis=-2, overwrite_x=True, **options)
+        _add_squares(F[:, M - half:], total[:half])              # kx = -R/2 .. -1
+        _add_squares(F[:, :half + 1], total[half:])              # kx = 0 .. R/2
+    else:
+        _add_squares(F, total)
+
+
+def _add_squares(F, total):
+    """total += Σ_r |F_r|² for complex F (r, ..., m) into a longdouble ``total``: the sum
+    over realizations is where float64 would lose ulps (all its terms have one sign)."""
+    for part in F:
+        parts = part.view(np.float64)                      # (..., 2m): re, im interleaved
+        squares = parts * parts
+        total += squares[..., 0::2] + squares[..., 1::2]
 
 
 def _fast(batch, resolution, tol, backend, progress):
@@ -648,7 +687,7 @@ def _fast(batch, resolution, tol, backend, progress):
     M = _grid_size(resolution, sigma, width)
     half = resolution // 2
     # Σ_r |G_r|² for kx in [-R/2, R/2] (2-D) and ky in [0, R/2]
-    total = np.zeros((resolution + 1, half + 1) if d == 2 else half + 1)
+    total = np.zeros((resolution + 1, half + 1) if d == 2 else half + 1, np.longdouble)
     size = M**d
     if backend == "opencl":
         import pyopencl.array as cla
@@ -676,26 +715,30 @@ def _fast(batch, resolution, tol, backend, progress):
             grids = spread_reference(batch[r0:r1], M, width, beta)
         else:
             pts = _block(batch, r0, r1)
-            copies = cla.empty(queue, rc * blocks * size, np.float64)
-            spread(queue, (blocks, rc), (1, 1), pts.data, copies.data, np.uint32(n), np.uint32(M),
-                   np.uint32(blocks), np.float64(beta))
+            # the grids the FFT reads are written into host memory (on a CPU device in place)
+            grids = runtime.Output(None, host=np.empty((rc,) + (M,) * d))
             if blocks > 1:
-                out = cla.empty(queue, rc * size, np.float64)
-                sum_copies(queue, (_pad(size, local), rc), (local, 1), copies.data, out.data,
+                copies = cla.empty(queue, rc * blocks * size, np.float64)
+                spread(queue, (blocks, rc), (1, 1), pts.data, copies.data, np.uint32(n), np.uint32(M),
+                       np.uint32(blocks), np.float64(beta))
+                sum_copies(queue, (_pad(size, local), rc), (local, 1), copies.data, grids.buffer,
                            np.uint32(size), np.uint32(blocks))
-                copies = out
-            grids = copies.get().reshape((rc,) + (M,) * d)
+            else:
+                spread(queue, (1, rc), (1, 1), pts.data, grids.buffer, np.uint32(n), np.uint32(M),
+                       np.uint32(1), np.float64(beta))
+            grids = grids.finish()
         _accumulate_power(grids, resolution, total)
         if bar is not None:
             bar.update(1)
     if bar is not None:
         bar.close()
-    correction = kernel_transform(np.arange(-half, half + 1), M, width, beta) ** -2
+    # deconvolved in longdouble, rounded once
+    psi = kernel_transform(np.arange(-half, half + 1), M, width, beta, extended=True)
     if d == 1:
-        Q = total * correction[half:]                      # k = 0 .. R/2
+        Q = (total / psi[half:] ** 2).astype(np.float64)          # k = 0 .. R/2
         P = np.concatenate([Q[half:0:-1], Q[:half]])       # k = -R/2 .. R/2 - 1
         return P / (r * n)
-    Q = total * correction[:, None] * correction[None, half:]   # kx = -R/2..R/2, ky = 0..R/2
+    Q = (total / (psi[:, None] * psi[None, half:]) ** 2).astype(np.float64)   # ky = 0..R/2
     P = np.empty((resolution, resolution))
     P[:, half:] = Q[:resolution, :half]                     # ky >= 0
     # ky < 0: P(kx, ky) = Q(-kx, -ky); row of -kx in Q is R - i, column of -ky is half - (j - half)

@@ -20,7 +20,10 @@ inline int axis_weights(const double t, const double beta, double *w)
     for (int q = 0; q < (WIDTH + 3) / 4; ++q) {
         const double4 lane = (double4)(4 * q, 4 * q + 1, 4 * q + 2, 4 * q + 3);
         const double4 z = (base + lane) * (2.0 / WIDTH);
-        const double4 phi = exp(beta * (sqrt(fmax(1.0 - z * z, 0.0)) - 1.0));
+        const double4 z2 = z * z;
+        /* sqrt(1 - z^2) - 1 without cancellation, so the weights near the centre, which
+         * every point's sum is made of, are accurate to an ulp or two */
+        const double4 phi = exp(-beta * z2 / (1.0 + sqrt(fmax(1.0 - z2, 0.0))));
         vstore4(select((double4)(0.0), phi, lane < (double4)(WIDTH)), q, w);
     }
     return i0;

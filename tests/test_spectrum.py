@@ -138,6 +138,38 @@ def test_direct_chunks_points_and_realizations(monkeypatch, small2):
     assert np.abs(P - exact).max() <= 1e-11 * 200
 
 
+EXTENDED = np.finfo(np.longdouble).eps < np.finfo(np.float64).eps
+
+
+@pytest.mark.skipif(not EXTENDED, reason="NumPy's longdouble is float64 here")
+@pytest.mark.parametrize("sigma, width", [(1.25, 8), (1.5, 11), (2.0, 15), (2.0, 16)])
+def test_kernel_transform_to_an_ulp(sigma, width):
+    # against 40 panels of 24 Gauss-Legendre nodes in z itself, graded towards z = ±1
+    # where φ's derivative is singular: a different rule for the same integral
+    beta, M = spectrum._beta(sigma, width), 512
+    k = np.array([0, 1, 17, 64, 128, M // (2 * sigma)], dtype=np.longdouble)   # as far as used
+    x, wt = spectrum._gauss_legendre(24)
+    edges = 1 - (1 - np.linspace(0, 1, 41, dtype=np.longdouble)) ** 3       # 0 .. 1, graded
+    total = np.zeros(k.size, np.longdouble)
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        z = (a + b) / 2 + (b - a) / 2 * x
+        phi = np.exp(-beta * z * z / (1 + np.sqrt(1 - z * z)))
+        total += (b - a) * (np.cos(np.outer(k, z) * (np.pi * width / M)) @ (wt * phi))  # 2x halves
+    reference = (width / 2 * total).astype(np.float64)
+    got = spectrum.kernel_transform(k.astype(np.float64), M, width, beta)
+    assert np.abs(got / reference - 1).max() <= 4 * np.finfo(np.float64).eps
+
+
+@pytest.mark.skipif(not EXTENDED, reason="NumPy's longdouble is float64 here")
+def test_fast_at_the_floor_is_exact_at_zero():
+    # every point's error at k shares ψ̂(k)'s, so P(0) = N is where an inexact ψ̂ or a
+    # float64 sum over realizations shows, N times over (old: 2.9e-14 relative); random
+    # offsets average the kernel's own error at 0 away (a grid's do not: tol bounds that)
+    pts = white(16, 2048, 2, seed=21)
+    P = clsamp.power_spectrum(pts, 64, method="fast", tol=1e-12)
+    assert abs(P[32, 32] - 2048) <= 8 * np.finfo(np.float64).eps * 2048
+
+
 def test_kernel_error_decreases_with_width():
     errors = [spectrum.kernel_error(2.0, w) for w in (4, 8, 12, 16)]
     assert all(a > b for a, b in zip(errors[:-1], errors[1:], strict=True))
