@@ -4,8 +4,10 @@ NumPy separable GEMM (``clsamp.spectrum.direct_reference``), in one run.
 
 Max error is max_ω |P̃(ω) - P(ω)| / N against clsamp's direct result (itself checked
 against the NumPy reference in the same run). The direct rows also report the kernel's rate
-in GFLOP/s of complex products it actually executes (8 flops per complex multiply-add; it
-computes the half u <= 0 of the spectrum) next to the NumPy GEMM's rate (all of it).
+in GFLOP/s of the products it actually executes next to the NumPy GEMM's rate (all of
+it, 8 flops per complex multiply-add). On a CPU device that is one real GEMM per set over
+the quarter plane u, v in [0, R/2] (2(R + 2)²N flops); elsewhere the complex products of
+the half u <= 0.
 """
 
 import numpy as np
@@ -88,9 +90,12 @@ def run(devices, quick):
         t_direct, exact = timed(lambda: power_spectrum(pts, R, method="direct", progress=False),
                                 repeats=1 if not quick else 3)
         t_gemm, ref = timed(lambda: gemm_peer(pts, R), repeats=1 if not quick else 3, warmup=0)
-        half_rows = (R // 2 + 1 + 3) // 4 * 4
-        cols = (R + 1 + 3) // 4 * 4
-        rate = 8.0 * r * n * half_rows * cols / t_direct / 1e9
+        if spectrum.HOST_GEMM and device.type == "cpu":     # one real GEMM (2c x n)(n x 2c)
+            rate = 8.0 * r * n * (R // 2 + 1) ** 2 / t_direct / 1e9
+        else:                                               # complex products over u <= 0
+            half_rows = (R // 2 + 1 + 3) // 4 * 4
+            cols = (R + 1 + 3) // 4 * 4
+            rate = 8.0 * r * n * half_rows * cols / t_direct / 1e9
         rate_np = 8.0 * r * n * R * R / t_gemm / 1e9
         err = np.abs(exact - ref).max() / n
         rows.append(Row("spectrum direct", size, dev, t_direct, "numpy GEMM, recurrence twiddles", t_gemm,

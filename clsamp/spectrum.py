@@ -468,12 +468,19 @@ def _unfold(H, resolution):
 
 def _direct_host_gemm(batch, resolution, progress):
     """The 2-D direct sum on a CPU device: ``spectrum_twiddles`` panels in host memory, then
-    the product in the host's BLAS (docs/performance.md says why), the half u <= 0 only."""
+    the products in the host's BLAS (docs/performance.md says why), over a quarter plane.
+
+    With a_k(u) = e^{-2πiux_k} and b_k(v) = e^{-2πivy_k} for u, v in [0, R/2], the four real
+    products G1 = Re a·Re b, G2 = Im a·Im b, G3 = Re a·Im b, G4 = Im a·Re b (one GEMM of
+    the panels side by side) give both
+    S(u, v) = G1 - G2 + i(G3 + G4) and S(u, -v) = G1 + G2 + i(G4 - G3); P(-u, -v) = P(u, v)
+    gives the rest: half the products of the half plane u <= 0."""
     (r, n, _), half = batch.shape, resolution // 2
-    count_u, count_v = half + 1, resolution + 1      # u in [-R/2, 0], v in [-R/2, R/2]
-    per_point = (count_u + count_v) * 16 + 16
+    count = half + 1                                 # u, v in [0, R/2]
+    per_point = 2 * count * 16 + 16
     points_per_chunk = min(n, runtime.fit(per_point, WORKING_SET))
-    reals_per_chunk = min(r, runtime.fit(per_point * points_per_chunk + count_u * count_v * 16, WORKING_SET))
+    reals_per_chunk = min(r, runtime.fit(per_point * points_per_chunk + 4 * count * count * 8,
+                                         WORKING_SET))
     twiddles = runtime.kernel("spectrum.cl", "spectrum_twiddles",
                               {"SUPER": _SUPER, "KBLOCK": 128, "FINE": _FINE}, _MAD)
     queue, local = runtime.queue(), runtime.local_size(64)
@@ -481,28 +488,38 @@ def _direct_host_gemm(batch, resolution, progress):
     point_chunks = [(a, min(n, a + points_per_chunk)) for a in range(0, n, points_per_chunk)]
     bar = _progress(len(chunks) * len(point_chunks), progress, _direct_seconds(r, n, resolution, 2),
                     "spectrum (direct)")
-    H = np.zeros((count_u, count_v))
+    plus = np.zeros((count, count))                  # Σ_r |S(u, v)|², u, v in [0, R/2]
+    minus = np.zeros((count, count))                 # Σ_r |S(u, -v)|²
+    m = np.uint32(count)
+    # the panels' memory, reused by every chunk: page faults once, not once a chunk
+    scratch = [np.empty(reals_per_chunk * points_per_chunk * 2 * count) for _ in range(2)]
     for r0, r1 in chunks:
         rc = r1 - r0
-        S = np.zeros((rc, count_u, count_v), np.complex128)
+        G = np.zeros((rc, 2 * count, 2 * count))     # [[G1, G3], [G4, G2]] per set
         for k0, k1 in point_chunks:
             nc = k1 - k0
             pts = _block(batch, r0, r1, k0, k1)
-            panels = [runtime.Output(None, host=np.empty((rc, nc, 2, count))) for count in (count_u, count_v)]
+            shape = (rc, nc, 2, count)
+            panels = [runtime.Output(None, host=memory[:rc * nc * 2 * count].reshape(shape))
+                      for memory in scratch]
             for axis, out in enumerate(panels):     # one tile of all frequencies: contiguous writes
-                m = np.uint32(out.host.shape[-1])
                 twiddles(queue, (_pad(nc, local), rc), (local, 1), pts.data, out.buffer, np.uint32(nc),
-                         np.uint32(2), np.uint32(axis), np.int64(-half), m, m)
+                         np.uint32(2), np.uint32(axis), np.int64(0), m, m)
             A, B = (panel.finish() for panel in panels)
-            for k in range(rc):
-                ar, ai, br, bi = A[k, :, 0].T, A[k, :, 1].T, B[k, :, 0], B[k, :, 1]
-                S[k].real += ar @ br - ai @ bi
-                S[k].imag += ar @ bi + ai @ br
+            for k in range(rc):                     # one GEMM: (Re a | Im a)ᵀ (Re b | Im b)
+                G[k] += A[k].reshape(nc, 2 * count).T @ B[k].reshape(nc, 2 * count)
             if bar is not None:
                 bar.update(1)
-        H += np.sum(S.real**2 + S.imag**2, axis=0)
+        g1, g2 = G[:, :count, :count], G[:, count:, count:]
+        g3, g4 = G[:, :count, count:], G[:, count:, :count]
+        plus += np.sum((g1 - g2) ** 2 + (g3 + g4) ** 2, axis=0)
+        minus += np.sum((g1 + g2) ** 2 + (g4 - g3) ** 2, axis=0)
     if bar is not None:
         bar.close()
+    # the half plane u <= 0 that _unfold takes: P(-u, v) = P(u, -v)
+    H = np.empty((count, resolution + 1))
+    H[:, :half + 1] = plus[::-1, ::-1]               # v = -R/2 .. 0
+    H[:, half:] = minus[::-1]                        # v = 0 .. R/2
     return _unfold(H / (r * n), resolution)
 
 
