@@ -3,45 +3,57 @@
 #include "philox.h"
 #include "dims.h"
 
-/* Grid (ceil(n / 4), realizations): work-item q makes points 4q .. 4q+3 of its
- * realization, their Philox blocks in vector lanes. out has shape (realizations, n, d),
- * float64 written as its bit patterns (f64bits.h), so no device needs fp64. */
+#ifndef POINTS_PER_ITEM
+#define POINTS_PER_ITEM 8
+#endif
+#define SETS (POINTS_PER_ITEM / 4)
+
+/* Grid (ceil(n / POINTS_PER_ITEM), realizations): work-item q makes points
+ * q POINTS_PER_ITEM .. (q + 1) POINTS_PER_ITEM - 1 of its realization, their Philox blocks
+ * in SETS sets of four vector lanes, inlined side by side so that their chains of
+ * dependent multiplies overlap. out has shape (realizations, n, d), float64 written as its
+ * bit patterns (f64bits.h), so no device needs fp64. */
 __kernel void random_points(__global ulong *out, const uint n, const uint d,
                             const uint start, const uint realization0,
                             const uint key_lo, const uint key_hi, const uint stream)
 {
-    const uint i = 4 * get_global_id(0);
+    const uint i = POINTS_PER_ITEM * get_global_id(0);
     const uint r = get_global_id(1);
     if (i >= n)
         return;
     const uint2 key = (uint2)(key_lo, key_hi);
-    const uint4 index = (uint4)(start + i) + (uint4)(0u, 1u, 2u, 3u);
     const uint4 realization = (uint4)(realization0 + r);
-    __global ulong *p = out + ((size_t)r * n + i) * d;
-    const uint lanes = n - i < 4u ? n - i : 4u;
+    const uint lanes = n - i < POINTS_PER_ITEM ? n - i : POINTS_PER_ITEM;
     /* dimension pairs: DIMS_PER_ITEM is even where it is defined */
     for (uint pair = CLSAMP_DIM0 / 2; 2 * pair < CLSAMP_DIM_END(d); ++pair) {
-        uint4 w0, w1, w2, w3;
-        philox4x32_10_x4(index, realization, (uint4)pair, (uint4)stream, key, &w0, &w1, &w2, &w3);
-        const ulong4 x = clsamp_unit4_bits(w0, w1), y = clsamp_unit4_bits(w2, w3);
         const uint c = 2 * pair;
-        if (lanes == 4u) {
-            p[c] = x.s0;
-            p[d + c] = x.s1;
-            p[2 * d + c] = x.s2;
-            p[3 * d + c] = x.s3;
-            if (c + 1 < d) {
-                p[c + 1] = y.s0;
-                p[d + c + 1] = y.s1;
-                p[2 * d + c + 1] = y.s2;
-                p[3 * d + c + 1] = y.s3;
-            }
-        } else {
-            const ulong xs[4] = {x.s0, x.s1, x.s2, x.s3}, ys[4] = {y.s0, y.s1, y.s2, y.s3};
-            for (uint l = 0; l < lanes; ++l) {
-                p[l * d + c] = xs[l];
-                if (c + 1 < d)
-                    p[l * d + c + 1] = ys[l];
+#pragma unroll
+        for (uint s = 0; s < SETS; ++s) {
+            const uint4 index = (uint4)(start + i + 4 * s) + (uint4)(0u, 1u, 2u, 3u);
+            uint4 w0, w1, w2, w3;
+            philox4x32_10_x4(index, realization, (uint4)pair, (uint4)stream, key, &w0, &w1, &w2, &w3);
+            const ulong4 x = clsamp_unit4_bits(w0, w1), y = clsamp_unit4_bits(w2, w3);
+            __global ulong *p = out + ((size_t)r * n + i + 4 * s) * d;
+            if (lanes == POINTS_PER_ITEM && d == 2u) {     /* four points: 8 consecutive words */
+                vstore4((ulong4)(x.s0, y.s0, x.s1, y.s1), 0, p);
+                vstore4((ulong4)(x.s2, y.s2, x.s3, y.s3), 1, p);
+            } else if (lanes == POINTS_PER_ITEM) {
+                p[c] = x.s0;
+                p[d + c] = x.s1;
+                p[2 * d + c] = x.s2;
+                p[3 * d + c] = x.s3;
+                if (c + 1 < d) {
+                    p[c + 1] = y.s0;
+                    p[d + c + 1] = y.s1;
+                    p[2 * d + c + 1] = y.s2;
+                    p[3 * d + c + 1] = y.s3;
+                }
+            } else {                                       /* the last points */
+                const uint here = lanes > 4 * s ? lanes - 4 * s : 0u;
+#define CLSAMP_STORE(l, x, y) if (l < here) { p[l * d + c] = x; if (c + 1 < d) p[l * d + c + 1] = y; }
+                CLSAMP_STORE(0, x.s0, y.s0) CLSAMP_STORE(1, x.s1, y.s1)
+                CLSAMP_STORE(2, x.s2, y.s2) CLSAMP_STORE(3, x.s3, y.s3)
+#undef CLSAMP_STORE
             }
         }
     }

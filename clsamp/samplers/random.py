@@ -43,9 +43,16 @@ class RandomSampler(Sampler):
     def _device(self, n, realizations, start, out=None):
         r = len(realizations)
         target = runtime.Output((r, n, self.d), host=out)
-        defines, grid, _ = runtime.dimension_split(self.d, 256, ((n + 3) // 4, r))
+        # points per work-item: 16 keep a CPU core's multipliers busy (4 overlapping Philox
+        # chains); a GPU wants the work-items. The bits do not depend on it.
+        per_item = 16 if runtime.current_device().type == "cpu" else 4
+        local = runtime.local_size(64)
+        items = -(-n // per_item)
+        items = -(-items // local) * local                     # a multiple of the group size
+        defines, grid, group = runtime.dimension_split(self.d, 256, (items, r), (local, 1))
+        defines = {**defines, "POINTS_PER_ITEM": per_item}
         kernel = runtime.kernel("random.cl", "random_points", defines=defines)
-        kernel(runtime.queue(), grid, None, target.buffer, np.uint32(n), np.uint32(self.d),
+        kernel(runtime.queue(), grid, group, target.buffer, np.uint32(n), np.uint32(self.d),
                np.uint32(start), np.uint32(realizations.start), *runtime.key_args(self.seed),
                np.uint32(philox.Stream.POINTS))
         return target.finish()
