@@ -17,6 +17,15 @@
 #define CLSAMP_FP64 1
 #endif
 
+/* Inline this function whatever its size (every kernel includes this header). PoCL's
+ * inliner left the unrolled lane rounds of philox4x32_10_x4 a call, their words through
+ * memory: 1.6x slower (docs/performance.md). */
+#ifdef __clang__
+#define CLSAMP_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define CLSAMP_ALWAYS_INLINE inline
+#endif
+
 #define F64_MANTISSA 0x000FFFFFFFFFFFFFUL
 #define F64_HIDDEN 0x0010000000000000UL
 #define F64_ONE 0x3FF0000000000000UL
@@ -203,7 +212,12 @@ inline ulong f64_next_down(ulong x) { return x - 1; }
 inline ulong f64_shift_mod1(ulong x, ulong u)
 {
     const ulong y = f64_add(x, u);
+#if CLSAMP_FP64
+    const ulong wrapped = f64_minus_one(y);    /* both, then a select: the wrap is a coin toss */
+    return y >= F64_ONE ? wrapped : y;
+#else
     return y >= F64_ONE ? f64_minus_one(y) : y;
+#endif
 }
 
 /* floor(x 2^k) of a double 0 <= x < 2^(64 - k) that is a multiple of 2^-k. */

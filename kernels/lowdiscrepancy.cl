@@ -277,20 +277,40 @@ __kernel void radical_points(__global ulong *out, __global const uint *bases,
         uint offset[32];
         for (uint k = 0; k < tabulated; ++k)
             offset[k] = segment[4 * k + 3];
+        ulong P0 = 1;                                  /* chunk 0's product of bounds */
+        for (uint t = 0; t < min(g, base); ++t)
+            P0 *= base - t;
+        const ulong T0 = 0x100000000UL % P0;
+        uint top = m;                                  /* digits k >= top of the index are 0 */
+        while (top > 0 && digit[top - 1] == 0)
+            --top;
         for (uint t = 0; t < count; ++t) {
             ulong v = 0, prefix = 0, power = 1;
-            for (uint k = 0; k < m; ++k) {
-                const uint e = k < tabulated
-                    ? tab[offset[k] + (uint)prefix * base + digit[k]]
-                    : owen_permutation_element(mix64(seed64 ^ (prefix + power)), base, g, digit[k]);
-                v = v * base + e;
+            uint k = 0;
+            for (; k < tabulated; ++k) {
+                v = v * base + tab[offset[k] + (uint)prefix * base + digit[k]];
                 prefix += (ulong)digit[k] * power;
+                power *= base;
+            }
+            for (; k < top; ++k) {
+                const ulong key = mix64(seed64 ^ (prefix + power));
+                v = v * base + (digit[k] < g ? owen_low_element(key, base, g, digit[k], P0, T0)
+                                             : owen_permutation_element(key, base, g, digit[k]));
+                prefix += (ulong)digit[k] * power;
+                power *= base;
+            }
+            /* the leading zeros: prefix is the whole index, and each level's π(0) is its
+             * first draw; the levels are independent, so their hashes overlap */
+            for (; k < m; ++k) {
+                v = v * base + owen_low_element(mix64(seed64 ^ (prefix + power)), base, g, 0, P0, T0);
                 power *= base;
             }
             p[(size_t)t * d] = f64_div(v, bm, 0);
             for (uint k = 0; k < m; ++k) {
-                if (++digit[k] < base)
+                if (++digit[k] < base) {
+                    top = max(top, k + 1);
                     break;
+                }
                 digit[k] = 0;
             }
         }
@@ -311,22 +331,34 @@ __kernel void radical_points(__global ulong *out, __global const uint *bases,
         ulong v = 0;
         for (uint k = 0; k < m; ++k)
             v += (ulong)LD_DIGIT(digit[k], k) * weight[k];
-        for (uint t = 0; t < count; ++t) {
+        /* v = high + LD_DIGIT(a0, 0) w0: digits >= 1 (high) change once in b points, so
+         * between those carries the points are independent (their divisions overlap) */
+        uint a0 = digit[0];
+        const ulong w0 = weight[0];
+        ulong high = v - (ulong)LD_DIGIT(a0, 0) * w0;
+        for (uint t = 0; t < count;) {
+            const uint run = min(base - a0, count - t);       /* points before digit 0 wraps */
+            for (uint q = 0; q < run; ++q) {
+                const ulong x = high + (ulong)LD_DIGIT(a0 + q, 0) * w0;
 #if RANDOMIZE == LD_SHIFT
-            p[(size_t)t * d] = f64_shift_mod1(f64_div(v, bm, 0), u);
+                p[(size_t)(t + q) * d] = f64_shift_mod1(f64_div(x, bm, 0), u);
 #else
-            p[(size_t)t * d] = f64_div(v, bm, 0);
+                p[(size_t)(t + q) * d] = f64_div(x, bm, 0);
 #endif
-            if (t + 1 == count)
-                break;
-            for (uint k = 0; k < m; ++k) {
-                const uint a = digit[k];
-                const uint b = a + 1u == base ? 0u : a + 1u;
-                digit[k] = b;
-                /* unsigned wrap-around cancels: v stays the exact new numerator */
-                v += ((ulong)LD_DIGIT(b, k) - (ulong)LD_DIGIT(a, k)) * weight[k];
-                if (b != 0u)
-                    break;
+            }
+            t += run;
+            a0 += run;
+            if (a0 == base && t < count) {
+                a0 = 0;
+                for (uint k = 1; k < m; ++k) {
+                    const uint a = digit[k];
+                    const uint b = a + 1u == base ? 0u : a + 1u;
+                    digit[k] = b;
+                    /* unsigned wrap-around cancels: high stays exact */
+                    high += ((ulong)LD_DIGIT(b, k) - (ulong)LD_DIGIT(a, k)) * weight[k];
+                    if (b != 0u)
+                        break;
+                }
             }
         }
 #endif

@@ -47,7 +47,7 @@ inline uint owen_scramble_base2(uint x, uint seed)
     return reverse_bits32(lk_hash(reverse_bits32(x), seed));
 }
 
-inline ulong mix64(ulong v)
+CLSAMP_ALWAYS_INLINE ulong mix64(ulong v)
 {
     v ^= v >> 31;
     v *= 0x7FB5D329728EA185UL;
@@ -165,6 +165,30 @@ inline uint owen_permutation_element(ulong key, uint base, uint g, uint d)
             if (j0 + t + r[t] == p)
                 p = j0 + t;
     }
+    return p;
+}
+
+/* owen_permutation_element for d < g, where only chunk 0 matters, with P0 = b (b - 1) ...
+ * (b - len + 1) and T0 = 2^32 mod P0 of that chunk given: the same value. The word's last
+ * remainder after the len multiplications is x P0 mod 2^32, so accepting it takes one
+ * product, and only the draws r_0 .. r_d are made (for d = 0, the leading zero digits of
+ * small indices: one). A rejected word (probability below P0 / 2^32) takes the general path. */
+CLSAMP_ALWAYS_INLINE uint owen_low_element(ulong key, uint base, uint g, uint d, ulong P0, ulong T0)
+{
+    ulong x = (uint)key;                         /* owen_word(key, 0): block 0, low half */
+    const ulong last = (x * P0) & 0xFFFFFFFFUL;
+    if (last < P0 && last < T0)
+        return owen_permutation_element(key, base, g, d);
+    uint r[OWEN_MAX_CHUNK];
+    for (uint t = 0; t <= d; ++t) {
+        x *= base - t;
+        r[t] = (uint)(x >> 32);
+        x &= 0xFFFFFFFFUL;
+    }
+    uint p = d + r[d];
+    for (uint t = d; t-- > 0;)
+        if (t + r[t] == p)
+            p = t;
     return p;
 }
 

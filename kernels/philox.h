@@ -11,14 +11,6 @@
 
 #include "f64bits.h"
 
-/* Inline this function whatever its size. PoCL's inliner left the unrolled lane rounds of
- * philox4x32_10_x4 a call, with its words through memory: 1.6x slower. */
-#ifdef __clang__
-#define CLSAMP_ALWAYS_INLINE inline __attribute__((always_inline))
-#else
-#define CLSAMP_ALWAYS_INLINE inline
-#endif
-
 #define CLSAMP_PHILOX_M0 0xD2511F53u
 #define CLSAMP_PHILOX_M1 0xCD9E8D57u
 #define CLSAMP_PHILOX_W0 0x9E3779B9u
