@@ -435,7 +435,7 @@ class Sampler:
         total = sum(len(run) for run in runs)
         host = (self.host_output and self.backend == "opencl" and n is not None
                 and runtime.current_device().type == "cpu")
-        out = np.empty((total, n, self.d), dtype=np.float64) if n is not None else None
+        out = runtime.host_empty((total, n, self.d)) if n is not None else None
         infos, row, single_set = [], 0, None
         pieces = self._pieces(n) if n is not None else [(0, None)]
         if len(pieces) > 1:                     # sets larger than a device buffer, in pieces
