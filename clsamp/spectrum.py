@@ -16,19 +16,21 @@ Two ways to compute it, one knob between them:
 
 - ``method="direct"``: the exact sum, as the separable product S = A Bᵀ of per-point twiddle
   panels A[k, u] = e^{-2πiux_k}, B[k, v] = e^{-2πivy_k} (a complex GEMM, blocked in an
-  OpenCL kernel). Phases are reduced exactly in 64-bit fixed point. Cost ~ 4·r·N·R²
-  flops in 2-D (P(ω) = P(-ω) for real points, so only half the rows are computed).
+  OpenCL kernel; on a CPU device one real GEMM in the host's BLAS over the quarter plane
+  u, v >= 0, which gives S(u, ±v) at once). Phases are reduced exactly in 64-bit fixed
+  point. Cost ~ 4·r·N·R² flops in 2-D (P(ω) = P(-ω) for real points, so only half the
+  rows are computed), ~ 2·r·N·R² over the quarter plane.
 - ``method="fast"``: a type-1 non-uniform FFT (Dutt & Rokhlin 1993; Barnett, Magland &
-  af Klinteberg 2019): spread each point onto an oversampled grid with the "exponential of
-  semicircle" kernel (OpenCL), FFT the grid (scipy.fft, else numpy.fft, on the host),
-  divide by the kernel's Fourier transform. Cost ~ r·(N·w^d + (σR)^d log R).
+  af Klinteberg 2019; its parameters and kernel in :mod:`clsamp.nufft`): spread each
+  point onto an oversampled grid with the "exponential of semicircle" kernel (OpenCL),
+  FFT the grid (scipy.fft, else numpy.fft, on the host), divide by the kernel's Fourier
+  transform. Cost ~ r·(N·w^d + (σR)^d log R).
 
-Kernels are in ``kernels/spectrum.cl``; every one has a NumPy reference here
-(:func:`twiddles_reference`, :func:`direct_reference`, :func:`spread_reference`), and
+Kernels are in ``kernels/spectrum.cl`` and ``kernels/nufft.cl``; every one has a NumPy
+reference (:func:`twiddles_reference`, :func:`direct_reference`, :func:`spread_reference`), and
 ``backend="numpy"`` runs the whole computation on them.
 """
 
-import functools
 import math
 import os
 
@@ -36,6 +38,7 @@ import numpy as np
 
 from . import parallel, runtime
 from .errors import InvalidArgumentError
+from .nufft import MIN_TOL, grid_size, kernel_transform, nufft_parameters, spread_reference
 from .validation import check_choice, check_int, check_points, check_real, point_sets
 
 __all__ = [
@@ -46,7 +49,6 @@ __all__ = [
 
 METHODS = ("auto", "direct", "fast")
 BACKENDS = ("opencl", "numpy")
-MIN_TOL = 5e-13          # the fast path's floor in 2-D (w = 16, σ = 2: 1.7e-13 worst case)
 DEFAULT_FAST_TOL = 1e-12
 _MAD = ("-cl-mad-enable",)
 _PHASE = 2.0 * np.pi * 2.0**-64     # radians per unit of 64-bit fixed-point phase (exact scaling)
@@ -301,7 +303,7 @@ def _direct_seconds(r, n, resolution, d):
 
 def _fast_seconds(r, n, resolution, d, tol):
     sigma, width, _ = nufft_parameters(tol, d)
-    grid = _grid_size(resolution, sigma, width) ** d
+    grid = grid_size(resolution, sigma, width) ** d
     return r * (n * width**d * 2e-9 + grid * math.log2(grid) * 1e-9)
 
 
@@ -523,147 +525,7 @@ def _direct_host_gemm(batch, resolution, progress):
     return _unfold(H / (r * n), resolution)
 
 
-# -- fast: parameters, kernel transform ---------------------------------------------------
-SIGMAS = (1.25, 1.5, 2.0)     # oversampling factors the fast path chooses from
-MAX_WIDTH = 16                # nufft.cl holds a point's weights on one axis in 16 doubles
-
-
-@functools.cache
-def kernel_error(sigma, width):
-    """Worst relative error of one point's Fourier sum after spreading, FFT and deconvolution.
-
-    Measured: points at 64 offsets in a cell, spread, transformed and deconvolved on
-    M = 128σ nodes; max |S̃(k)/S(k) - 1| over |k| <= M/(2σ). N points: |P̃ - P| <= (2e + e²)·N
-    (the error depends on M/R, >= σ in use, not on R)."""
-    beta = _beta(sigma, width)
-    M = int(round(128 * sigma))
-    half = int(M / (2 * sigma))
-    x = (np.arange(64) + 0.5) / (64 * M) + 0.37
-    grids = spread_reference(x[:, None, None], M, width, beta)
-    k = np.arange(-half, half + 1)
-    F = np.fft.fft(grids, axis=-1)[:, k % M] / kernel_transform(k, M, width, beta)
-    return float(np.abs(F * np.exp(2j * np.pi * np.outer(x, k)) - 1.0).max())
-
-
-def _beta(sigma, width):
-    # finufft's shape parameter: 2.30 w for σ = 2, 0.97 π w (1 - 1/(2σ)) otherwise
-    return 2.30 * width if sigma == 2.0 else 0.97 * math.pi * width * (1.0 - 0.5 / sigma)
-
-
-def nufft_parameters(tol, d=2, sigma=None):
-    """(σ, w, β) of the spreading for a ``d``-dimensional spectrum with error below ``tol·N``.
-
-    For each σ in ``SIGMAS`` (or the one given) the smallest w <= 16 whose measured
-    :func:`kernel_error` e bounds the error in the worst case, N coincident points:
-    |S̃| <= (1 + e)^d |S|, so |P̃ - P| <= ((1 + e)^{2d} - 1)·N, required <= tol/1.2 (a
-    margin for offsets between the measured ones). Among those, the σ with the lowest
-    modelled cost (spreading ~ w^d per point against the FFT ~ (σR)^d per realization, in
-    the proportions of the benchmark case, 4096 points at R = 256).
-    """
-    best = None
-    for s in (SIGMAS if sigma is None else (sigma,)):
-        for width in range(2, MAX_WIDTH + 1):
-            e = kernel_error(s, width)
-            if (1.0 + e) ** (2 * d) - 1.0 <= tol / 1.2:
-                cost = 4096 * width**d * 3e-9 + (s * 256) ** d * 6e-9
-                if best is None or cost < best[0]:
-                    best = (cost, s, width)
-                break
-    if best is None:
-        raise InvalidArgumentError(
-            f"'tol' {tol:g} is below what the fast path reaches in {d}-D (about {MIN_TOL:g}); "
-            "use method='direct'")
-    _, s, width = best
-    return s, width, _beta(s, width)
-
-
-def _smooth(m):
-    """The smallest even 2^a 3^b 5^c >= m (sizes pocketfft transforms fastest)."""
-    m = max(2, int(m))
-    while True:
-        k = m
-        for p in (2, 3, 5):
-            while k % p == 0:
-                k //= p
-        if k == 1 and m % 2 == 0:
-            return m
-        m += 1
-
-
-def _grid_size(resolution, sigma, width):
-    return _smooth(max(math.ceil(sigma * resolution), 2 * width))
-
-
-def es_kernel(z, beta):
-    """φ(z) = exp(β(√(1 - z²) - 1)) on |z| <= 1, zero outside (Barnett et al. 2019)."""
-    z = np.asarray(z, dtype=np.float64)
-    inside = np.abs(z) <= 1.0
-    z2 = np.where(inside, z * z, 1.0)
-    return np.where(inside, np.exp(-beta * z2 / (1.0 + np.sqrt(1.0 - z2))), 0.0)  # no cancellation
-
-
-def kernel_transform(freqs, grid, width, beta, extended=False):
-    """ψ̂(k) = (w/2)∫_{-1}^{1} φ(z) cos(πkwz/M) dz: what spreading multiplies S(k) by.
-
-    Every point's error at k shares ψ̂(k)'s, so it adds up over the N points (at k = 0
-    always): computed to about an ulp. With z = sin θ the integrand
-    exp(-2β sin²(θ/2)) cos θ cos(πkw sin θ / M) is smooth, and 2w + 60 Gauss-Legendre
-    nodes in extended precision (where NumPy's longdouble has it, as on x86-64 Linux)
-    give it correctly rounded to float64 or one ulp off (``extended``: in longdouble)."""
-    x, weight = _gauss_legendre(2 * width + 60)
-    pi = np.arccos(np.longdouble(-1.0))
-    theta, weight = x * (pi / 2), weight * (pi / 2)
-    phi = np.exp(-2 * np.longdouble(beta) * np.sin(theta / 2) ** 2) * np.cos(theta)
-    freqs = np.asarray(freqs, dtype=np.float64).astype(np.longdouble)
-    phase = np.cos(pi * width / grid * np.outer(freqs, np.sin(theta)))
-    transform = np.longdouble(0.5) * width * (phase @ (weight * phi))
-    return transform if extended else transform.astype(np.float64)
-
-
-@functools.cache
-def _gauss_legendre(q):
-    """Gauss-Legendre nodes and weights on [-1, 1] in longdouble: NumPy's nodes, refined by
-    Newton's method on the three-term recurrence of P_q."""
-    def legendre(x):                      # P_q(x) and P_q'(x)
-        p0, p1 = np.ones_like(x), x
-        for m in range(2, q + 1):
-            p0, p1 = p1, ((2 * m - 1) * x * p1 - (m - 1) * p0) / m
-        return p1, q * (x * p1 - p0) / (x * x - 1)
-    x = np.polynomial.legendre.leggauss(q)[0].astype(np.longdouble)
-    for _ in range(3):
-        p, dp = legendre(x)
-        x = x - p / dp
-    _, dp = legendre(x)
-    return x, 2 / ((1 - x * x) * dp * dp)
-
-
-# -- fast: spreading, NumPy reference ------------------------------------------------------
-def spread_reference(points, grid, width, beta):
-    """Spread a batch (r, n, d) onto r periodic grids of ``grid`` nodes per axis.
-
-    NumPy reference of ``spectrum_spread``: node j of an axis gets φ((j - xM)·2/w) from every
-    point within w/2 nodes, a 2-D node the product of its axes' weights: (r, M) or (r, M, M).
-    """
-    batch = np.asarray(points, dtype=np.float64)
-    r, n, d = batch.shape
-    M = int(grid)
-    offsets = np.arange(width)
-    out = np.zeros((r,) + (M,) * d)
-    for k in range(r):
-        t = batch[k] * M
-        first = np.ceil(t - 0.5 * width).astype(np.int64)          # (n, d)
-        nodes = first[:, :, None] + offsets                        # (n, d, w)
-        weights = es_kernel((nodes - t[:, :, None]) * (2.0 / width), beta)
-        nodes %= M
-        if d == 1:
-            out[k] = np.bincount(nodes[:, 0].ravel(), weights[:, 0].ravel(), minlength=M)
-        else:
-            flat = nodes[:, 0, :, None] * M + nodes[:, 1, None, :]
-            w2 = weights[:, 0, :, None] * weights[:, 1, None, :]
-            out[k] = np.bincount(flat.ravel(), w2.ravel(), minlength=M * M).reshape(M, M)
-    return out
-
-
+# -- fast: OpenCL spreading, host FFT --------------------------------------------------
 def _fft_module():
     try:
         import scipy.fft as fft
@@ -701,7 +563,7 @@ def _add_squares(F, total):
 def _fast(batch, resolution, tol, backend, progress):
     r, n, d = batch.shape
     sigma, width, beta = nufft_parameters(tol, d)
-    M = _grid_size(resolution, sigma, width)
+    M = grid_size(resolution, sigma, width)
     half = resolution // 2
     # Σ_r |G_r|² for kx in [-R/2, R/2] (2-D) and ky in [0, R/2]
     total = np.zeros((resolution + 1, half + 1) if d == 2 else half + 1, np.longdouble)

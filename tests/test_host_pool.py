@@ -1,6 +1,7 @@
-"""Host output memory that is recycled (runtime.host_empty): a sampler's output is written in
-place (zero-copy on a CPU device) into memory an earlier output freed, never into memory an
-array or view still uses, and gives the same bits as the copied and the NumPy paths."""
+"""Host output memory that is recycled (host_memory.host_empty): a sampler's output is
+written in place (zero-copy on a CPU device) into memory an earlier output freed, never into
+memory an array or view still uses, and gives the same bits as the copied and the NumPy
+paths."""
 
 import gc
 
@@ -8,16 +9,16 @@ import numpy as np
 import pytest
 
 import clsamp
-from clsamp import runtime
+from clsamp import host_memory
 
 N = 2**18                       # 4 MiB of 2-D points (512², for jittered): above HOST_POOL_MIN
 
 
 @pytest.fixture(autouse=True)
 def empty_pool():
-    runtime.release_host_memory()
+    host_memory.release_host_memory()
     yield
-    runtime.release_host_memory()
+    host_memory.release_host_memory()
 
 
 def address(a):
@@ -36,7 +37,7 @@ def test_recycled_output_equals_a_fresh_and_a_copied_one(name, params, monkeypat
     again = s.sample(N, realizations=2)
     assert address(again) == where                           # the same memory, reused ...
     assert np.array_equal(again, kept)                       # ... and wholly rewritten
-    monkeypatch.setattr(runtime, "HOST_POOL_BYTES", 0)       # no pool: np.empty
+    monkeypatch.setattr(host_memory, "HOST_POOL_BYTES", 0)       # no pool: np.empty
     assert np.array_equal(s.sample(N, realizations=2), kept)
     reference = clsamp.make_sampler(name, d=2, seed=5, backend="numpy", **params)
     assert np.array_equal(reference.sample(N, realizations=2), kept)
@@ -57,26 +58,26 @@ def test_memory_a_view_still_uses_is_never_handed_out():
     freed = {where} | {address(b) for b in others}
     del view, column, others
     gc.collect()
-    assert runtime._host_pool.held == 4 * N * 2 * 8          # all four blocks came back
+    assert host_memory._host_pool.held == 4 * N * 2 * 8          # all four blocks came back
     assert address(s.sample(N)) in freed
 
 
 def test_the_pool_holds_at_most_its_cap(monkeypatch):
-    monkeypatch.setattr(runtime, "HOST_POOL_BYTES", 5 * 2**20)
-    arrays = [runtime.host_empty((2**20 // 8,)) for _ in range(8)]     # 1 MiB each
+    monkeypatch.setattr(host_memory, "HOST_POOL_BYTES", 5 * 2**20)
+    arrays = [host_memory.host_empty((2**20 // 8,)) for _ in range(8)]     # 1 MiB each
     del arrays
     gc.collect()
-    assert runtime._host_pool.held <= 5 * 2**20
-    assert runtime._host_pool.held == 5 * 2**20
+    assert host_memory._host_pool.held <= 5 * 2**20
+    assert host_memory._host_pool.held == 5 * 2**20
 
 
 def test_small_and_huge_outputs_are_plain_numpy_arrays(monkeypatch):
-    small = runtime.host_empty((100, 2))
+    small = host_memory.host_empty((100, 2))
     assert small.base is None and small.flags.owndata
-    monkeypatch.setattr(runtime, "HOST_POOL_BYTES", 2**21)
-    huge = runtime.host_empty((2**19,))                      # 4 MiB > the cap
+    monkeypatch.setattr(host_memory, "HOST_POOL_BYTES", 2**21)
+    huge = host_memory.host_empty((2**19,))                      # 4 MiB > the cap
     assert huge.base is None
-    pooled = runtime.host_empty((2**17,))                    # 1 MiB
+    pooled = host_memory.host_empty((2**17,))                    # 1 MiB
     assert pooled.base is not None and pooled.flags.c_contiguous and pooled.flags.writeable
     assert pooled.dtype == np.float64 and pooled.shape == (2**17,)
 

@@ -15,11 +15,11 @@ PACKAGE = ROOT / "clsamp"
 
 # docs/design.md, "Layers": a module may import its own layer and the layers before it.
 LAYERS = [
-    ("core", {"errors", "validation", "runtime", "philox", "number_theory", "permutation", "io",
-              "parallel"}),
+    ("core", {"errors", "validation", "runtime", "host_memory", "philox", "number_theory",
+              "permutation", "io", "parallel"}),
     ("geometry", {"geometry"}),
     ("samplers", {"samplers"}),
-    ("analysis", {"spectrum", "point_metrics", "metrics"}),
+    ("analysis", {"nufft", "spectrum", "point_metrics", "metrics"}),
     ("experiments", {"integrands", "families", "variance", "convergence", "theory", "integration"}),
     ("render", {"scene", "pixel_sampling", "render_numpy", "render"}),
     ("report", {"plots", "report", "tour", "cli", "__main__", "__init__"}),

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import clsamp
-from clsamp import philox, plots, spectrum
+from clsamp import nufft, philox, plots, spectrum
 from clsamp.errors import InvalidArgumentError
 
 
@@ -146,9 +146,9 @@ EXTENDED = np.finfo(np.longdouble).eps < np.finfo(np.float64).eps
 def test_kernel_transform_to_an_ulp(sigma, width):
     # against 40 panels of 24 Gauss-Legendre nodes in z itself, graded towards z = ±1
     # where φ's derivative is singular: a different rule for the same integral
-    beta, M = spectrum._beta(sigma, width), 512
+    beta, M = nufft._beta(sigma, width), 512
     k = np.array([0, 1, 17, 64, 128, M // (2 * sigma)], dtype=np.longdouble)   # as far as used
-    x, wt = spectrum._gauss_legendre(24)
+    x, wt = nufft._gauss_legendre(24)
     edges = 1 - (1 - np.linspace(0, 1, 41, dtype=np.longdouble)) ** 3       # 0 .. 1, graded
     total = np.zeros(k.size, np.longdouble)
     for a, b in zip(edges[:-1], edges[1:], strict=True):
@@ -156,7 +156,7 @@ def test_kernel_transform_to_an_ulp(sigma, width):
         phi = np.exp(-beta * z * z / (1 + np.sqrt(1 - z * z)))
         total += (b - a) * (np.cos(np.outer(k, z) * (np.pi * width / M)) @ (wt * phi))  # 2x halves
     reference = (width / 2 * total).astype(np.float64)
-    got = spectrum.kernel_transform(k.astype(np.float64), M, width, beta)
+    got = nufft.kernel_transform(k.astype(np.float64), M, width, beta)
     assert np.abs(got / reference - 1).max() <= 4 * np.finfo(np.float64).eps
 
 
@@ -171,7 +171,7 @@ def test_fast_at_the_floor_is_exact_at_zero():
 
 
 def test_kernel_error_decreases_with_width():
-    errors = [spectrum.kernel_error(2.0, w) for w in (4, 8, 12, 16)]
+    errors = [nufft.kernel_error(2.0, w) for w in (4, 8, 12, 16)]
     assert all(a > b for a, b in zip(errors[:-1], errors[1:], strict=True))
     assert errors[-1] < 1e-13
 

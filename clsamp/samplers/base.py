@@ -27,7 +27,7 @@ import difflib
 
 import numpy as np
 
-from .. import runtime
+from .. import host_memory, runtime
 from ..errors import InvalidArgumentError
 from ..validation import MAX_UINT32, check_choice, check_int, check_positive_int, check_seed
 
@@ -435,7 +435,7 @@ class Sampler:
         total = sum(len(run) for run in runs)
         host = (self.host_output and self.backend == "opencl" and n is not None
                 and runtime.current_device().type == "cpu")
-        out = runtime.host_empty((total, n, self.d)) if n is not None else None
+        out = host_memory.host_empty((total, n, self.d)) if n is not None else None
         infos, row, single_set = [], 0, None
         pieces = self._pieces(n) if n is not None else [(0, None)]
         if len(pieces) > 1:                     # sets larger than a device buffer, in pieces
