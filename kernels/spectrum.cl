@@ -35,30 +35,8 @@ inline ulong fixed64(const double x)
     return ((ulong)(uint)h << 32) | (ulong)lo;
 }
 
-/* e^{-2 pi i theta / 2^64}; theta is a phase already reduced modulo 1 (uint64 wraparound). */
-inline double2 twiddle(const ulong theta)
-{
-    const double angle = (double)(long)theta * PHASE_TO_RADIANS;
-    double c;
-    const double s = sincos(angle, &c);
-    return (double2)(c, -s);
-}
-
-inline double2 cmul(const double2 a, const double2 b)
-{
-    return (double2)(a.x * b.x - a.y * b.y, a.x * b.y + a.y * b.x);
-}
-
-/* Twiddles e^{-2 pi i f x_k} of one coordinate (axis) for the frequencies f = f0 + m,
- * m in [0, count), count a multiple of `tile`, packed for the product kernels: one panel per
- * tile of frequencies, point-major inside the panel, `tile` real parts then `tile` imaginary
- * parts per point:
- *     out[(((r * (count / tile) + m / tile) * n + k) * 2 + {0: re, 1: im}) * tile + m % tile]
- * Only count / FINE + FINE sincos per point: e(fX) = e((f0 + q FINE) X) * e(s X), each factor
- * from an exactly reduced phase, so every twiddle is within a few ulps.
- * Grid (n, realizations). */
-/* e^{-2 pi i theta_l / 2^64} for four phases at once: PoCL's double4 sincos runs far faster
- * than four scalar calls. */
+/* e^{-2 pi i theta_l / 2^64} for four phases already reduced modulo 1 (uint64 wraparound)
+ * at once: PoCL's double4 sincos runs far faster than four scalar calls. */
 inline void twiddle4(const ulong4 theta, double4 *re, double4 *im)
 {
     const double4 angle = convert_double4(as_long4(theta)) * PHASE_TO_RADIANS;
@@ -68,6 +46,18 @@ inline void twiddle4(const ulong4 theta, double4 *re, double4 *im)
     *im = -s;
 }
 
+#if FINE % 4
+#error "FINE must be a multiple of 4 (the steps are made four at a time)"
+#endif
+
+/* Twiddles e^{-2 pi i f x_k} of one coordinate (axis) for the frequencies f = f0 + m,
+ * m in [0, count), count a multiple of `tile`, packed for the product kernels: one panel per
+ * tile of frequencies, point-major inside the panel, `tile` real parts then `tile` imaginary
+ * parts per point:
+ *     out[(((r * (count / tile) + m / tile) * n + k) * 2 + {0: re, 1: im}) * tile + m % tile]
+ * Only count / FINE + FINE sincos per point: e(fX) = e((f0 + q FINE) X) * e(s X), each factor
+ * from an exactly reduced phase, so every twiddle is within a few ulps.
+ * Grid (n, realizations). */
 __kernel void spectrum_twiddles(__global const double *points, __global double *out,
                                 const uint n, const uint d, const uint axis, const long f0,
                                 const uint count, const uint tile)
