@@ -324,6 +324,22 @@ __kernel void radical_points(__global ulong *out, __global const uint *bases,
         for (uint k = 0; k < m; ++k)
             hash[k] = digit_hash(seed64, k);
 #endif
+        if (base == 2u) {
+            /* v is the index's bits reversed, each digit's randomization an xor: no carries,
+             * no division (v / 2^32 is exact) */
+            uint mask = 0;
+            for (uint k = 0; k < 32; ++k)
+                mask |= (uint)LD_DIGIT(0u, k) << (31 - k);
+            for (uint t = 0; t < count; ++t) {
+                const ulong x = f64_scaled(reverse_bits32(first + t) ^ mask, -32);
+#if RANDOMIZE == LD_SHIFT
+                p[(size_t)t * d] = f64_shift_mod1(x, u);
+#else
+                p[(size_t)t * d] = x;
+#endif
+            }
+            continue;
+        }
         ulong weight[32];   /* b^(m-1-k): the place of digit k in the numerator */
         weight[m - 1] = 1;
         for (uint k = m - 1; k > 0; --k)
