@@ -17,9 +17,9 @@
 #define CLSAMP_FP64 1
 #endif
 
-/* Inline this function whatever its size (every kernel includes this header). PoCL's
- * inliner left the unrolled lane rounds of philox4x32_10_x4 a call, their words through
- * memory: 1.6x slower (docs/performance.md). */
+/* Inline this function whatever its size (every kernel includes this header): PoCL's
+ * inliner can leave a large unrolled function a call, its results through memory
+ * (docs/performance.md, "Philox in 64-bit lanes, always inlined"). */
 #ifdef __clang__
 #define CLSAMP_ALWAYS_INLINE inline __attribute__((always_inline))
 #else

@@ -93,10 +93,9 @@ inline double clsamp_uniform(uint2 key, uint stream, uint realization, uint inde
 /* philox4x32_10 on four counters at once, lane l holding the counter (c0.l, c1.l, c2.l,
  * c3.l): the same words as four calls, computed in vector lanes (PoCL does not vectorize
  * across work-items when a kernel has a loop). The words ride in the low halves of 64-bit
- * lanes, so the 32x32->64 products need no conversions between uint4 and ulong4 (those
- * shuffles had made it 1.5x slower on PoCL); the high halves hold garbage that the masks
- * before each multiply and at the end drop. 256-bit vectors only (docs/design.md,
- * "Kernels and the runtime"). */
+ * lanes, so the 32x32->64 products need no shuffles between uint4 and ulong4; the high
+ * halves hold garbage that the masks before each multiply and at the end drop. 256-bit
+ * vectors only (docs/design.md, "Kernels and the runtime"). */
 CLSAMP_ALWAYS_INLINE void philox4x32_10_x4(uint4 c0, uint4 c1, uint4 c2, uint4 c3, uint2 key,
                              uint4 *w0, uint4 *w1, uint4 *w2, uint4 *w3)
 {
