@@ -277,10 +277,6 @@ __kernel void radical_points(__global ulong *out, __global const uint *bases,
         uint offset[32];
         for (uint k = 0; k < tabulated; ++k)
             offset[k] = segment[4 * k + 3];
-        ulong P0 = 1;                                  /* chunk 0's product of bounds */
-        for (uint t = 0; t < min(g, base); ++t)
-            P0 *= base - t;
-        const ulong T0 = 0x100000000UL % P0;
         uint top = m;                                  /* digits k >= top of the index are 0 */
         while (top > 0 && digit[top - 1] == 0)
             --top;
@@ -294,15 +290,14 @@ __kernel void radical_points(__global ulong *out, __global const uint *bases,
             }
             for (; k < top; ++k) {
                 const ulong key = mix64(seed64 ^ (prefix + power));
-                v = v * base + (digit[k] < g ? owen_low_element(key, base, g, digit[k], P0, T0)
-                                             : owen_permutation_element(key, base, g, digit[k]));
+                v = v * base + owen_permutation_element(key, base, g, digit[k]);
                 prefix += (ulong)digit[k] * power;
                 power *= base;
             }
             /* the leading zeros: prefix is the whole index, and each level's π(0) is its
              * first draw; the levels are independent, so their hashes overlap */
             for (; k < m; ++k) {
-                v = v * base + owen_low_element(mix64(seed64 ^ (prefix + power)), base, g, 0, P0, T0);
+                v = v * base + owen_permutation_element(mix64(seed64 ^ (prefix + power)), base, g, 0);
                 power *= base;
             }
             p[(size_t)t * d] = f64_div(v, bm, 0);
@@ -424,7 +419,7 @@ __kernel void owen_tables(__global uint *owen_table, __global const uint *owen_l
         a[i] = i;
     uint draws[OWEN_MAX_CHUNK];
     for (uint c = 0; c * g < base; ++c) {
-        const uint len = owen_chunk_draws(key, base, g, c, draws);
+        const uint len = owen_chunk_draws(key, base, g, c, draws, g);
         for (uint t = 0; t < len; ++t) {
             const uint i = c * g + t;
             const uint other = i + draws[t];

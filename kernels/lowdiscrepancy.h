@@ -123,72 +123,55 @@ inline uint owen_word(ulong key, ulong slot)
     return (slot & 1) ? (uint)(block >> 32) : (uint)block;
 }
 
-/* The draws r_j, j in [c g, c g + len), of chunk c: r[t] uniform on [0, b - c g - t), from
- * one 32-bit word by multiplications (a rejected word, rare, is replaced). Returns len. */
-inline uint owen_chunk_draws(ulong key, uint base, uint g, uint c, uint *r)
+/* The draws r_j, j in [c g, c g + need), of chunk c: r[t] uniform on [0, b - c g - t), from
+ * one 32-bit word by multiplications (a rejected word, rare, is replaced). The word's last
+ * remainder after all len multiplications is x P mod 2^32 (P the product of the bounds),
+ * so accepting it takes one product and only the draws asked for are made. Returns len. */
+CLSAMP_ALWAYS_INLINE uint owen_chunk_draws(ulong key, uint base, uint g, uint c, uint *r, uint need)
 {
     const uint j0 = c * g;
     const uint len = min(g, base - j0);
+    ulong product = 1;
+    for (uint t = 0; t < len; ++t)
+        product *= base - j0 - t;
     for (ulong a = 0;; ++a) {
         ulong x = owen_word(key, (ulong)c + a * OWEN_ATTEMPT_STRIDE);
-        ulong product = 1;
-        for (uint t = 0; t < len; ++t) {
-            const uint s = base - j0 - t;
-            x *= s;
+        const ulong last = (x * product) & 0xFFFFFFFFUL;
+        /* 2^32 mod P < P: most words pass the first test without a division */
+        if (last < product && last < 0x100000000UL % product)
+            continue;
+        for (uint t = 0; t < min(need, len); ++t) {
+            x *= base - j0 - t;
             r[t] = (uint)(x >> 32);
             x &= 0xFFFFFFFFUL;
-            product *= s;
         }
-        /* 2^32 mod P < P: most words pass the first test without a division */
-        if (x >= product || x >= 0x100000000UL % product)
-            return len;
+        return len;
     }
 }
 
 /* π(d): what position d holds after the Fisher-Yates shuffle (swap j, j + r_j for
  * j = 0, 1, ...). Walk back from p = d + r_d through the swaps j < d, taking p = j where
- * j + r_j = p; chunks are made from d's down to 0, so r needs one chunk of room. */
-inline uint owen_permutation_element(ulong key, uint base, uint g, uint d)
+ * j + r_j = p; chunks are made from d's down to 0, so r needs one chunk of room. For
+ * d = 0 (the leading zero digits of small indices) that is one product and one draw. */
+CLSAMP_ALWAYS_INLINE uint owen_permutation_element(ulong key, uint base, uint g, uint d)
 {
     uint r[OWEN_MAX_CHUNK];
     const uint cd = d < g ? 0u : d / g;
     uint p = 0;
     for (uint c = cd + 1; c-- > 0;) {
-        owen_chunk_draws(key, base, g, c, r);
         const uint j0 = c * g;
         uint top = g;
         if (c == cd) {
             top = d - j0;
+            owen_chunk_draws(key, base, g, c, r, top + 1);
             p = d + r[top];
+        } else {
+            owen_chunk_draws(key, base, g, c, r, g);
         }
         for (uint t = top; t-- > 0;)
             if (j0 + t + r[t] == p)
                 p = j0 + t;
     }
-    return p;
-}
-
-/* owen_permutation_element for d < g, where only chunk 0 matters, with P0 = b (b - 1) ...
- * (b - len + 1) and T0 = 2^32 mod P0 of that chunk given: the same value. The word's last
- * remainder after the len multiplications is x P0 mod 2^32, so accepting it takes one
- * product, and only the draws r_0 .. r_d are made (for d = 0, the leading zero digits of
- * small indices: one). A rejected word (probability below P0 / 2^32) takes the general path. */
-CLSAMP_ALWAYS_INLINE uint owen_low_element(ulong key, uint base, uint g, uint d, ulong P0, ulong T0)
-{
-    ulong x = (uint)key;                         /* owen_word(key, 0): block 0, low half */
-    const ulong last = (x * P0) & 0xFFFFFFFFUL;
-    if (last < P0 && last < T0)
-        return owen_permutation_element(key, base, g, d);
-    uint r[OWEN_MAX_CHUNK];
-    for (uint t = 0; t <= d; ++t) {
-        x *= base - t;
-        r[t] = (uint)(x >> 32);
-        x &= 0xFFFFFFFFUL;
-    }
-    uint p = d + r[d];
-    for (uint t = d; t-- > 0;)
-        if (t + r[t] == p)
-            p = t;
     return p;
 }
 
