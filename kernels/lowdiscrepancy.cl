@@ -197,6 +197,17 @@ __kernel void sobol_points(__global ulong *out, __global const uint *matrices,
  * index changes digit 0 and, on a carry, the next ones. Owen scrambling depends on every
  * digit below, so it maps all m digits for each point: at the depths that owen_tables
  * tabulated (owen_layout) by a look-up, deeper by owen_permutation_element. */
+#if RANDOMIZE == LD_OWEN
+/* The lanes of pi that owen_*4 rejected, redone one by one. */
+#define OWEN_REDO(pi, bad, key, dk)                                                           \
+    if (any(bad)) {                                                                           \
+        if (bad.s0) pi.s0 = owen_permutation_element(key.s0, base, g, dk);                    \
+        if (bad.s1) pi.s1 = owen_permutation_element(key.s1, base, g, dk);                    \
+        if (bad.s2) pi.s2 = owen_permutation_element(key.s2, base, g, dk);                    \
+        if (bad.s3) pi.s3 = owen_permutation_element(key.s3, base, g, dk);                    \
+    }
+#endif
+
 __kernel void radical_points(__global ulong *out, __global const uint *bases,
                              const uint n, const uint d, const uint start, const uint realization0,
                              const uint key_lo, const uint key_hi, const uint scramble_stream,
@@ -280,33 +291,85 @@ __kernel void radical_points(__global ulong *out, __global const uint *bases,
         uint top = m;                                  /* digits k >= top of the index are 0 */
         while (top > 0 && digit[top - 1] == 0)
             --top;
-        for (uint t = 0; t < count; ++t) {
-            ulong v = 0, prefix = 0, power = 1;
-            uint k = 0;
-            for (; k < tabulated; ++k) {
-                v = v * base + tab[offset[k] + (uint)prefix * base + digit[k]];
-                prefix += (ulong)digit[k] * power;
-                power *= base;
-            }
-            for (; k < top; ++k) {
-                const ulong key = mix64(seed64 ^ (prefix + power));
-                v = v * base + owen_permutation_element(key, base, g, digit[k]);
-                prefix += (ulong)digit[k] * power;
-                power *= base;
-            }
-            /* the leading zeros: prefix is the whole index, and each level's π(0) is its
-             * first draw; the levels are independent, so their hashes overlap */
-            for (; k < m; ++k) {
-                v = v * base + owen_permutation_element(mix64(seed64 ^ (prefix + power)), base, g, 0);
-                power *= base;
-            }
-            p[(size_t)t * d] = f64_div(v, bm, 0);
-            for (uint k = 0; k < m; ++k) {
-                if (++digit[k] < base) {
-                    top = max(top, k + 1);
-                    break;
+        /* Quads: 4 consecutive points whose digits k >= s agree (s the tabulated depths, at
+         * least 1) map those digits together, a point a lane (vh: their part of v); the
+         * digits below s, and points outside quads, each point on its own. */
+        ulong product0 = 1;
+        for (uint t = 0; t < min(g, base); ++t)
+            product0 *= base - t;
+        const ulong limit0 = 0x100000000UL % product0;
+        const uint s = max(tabulated, 1u);
+        ulong bs = 1, low = 0;                         /* b^s; the index mod b^s */
+        for (uint k = s; k-- > 0;) {
+            bs *= base;
+            low = low * base + digit[k];
+        }
+        ulong scale = 1;                               /* b^(m-s): the place of vh */
+        for (uint k = s; k < m; ++k)
+            scale *= base;
+        for (uint t = 0; t < count;) {
+            ulong vh[4];
+            uint lanes = 1, depth = m;
+            if (count - t >= 4 && low + 3 < bs) {
+                lanes = 4;
+                depth = s;
+                ulong4 prefix = low + (ulong4)(0, 1, 2, 3), v4 = 0;
+                ulong power = bs;
+                uint k = s;
+                for (; k < top; ++k) {
+                    const ulong4 key = mix64_4(seed64 ^ (prefix + power));
+                    int4 bad;
+                    uint4 pi = owen_permutation_element4(key, base, g, digit[k], product0, limit0, &bad);
+                    OWEN_REDO(pi, bad, key, digit[k]);
+                    v4 = v4 * base + convert_ulong4(pi);
+                    prefix += (ulong)digit[k] * power;
+                    power *= base;
                 }
-                digit[k] = 0;
+                for (; k < m; ++k) {
+                    const ulong4 key = mix64_4(seed64 ^ (prefix + power));
+                    int4 bad;
+                    uint4 pi = owen_first_draw4(key, base, product0, limit0, &bad);
+                    OWEN_REDO(pi, bad, key, 0u);
+                    v4 = v4 * base + convert_ulong4(pi);
+                    power *= base;
+                }
+                vh[0] = v4.s0;
+                vh[1] = v4.s1;
+                vh[2] = v4.s2;
+                vh[3] = v4.s3;
+            }
+            for (uint l = 0; l < lanes; ++l, ++t) {
+                ulong v = 0, prefix = 0, power = 1;
+                uint k = 0;
+                for (; k < tabulated; ++k) {
+                    v = v * base + tab[offset[k] + (uint)prefix * base + digit[k]];
+                    prefix += (ulong)digit[k] * power;
+                    power *= base;
+                }
+                for (; k < min(top, depth); ++k) {
+                    const ulong key = mix64(seed64 ^ (prefix + power));
+                    v = v * base + owen_permutation_element(key, base, g, digit[k]);
+                    prefix += (ulong)digit[k] * power;
+                    power *= base;
+                }
+                /* the leading zeros: prefix is the whole index, and each level's π(0) is its
+                 * first draw; the levels are independent, so their hashes overlap */
+                for (; k < depth; ++k) {
+                    v = v * base + owen_permutation_element(mix64(seed64 ^ (prefix + power)), base, g, 0);
+                    power *= base;
+                }
+                if (lanes == 4)
+                    v = v * scale + vh[l];
+                p[(size_t)t * d] = f64_div(v, bm, 0);
+                for (uint k = 0; k < m; ++k) {
+                    if (++digit[k] < base) {
+                        top = max(top, k + 1);
+                        break;
+                    }
+                    digit[k] = 0;
+                }
+                if (++low == bs)
+                    low = 0;
             }
         }
 #else

@@ -47,15 +47,19 @@ inline uint owen_scramble_base2(uint x, uint seed)
     return reverse_bits32(lk_hash(reverse_bits32(x), seed));
 }
 
-CLSAMP_ALWAYS_INLINE ulong mix64(ulong v)
-{
-    v ^= v >> 31;
-    v *= 0x7FB5D329728EA185UL;
-    v ^= v >> 27;
-    v *= 0x81DADEF4BC2DD44DUL;
-    v ^= v >> 33;
-    return v;
-}
+/* mix64 of one word, and mix64_4 of four words in lanes */
+#define CLSAMP_MIX64(name, T)             \
+    CLSAMP_ALWAYS_INLINE T name(T v)      \
+    {                                     \
+        v ^= v >> 31;                     \
+        v *= 0x7FB5D329728EA185UL;        \
+        v ^= v >> 27;                     \
+        v *= 0x81DADEF4BC2DD44DUL;        \
+        v ^= v >> 33;                     \
+        return v;                         \
+    }
+CLSAMP_MIX64(mix64, ulong)
+CLSAMP_MIX64(mix64_4, ulong4)
 
 inline uint digit_hash(ulong seed64, ulong key)
 {
@@ -173,6 +177,70 @@ CLSAMP_ALWAYS_INLINE uint owen_permutation_element(ulong key, uint base, uint g,
                 p = j0 + t;
     }
     return p;
+}
+
+/* Four nodes at once, one a lane, for the same d: owen_permutation_element of each key, and
+ * owen_first_draw4 its π(0). product0 and limit0 are chunk 0's product of bounds and 2^32 mod
+ * it (owen_chunk_draws). A lane whose word owen_chunk_draws would reject (rare) gets -1 in
+ * *rejected and a wrong element; the caller redoes it with owen_permutation_element. */
+CLSAMP_ALWAYS_INLINE int4 owen_chunk_draws4(ulong4 key, uint base, uint g, uint c, uint4 *r,
+                                            uint need, ulong product0, ulong limit0)
+{
+    const uint j0 = c * g;
+    const uint len = min(g, base - j0);
+    ulong product = product0;
+    if (c > 0) {
+        product = 1;
+        for (uint t = 0; t < len; ++t)
+            product *= base - j0 - t;
+    }
+    const ulong u = (ulong)c >> 1;
+    const ulong4 block = u == 0 ? key : mix64_4(key ^ u);
+    ulong4 x = (c & 1) ? block >> 32 : block & 0xFFFFFFFFUL;
+    const ulong4 last = (x * product) & 0xFFFFFFFFUL;
+    const long4 small = last < product;
+    int4 bad = 0;
+    if (any(small))
+        bad = convert_int4(small & (last < (c > 0 ? 0x100000000UL % product : limit0)));
+    for (uint t = 0; t < min(need, len); ++t) {
+        x *= base - j0 - t;
+        r[t] = convert_uint4(x >> 32);
+        x &= 0xFFFFFFFFUL;
+    }
+    return bad;
+}
+
+CLSAMP_ALWAYS_INLINE uint4 owen_permutation_element4(ulong4 key, uint base, uint g, uint d,
+                                                     ulong product0, ulong limit0, int4 *rejected)
+{
+    uint4 r[OWEN_MAX_CHUNK];
+    const uint cd = d < g ? 0u : d / g;
+    uint4 p = 0;
+    int4 bad = 0;
+    for (uint c = cd + 1; c-- > 0;) {
+        const uint j0 = c * g;
+        uint top = g;
+        if (c == cd) {
+            top = d - j0;
+            bad |= owen_chunk_draws4(key, base, g, c, r, top + 1, product0, limit0);
+            p = d + r[top];
+        } else {
+            bad |= owen_chunk_draws4(key, base, g, c, r, g, product0, limit0);
+        }
+        for (uint t = top; t-- > 0;)
+            p = j0 + t + r[t] == p ? (uint4)(j0 + t) : p;
+    }
+    *rejected = bad;
+    return p;
+}
+
+CLSAMP_ALWAYS_INLINE uint4 owen_first_draw4(ulong4 key, uint base, ulong product0, ulong limit0,
+                                            int4 *rejected)
+{
+    const ulong4 x = key & 0xFFFFFFFFUL;
+    const ulong4 last = (x * product0) & 0xFFFFFFFFUL;
+    *rejected = convert_int4(last < product0 & last < limit0);
+    return convert_uint4((x * base) >> 32);
 }
 
 #endif
