@@ -200,7 +200,7 @@ __kernel void sobol_points(__global ulong *out, __global const uint *matrices,
 #if RANDOMIZE == LD_OWEN
 /* The lanes of pi that owen_*4 rejected, redone one by one. */
 #define OWEN_REDO(pi, bad, key, dk)                                                           \
-    if (any(bad)) {                                                                           \
+    if (ld_any4(bad)) {                                                                       \
         if (bad.s0) pi.s0 = owen_permutation_element(key.s0, base, g, dk);                    \
         if (bad.s1) pi.s1 = owen_permutation_element(key.s1, base, g, dk);                    \
         if (bad.s2) pi.s2 = owen_permutation_element(key.s2, base, g, dk);                    \
@@ -304,15 +304,19 @@ __kernel void radical_points(__global ulong *out, __global const uint *bases,
             bs *= base;
             low = low * base + digit[k];
         }
-        ulong scale = 1;                               /* b^(m-s): the place of vh */
-        for (uint k = s; k < m; ++k)
-            scale *= base;
+        ulong place[32];                               /* b^(m-1-k): the place of digit k */
+        place[m - 1] = 1;
+        for (uint k = m - 1; k > 0; --k)
+            place[k - 1] = place[k] * base;
+        const ulong scale = place[s - 1];              /* b^(m-s): the place of vh */
         for (uint t = 0; t < count;) {
             ulong vh[4];
             uint lanes = 1, depth = m;
             if (count - t >= 4 && low + 3 < bs) {
                 lanes = 4;
                 depth = s;
+                /* v4 = sum of π_k b^(m-1-k): the levels' products are independent, where
+                 * Horner's v4 b + π_k would chain a 64-bit vector multiply per level */
                 ulong4 prefix = low + (ulong4)(0, 1, 2, 3), v4 = 0;
                 ulong power = bs;
                 uint k = s;
@@ -321,7 +325,7 @@ __kernel void radical_points(__global ulong *out, __global const uint *bases,
                     int4 bad;
                     uint4 pi = owen_permutation_element4(key, base, g, digit[k], product0, limit0, &bad);
                     OWEN_REDO(pi, bad, key, digit[k]);
-                    v4 = v4 * base + convert_ulong4(pi);
+                    v4 += convert_ulong4(pi) * place[k];
                     prefix += (ulong)digit[k] * power;
                     power *= base;
                 }
@@ -330,7 +334,7 @@ __kernel void radical_points(__global ulong *out, __global const uint *bases,
                     int4 bad;
                     uint4 pi = owen_first_draw4(key, base, product0, limit0, &bad);
                     OWEN_REDO(pi, bad, key, 0u);
-                    v4 = v4 * base + convert_ulong4(pi);
+                    v4 += convert_ulong4(pi) * place[k];
                     power *= base;
                 }
                 vh[0] = v4.s0;
@@ -346,7 +350,7 @@ __kernel void radical_points(__global ulong *out, __global const uint *bases,
                     prefix += (ulong)digit[k] * power;
                     power *= base;
                 }
-                for (; k < min(top, depth); ++k) {
+                for (; k < ld_min(top, depth); ++k) {
                     const ulong key = mix64(seed64 ^ (prefix + power));
                     v = v * base + owen_permutation_element(key, base, g, digit[k]);
                     prefix += (ulong)digit[k] * power;
@@ -363,7 +367,7 @@ __kernel void radical_points(__global ulong *out, __global const uint *bases,
                 p[(size_t)t * d] = f64_div(v, bm, 0);
                 for (uint k = 0; k < m; ++k) {
                     if (++digit[k] < base) {
-                        top = max(top, k + 1);
+                        top = ld_max(top, k + 1);
                         break;
                     }
                     digit[k] = 0;
