@@ -46,7 +46,7 @@ def shift_vectors(seed, realizations, d):
     return philox.uniform(seed, philox.Stream.SHIFT, r, 0, np.arange(d, dtype=np.uint32)[None, :])
 
 
-OWEN_TABLE_ENTRIES_PER_DIGIT = 2**13   # a depth's table: at most this times b entries
+OWEN_TABLE_ENTRIES_PER_DIGIT = 2**15   # a depth's table: at most this times b entries
 OWEN_TABLE_BYTES = 64 * 2**20          # all tables of one launch
 OWEN_LOOP_BASE = 2048                  # largest owen base where runtime.loop_limit() applies
 
