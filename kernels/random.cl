@@ -35,8 +35,16 @@ __kernel void random_points(__global ulong *out, const uint n, const uint d,
             const ulong4 x = clsamp_unit4_bits(w0, w1), y = clsamp_unit4_bits(w2, w3);
             __global ulong *p = out + ((size_t)r * n + i + 4 * s) * d;
             if (lanes == POINTS_PER_ITEM && d == 2u) {     /* four points: 8 consecutive words */
-                vstore4((ulong4)(x.s0, y.s0, x.s1, y.s1), 0, p);
-                vstore4((ulong4)(x.s2, y.s2, x.s3, y.s3), 1, p);
+                /* element by element, which the compiler merges into vector stores: PoCL
+                 * calls its vstore4 built-in as a function */
+                p[0] = x.s0;
+                p[1] = y.s0;
+                p[2] = x.s1;
+                p[3] = y.s1;
+                p[4] = x.s2;
+                p[5] = y.s2;
+                p[6] = x.s3;
+                p[7] = y.s3;
             } else if (lanes == POINTS_PER_ITEM) {
                 p[c] = x.s0;
                 p[d + c] = x.s1;
