@@ -50,6 +50,16 @@
 #define vstoreW LD_XCAT(vstore, LD_WIDTH)
 #define intW LD_XCAT(int, LD_WIDTH)
 #define as_intW LD_XCAT(as_int, LD_WIDTH)
+/* Loads and stores of LD_WIDTH consecutive words, element by element, which the compiler
+ * merges into vector moves: PoCL calls its vload/vstore built-ins as functions, once a
+ * point in sobol_points' loop. */
+#if LD_WIDTH == 4
+#define LD_LOADW(a) ((uintW)((a)[0], (a)[1], (a)[2], (a)[3]))
+#define LD_STOREW(y, a) ((a)[0] = (y).s0, (a)[1] = (y).s1, (a)[2] = (y).s2, (a)[3] = (y).s3)
+#else
+#define LD_LOADW(a) ((uintW)((a)[0], (a)[1]))
+#define LD_STOREW(y, a) ((a)[0] = (y).s0, (a)[1] = (y).s1)
+#endif
 #if CLSAMP_FP64
 #define doubleW LD_XCAT(double, LD_WIDTH)
 #define as_doubleW LD_XCAT(as_double, LD_WIDTH)
@@ -139,7 +149,7 @@ __kernel void sobol_points(__global ulong *out, __global const uint *matrices,
         uint gray = first ^ (first >> 1);
         uintW x = (uintW)(0u);
         while (gray) {
-            x ^= vloadW(0, v + (size_t)ld_ctz(gray) * stride);
+            x ^= LD_LOADW(v + (size_t)ld_ctz(gray) * stride);
             gray &= gray - 1u;
         }
 #if RANDOMIZE == LD_SHIFT
@@ -167,7 +177,7 @@ __kernel void sobol_points(__global ulong *out, __global const uint *matrices,
             const ulongW y = unit32W_bits(x);
 #endif
             if (width == LD_WIDTH) {
-                vstoreW(y, 0, p + (size_t)t * d);
+                LD_STOREW(y, p + (size_t)t * d);
             } else {
                 ulong tail[LD_WIDTH];
                 vstoreW(y, 0, tail);
@@ -176,7 +186,7 @@ __kernel void sobol_points(__global ulong *out, __global const uint *matrices,
             }
             if (t + 1 < count) {
                 ++index;
-                x ^= vloadW(0, v + (size_t)ld_ctz(index) * stride);
+                x ^= LD_LOADW(v + (size_t)ld_ctz(index) * stride);
             }
         }
     }
