@@ -48,9 +48,10 @@ __kernel void pmj02_level(__global ulong *out, __global const uint *masks, const
                      (uint4)(0u), (uint4)(PMJ_STREAM), (uint2)(key_lo, key_hi), &w0, &w1, &w2, &w3);
     const uint low = PMJ_BITS - m - 1;
     const ulong keep = ((ulong)1 << low) - 1;
-    ulong bits[2][4];
-    vstore4(((convert_ulong4(w0 >> 5) << 26) | convert_ulong4(w1 >> 6)) & keep, 0, bits[0]);
-    vstore4(((convert_ulong4(w2 >> 5) << 26) | convert_ulong4(w3 >> 6)) & keep, 0, bits[1]);
+    /* element by element: PoCL calls its vstore4 built-in as a function */
+    const ulong4 bx = ((convert_ulong4(w0 >> 5) << 26) | convert_ulong4(w1 >> 6)) & keep;
+    const ulong4 by = ((convert_ulong4(w2 >> 5) << 26) | convert_ulong4(w3 >> 6)) & keep;
+    const ulong bits[2][4] = {{bx.s0, bx.s1, bx.s2, bx.s3}, {by.s0, by.s1, by.s2, by.s3}};
     __global ulong *base = out + (size_t)r * total * 2;
     const uint lanes = count - i0 < 4u ? count - i0 : 4u;
     const uint mx = masks[m], my = masks[32 + m];
