@@ -210,7 +210,7 @@ __kernel void sobol_points(__global ulong *out, __global const uint *matrices,
 #if RANDOMIZE == LD_OWEN
 /* The lanes of pi that owen_*4 rejected, redone one by one. */
 #define OWEN_REDO(pi, bad, key, dk)                                                           \
-    if (ld_any4(bad)) {                                                                       \
+    if (clsamp_any4(bad)) {                                                                   \
         if (bad.s0) pi.s0 = owen_permutation_element(key.s0, base, g, dk);                    \
         if (bad.s1) pi.s1 = owen_permutation_element(key.s1, base, g, dk);                    \
         if (bad.s2) pi.s2 = owen_permutation_element(key.s2, base, g, dk);                    \
@@ -360,7 +360,7 @@ __kernel void radical_points(__global ulong *out, __global const uint *bases,
                     prefix += (ulong)digit[k] * power;
                     power *= base;
                 }
-                for (; k < ld_min(top, depth); ++k) {
+                for (; k < clsamp_min(top, depth); ++k) {
                     const ulong key = mix64(seed64 ^ (prefix + power));
                     v = v * base + owen_permutation_element(key, base, g, digit[k]);
                     prefix += (ulong)digit[k] * power;
@@ -377,7 +377,7 @@ __kernel void radical_points(__global ulong *out, __global const uint *bases,
                 p[(size_t)t * d] = f64_div(v, bm, 0);
                 for (uint k = 0; k < m; ++k) {
                     if (++digit[k] < base) {
-                        top = ld_max(top, k + 1);
+                        top = clsamp_max(top, k + 1);
                         break;
                     }
                     digit[k] = 0;

@@ -8,6 +8,7 @@
 #define CLSAMP_LOWDISCREPANCY_H
 
 #include "f64bits.h"
+#include "inline_builtins.h"
 
 /* Randomizations: the values of -DRANDOMIZE. */
 #define LD_NONE 0
@@ -15,12 +16,6 @@
 #define LD_XOR 2
 #define LD_OWEN 3
 #define LD_PERMUTE 4
-
-/* min, max and any where they run once a point or more: PoCL 3.0 calls its built-ins of
- * these as functions instead of inlining them. */
-CLSAMP_ALWAYS_INLINE uint ld_min(uint a, uint b) { return a < b ? a : b; }
-CLSAMP_ALWAYS_INLINE uint ld_max(uint a, uint b) { return a > b ? a : b; }
-CLSAMP_ALWAYS_INLINE bool ld_any4(int4 x) { return ((x.s0 | x.s1) | (x.s2 | x.s3)) < 0; }
 
 /* Counts trailing zeros of x != 0 (ctz is OpenCL 2.0 only). */
 inline uint ld_ctz(uint x)
@@ -150,7 +145,7 @@ CLSAMP_ALWAYS_INLINE uint owen_chunk_draws(ulong key, uint base, uint g, uint c,
         /* 2^32 mod P < P: most words pass the first test without a division */
         if (last < product && last < 0x100000000UL % product)
             continue;
-        for (uint t = 0; t < ld_min(need, len); ++t) {
+        for (uint t = 0; t < clsamp_min(need, len); ++t) {
             x *= base - j0 - t;
             r[t] = (uint)(x >> 32);
             x &= 0xFFFFFFFFUL;
@@ -193,7 +188,7 @@ CLSAMP_ALWAYS_INLINE int4 owen_chunk_draws4(ulong4 key, uint base, uint g, uint 
                                             uint need, ulong product0, ulong limit0)
 {
     const uint j0 = c * g;
-    const uint len = ld_min(g, base - j0);
+    const uint len = clsamp_min(g, base - j0);
     ulong product = product0;
     if (c > 0) {
         product = 1;
@@ -207,11 +202,11 @@ CLSAMP_ALWAYS_INLINE int4 owen_chunk_draws4(ulong4 key, uint base, uint g, uint 
     const ulong4 last = (x * (product & 0xFFFFFFFFUL)) & 0xFFFFFFFFUL;
     const int4 small = convert_int4(last < product);
     int4 bad = 0;
-    if (ld_any4(small))
+    if (clsamp_any4(small))
         bad = small & convert_int4(last < (c > 0 ? 0x100000000UL % product : limit0));
     /* the mask beside the multiply: a 32 x 32 -> 64-bit product to the compiler
      * (vpmuludq, where a mask at the loop's end left a full 64-bit vector multiply) */
-    for (uint t = 0; t < ld_min(need, len); ++t) {
+    for (uint t = 0; t < clsamp_min(need, len); ++t) {
         x = (x & 0xFFFFFFFFUL) * (ulong)(base - j0 - t);
         r[t] = convert_uint4(x >> 32);
     }
