@@ -67,6 +67,46 @@ inline uint clsamp_permute(uint i, const uint l, const uint p)
     return i >= l - rot ? i - (l - rot) : i + rot;
 }
 
+/* clsamp_permute of four elements, one a lane (same length and pattern): every lane runs
+ * the hash until its value lands in [0, l), the lanes that have landed keep theirs. */
+inline uint4 clsamp_permute4(uint4 i, const uint l, const uint p)
+{
+    if (l <= 1u)
+        return (uint4)(0u);
+    uint w = l - 1u;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    int4 walking = (int4)(-1);
+    do {
+        uint4 h = i;
+        h ^= p;
+        h *= 0xe170893du;
+        h ^= p >> 16;
+        h ^= (h & w) >> 4;
+        h ^= p >> 8;
+        h *= 0x0929eb3fu;
+        h ^= p >> 23;
+        h ^= (h & w) >> 1;
+        h *= 1u | p >> 27;
+        h *= 0x6935fa69u;
+        h ^= (h & w) >> 11;
+        h *= 0x74dcb303u;
+        h ^= (h & w) >> 2;
+        h *= 0x9e501cc3u;
+        h ^= (h & w) >> 2;
+        h *= 0xc860a3dfu;
+        h &= w;
+        h ^= h >> 5;
+        i = walking ? h : i;          /* vector ?: rather than select(), a call in PoCL */
+        walking &= i >= l;
+    } while (((walking.s0 | walking.s1) | (walking.s2 | walking.s3)) < 0);
+    const uint rot = p % l;
+    return i >= l - rot ? i - (l - rot) : i + rot;
+}
+
 /* Philox counters of permutation `perm`: the first draw of step t is lane t%4 of
  * block (perm << 8) at index t/4 (one Philox call serves four steps); the rare
  * retries of step t use index t and blocks (perm << 8) | 128 | a/4, a = 0..511. */

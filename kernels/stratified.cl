@@ -8,6 +8,7 @@
  * buffer) and CENTERED (cell centres instead of jitter) for stratified_points. */
 #pragma OPENCL FP_CONTRACT OFF
 #include "permutation.h"
+#include "inline_builtins.h"
 #include "dims.h"
 
 #ifndef PERMUTED
@@ -58,26 +59,47 @@ inline ulong stratum_point(const uint k, const ulong u, const uint count)
 }
 #endif
 
-/* Grid (n padded, realizations); out has shape (realizations, n, d).
- * Dimension j is split into radix[j] strata and belongs to group group[j] (groups are
- * contiguous runs of dimensions). Point i of a group takes cell c = perms[r, g, i]
- * (PERMUTED) or c = i, whose mixed-radix digits (first dimension fastest) are its
- * strata in the group's dimensions. perms has shape (realizations, groups, n). */
+/* stratum_point of four points, one a lane (same count): with fp64 the four divisions and
+ * checks in vector lanes, a lane that needs the nudge (rare) redone by stratum_point. */
+inline ulong4 stratum_point4(const uint4 k, const ulong4 ub, const uint count)
+{
+#if CLSAMP_FP64
+    const double c = (double)count;
+    const double4 kd = convert_double4(k);
+    const double4 x = (kd + as_double4(ub)) / c;
+    const double4 y = x * c;
+    if (!clsamp_any4l((y >= kd + 1.0) | (y < kd)))
+        return as_ulong4(x);
+#endif
+    return (ulong4)(stratum_point(k.s0, ub.s0, count), stratum_point(k.s1, ub.s1, count),
+                    stratum_point(k.s2, ub.s2, count), stratum_point(k.s3, ub.s3, count));
+}
+
+/* Grid (ceil(n / 4) padded, realizations); out has shape (realizations, n, d). Work-item q
+ * makes points 4q .. 4q + 3, one a vector lane (their Philox blocks and divisions side by
+ * side). Dimension j is split into radix[j] strata and belongs to group group[j] (groups
+ * are contiguous runs of dimensions). Point i of a group takes cell c = perms[r, g, i]
+ * (PERMUTED) or c = i, whose mixed-radix digits (first dimension fastest) are its strata
+ * in the group's dimensions. perms has shape (realizations, groups, n). */
 __kernel void stratified_points(__global ulong *out, const uint n, const uint d,
                                 const uint start, const uint realization0,
                                 const uint key_lo, const uint key_hi, const uint stream,
                                 __global const uint *radix, __global const uint *group,
                                 __global const uint *perms, const uint groups)
 {
-    const uint i = get_global_id(0);
+    const uint i0 = 4u * get_global_id(0);
     const uint r = get_global_id(1);
-    if (i >= n)
+    if (i0 >= n)
         return;
     const uint2 key = (uint2)(key_lo, key_hi);
-    __global ulong *p = out + ((size_t)r * n + i) * d;
+    const uint lanes = n - i0;                        /* points to store: min(lanes, 4) */
+    /* lanes past n repeat point n - 1 (made, not stored) */
+    const uint4 lane = (uint4)(i0) + (uint4)(0u, 1u, 2u, 3u);
+    const uint4 i = lane < n ? lane : (uint4)(n - 1u);
+    __global ulong *p = out + ((size_t)r * n + i0) * d;
     uint current = 0xFFFFFFFFu;
-    uint cell = 0;
-    ulong2 u = (ulong2)(0x3FE0000000000000UL);   /* 0.5 */
+    uint4 cell = 0;
+    ulong4 ux = (ulong4)(0x3FE0000000000000UL), uy = ux;     /* 0.5 */
     /* a chunk of dimensions (dims.h) that starts inside a group walks from the group's
      * first dimension, to take the digits before it off the cell */
 #ifdef DIMS_PER_ITEM
@@ -92,74 +114,133 @@ __kernel void stratified_points(__global ulong *out, const uint n, const uint d,
         if (group[j] != current) {
             current = group[j];
 #if PERMUTED
-            cell = perms[((size_t)r * groups + current) * n + i];
+            __global const uint *row = perms + ((size_t)r * groups + current) * n;
+            cell = (uint4)(row[i.s0], row[i.s1], row[i.s2], row[i.s3]);
 #else
             cell = i;
 #endif
         }
         const uint strata = radix[j];
-        const uint digit = cell % strata;
+        const uint4 digit = cell % strata;
         cell /= strata;
 #ifdef DIMS_PER_ITEM
         if (j < j0)
             continue;
 #if !CENTERED
         if ((j & 1u) == 0u || j == j0)
-            u = clsamp_uniform2_bits(key, stream, realization0 + r, start + i, j >> 1);
 #endif
 #elif !CENTERED
         if ((j & 1u) == 0u)
-            u = clsamp_uniform2_bits(key, stream, realization0 + r, start + i, j >> 1);
 #endif
-        p[j] = stratum_point(digit, (j & 1u) ? u.y : u.x, strata);
+#if !CENTERED
+        {
+            uint4 w0, w1, w2, w3;
+            philox4x32_10_x4((uint4)(start) + i, (uint4)(realization0 + r), (uint4)(j >> 1),
+                             (uint4)(stream), key, &w0, &w1, &w2, &w3);
+            ux = clsamp_unit4_bits(w0, w1);
+            uy = clsamp_unit4_bits(w2, w3);
+        }
+#endif
+        const ulong4 x = stratum_point4(digit, (j & 1u) ? uy : ux, strata);
+        p[j] = x.s0;
+        if (lanes > 1u)
+            p[d + j] = x.s1;
+        if (lanes > 2u)
+            p[2 * d + j] = x.s2;
+        if (lanes > 3u)
+            p[3 * d + j] = x.s3;
     }
 }
 
-/* Chiu, Shirley, Wang (1994): grid (n padded, realizations), n = mx * my points, point
- * p = row * mx + col. Its x lies in column col and in substratum col * my + colperm[col][row]
- * of the n x-slabs; its y in row row and substratum row * mx + rowperm[row][col].
+/* Chiu, Shirley, Wang (1994): grid (ceil(n / 4) padded, realizations), n = mx * my points,
+ * point p = row * mx + col, work-item q making points 4q .. 4q + 3 in vector lanes. Its x lies
+ * in column col and in substratum col * my + colperm[col][row] of the n x-slabs; its y in
+ * row row and substratum row * mx + rowperm[row][col].
  * colperm: (realizations, mx, my), rowperm: (realizations, my, mx). */
 __kernel void multijittered_points(__global ulong *out, const uint mx, const uint my,
                                    const uint start, const uint realization0,
                                    const uint key_lo, const uint key_hi, const uint stream,
                                    __global const uint *colperm, __global const uint *rowperm)
 {
-    const uint i = get_global_id(0);
+    const uint i0 = 4u * get_global_id(0);
     const uint r = get_global_id(1);
     const uint n = mx * my;
-    if (i >= n)
+    if (i0 >= n)
         return;
-    const uint col = i % mx;
-    const uint row = i / mx;
-    const ulong2 u = clsamp_uniform2_bits((uint2)(key_lo, key_hi), stream, realization0 + r, start + i, 0);
-    const uint sx = colperm[((size_t)r * mx + col) * my + row];
-    const uint sy = rowperm[((size_t)r * my + row) * mx + col];
-    __global ulong *p = out + ((size_t)r * n + i) * 2;
-    p[0] = stratum_point(col * my + sx, u.x, n);
-    p[1] = stratum_point(row * mx + sy, u.y, n);
+    const uint4 lane = (uint4)(i0) + (uint4)(0u, 1u, 2u, 3u);
+    const uint4 i = lane < n ? lane : (uint4)(n - 1u);       /* past n: made, not stored */
+    const uint4 col = i % mx;
+    const uint4 row = i / mx;
+    uint4 w0, w1, w2, w3;
+    philox4x32_10_x4((uint4)(start) + i, (uint4)(realization0 + r), (uint4)(0u), (uint4)(stream),
+                     (uint2)(key_lo, key_hi), &w0, &w1, &w2, &w3);
+    __global const uint *cp = colperm + (size_t)r * n, *rp = rowperm + (size_t)r * n;
+    const uint4 sx = (uint4)(cp[col.s0 * my + row.s0], cp[col.s1 * my + row.s1],
+                             cp[col.s2 * my + row.s2], cp[col.s3 * my + row.s3]);
+    const uint4 sy = (uint4)(rp[row.s0 * mx + col.s0], rp[row.s1 * mx + col.s1],
+                             rp[row.s2 * mx + col.s2], rp[row.s3 * mx + col.s3]);
+    const ulong4 x = stratum_point4(col * my + sx, clsamp_unit4_bits(w0, w1), n);
+    const ulong4 y = stratum_point4(row * mx + sy, clsamp_unit4_bits(w2, w3), n);
+    __global ulong *p = out + ((size_t)r * n + i0) * 2;
+    const uint lanes = n - i0;
+    p[0] = x.s0;
+    p[1] = y.s0;
+    if (lanes > 1u) {
+        p[2] = x.s1;
+        p[3] = y.s1;
+    }
+    if (lanes > 2u) {
+        p[4] = x.s2;
+        p[5] = y.s2;
+    }
+    if (lanes > 3u) {
+        p[6] = x.s3;
+        p[7] = y.s3;
+    }
 }
 
-/* Kensler (2013), final "cmj" listing with aspect 1: grid (n padded, realizations);
- * m = floor(sqrt(n)) columns, rows = ceil(n / m). The pattern p of a realization is
- * Philox word 0 of (perm_stream, realization, index 0); jitter comes from Philox
- * (point_stream, index start + i) instead of Kensler's 32-bit hash. */
+/* Kensler (2013), final "cmj" listing with aspect 1: grid (ceil(n / 4) padded,
+ * realizations), work-item q making points 4q .. 4q + 3 in vector lanes; m = floor(sqrt(n))
+ * columns, rows = ceil(n / m). The pattern p of a realization is Philox word 0 of
+ * (perm_stream, realization, index 0); jitter comes from Philox (point_stream, index
+ * start + i) instead of Kensler's 32-bit hash. */
 __kernel void correlated_multijittered_points(__global ulong *out, const uint n, const uint m,
                                               const uint rows, const uint start,
                                               const uint realization0, const uint key_lo,
                                               const uint key_hi, const uint point_stream,
                                               const uint perm_stream)
 {
-    const uint i = get_global_id(0);
+    const uint i0 = 4u * get_global_id(0);
     const uint r = get_global_id(1);
-    if (i >= n)
+    if (i0 >= n)
         return;
     const uint2 key = (uint2)(key_lo, key_hi);
     const uint p = clsamp_bits(key, perm_stream, realization0 + r, 0u, 0u);
-    const uint s = clsamp_permute(i, n, p * 0x51633e2du);
-    const uint sx = clsamp_permute(s % m, m, p * 0x68bc21ebu);
-    const uint sy = clsamp_permute(s / m, rows, p * 0x02e5be93u);
-    const ulong2 u = clsamp_uniform2_bits(key, point_stream, realization0 + r, start + i, 0);
-    __global ulong *q = out + ((size_t)r * n + i) * 2;
-    q[0] = stratum_point(sx * rows + sy, u.x, m * rows);
-    q[1] = stratum_point(s, u.y, n);
+    /* lanes past n take point n - 1 (made, not stored) */
+    const uint4 lane = (uint4)(i0) + (uint4)(0u, 1u, 2u, 3u);
+    const uint4 i = lane < n ? lane : (uint4)(n - 1u);
+    const uint4 s = clsamp_permute4(i, n, p * 0x51633e2du);
+    const uint4 sx = clsamp_permute4(s % m, m, p * 0x68bc21ebu);
+    const uint4 sy = clsamp_permute4(s / m, rows, p * 0x02e5be93u);
+    uint4 w0, w1, w2, w3;
+    philox4x32_10_x4((uint4)(start) + i, (uint4)(realization0 + r), (uint4)(0u),
+                     (uint4)(point_stream), key, &w0, &w1, &w2, &w3);
+    const ulong4 x = stratum_point4(sx * rows + sy, clsamp_unit4_bits(w0, w1), m * rows);
+    const ulong4 y = stratum_point4(s, clsamp_unit4_bits(w2, w3), n);
+    __global ulong *q = out + ((size_t)r * n + i0) * 2;
+    const uint lanes = n - i0;
+    q[0] = x.s0;
+    q[1] = y.s0;
+    if (lanes > 1u) {
+        q[2] = x.s1;
+        q[3] = y.s1;
+    }
+    if (lanes > 2u) {
+        q[4] = x.s2;
+        q[5] = y.s2;
+    }
+    if (lanes > 3u) {
+        q[6] = x.s3;
+        q[7] = y.s3;
+    }
 }

@@ -197,7 +197,8 @@ class _Stratified(Sampler):
         else:
             perms = runtime.table("stratified unused", lambda: [0])   # the kernel reads cell = i
         local = runtime.local_size()
-        split, grid, group = runtime.dimension_split(self.d, 64, (-(-n // local) * local, r),
+        quads = -(-n // 4)                                     # four points a work-item
+        split, grid, group = runtime.dimension_split(self.d, 64, (-(-quads // local) * local, r),
                                                      (local, 1))
         kernel = runtime.kernel("stratified.cl", "stratified_points",
                                 defines={"PERMUTED": int(self.permuted),
@@ -584,8 +585,9 @@ class MultiJitteredSampler(Sampler):
             self.seed, philox.Stream.PERMUTATION, realizations, mx, range(mx, mx + my))
         target = runtime.Output((r, n, 2), host=out)
         local = runtime.local_size()
+        quads = -(-n // 4)                                     # four points a work-item
         runtime.kernel("stratified.cl", "multijittered_points")(
-            queue, (-(-n // local) * local, r), (local, 1), target.buffer, np.uint32(mx),
+            queue, (-(-quads // local) * local, r), (local, 1), target.buffer, np.uint32(mx),
             np.uint32(my), np.uint32(start), np.uint32(realizations.start),
             *runtime.key_args(self.seed), np.uint32(philox.Stream.POINTS), colperm.data,
             rowperm.data)
@@ -671,8 +673,9 @@ class CorrelatedMultiJitteredSampler(Sampler):
         r = len(realizations)
         target = runtime.Output((r, n, 2), host=out)
         local = runtime.local_size()
+        quads = -(-n // 4)                                     # four points a work-item
         runtime.kernel("stratified.cl", "correlated_multijittered_points")(
-            queue, (-(-n // local) * local, r), (local, 1), target.buffer, np.uint32(n),
+            queue, (-(-quads // local) * local, r), (local, 1), target.buffer, np.uint32(n),
             np.uint32(m), np.uint32(k), np.uint32(start), np.uint32(realizations.start),
             *runtime.key_args(self.seed), np.uint32(philox.Stream.POINTS),
             np.uint32(philox.Stream.PERMUTATION))
