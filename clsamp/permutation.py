@@ -315,9 +315,9 @@ def random_permutations_device(seed, stream, realizations, length, perms):
     draws = cla.empty(queue, shape, np.uint32)
     out = cla.empty(queue, shape, np.uint32)
     local = runtime.local_size()
-    quads = -(-length // 4)
+    items = -(-length // 16)                                  # sixteen steps a work-item
     runtime.kernel("permutation.cl", "fisher_yates_draws")(
-        queue, (-(-quads // local) * local, rows), (local, 1), draws.data, np.uint32(length),
+        queue, (-(-items // local) * local, rows), (local, 1), draws.data, np.uint32(length),
         np.uint32(len(perms)), np.uint32(perms.start), np.uint32(realizations.start),
         *runtime.key_args(seed), np.uint32(stream))
     # Few, long work-items: small work-groups let a CPU device spread them over its cores.

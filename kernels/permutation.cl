@@ -7,29 +7,48 @@
  * calls one at a time. */
 #include "permutation.h"
 
-/* Grid (ceil(length / 4), count * perms); draws has shape (count, perms, length):
+/* Grid (ceil(length / 16) padded, count * perms); draws has shape (count, perms, length):
  * draws[row, t] uniform in [0, t] (t = 0 holds 0). Row w is permutation
- * perm0 + w % perms of realization realization0 + w / perms. */
+ * perm0 + w % perms of realization realization0 + w / perms. Work-item q makes steps
+ * 16q .. 16q + 15: the Philox blocks of its four quads in vector lanes, and each step's
+ * multiply in lanes too; a lane whose multiply lands in Lemire's rejection zone (rare) is
+ * redone by clsamp_bounded_from. */
 __kernel void fisher_yates_draws(__global uint *draws, const uint length, const uint perms,
                                  const uint perm0, const uint realization0,
                                  const uint key_lo, const uint key_hi, const uint stream)
 {
-    const uint quad = get_global_id(0);
+    const uint quad0 = 4u * get_global_id(0);
     const uint row = get_global_id(1);
-    if (4u * (size_t)quad >= length)
+    if (4u * (size_t)quad0 >= length)
         return;
     const uint2 key = (uint2)(key_lo, key_hi);
     const uint realization = realization0 + row / perms;
     const uint perm = perm0 + row % perms;
-    const uint4 block = clsamp_block(key, stream, realization, quad, perm << 8);
-    const uint words[4] = {block.x, block.y, block.z, block.w};
+    const uint4 quad = (uint4)(quad0) + (uint4)(0u, 1u, 2u, 3u);
+    uint4 word[4];
+    philox4x32_10_x4(quad, (uint4)(realization), (uint4)(perm << 8), (uint4)(stream), key,
+                     &word[0], &word[1], &word[2], &word[3]);
     __global uint *out = draws + (size_t)row * length;
-    for (uint lane = 0; lane < 4u; ++lane) {
-        const uint t = 4u * quad + lane;
-        if (t >= length)
-            break;
-        out[t] = t == 0u ? 0u
-               : clsamp_bounded_from(words[lane], key, stream, realization, t, perm, t + 1u);
+    uint4 step[4];                      /* step[k], lane l: the draw of step 4 (quad0 + l) + k */
+    for (uint k = 0; k < 4u; ++k) {
+        const uint4 t = 4u * quad + k, range = t + 1u;
+        const ulong4 m = convert_ulong4(word[k]) * convert_ulong4(range);
+        uint4 j = convert_uint4(m >> 32);
+        const int4 low = convert_uint4(m) < range;
+        if (((low.s0 | low.s1) | (low.s2 | low.s3)) < 0) {
+            j = (uint4)(clsamp_bounded_from(word[k].s0, key, stream, realization, t.s0, perm, range.s0),
+                        clsamp_bounded_from(word[k].s1, key, stream, realization, t.s1, perm, range.s1),
+                        clsamp_bounded_from(word[k].s2, key, stream, realization, t.s2, perm, range.s2),
+                        clsamp_bounded_from(word[k].s3, key, stream, realization, t.s3, perm, range.s3));
+        }
+        step[k] = j;
+    }
+    const uint t0 = 4u * quad0;
+    const uint here = length - t0 < 16u ? length - t0 : 16u;
+    for (uint s = 0; s < here; ++s) {
+        const uint4 v = step[s & 3u];
+        const uint l = s >> 2;
+        out[t0 + s] = t0 + s == 0u ? 0u : l == 0u ? v.s0 : l == 1u ? v.s1 : l == 2u ? v.s2 : v.s3;
     }
 }
 
