@@ -21,14 +21,16 @@ def run(devices, quick):
         for n, r, d in cases:
             cl = clsamp.make_sampler("random", d=d, seed=1)
             ref = clsamp.make_sampler("random", d=d, seed=1, backend="numpy")
-            t_cl, a = timed(lambda: cl.sample(n, realizations=r), repeats=15)
+            # calls of a few ms: the first ones after the build fault the output pool's
+            # pages in and wake PoCL's threads, so more warm-up calls and repeats
+            t_cl, a = timed(lambda: cl.sample(n, realizations=r), repeats=31, warmup=3)
             t_ref, b = timed(lambda: ref.sample(n, realizations=r), repeats=3)
             same = "bit-identical" if np.array_equal(a, b) else "DIFFERS"
             copy = copy_bandwidth(a.nbytes)
             rows.append(Row("random", f"{r}x{n}x{d}D", short_name(device), t_cl,
                             "numpy reference", t_ref, same, output_bytes=a.nbytes, copy_gbs=copy))
             rng = np.random.default_rng(1)
-            t_np, _ = timed(lambda: rng.random((r, n, d)), repeats=15)
+            t_np, _ = timed(lambda: rng.random((r, n, d)), repeats=31, warmup=3)
             rows.append(Row("random", f"{r}x{n}x{d}D", short_name(device), t_cl,
                             "numpy default_rng", t_np, f"{r * n / t_cl / 1e6:.1f} Mpts/s",
                             output_bytes=a.nbytes, copy_gbs=copy))
