@@ -9,6 +9,7 @@
 
 #include "f64bits.h"
 #include "inline_builtins.h"
+#include "permutation.h"
 
 /* Randomizations: the values of -DRANDOMIZE. */
 #define LD_NONE 0
@@ -76,31 +77,9 @@ inline uint digit_shift(uint h, uint base)
  * (number_theory.permutation_element). */
 inline uint permutation_element(uint i, uint l, uint p)
 {
-    uint w = l - 1u;
-    w |= w >> 1;
-    w |= w >> 2;
-    w |= w >> 4;
-    w |= w >> 8;
-    w |= w >> 16;
+    const uint w = clsamp_hash_mask(l);
     do {
-        i ^= p;
-        i *= 0xE170893Du;
-        i ^= p >> 16;
-        i ^= (i & w) >> 4;
-        i ^= p >> 8;
-        i *= 0x0929EB3Fu;
-        i ^= p >> 23;
-        i ^= (i & w) >> 1;
-        i *= 1u | (p >> 27);
-        i *= 0x6935FA69u;
-        i ^= (i & w) >> 11;
-        i *= 0x74DCB303u;
-        i ^= (i & w) >> 2;
-        i *= 0x9E501CC3u;
-        i ^= (i & w) >> 2;
-        i *= 0xC860A3DFu;
-        i &= w;
-        i ^= i >> 5;
+        CLSAMP_KENSLER_HASH(i, p, w);
     } while (i >= l);
     return (uint)(((ulong)i + p) % l);   /* in 64 bits: a 32-bit sum wraps for p > 2^32 - l */
 }

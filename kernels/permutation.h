@@ -28,37 +28,51 @@
 
 #include "philox.h"
 
-inline uint clsamp_permute(uint i, const uint l, const uint p)
+/* The smallest 2^k - 1 >= l - 1 (l >= 1): the hash's domain [0, w]. */
+inline uint clsamp_hash_mask(const uint l)
 {
-    if (l <= 1u)
-        return 0u;
     uint w = l - 1u;
     w |= w >> 1;
     w |= w >> 2;
     w |= w >> 4;
     w |= w >> 8;
     w |= w >> 16;
+    return w;
+}
+
+/* Kensler's hash of x (a uint or a uint vector) with pattern p, applied once: a bijection
+ * of [0, w]. Also the hash of number_theory.permutation_element (lowdiscrepancy.h). */
+#define CLSAMP_KENSLER_HASH(x, p, w)  \
+    do {                              \
+        x ^= (p);                     \
+        x *= 0xe170893du;             \
+        x ^= (p) >> 16;               \
+        x ^= (x & (w)) >> 4;          \
+        x ^= (p) >> 8;                \
+        x *= 0x0929eb3fu;             \
+        x ^= (p) >> 23;               \
+        x ^= (x & (w)) >> 1;          \
+        x *= 1u | (p) >> 27;          \
+        x *= 0x6935fa69u;             \
+        x ^= (x & (w)) >> 11;         \
+        x *= 0x74dcb303u;             \
+        x ^= (x & (w)) >> 2;          \
+        x *= 0x9e501cc3u;             \
+        x ^= (x & (w)) >> 2;          \
+        x *= 0xc860a3dfu;             \
+        x &= (w);                     \
+        x ^= x >> 5;                  \
+    } while (0)
+
+inline uint clsamp_permute(uint i, const uint l, const uint p)
+{
+    if (l <= 1u)
+        return 0u;
+    const uint w = clsamp_hash_mask(l);
     /* Cycle walking: the hash permutes [0, w], so re-apply it until the value lands
      * inside [0, l); w + 1 < 2l, so on average fewer than two rounds. */
     do {
-        i ^= p;
-        i *= 0xe170893du;
-        i ^= p >> 16;
-        i ^= (i & w) >> 4;
-        i ^= p >> 8;
-        i *= 0x0929eb3fu;
-        i ^= p >> 23;
-        i ^= (i & w) >> 1;
-        i *= 1u | p >> 27;
-        i *= 0x6935fa69u;
-        i ^= (i & w) >> 11;
-        i *= 0x74dcb303u;
-        i ^= (i & w) >> 2;
-        i *= 0x9e501cc3u;
-        i ^= (i & w) >> 2;
-        i *= 0xc860a3dfu;
-        i &= w;
-        i ^= i >> 5;
+        CLSAMP_KENSLER_HASH(i, p, w);
     } while (i >= l);
     /* Kensler's listing returns (i + p) % l in 32-bit arithmetic, which stops being a
      * bijection when i + p wraps past 2^32 (e.g. l = 3, p = 0xffffffff); rotating by
@@ -73,33 +87,11 @@ inline uint4 clsamp_permute4(uint4 i, const uint l, const uint p)
 {
     if (l <= 1u)
         return (uint4)(0u);
-    uint w = l - 1u;
-    w |= w >> 1;
-    w |= w >> 2;
-    w |= w >> 4;
-    w |= w >> 8;
-    w |= w >> 16;
+    const uint w = clsamp_hash_mask(l);
     int4 walking = (int4)(-1);
     do {
         uint4 h = i;
-        h ^= p;
-        h *= 0xe170893du;
-        h ^= p >> 16;
-        h ^= (h & w) >> 4;
-        h ^= p >> 8;
-        h *= 0x0929eb3fu;
-        h ^= p >> 23;
-        h ^= (h & w) >> 1;
-        h *= 1u | p >> 27;
-        h *= 0x6935fa69u;
-        h ^= (h & w) >> 11;
-        h *= 0x74dcb303u;
-        h ^= (h & w) >> 2;
-        h *= 0x9e501cc3u;
-        h ^= (h & w) >> 2;
-        h *= 0xc860a3dfu;
-        h &= w;
-        h ^= h >> 5;
+        CLSAMP_KENSLER_HASH(h, p, w);
         i = walking ? h : i;          /* vector ?: rather than select(), a call in PoCL */
         walking &= i >= l;
     } while (((walking.s0 | walking.s1) | (walking.s2 | walking.s3)) < 0);

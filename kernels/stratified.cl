@@ -75,6 +75,25 @@ inline ulong4 stratum_point4(const uint4 k, const ulong4 ub, const uint count)
                     stratum_point(k.s2, ub.s2, count), stratum_point(k.s3, ub.s3, count));
 }
 
+/* Four 2-D points, lane l = point l, at p (2 words a point): the first `lanes` of them. */
+inline void store_points2(__global ulong *p, const ulong4 x, const ulong4 y, const uint lanes)
+{
+    p[0] = x.s0;
+    p[1] = y.s0;
+    if (lanes > 1u) {
+        p[2] = x.s1;
+        p[3] = y.s1;
+    }
+    if (lanes > 2u) {
+        p[4] = x.s2;
+        p[5] = y.s2;
+    }
+    if (lanes > 3u) {
+        p[6] = x.s3;
+        p[7] = y.s3;
+    }
+}
+
 /* Grid (ceil(n / 4) padded, realizations); out has shape (realizations, n, d). Work-item q
  * makes points 4q .. 4q + 3, one a vector lane (their Philox blocks and divisions side by
  * side). Dimension j is split into radix[j] strata and belongs to group group[j] (groups
@@ -181,22 +200,7 @@ __kernel void multijittered_points(__global ulong *out, const uint mx, const uin
                              rp[row.s2 * mx + col.s2], rp[row.s3 * mx + col.s3]);
     const ulong4 x = stratum_point4(col * my + sx, clsamp_unit4_bits(w0, w1), n);
     const ulong4 y = stratum_point4(row * mx + sy, clsamp_unit4_bits(w2, w3), n);
-    __global ulong *p = out + ((size_t)r * n + i0) * 2;
-    const uint lanes = n - i0;
-    p[0] = x.s0;
-    p[1] = y.s0;
-    if (lanes > 1u) {
-        p[2] = x.s1;
-        p[3] = y.s1;
-    }
-    if (lanes > 2u) {
-        p[4] = x.s2;
-        p[5] = y.s2;
-    }
-    if (lanes > 3u) {
-        p[6] = x.s3;
-        p[7] = y.s3;
-    }
+    store_points2(out + ((size_t)r * n + i0) * 2, x, y, n - i0);
 }
 
 /* Kensler (2013), final "cmj" listing with aspect 1: grid (ceil(n / 4) padded,
@@ -227,20 +231,5 @@ __kernel void correlated_multijittered_points(__global ulong *out, const uint n,
                      (uint4)(point_stream), key, &w0, &w1, &w2, &w3);
     const ulong4 x = stratum_point4(sx * rows + sy, clsamp_unit4_bits(w0, w1), m * rows);
     const ulong4 y = stratum_point4(s, clsamp_unit4_bits(w2, w3), n);
-    __global ulong *q = out + ((size_t)r * n + i0) * 2;
-    const uint lanes = n - i0;
-    q[0] = x.s0;
-    q[1] = y.s0;
-    if (lanes > 1u) {
-        q[2] = x.s1;
-        q[3] = y.s1;
-    }
-    if (lanes > 2u) {
-        q[4] = x.s2;
-        q[5] = y.s2;
-    }
-    if (lanes > 3u) {
-        q[6] = x.s3;
-        q[7] = y.s3;
-    }
+    store_points2(out + ((size_t)r * n + i0) * 2, x, y, n - i0);
 }
