@@ -145,14 +145,15 @@ __kernel void stratified_points(__global ulong *out, const uint n, const uint d,
 #ifdef DIMS_PER_ITEM
         if (j < j0)
             continue;
-#if !CENTERED
-        if ((j & 1u) == 0u || j == j0)
-#endif
-#elif !CENTERED
-        if ((j & 1u) == 0u)
 #endif
 #if !CENTERED
-        {
+        /* pair j >> 1's Philox blocks: at its first dimension, or a chunk's first */
+#ifdef DIMS_PER_ITEM
+        const bool pair = (j & 1u) == 0u || j == j0;
+#else
+        const bool pair = (j & 1u) == 0u;
+#endif
+        if (pair) {
             uint4 w0, w1, w2, w3;
             philox4x32_10_x4((uint4)(start) + i, (uint4)(realization0 + r), (uint4)(j >> 1),
                              (uint4)(stream), key, &w0, &w1, &w2, &w3);
