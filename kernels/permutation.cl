@@ -35,7 +35,7 @@ __kernel void fisher_yates_draws(__global uint *draws, const uint length, const 
         const ulong4 m = convert_ulong4(word[k]) * convert_ulong4(range);
         uint4 j = convert_uint4(m >> 32);
         const int4 low = convert_uint4(m) < range;
-        if (((low.s0 | low.s1) | (low.s2 | low.s3)) < 0) {
+        if (clsamp_any4(low)) {
             j = (uint4)(clsamp_bounded_from(word[k].s0, key, stream, realization, t.s0, perm, range.s0),
                         clsamp_bounded_from(word[k].s1, key, stream, realization, t.s1, perm, range.s1),
                         clsamp_bounded_from(word[k].s2, key, stream, realization, t.s2, perm, range.s2),

@@ -27,6 +27,7 @@
 #define CLSAMP_PERMUTATION_H
 
 #include "philox.h"
+#include "inline_builtins.h"
 
 /* The smallest 2^k - 1 >= l - 1 (l >= 1): the hash's domain [0, w]. */
 inline uint clsamp_hash_mask(const uint l)
@@ -94,7 +95,7 @@ inline uint4 clsamp_permute4(uint4 i, const uint l, const uint p)
         CLSAMP_KENSLER_HASH(h, p, w);
         i = walking ? h : i;          /* vector ?: rather than select(), a call in PoCL */
         walking &= i >= l;
-    } while (((walking.s0 | walking.s1) | (walking.s2 | walking.s3)) < 0);
+    } while (clsamp_any4(walking));
     const uint rot = p % l;
     return i >= l - rot ? i - (l - rot) : i + rot;
 }
