@@ -15,6 +15,7 @@ setup(
     include_package_data=False,
     install_requires=[
         "numpy>=1.24",
+        "scipy>=1.10",
         "pyopencl>=2024.1",
         "pocl-binary-distribution>=3.0",
         "scikit-image>=0.21",

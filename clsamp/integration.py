@@ -32,7 +32,7 @@ from .validation import check_int, check_real, check_seed
 
 BLOCK = 2**20           # points one call of a Python integrand gets at most
 
-__all__ = ["IntegrationResult", "integrate", "t_quantile"]
+__all__ = ["IntegrationResult", "integrate"]
 
 
 @dataclasses.dataclass
@@ -71,67 +71,6 @@ class IntegrationResult:
     sampler: str
     tolerance: float
     history: list = dataclasses.field(default_factory=list)
-
-
-# -- Student's t -----------------------------------------------------------------------
-def _beta_fraction(a, b, x):
-    """The continued fraction of the incomplete beta function (modified Lentz)."""
-    tiny = 1e-300
-    c, d = 1.0, 1.0 - (a + b) * x / (a + 1.0)
-    d = 1.0 / (d if abs(d) > tiny else tiny)
-    h = d
-    for m in range(1, 500):
-        for numerator in (m * (b - m) * x / ((a + 2 * m - 1) * (a + 2 * m)),
-                          -(a + m) * (a + b + m) * x / ((a + 2 * m) * (a + 2 * m + 1))):
-            d = 1.0 + numerator * d
-            d = 1.0 / (d if abs(d) > tiny else tiny)
-            c = 1.0 + numerator / c
-            c = c if abs(c) > tiny else tiny
-            h *= d * c
-        if abs(d * c - 1.0) < 1e-16:
-            break
-    return h
-
-
-def _beta_regularized(a, b, x):
-    if x <= 0.0:
-        return 0.0
-    if x >= 1.0:
-        return 1.0
-    front = math.exp(math.lgamma(a + b) - math.lgamma(a) - math.lgamma(b)
-                     + a * math.log(x) + b * math.log1p(-x))
-    if x < (a + 1.0) / (a + b + 2.0):
-        return front * _beta_fraction(a, b, x) / a
-    return 1.0 - front * _beta_fraction(b, a, 1.0 - x) / b
-
-
-def _t_upper_tail(t, dof):
-    """P(T > t) for t >= 0."""
-    return 0.5 * _beta_regularized(dof / 2.0, 0.5, dof / (dof + t * t))
-
-
-def t_quantile(p, dof):
-    """The p quantile of Student's t with ``dof`` degrees of freedom, p in (0, 1)
-    (bisection on the distribution function, to about 1e-12 relative)."""
-    if not 0.0 < p < 1.0:
-        raise InvalidArgumentError(f"'p' must be in (0, 1), got {p!r}")
-    if p < 0.5:
-        return -t_quantile(1.0 - p, dof)
-    if p == 0.5:
-        return 0.0
-    tail = 1.0 - p
-    lo, hi = 0.0, 1.0
-    while _t_upper_tail(hi, dof) > tail:
-        lo, hi = hi, 2.0 * hi
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        if _t_upper_tail(mid, dof) > tail:
-            lo = mid
-        else:
-            hi = mid
-        if hi - lo <= 1e-13 * hi:
-            break
-    return 0.5 * (lo + hi)
 
 
 # -- the integrand ---------------------------------------------------------------------
@@ -256,7 +195,9 @@ def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**2
         raise InvalidArgumentError(
             f"'f' must be a callable, an Integrand or an integrand name, got {f!r}")
     extends = s.splits_along_n         # sample(n, start=k) continues sample(k)
-    t_value = t_quantile(0.5 + confidence / 2.0, r - 1)
+    # imported here, not at the top, so that `import clsamp` does not pay for scipy.stats
+    from scipy.stats import t as student_t
+    t_value = float(student_t.ppf(0.5 + confidence / 2.0, r - 1))
 
     def sums(count, start):
         """Per replication, the sum of f over points start .. start + count - 1."""

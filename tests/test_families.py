@@ -11,7 +11,6 @@ import pytest
 import clsamp
 from clsamp import families, variance
 from clsamp.errors import InvalidArgumentError
-from clsamp.integration import t_quantile
 
 NAMES = families.family_names()
 
@@ -145,14 +144,6 @@ def test_family_bad_input_names_the_argument():
 
 
 # -- integrate -----------------------------------------------------------------------------
-def test_t_quantile_equals_scipy():
-    from scipy.stats import t
-    for dof in (1, 2, 3, 7, 15, 63, 1000):
-        for p in (0.6, 0.9, 0.975, 0.995, 0.9999):
-            assert t_quantile(p, dof) == pytest.approx(t.ppf(p, dof), rel=1e-10)
-            assert t_quantile(1 - p, dof) == pytest.approx(t.ppf(1 - p, dof), rel=1e-10)
-
-
 def _gauss(x):
     return np.exp(-8.0 * np.sum((x - 0.5) ** 2, axis=1))
 

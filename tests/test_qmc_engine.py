@@ -1,4 +1,4 @@
-"""clsamp samplers as scipy.stats.qmc engines (as_qmc_engine), scipy optional."""
+"""clsamp samplers as scipy.stats.qmc engines (as_qmc_engine); scipy.stats imported on first use."""
 
 import os
 import subprocess
@@ -50,7 +50,7 @@ def test_scipy_tools_take_the_engine():
     assert qmc.discrepancy(x) < qmc.discrepancy(np.random.default_rng(0).random((50, 2)))
 
 
-def test_bad_input_and_scipy_stays_optional():
+def test_bad_input_and_import_clsamp_leaves_scipy_out():
     with pytest.raises(InvalidArgumentError, match="'sampler'"):
         clsamp.as_qmc_engine("sobol")
     with pytest.raises(InvalidArgumentError, match="'realization'"):

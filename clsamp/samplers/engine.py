@@ -1,7 +1,6 @@
-"""The ``scipy.stats.qmc`` face of a sampler: :func:`as_qmc_engine`.
+"""The ``scipy.stats.qmc`` face of a sampler: :func:`as_qmc_engine`."""
 
-scipy stays optional: it is imported when an engine is made, never by ``import clsamp``.
-"""
+import functools
 
 import numpy as np
 
@@ -9,17 +8,12 @@ from ..errors import InvalidArgumentError
 from ..validation import check_int
 from .base import Sampler
 
-_ENGINE = None      # the QMCEngine subclass, made on first use (scipy is imported then)
 
-
+@functools.cache
 def _engine_class():
-    global _ENGINE
-    if _ENGINE is not None:
-        return _ENGINE
-    try:
-        from scipy.stats import qmc
-    except ImportError:   # pragma: no cover - scipy is in the test and bench extras
-        raise ImportError("as_qmc_engine needs scipy: pip install scipy") from None
+    # The class derives from scipy's, and importing scipy.stats costs more than all of
+    # `import clsamp`: it is made when the first engine is asked for.
+    from scipy.stats import qmc
 
     class ClsampEngine(qmc.QMCEngine):
         """A clsamp sampler as a ``scipy.stats.qmc.QMCEngine`` (see :func:`as_qmc_engine`)."""
@@ -42,11 +36,30 @@ def _engine_class():
             return self.sampler.sample(n, realizations=range(k, k + 1))[0]
 
         def reset(self):
+            """Go back to the first point (a sequence) or the first set (a point set).
+
+            Returns
+            -------
+            ClsampEngine
+                This engine.
+            """
             self.num_generated = 0
             self.draws = 0
             return self
 
         def fast_forward(self, n):
+            """Skip ``n`` points of a sequence, or one set of a point-set sampler.
+
+            Parameters
+            ----------
+            n : int
+                Points to skip, at least 0.
+
+            Returns
+            -------
+            ClsampEngine
+                This engine.
+            """
             n = check_int(n, "n", minimum=0)
             self.num_generated += n
             if not self.sampler.sequence and n:
@@ -56,8 +69,7 @@ def _engine_class():
         def __repr__(self):
             return f"ClsampEngine({self.sampler!r}, realization={self.realization})"
 
-    _ENGINE = ClsampEngine
-    return _ENGINE
+    return ClsampEngine
 
 
 def as_qmc_engine(sampler, realization=0):
