@@ -23,7 +23,7 @@ Two ways to compute it, one knob between them:
 - ``method="fast"``: a type-1 non-uniform FFT (Dutt & Rokhlin 1993; Barnett, Magland &
   af Klinteberg 2019; its parameters and kernel in :mod:`clsamp.nufft`): spread each
   point onto an oversampled grid with the "exponential of semicircle" kernel (OpenCL),
-  FFT the grid (scipy.fft, else numpy.fft, on the host), divide by the kernel's Fourier
+  FFT the grid (scipy.fft, on the host, all cores), divide by the kernel's Fourier
   transform. Cost ~ r·(N·w^d + (σR)^d log R).
 
 Kernels are in ``kernels/spectrum.cl`` and ``kernels/nufft.cl``; every one has a NumPy
@@ -526,20 +526,15 @@ def _direct_host_gemm(batch, resolution, progress):
 
 
 # -- fast: OpenCL spreading, host FFT --------------------------------------------------
-def _fft_module():
-    try:
-        import scipy.fft as fft
-        return fft, {"workers": os.cpu_count() or 1}
-    except ImportError:  # numpy's pocketfft: same results, one thread
-        return np.fft, {}
-
-
 def _accumulate_power(grids, resolution, total):
     """Add Σ_r |FFT(grid_r)|² at the frequencies [-R/2, R/2] (last axis >= 0) to ``total``.
 
     In 2-D only the columns ky <= R/2 of the row transforms go through the column
     transforms, and only the rows |kx| <= R/2 of those are squared and summed."""
-    fft, options = _fft_module()
+    # scipy.fft rather than numpy.fft for its ``workers``; imported here to keep it out of
+    # `import clsamp`
+    import scipy.fft as fft
+    options = {"workers": os.cpu_count() or 1}
     half = resolution // 2
     M = grids.shape[-1]
     F = fft.rfft(grids, axis=-1, **options)[..., :half + 1]
