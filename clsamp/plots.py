@@ -13,11 +13,11 @@ from . import io, theory
 from . import spectrum as spectra
 from .convergence import pareto_front
 from .errors import InvalidArgumentError
-from .validation import check_choice, check_real
+from .validation import check_choice, check_points, check_positive_int, check_real, point_sets
 
-__all__ = ["spectrum", "radial_mean", "anisotropy", "spectrum_figure", "pair_correlation",
-           "pcf_figure", "discrepancy", "convergence", "family_spread", "family_convergence",
-           "accuracy_time", "render_comparison",
+__all__ = ["points", "points_figure", "spectrum", "radial_mean", "anisotropy", "spectrum_figure",
+           "pair_correlation", "pcf_figure", "discrepancy", "convergence", "family_spread",
+           "family_convergence", "accuracy_time", "render_comparison",
            "spectrum_image", "save_spectrum_png", "save_spectrum_exr", "pyplot"]
 
 
@@ -27,6 +27,97 @@ def pyplot():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     return plt
+
+
+# -- point sets -----------------------------------------------------------------------------
+def _point_sets(points, name="points"):
+    """The (n, 2) sets of one set, a batch (r, n, 2) or a list of sets of different sizes."""
+    sets = point_sets(points, name, d=2)
+    return sets if sets is not None else list(check_points(points, name, d=2)[0])
+
+
+def _scatter(ax, one, title, size=None, color="black"):
+    """One checked (n, 2) set on the unit square (the body of :func:`points`)."""
+    size = max(0.5, 1600.0 / len(one)) if size is None else size
+    shown = ax.scatter(one[:, 0], one[:, 1], s=size, color=color, linewidths=0)
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1)
+    ax.set_aspect("equal")
+    ax.set_xticks([])
+    ax.set_yticks([])
+    if title:
+        ax.set_title(title, fontsize=10)
+    return shown
+
+
+def points(ax, points, title=None, size=None, color="black"):
+    """Draw a 2-D point set on a matplotlib Axes: the unit square, square aspect, no ticks.
+
+    Parameters
+    ----------
+    ax : matplotlib Axes
+    points : ndarray (n, 2) or (r, n, 2), or list of (n_k, 2) arrays
+        One set, or a batch or list of sets (``sample``, ``sample_sets``), of which the
+        first is drawn.
+    title : str, optional
+    size : float, optional
+        Marker area in points^2; by default it shrinks as n grows (1600 / n, at least 0.5).
+    color : matplotlib colour
+
+    Returns
+    -------
+    matplotlib PathCollection
+
+    Examples
+    --------
+    >>> import clsamp
+    >>> from clsamp import plots
+    >>> fig, ax = plots.pyplot().subplots()
+    >>> dots = plots.points(ax, clsamp.make_sampler("jittered", seed=1).sample(256), "jittered")
+    """
+    if size is not None:
+        size = check_real(size, "size", minimum=0.0, open_minimum=True)
+    return _scatter(ax, _point_sets(points)[0], title, size, color)
+
+
+def points_figure(path, points, title=None, columns=4):
+    """Point sets saved as a figure (.png, .pdf or .svg, written whole), one panel a set.
+
+    Parameters
+    ----------
+    path : str or Path
+    points : ndarray (n, 2) or (r, n, 2), or list of (n_k, 2) arrays
+        One set (one panel), or a batch or list of sets (a panel each, titled with its n).
+    title : str, optional
+        Above the panels.
+    columns : int
+        Panels per row.
+
+    Returns
+    -------
+    Path
+
+    Examples
+    --------
+    >>> import clsamp, tempfile, pathlib
+    >>> from clsamp import plots
+    >>> sets = clsamp.make_sampler("poisson_disk", rho=0.75, seed=2).sample(256, realizations=2)
+    >>> out = plots.points_figure(pathlib.Path(tempfile.mkdtemp()) / "pd.png", sets)
+    >>> out.suffix
+    '.png'
+    """
+    sets = _point_sets(points)
+    columns = min(check_positive_int(columns, "columns"), len(sets))
+    rows = -(-len(sets) // columns)
+    fig, axes = pyplot().subplots(rows, columns, figsize=(3.0 * columns, 3.2 * rows), squeeze=False)
+    for ax in axes.ravel()[len(sets):]:
+        ax.axis("off")
+    for k, (ax, one) in enumerate(zip(axes.ravel(), sets, strict=False)):
+        _scatter(ax, one, f"set {k}, n = {len(one)}" if len(sets) > 1 else f"n = {len(one)}")
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return io.save_figure(path, fig)
 
 
 # -- spectra --------------------------------------------------------------------------------

@@ -1,0 +1,63 @@
+"""The pictures of clsamp.plots: point sets."""
+
+import numpy as np
+import pytest
+
+import clsamp
+from clsamp import plots
+
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+def _is_png(path):
+    return path.is_file() and path.read_bytes()[:8] == PNG
+
+
+@pytest.fixture(scope="module")
+def sets():
+    return clsamp.make_sampler("jittered", seed=1).sample(64, realizations=3)
+
+
+def test_points_draws_the_first_set_on_the_unit_square(sets):
+    fig, ax = plots.pyplot().subplots()
+    dots = plots.points(ax, sets, title="jittered")
+    np.testing.assert_array_equal(dots.get_offsets(), sets[0])
+    assert ax.get_xlim() == (0, 1) and ax.get_ylim() == (0, 1)
+    assert ax.get_aspect() == 1.0 and ax.get_title() == "jittered"
+    # a list of sets of different sizes: its first
+    maximal = [sets[0][:40], sets[1]]
+    np.testing.assert_array_equal(plots.points(ax, maximal).get_offsets(), sets[0][:40])
+    plots.pyplot().close(fig)
+
+
+@pytest.mark.parametrize("shape", ["one", "batch", "list"])
+def test_points_figure_writes_a_png(tmp_path, sets, shape):
+    points = {"one": sets[0], "batch": sets, "list": [sets[0][:40], sets[1], sets[2][:10]]}[shape]
+    out = plots.points_figure(tmp_path / f"{shape}.png", points, title=shape, columns=2)
+    assert out == tmp_path / f"{shape}.png"
+    assert _is_png(out)
+
+
+@pytest.mark.parametrize("bad, match", [
+    (np.full((8, 3), 0.5), "'points' must have 2 dimensions"),
+    (np.full((8, 2), 1.5), "'points'"),
+    (np.zeros((2, 2, 2, 2)), "'points' must have shape"),
+    ("points", "'points' must be a NumPy array"),
+])
+def test_points_refuses_what_is_not_a_2d_point_set(tmp_path, bad, match):
+    fig, ax = plots.pyplot().subplots()
+    with pytest.raises(ValueError, match=match):
+        plots.points(ax, bad)
+    plots.pyplot().close(fig)
+    with pytest.raises(ValueError, match=match):
+        plots.points_figure(tmp_path / "bad.png", bad)
+    assert not (tmp_path / "bad.png").exists()
+
+
+def test_points_refuses_bad_options(tmp_path, sets):
+    fig, ax = plots.pyplot().subplots()
+    with pytest.raises(ValueError, match="'size'"):
+        plots.points(ax, sets, size=-1.0)
+    plots.pyplot().close(fig)
+    with pytest.raises(ValueError, match="'columns'"):
+        plots.points_figure(tmp_path / "p.png", sets, columns=0)
