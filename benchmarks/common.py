@@ -180,22 +180,21 @@ def copy_bandwidth(nbytes, repeats=None):
     return 8 * n / seconds / 1e9
 
 
-# The machine gauge: a fixed single-threaded workload that the issues also timed on the
-# project machine, when they published the figures of peers that cannot run here
+# The machine gauge: a fixed single-threaded workload, also timed when the figures of peers
+# that cannot run here (Balzer et al.'s CCVT) were taken on the project machine
 GAUGE_RADIUS = 0.01215
-GAUGE_PUBLISHED = 2.98   # seconds of the gauge in issue 6, beside Balzer et al.'s CCVT times
+GAUGE_PUBLISHED = 2.98   # the gauge's seconds then (docs/performance.md, first section)
 
 
 def machine_gauge():
     """Seconds of ``scipy.stats.qmc.PoissonDisk(d=2, radius=0.01215, seed=1).fill_space()``
-    now (GAUGE_PUBLISHED when the issue timed it).
+    now, to set beside GAUGE_PUBLISHED.
 
     A row whose peer is a published figure, not code run in the same process, compares
-    like with like only while the machine runs at the speed it ran at then. The project's
-    VM does not always: on one evening this gauge took 3.1 to 3.3 s for a while and 4.0
-    to 5.9 s for the next 90 minutes, and a 1024 x 1024 CCVT 0.77 to 0.86 s and then 0.99
-    to 1.46 s. The two did not slow by the same factor, so the gauge says when a ratio to a
-    published figure is fair (near GAUGE_PUBLISHED); it is no conversion factor."""
+    like with like only while the machine runs at the speed it ran at then, and a shared
+    VM drifts. The gauge says when a ratio to a published figure is fair (near
+    GAUGE_PUBLISHED); it is no conversion factor, since the gauge and the timed code do not
+    slow by the same factor (docs/performance.md gives an evening of both)."""
     from scipy.stats import qmc
     engine = qmc.PoissonDisk(d=2, radius=GAUGE_RADIUS, seed=1)
     t0 = time.perf_counter()

@@ -34,7 +34,8 @@ import numpy as np
 from . import io
 from .errors import InvalidArgumentError
 
-TASK_WORK = 2**25       # points a task aims at (~1 s of a convergence sweep on 2 CPU cores)
+TASK_WORK = 2**25       # points a task aims at: long beside the scheduler's cost per task
+                        # (docs/scale-out.md sizes it)
 RETRIES = 3
 CONNECT_TIMEOUT = 10.0  # seconds to reach a scheduler
 _MANIFEST = "clsamp-checkpoint.json"

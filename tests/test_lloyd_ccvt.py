@@ -130,7 +130,7 @@ def test_jittered_density_lowers_the_integration_error():
         s = clsamp.make_sampler("ccvt", seed=5, points_per_site=32, density=kind)
         mse[kind] = clsamp.convergence(s, "gaussian", [64], realizations=16, seed=1,
                                           progress=False).mse[0]
-    assert mse["jittered"] < mse["random"] / 10          # measured: about 90 times lower
+    assert mse["jittered"] < mse["random"] / 10
 
 
 def test_start_partition_is_exact():
@@ -211,14 +211,13 @@ def test_start_weights_balance_the_cells():
     assert np.array_equal(w, start.start_weights(sites, 256, G, power.PowerPass(sites, G, "numpy")))
     after = power.power_counts(power.power_pass_device(points, sites, w, G)[0], 256)
     spread = [np.abs(c - 256).mean() / 256 for c in (before, after)]
-    assert spread[0] > 0.3 and spread[1] < 0.08, spread      # measured: 0.42, 0.04
+    assert spread[0] > 0.3 and spread[1] < 0.08, spread
 
 
 def test_start_sites_relax_the_sites_and_both_backends_agree():
     # random sites crowd in places: on the weights' lattice, a few capacity-constrained
-    # Lloyd steps spread them (relative radius 0.11 and 0.07 -> 0.71, measured), four
-    # duplicates included; the same integers with both backends; a crowded realization
-    # stays where it is
+    # Lloyd steps spread them, four duplicates included; the same integers with both
+    # backends; a crowded realization stays where it is
     sites = initial_sites(6, np.arange(3), 90)
     sites[2] = 1234567                                        # crowded: left alone
     sites[1, :3] = sites[1, 3]                                # duplicates of site 3
@@ -289,9 +288,7 @@ def test_start_partition_backends_agree_and_are_deterministic():
 @pytest.mark.parametrize("seed, r, n, p", [(1, 2, 256, 64), (2, 1, 1024, 16), (4, 3, 20, 30)])
 def test_start_partition_is_compact(seed, r, n, p):
     # excess is passed along to neighbouring sites, never to a far site with room: every
-    # point stays within a few spacings of its site (the greedy start this replaced put
-    # its leftovers anywhere: 99% 7.9, max 19.6 spacings at 1024 x 1024; here 99% 1.5 to
-    # 2.0, max 1.8 to 3.0)
+    # point stays within a few spacings of its site
     sites, points, members = _start(seed, r, n, p)
     for k in range(r):
         assert np.array_equal(np.sort(members[k].ravel()), np.arange(n * p))
@@ -327,7 +324,7 @@ def test_relay_shifts_excess_along_neighbours():
 
 def test_ccvt_has_no_axis_cross_in_its_spectrum():
     # a start that cuts the unit square leaves seams on x = 0 and y = 0, which show as
-    # excess power on the frequency axes (1.44 times the power beside them, measured)
+    # excess power on the frequency axes
     pts = clsamp.make_sampler("ccvt", seed=1, points_per_site=64).sample(256, realizations=32)
     P = clsamp.power_spectrum(pts, resolution=64, method="direct", progress=False)
     c = P.shape[0] // 2
@@ -447,16 +444,13 @@ def test_ccvt_quality():
     pts, info = s.sample(128, realizations=4, return_info=True)
     assert np.all(info.converged)
     # white noise 0.32, hexagonal 0.1604; Balzer's code reaches 0.1677 at 1024 x 1024.
-    # Local optima spread N*E from realization to realization at this size (seed 4, eight
-    # realizations, jittered density: 0.1705 to 0.1727, mean 0.1717, from the power start;
-    # 0.1706 to 0.1730, mean 0.1715, from the greedy start it replaced; 0.1690 to 0.1723
-    # with i.i.d. points), so the bound holds each set and the Voronoi energy below the mean.
+    # Local optima spread N*E from realization to realization at this size, so the bound
+    # holds each set and the Voronoi energy below the mean.
     capacity_ne = 128 * info.energy_history[:, -1]
     assert np.all(capacity_ne < 0.173)
     assert np.all(capacity_ne > point_metrics.HEXAGONAL_NE)
     # the energy of the sites' own Voronoi cells, on a fine grid: the continuous quality,
-    # which the discrete E over the density points only estimates (0.1686 to 0.1705, mean
-    # 0.1696 here; 0.1688 to 0.1699, mean 0.1692, from the greedy start it replaced)
+    # which the discrete E over the density points only estimates
     c = (np.arange(512) + 0.5) / 512
     grid = np.stack(np.meshgrid(c, c), -1).reshape(-1, 2)
     ne = [128 * np.mean(cKDTree(q, boxsize=1.0).query(grid)[0] ** 2) for q in pts]

@@ -226,9 +226,9 @@ def test_jittered_beats_random_at_96_ao_rays():
 def test_ccvt_beats_poisson_disk_at_96_ao_rays():
     scene = Scene.from_file("ao")
     ref = rendering.reference(scene, 24, spp=4096, progress=False)
-    # expensive samplers share a pool of 8 sets per image, so sum over three images;
-    # 64 points per site keeps CCVT test-sized; CCVT's MSE over Poisson disk's was 0.85, 0.74
-    # and 0.79 for the seed triples (4, 5, 6), (7, 8, 9), (10, 11, 12)
+    # expensive samplers share a pool of 8 sets per image, so sum over three images (the
+    # ratio over other seeds: docs/performance.md, "What the tests' bounds rest on");
+    # 64 points per site keeps CCVT test-sized
     poisson = sum(rendering.mse(rendering.render(scene, "poisson_disk", 96, 24, seed=s,
                                                  progress=False), ref) for s in (4, 5, 6))
     ccvt = sum(rendering.mse(rendering.render(scene, "ccvt", 96, 24, seed=s, progress=False,

@@ -67,8 +67,8 @@ def test_refuses_pixels_outside_the_image_and_too_many_samples():
 
 
 def test_zsobol_error_is_bluer_than_sobol_owen_on_the_ao_scene():
-    # measured: low-frequency share 0.45-0.60 for zsobol, 0.93-1.05 for sobol:owen (and
-    # random) at 4-64 spp, 128^2; here 64^2 at 16 spp over two seeds
+    # a test-sized image: 64^2 at 16 spp over two seeds (the shares at 128^2:
+    # docs/performance.md, "Renderer samplers")
     scene = Scene.from_file("ao")
     ref = rendering.reference(scene, 64, spp=2048, progress=False)
     low = {}

@@ -36,11 +36,16 @@ def ccvt_grid_size(n):
 
 
 def ccvt_defines():
-    """Build options of ``kernels/ccvt*.cl`` on the current device: the shared constants,
-    and CCVT_PREFETCH (software prefetch of the records and points a pair reads) under PoCL
-    on a CPU, where it was measured to help the scans that wait on memory (other
-    implementations may lower ``prefetch`` differently, or not at all); it never changes a
-    result."""
+    """Build options of ``kernels/ccvt*.cl`` on the current device.
+
+    Returns
+    -------
+    dict
+        The constants the kernels share with Python, and CCVT_PREFETCH: software prefetch
+        of the records and points a pair reads, on under PoCL on a CPU, whose scans of
+        pairs wait on memory (other implementations may lower ``prefetch`` differently, or
+        not at all). It never changes a result.
+    """
     return {**it.DEFINES, "CCVT_TOP": CCVT_TOP, "CCVT_SECTORS": CCVT_SECTORS,
             "CCVT_BANDS": CCVT_BANDS, "CCVT_META": CCVT_META, "CCVT_NO_OWNER": f"{NO_OWNER}u",
             "CCVT_NO_SECOND": f"{NO_SECOND}L",
