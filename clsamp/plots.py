@@ -16,9 +16,11 @@ from .errors import InvalidArgumentError
 from .validation import check_choice, check_points, check_positive_int, check_real, point_sets
 
 __all__ = ["points", "points_figure", "spectrum", "radial_mean", "anisotropy", "spectrum_figure",
-           "pair_correlation", "pcf_figure", "discrepancy", "convergence", "family_spread",
-           "family_convergence", "accuracy_time", "render_comparison",
-           "spectrum_image", "save_spectrum_png", "save_spectrum_exr", "pyplot"]
+           "sampler_figure", "radial_mean_families", "pair_correlation", "pcf_figure",
+           "discrepancy", "discrepancy_figure", "convergence", "family_spread",
+           "family_convergence", "accuracy_time", "error_time", "error_time_figure",
+           "render_comparison", "error_spectra", "spectrum_image", "save_spectrum_png",
+           "save_spectrum_exr", "pyplot"]
 
 
 def pyplot():
@@ -269,6 +271,105 @@ def spectrum_figure(path, P, n=None, realizations=None, label=None, bin_width=1.
     return io.save_figure(path, figure)
 
 
+def sampler_figure(path, points, P, pcf, n=None, label=None):
+    """A sampler at a glance, saved as one row of four panels: its first point set, the
+    (expected) spectrum, its radial mean and the pair correlation function.
+
+    Parameters
+    ----------
+    path : str or Path
+        The figure (.png, .pdf or .svg), written whole.
+    points : ndarray (n, 2) or (r, n, 2), or list of (n_k, 2) arrays
+        The sets the spectrum and the PCF were measured over.
+    P : ndarray (R, R)
+        Their spectrum (:func:`clsamp.power_spectrum`).
+    pcf : (radii, g)
+        Their pair correlation function (:func:`clsamp.pair_correlation`), its radius
+        axis drawn in mean spacings of the sets' mean size.
+    n : int, optional
+        Points per set for the radial mean's frequency axis (2ν/√N); by default the sets'
+        mean size, rounded.
+    label : str, optional
+        The sampler's name, in the first panel's title.
+
+    Returns
+    -------
+    Path
+
+    Examples
+    --------
+    >>> import clsamp, tempfile, pathlib
+    >>> from clsamp import plots
+    >>> sets = clsamp.make_sampler("jittered", seed=1).sample(256, realizations=4)
+    >>> P = clsamp.power_spectrum(sets, resolution=64, progress=False)
+    >>> out = plots.sampler_figure(pathlib.Path(tempfile.mkdtemp()) / "j.png", sets, P,
+    ...                            clsamp.pair_correlation(sets), label="jittered")
+    """
+    sets = _point_sets(points)
+    size = float(np.mean([len(s) for s in sets]))
+    P = spectra.check_spectrum(P)
+    radii, g = pcf
+    several = f", {len(sets)} sets" if len(sets) > 1 else ""
+    fig, axes = pyplot().subplots(1, 4, figsize=(14, 3.3))
+    first = f"n = {len(sets[0])}"
+    _scatter(axes[0], sets[0], f"{label}, {first}" if label else first)
+    spectrum(axes[1], P, title=f"expected spectrum{several}" if several else "spectrum")
+    radial_mean(axes[2], *spectra.radial_mean(P), n=round(size) if n is None else n)
+    axes[2].set_ylim(0, 2.5)
+    pair_correlation(axes[3], radii, g, n=size)
+    axes[3].set_ylim(0, max(2.5, float(np.max(g)) * 1.05))
+    axes[3].set_title(f"expected PCF{several}" if several else "PCF", fontsize=10)
+    fig.tight_layout()
+    return io.save_figure(path, fig)
+
+
+def radial_mean_families(path, curves, families, n=None, reference="random", note=None):
+    """Radial means of many samplers, saved as one panel per family (a shared y axis),
+    with a reference curve (white noise) in grey in every panel.
+
+    Parameters
+    ----------
+    path : str or Path
+    curves : dict
+        ``{sampler: (frequencies, radial mean)}`` (:func:`clsamp.radial_mean`).
+    families : sequence of (name, samplers)
+        The panels, each with the samplers it shows (those in ``curves``, in this order).
+    n : int, optional
+        Points per set, to draw frequencies as 2ν/√N.
+    reference : str, optional
+        The entry of ``curves`` drawn in every panel.
+    note : str, optional
+        Added to each panel's title, in parentheses.
+
+    Returns
+    -------
+    Path
+
+    Examples
+    --------
+    >>> import clsamp, tempfile, pathlib
+    >>> from clsamp import plots
+    >>> curves = {s: clsamp.radial_mean(clsamp.power_spectrum(
+    ...     clsamp.make_sampler(s, seed=1).sample(256, realizations=4), resolution=64,
+    ...     progress=False)) for s in ("random", "jittered", "halton")}
+    >>> out = plots.radial_mean_families(pathlib.Path(tempfile.mkdtemp()) / "r.png", curves,
+    ...     [("stratified", ["jittered"]), ("low discrepancy", ["halton"])], n=256)
+    """
+    families = list(families)
+    fig, axes = pyplot().subplots(1, len(families), figsize=(5.2 * len(families), 3.8), sharey=True,
+                                  squeeze=False)
+    for ax, (family, members) in zip(axes[0], families, strict=True):
+        if reference in curves:
+            radial_mean(ax, *curves[reference], n=n, color="0.55", linewidth=1.0, label=reference)
+        for k, name in enumerate(m for m in members if m in curves):
+            radial_mean(ax, *curves[name], n=n, color=f"C{k}", label=name)
+        ax.set_ylim(0, 2.5)
+        ax.set_title(f"{family} ({note})" if note else family, fontsize=10)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    return io.save_figure(path, fig)
+
+
 # -- metrics ------------------------------------------------------------------------------
 def pair_correlation(ax, radii, pcf, n=None, d=2, label=None, **line_args):
     """Plot a pair correlation function (from :func:`clsamp.pair_correlation`).
@@ -314,6 +415,52 @@ def discrepancy(ax, sweep, expected=None, **line_args):
     ax.set_xlabel("N (points)")
     ax.set_ylabel(f"{sweep.method} discrepancy")
     return line
+
+
+def discrepancy_figure(path, sweeps):
+    """Discrepancies of many samplers against N, saved as one log-log panel per method,
+    each sampler with its fitted slope and, where :func:`clsamp.theory.discrepancy_rate`
+    knows it, a dashed line of the known rate.
+
+    Parameters
+    ----------
+    path : str or Path
+    sweeps : sequence of dict
+        One :func:`clsamp.metrics.discrepancy_sweep` result (``{method: DiscrepancySweep}``)
+        per sampler, all with the methods of the first.
+
+    Returns
+    -------
+    Path
+
+    Examples
+    --------
+    >>> import clsamp, tempfile, pathlib
+    >>> from clsamp import plots
+    >>> from clsamp.metrics import discrepancy_sweep
+    >>> sweeps = [discrepancy_sweep(clsamp.make_sampler(s, seed=3), [16, 64, 256, 1024],
+    ...                             progress=False) for s in ("random", "halton")]
+    >>> out = plots.discrepancy_figure(pathlib.Path(tempfile.mkdtemp()) / "d.png", sweeps)
+    """
+    sweeps = list(sweeps)
+    if not sweeps:
+        raise InvalidArgumentError("'sweeps' must hold at least one sampler's sweeps")
+    methods = list(sweeps[0])
+    plt = pyplot()
+    fig, axes = plt.subplots(1, len(methods), figsize=(6.5 * len(methods), 5.2), squeeze=False)
+    colours = plt.get_cmap("tab20").colors      # up to twenty samplers, no colour twice
+    for index, by_method in enumerate(sweeps):
+        for ax, method in zip(axes[0], methods, strict=True):
+            sweep = by_method[method]
+            discrepancy(ax, sweep, theory.discrepancy_rate(sweep.sampler),
+                        color=colours[index % 20], marker="os^vD<>"[index % 7])
+    for ax, method in zip(axes[0], methods, strict=True):
+        sets = sweeps[0][method].realizations
+        ax.set_title(f"{method} discrepancy (RMS of D over {sets} sets; dashed: known)")
+        ax.grid(True, which="both", alpha=0.2)
+        ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    return io.save_figure(path, fig)
 
 
 # -- convergence --------------------------------------------------------------------------
@@ -416,6 +563,76 @@ def accuracy_time(results, path):
             ax.step([p["seconds"] for p in front], [p["mse"] for p in front], "k-", where="post",
                     linewidth=1.5, alpha=0.6, label="front")
         _label(ax, "seconds per estimate (generation included)", f"{name}: accuracy against time")
+    fig.tight_layout()
+    return io.save_figure(path, fig)
+
+
+def error_time(ax, curves, xlabel="seconds", ylabel="MSE", title=None, exact=None,
+               markersize=3, fontsize=7):
+    """Error against time on a matplotlib Axes, log-log, a line with markers per curve.
+
+    Parameters
+    ----------
+    ax : matplotlib Axes
+    curves : dict
+        ``{label: (seconds, error)}``, positive values.
+    xlabel, ylabel, title : str
+    exact : (label, seconds), optional
+        A method without error (the direct spectrum), drawn as a dashed vertical line.
+    markersize, fontsize : float or None
+        Marker size and the legend's font size (None: matplotlib's defaults).
+
+    Returns
+    -------
+    list of Line2D
+
+    Examples
+    --------
+    >>> from clsamp import plots
+    >>> fig, ax = plots.pyplot().subplots()
+    >>> lines = plots.error_time(ax, {"fast": ([0.01, 0.02, 0.05], [1e-3, 1e-6, 1e-12])},
+    ...                          ylabel="max error / N", exact=("direct", 0.4))
+    """
+    lines = [ax.loglog(x, y, "o-", label=label, markersize=markersize)[0]
+             for label, (x, y) in curves.items()]
+    if exact:
+        lines.append(ax.axvline(exact[1], color="k", linestyle="--", label=exact[0]))
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    if title:
+        ax.set_title(title)
+    ax.legend(fontsize=fontsize)
+    return lines
+
+
+def error_time_figure(path, panels):
+    """Panels of error against time (:func:`error_time`) side by side, saved whole.
+
+    Parameters
+    ----------
+    path : str or Path
+    panels : sequence of dict or None
+        The keyword arguments of :func:`error_time` for each panel, or None for a panel
+        left empty (a measurement that failed).
+
+    Returns
+    -------
+    Path
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from clsamp import plots
+    >>> out = plots.error_time_figure(pathlib.Path(tempfile.mkdtemp()) / "t.png",
+    ...     [{"curves": {"a": ([1, 2], [1e-2, 1e-3])}, "title": "a"}, None])
+    """
+    panels = list(panels)
+    if not panels:
+        raise InvalidArgumentError("'panels' must hold at least one panel")
+    fig, axes = pyplot().subplots(1, len(panels), figsize=(5.0 * len(panels), 4.2), squeeze=False)
+    for ax, panel in zip(axes[0], panels, strict=True):
+        if panel is not None:
+            error_time(ax, **panel)
     fig.tight_layout()
     return io.save_figure(path, fig)
 

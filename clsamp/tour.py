@@ -72,15 +72,10 @@ TOUR_SWEEPS = {
 }
 
 
-def _plot_points(ax, points, title):
-    ax.scatter(points[:, 0], points[:, 1] if points.shape[1] > 1 else np.zeros(len(points)),
-               s=max(0.5, 1600.0 / len(points)), color="black", linewidths=0)
-    ax.set_xlim(0, 1)
-    ax.set_ylim(0, 1)
-    ax.set_aspect("equal")
-    ax.set_xticks([])
-    ax.set_yticks([])
-    ax.set_title(title, fontsize=10)
+def _picture(report, name):
+    """Where a picture goes (img/<name>.png) and its link from index.html."""
+    path = report.out / "img" / f"{name}.png"
+    return path, path.relative_to(report.out).as_posix()
 
 
 def tour_sampler_params(name, quick):
@@ -96,7 +91,6 @@ def section_samplers(report, quick):
     correlation; the radial means by family; the discrepancies against N."""
     from . import metrics, point_metrics, spectrum
     from .samplers import make_sampler, sampler_names
-    plt = plots.pyplot()
     n, realizations, resolution = (256, 8, 64) if quick else (1024, 32, 128)
     known = set(sampler_names())
     rows, data, cells, curves = [], {}, [], {}
@@ -125,16 +119,9 @@ def section_samplers(report, quick):
             report.array(f"spectrum_{name}", P)
             plots.save_spectrum_exr(report.out / "data" / f"spectrum_{name}.exr", P,
                                     header={"sampler": name, "n": size, "realizations": realizations})
-            fig, axes = plt.subplots(1, 4, figsize=(14, 3.3))
-            _plot_points(axes[0], points[0], f"{name}, n = {len(points[0])}")
-            plots.spectrum(axes[1], P, title=f"expected spectrum, {realizations} sets")
-            plots.radial_mean(axes[2], freqs, mean, n=n)
-            axes[2].set_ylim(0, 2.5)
-            plots.pair_correlation(axes[3], radii, pcf, n=size)
-            axes[3].set_ylim(0, max(2.5, float(np.max(pcf)) * 1.05))
-            axes[3].set_title(f"expected PCF, {realizations} sets", fontsize=10)
-            fig.tight_layout()
-            cells.append((name, report.figure(f"sampler_{name}", fig)))
+            path, src = _picture(report, f"sampler_{name}")
+            plots.sampler_figure(path, points, P, (radii, pcf), n=n, label=name)
+            cells.append((name, src))
             curves[name] = (freqs, mean)
             low = float(np.nanmean(mean[freqs <= 0.5 * np.sqrt(n)]))
             peak = float(radii[np.argmax(pcf)] * size ** 0.5)
@@ -147,7 +134,8 @@ def section_samplers(report, quick):
         except Exception as error:  # one sampler failing leaves the others in the report
             rows.append((name, n, realizations, "-", "-", "-", "-", f"failed: {error}"))
             data[name] = {"error": traceback.format_exc()}
-    overlay = report.figure("radial_means", _family_overlay(plt, curves, n, realizations))
+    path, overlay = _picture(report, "radial_means")
+    plots.radial_mean_families(path, curves, FAMILIES, n=n, note=f"n = {n}, {realizations} sets")
     body = (f"<p>Each sampler makes {realizations} sets of n = {n} points (seed 1); the spectrum is the mean "
             "periodogram over the sets (exact, <code>method='direct'</code>), DC at the centre; "
             "the pair correlation function (PCF) is the mean over the sets of the Gaussian-smoothed "
@@ -182,37 +170,18 @@ DISCREPANCY_REALIZATIONS = (8, 4)
 DISCREPANCY_CAPS = {"lloyd": (4096, 256), "ccvt": (1024, 256)}
 
 
-def _family_overlay(plt, curves, n, realizations):
-    fig, axes = plt.subplots(1, len(FAMILIES), figsize=(5.2 * len(FAMILIES), 3.8), sharey=True)
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    for ax, (family, members) in zip(axes, FAMILIES, strict=True):
-        if "random" in curves:
-            plots.radial_mean(ax, *curves["random"], n=n, color="0.55", linewidth=1.0,
-                              label="random")
-        for k, name in enumerate(m for m in members if m in curves):
-            plots.radial_mean(ax, *curves[name], n=n, color=colours[k % len(colours)], label=name)
-        ax.set_ylim(0, 2.5)
-        ax.set_title(f"{family} (n = {n}, {realizations} sets)", fontsize=10)
-        ax.legend(fontsize=8)
-    fig.tight_layout()
-    return fig
-
-
 def _discrepancy_against_n(report, quick):
     """CD and L2-star discrepancy of every sampler's sets against N, slopes against the
     known rates (theory.DISCREPANCY_RATES)."""
     from . import theory
     from .metrics import discrepancy_sweep
     from .samplers import make_sampler, sampler_names
-    plt = plots.pyplot()
     ns_all = DISCREPANCY_NS[1 if quick else 0]
     realizations = DISCREPANCY_REALIZATIONS[1 if quick else 0]
     methods = ("CD", "L2-star")
-    fig, axes = plt.subplots(1, 2, figsize=(13, 5.2))
-    rows, data = [], {}
+    rows, data, drawn = [], {}, []
     known = set(sampler_names())
-    colours = plt.get_cmap("tab20").colors      # thirteen samplers: no colour twice
-    for index, (name, _) in enumerate(TOUR_SAMPLERS):
+    for name, _ in TOUR_SAMPLERS:
         if name not in known:
             continue
         try:
@@ -224,9 +193,7 @@ def _discrepancy_against_n(report, quick):
             sweeps = discrepancy_sweep(sampler, ns, realizations=realizations, methods=methods)
             seconds = time.perf_counter() - t0
             expected = theory.discrepancy_rate(sampler.label)
-            for ax, method in zip(axes, methods, strict=True):
-                plots.discrepancy(ax, sweeps[method], expected, color=colours[index % 20],
-                                  marker="os^vD<>"[index % 7])
+            drawn.append(sweeps)
             slopes = {m: sweeps[m].slope() for m in methods}
             rows.append((sampler.label, f"{sweeps['CD'].ns[0]}..{sweeps['CD'].ns[-1]}",
                          *(f"{slopes[m][0]:+.2f} ± {slopes[m][1]:.2f}" for m in methods),
@@ -235,12 +202,6 @@ def _discrepancy_against_n(report, quick):
         except Exception as error:  # one sampler failing leaves the others in the report
             rows.append((name, "-", "-", "-", "-", f"failed: {error}"))
             data[name] = {"error": traceback.format_exc()}
-    for ax, method in zip(axes, methods, strict=True):
-        ax.set_title(f"{method} discrepancy (RMS of D over {realizations} sets; dashed: known)")
-        ax.grid(True, which="both", alpha=0.2)
-        ax.legend(fontsize=7, ncol=2)
-    fig.tight_layout()
-    src = report.figure("discrepancy_against_n", fig)
     body = ("<h3>Discrepancy against N</h3><p>The centred (CD) and L2-star discrepancies D "
             "(<code>clsamp.discrepancy</code>; the root of scipy's CD), root-mean-square over "
             f"{realizations} sets per N (seed 3), with the slope of log D against log N fitted "
@@ -249,7 +210,10 @@ def _discrepancy_against_n(report, quick):
             "cell (jittered), N<sup>-1</sup> up to a log factor for low-discrepancy sets. The "
             "optimizers' sweeps stop earlier (their points cost most).</p>")
     body += table(("sampler", "N", "CD slope", "L2-star slope", "known", "seconds"), rows)
-    body += img(src, "discrepancy against N", 1100)
+    if drawn:
+        path, src = _picture(report, "discrepancy_against_n")
+        plots.discrepancy_figure(path, drawn)
+        body += img(src, "discrepancy against N", 1100)
     return body, data
 
 
@@ -504,9 +468,8 @@ def _spectrum_cost(report, quick):
 
 def section_cost(report, quick):
     """What accuracy costs in time: spectra, sampler MSE, rendered images."""
-    plt = plots.pyplot()
     data, body, failures = {}, "", []
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    panels = [None, None, None]   # spectra, samplers, renders: error against time
     # spectra
     try:
         spec, rows = _spectrum_cost(report, quick)
@@ -516,14 +479,11 @@ def section_cost(report, quick):
                  "path at each tolerance against the exact sum (error = max |P<sub>fast</sub> &minus; "
                  "P<sub>direct</sub>| / N).</p>")
         body += table(("method", "tol", "seconds", "max error / N"), rows)
-        ax = axes[0]
-        ax.loglog([c["seconds"] for c in spec["fast"]], [max(c["max_error_over_n"], 1e-17)
-                                                         for c in spec["fast"]], "o-", label="fast (NUFFT)")
-        ax.axvline(spec["direct_seconds"], color="k", linestyle="--", label="direct (exact)")
-        ax.set_xlabel("seconds")
-        ax.set_ylabel("max error / N")
-        ax.set_title("spectrum: error against time")
-        ax.legend()
+        fast = ([c["seconds"] for c in spec["fast"]], [max(c["max_error_over_n"], 1e-17)
+                                                         for c in spec["fast"]])
+        panels[0] = {"curves": {"fast (NUFFT)": fast}, "exact": ("direct (exact)", spec["direct_seconds"]),
+                     "ylabel": "max error / N", "title": "spectrum: error against time",
+                     "markersize": None, "fontsize": None}
     except Exception:
         failures.append(("spectra", traceback.format_exc()))
     # samplers
@@ -532,8 +492,7 @@ def section_cost(report, quick):
         results = report.results.get("convergence")
         if not results:
             raise RuntimeError("section 2 produced no convergence results")
-        ax = axes[1]
-        target_rows, sampler_data = [], {}
+        target_rows, sampler_data, curves = [], {}, {}
         for integrand in sorted({r.integrand for r in results}):
             group = [r for r in results if r.integrand == integrand]
             target = float(np.median([r.mse[len(r.mse) // 2] for r in group]))
@@ -543,12 +502,10 @@ def section_cost(report, quick):
                                     "not reached" if reach is None else reach["n"],
                                     "not reached" if reach is None else reach["seconds"]))
                 if integrand == "disk":
-                    ax.loglog(r.seconds_per_estimate, r.mse, "o-", label=r.sampler, markersize=3)
+                    curves[r.sampler] = (r.seconds_per_estimate, r.mse)
             sampler_data[integrand] = {"target_mse": target, "pareto_front": pareto_front(group)}
-        ax.set_xlabel("seconds per estimate (generation included)")
-        ax.set_ylabel("MSE")
-        ax.set_title("samplers (disk integrand): MSE against time")
-        ax.legend(fontsize=7)
+        panels[1] = {"curves": curves, "xlabel": "seconds per estimate (generation included)",
+                     "title": "samplers (disk integrand): MSE against time"}
         data["samplers"] = sampler_data
         body += ("<h3>Samplers</h3><p>From section 2: the seconds one estimate takes, point "
                  "generation included, to reach a target MSE (the median MSE at the middle of the "
@@ -570,8 +527,7 @@ def section_cost(report, quick):
             raise RuntimeError("section 3 produced no renders")
         scene, resolution, ref = state["scene"], state["resolution"], state["reference"]
         spps = (4, 16, 64) if quick else (4, 16, 64, 256)
-        ax = axes[2]
-        render_rows, render_data = [], {}
+        render_rows, render_data, curves = [], {}, {}
         for name, params in (("random", {}), ("jittered", None), ("sobol:owen", {})):
             seconds, errors = [], []
             for spp in spps:
@@ -587,20 +543,19 @@ def section_cost(report, quick):
                 seconds.append(time.perf_counter() - t0)
                 errors.append(rendering.mse(image, ref))
                 render_rows.append((name, spp, seconds[-1], errors[-1]))
-            ax.loglog(seconds, errors, "o-", label=name, markersize=3)
+            curves[name] = (seconds, errors)
             render_data[name] = {"spp": list(spps), "seconds": seconds, "mse": errors}
-        ax.set_xlabel("seconds per image")
-        ax.set_ylabel("MSE against reference")
-        ax.set_title(f"AO renders {resolution}² : MSE against time")
-        ax.legend(fontsize=7)
+        panels[2] = {"curves": curves, "xlabel": "seconds per image", "ylabel": "MSE against reference",
+                     "title": f"AO renders {resolution}² : MSE against time"}
         data["render"] = render_data
         body += ("<h3>Rendered images</h3><p>The AO scene rendered at increasing samples per pixel: "
                  "MSE against seconds, sampling and rendering included.</p>")
         body += table(("sampler", "spp", "seconds", "MSE"), render_rows)
     except Exception:
         failures.append(("renders", traceback.format_exc()))
-    fig.tight_layout()
-    body = img(report.figure("accuracy_time", fig), "accuracy against time", 1100) + body
+    path, src = _picture(report, "accuracy_time")
+    plots.error_time_figure(path, panels)
+    body = img(src, "accuracy against time", 1100) + body
     for part, trace in failures:
         body += f"<div class='error'>The {part} part failed:\n{html.escape(trace)}</div>"
         data[f"{part}_error"] = trace

@@ -1,10 +1,12 @@
-"""The pictures of clsamp.plots: point sets."""
+"""The pictures of clsamp.plots that the tour draws: point sets, a sampler at a glance,
+radial means by family, discrepancy against N, error against time."""
 
 import numpy as np
 import pytest
 
 import clsamp
 from clsamp import plots
+from clsamp.metrics import discrepancy_sweep
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -61,3 +63,24 @@ def test_points_refuses_bad_options(tmp_path, sets):
     plots.pyplot().close(fig)
     with pytest.raises(ValueError, match="'columns'"):
         plots.points_figure(tmp_path / "p.png", sets, columns=0)
+
+
+def test_the_tour_figures_write_pngs(tmp_path, sets):
+    P = clsamp.power_spectrum(sets, resolution=32, method="direct", progress=False)
+    assert _is_png(plots.sampler_figure(tmp_path / "s.png", sets, P, clsamp.pair_correlation(sets),
+                                        n=64, label="jittered"))
+    curves = {"random": clsamp.radial_mean(P), "jittered": clsamp.radial_mean(P)}
+    assert _is_png(plots.radial_mean_families(tmp_path / "r.png", curves,
+                                              [("stratified", ("jittered",)), ("other", ())], n=64))
+    sweeps = [discrepancy_sweep(clsamp.make_sampler(s, seed=3), [16, 64, 256], realizations=2,
+                                progress=False) for s in ("random", "halton")]
+    assert _is_png(plots.discrepancy_figure(tmp_path / "d.png", sweeps))
+    panels = [{"curves": {"a": ([1e-3, 2e-3], [1e-2, 1e-4])}, "exact": ("exact", 3e-3)}, None]
+    assert _is_png(plots.error_time_figure(tmp_path / "t.png", panels))
+
+
+def test_the_tour_figures_refuse_nothing_to_draw(tmp_path):
+    with pytest.raises(ValueError, match="'sweeps'"):
+        plots.discrepancy_figure(tmp_path / "d.png", [])
+    with pytest.raises(ValueError, match="'panels'"):
+        plots.error_time_figure(tmp_path / "t.png", [])
