@@ -17,7 +17,22 @@ from . import io
 
 @dataclasses.dataclass
 class Section:
-    """One part of the report: its HTML body, its numbers and how long it took."""
+    """One part of the report: its HTML body, its numbers and how long it took.
+
+    Attributes
+    ----------
+    key : str
+        The section's anchor in the page (``#key``) and its entry in ``tour.json``.
+    title : str
+    body : str
+        HTML.
+    data : dict
+        The section's numbers, as written to ``tour.json``.
+    seconds : float
+        How long the section took.
+    error : str or None
+        The traceback, where the section failed.
+    """
 
     key: str
     title: str
@@ -28,7 +43,31 @@ class Section:
 
 
 class Report:
-    """Collects sections, figures and data files under one output folder."""
+    """Collects sections, figures and data files under one output folder.
+
+    Parameters
+    ----------
+    out : str or Path
+        The output folder; it and its ``img/`` and ``data/`` subfolders are created.
+
+    Attributes
+    ----------
+    sections : list of Section
+        The report's parts, in order.
+    results : dict
+        Objects a later section reuses (convergence results, renders).
+    client : dask.distributed.Client or None
+        Where the sweeps run; None runs them in-process.
+
+    Examples
+    --------
+    >>> import tempfile, numpy as np
+    >>> from clsamp.report import Report
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     report = Report(folder)
+    ...     report.array("spectrum", np.zeros((4, 4)))
+    'data/spectrum.npy'
+    """
 
     def __init__(self, out):
         self.out = Path(out)
@@ -39,13 +78,39 @@ class Report:
         self.client = None  # a dask.distributed.Client for the sweeps, or None (in-process)
 
     def figure(self, name, fig):
-        """Save a matplotlib figure as img/<name>.png; return its relative path."""
+        """Save a matplotlib figure as ``img/<name>.png`` and close it.
+
+        Parameters
+        ----------
+        name : str
+            The file's name without its suffix.
+        fig : matplotlib.figure.Figure
+
+        Returns
+        -------
+        str
+            The file's path relative to the output folder (for an ``<img>`` tag).
+        """
         path = io.save_figure(self.out / "img" / f"{name}.png", fig)
         return path.relative_to(self.out).as_posix()
 
     def points(self, name, points):
-        """data/<name>.npy, or for sets of different sizes data/<name>.txt (realizations
-        separated by a line ``#``)."""
+        """Save point sets as ``data/<name>.npy``, or ``data/<name>.txt`` for a list of sets.
+
+        Parameters
+        ----------
+        name : str
+            The file's name without its suffix.
+        points : ndarray or list of ndarray
+            (n, d) or (r, n, d) points, written in NumPy's format; or sets of different
+            sizes, written as text (:func:`clsamp.io.format_points`), one set after
+            another, separated by a line ``#``.
+
+        Returns
+        -------
+        str
+            The file's path relative to the output folder.
+        """
         suffix = ".txt" if isinstance(points, list) else ".npy"
         if isinstance(points, list):
             path = self.out / "data" / f"{name}{suffix}"
@@ -55,6 +120,19 @@ class Report:
         return path.relative_to(self.out).as_posix()
 
     def array(self, name, array):
+        """Save an array as ``data/<name>.npy`` (NumPy's format, written whole).
+
+        Parameters
+        ----------
+        name : str
+            The file's name without its suffix.
+        array : array_like
+
+        Returns
+        -------
+        str
+            The file's path relative to the output folder.
+        """
         from io import BytesIO
         buffer = BytesIO()
         np.save(buffer, np.asarray(array))
@@ -63,15 +141,67 @@ class Report:
         return path.relative_to(self.out).as_posix()
 
     def exr(self, name, image, header=None):
+        """Save a float image as OpenEXR, ``data/<name>.exr`` (:func:`clsamp.io.write_exr`).
+
+        Parameters
+        ----------
+        name : str
+            The file's name without its suffix.
+        image : ndarray
+            (h, w) or (h, w, c) linear float values.
+        header : dict, optional
+            Entries stored as string attributes of the file (sampler, spp, seed, ...).
+
+        Returns
+        -------
+        str
+            The file's path relative to the output folder.
+        """
         path = io.write_exr(self.out / "data" / f"{name}.exr", image, header)
         return path.relative_to(self.out).as_posix()
 
     def png(self, name, image, **tone):
+        """Save an image as PNG, ``img/<name>.png`` (:func:`clsamp.io.write_png`).
+
+        Parameters
+        ----------
+        name : str
+            The file's name without its suffix.
+        image : ndarray
+            Linear float values (tone-mapped) or, with ``tone=False``, uint8 as is.
+        **tone
+            ``tone``, ``exposure``, ``gamma``: how floats become 8-bit.
+
+        Returns
+        -------
+        str
+            The file's path relative to the output folder.
+        """
         path = io.write_png(self.out / "img" / f"{name}.png", image, **tone)
         return path.relative_to(self.out).as_posix()
 
 
 def table(headers, rows):
+    """An HTML table; every cell is escaped and numbers formatted by :func:`fmt`.
+
+    Parameters
+    ----------
+    headers : sequence
+        The column headings.
+    rows : iterable of sequences
+        One sequence of cells a row.
+
+    Returns
+    -------
+    str
+        ``<table>`` ... ``</table>``.
+
+    Examples
+    --------
+    >>> from clsamp.report import table
+    >>> table(["MSE"], [[0.00125]])
+    '<table><thead><tr><th>MSE</th></tr></thead><tbody><tr><td>0.00125</td></tr></tbody></table>'
+    """
     head = "".join(f"<th>{html.escape(str(h))}</th>" for h in headers)
     body = "".join("<tr>" + "".join(f"<td>{html.escape(fmt(c))}</td>" for c in row) + "</tr>"
                    for row in rows)
@@ -79,6 +209,23 @@ def table(headers, rows):
 
 
 def fmt(value):
+    """A table cell's text: floats to four significant digits, very small or large ones in
+    scientific notation; anything else as ``str``.
+
+    Parameters
+    ----------
+    value : object
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> from clsamp.report import fmt
+    >>> fmt(0.123456), fmt(2.5e-7), fmt(0.0), fmt("sobol")
+    ('0.1235', '2.500e-07', '0', 'sobol')
+    """
     if isinstance(value, float):
         if value == 0 or 1e-3 <= abs(value) < 1e4:
             return f"{value:.4g}"
@@ -87,11 +234,53 @@ def fmt(value):
 
 
 def img(src, alt, width=None):
+    """An HTML ``<img>`` tag, its source and text escaped.
+
+    Parameters
+    ----------
+    src : str
+        The picture's path, relative to the report (as :meth:`Report.figure` returns it).
+    alt : str
+        The text shown in its place.
+    width : int, optional
+        The width in pixels; by default the picture's own.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> from clsamp.report import img
+    >>> img("img/pd.png", "Poisson disk", width=300)
+    '<img src="img/pd.png" alt="Poisson disk" width="300">'
+    """
     w = f' width="{width}"' if width else ""
     return f'<img src="{html.escape(src)}" alt="{html.escape(alt)}"{w}>'
 
 
 def json_safe(value):
+    """A copy of ``value`` that ``json.dumps`` writes as standard JSON.
+
+    Dictionaries (keys made strings), lists, tuples and arrays are converted all the way
+    down; NumPy scalars become Python numbers; NaN and infinities, which JSON cannot hold,
+    become the strings ``"nan"``, ``"inf"`` and ``"-inf"``.
+
+    Parameters
+    ----------
+    value : object
+
+    Returns
+    -------
+    object
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clsamp.report import json_safe
+    >>> json_safe({1: np.array([0.5, np.inf]), "n": np.int64(3)})
+    {'1': [0.5, 'inf'], 'n': 3}
+    """
     if isinstance(value, dict):
         return {str(k): json_safe(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
@@ -122,6 +311,15 @@ th { background: #f4f4f4; } td:first-child { text-align: left; }
 
 
 def write_html(report, meta):
+    """Write ``index.html`` into the report's folder: a table of contents, then every
+    section with its body, the error it raised if it failed, and its time.
+
+    Parameters
+    ----------
+    report : Report
+    meta : dict
+        ``device`` (str), ``date`` (str) and ``quick`` (bool), shown at the top.
+    """
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>clsamp tour</title>"
              f"<style>{CSS}</style></head><body>",
              "<h1>clsamp tour</h1>",
@@ -142,6 +340,12 @@ def write_html(report, meta):
 
 
 def versions():
+    """The versions of Python, NumPy, pyopencl, matplotlib and clsamp, for a report's record.
+
+    Returns
+    -------
+    dict of str to str
+    """
     import matplotlib
     import pyopencl
     versions = {"python": platform.python_version(), "numpy": np.__version__,
