@@ -16,23 +16,55 @@
 #define CLSAMP_PHILOX_W0 0x9E3779B9u
 #define CLSAMP_PHILOX_W1 0xBB67AE85u
 
+/* The ten rounds of Philox4x32-10 on the counter words c0..c3 (in place), for lanes of
+ * any type T: uint, a uint vector, or ulong vectors carrying the words in their low halves.
+ * MUL(a, m, &hi) returns the low 32 bits of the 64-bit product a * m (as T) and stores
+ * the high 32 bits in hi; ulong lanes may leave garbage in the high halves of what MUL
+ * returns and of c1, c3, which the next MUL and the caller mask off. Every form gives the
+ * words of philox4x32_10 below, the twin of clsamp.philox. */
+#define CLSAMP_PHILOX_ROUNDS(T, MUL, c0, c1, c2, c3, key) do {                    \
+        uint kx_ = (key).x, ky_ = (key).y;                                        \
+        _Pragma("unroll")                                                         \
+        for (int round_ = 0; round_ < 10; ++round_) {                             \
+            if (round_) {                                                         \
+                kx_ += CLSAMP_PHILOX_W0;                                          \
+                ky_ += CLSAMP_PHILOX_W1;                                          \
+            }                                                                     \
+            T h0_, h1_;                                                           \
+            const T l0_ = MUL(c0, CLSAMP_PHILOX_M0, &h0_);                        \
+            const T l1_ = MUL(c2, CLSAMP_PHILOX_M1, &h1_);                        \
+            c0 = h1_ ^ c1 ^ kx_;                                                  \
+            c2 = h0_ ^ c3 ^ ky_;                                                  \
+            c1 = l1_;                                                             \
+            c3 = l0_;                                                             \
+        }                                                                         \
+    } while (0)
+
 /* The 32x32->64 products are taken as ulong multiplies, not mul_hi(): PoCL (LLVM 14,
  * x86-64) compiles the widening multiply to far better code (docs/performance.md); GPUs
  * compile both to the same wide multiply. */
+CLSAMP_ALWAYS_INLINE uint clsamp_mul_wide(const uint a, const uint m, uint *hi)
+{
+    const ulong p = (ulong)m * a;
+    *hi = (uint)(p >> 32);
+    return (uint)p;
+}
+
+/* The same for four words riding in the low halves of 64-bit lanes: no shuffles between
+ * uint4 and ulong4 (the high halves of a are masked off here, those of the results are
+ * garbage). */
+CLSAMP_ALWAYS_INLINE ulong4 clsamp_mul_wide4l(const ulong4 a, const uint m, ulong4 *hi)
+{
+    const ulong4 p = (a & 0xFFFFFFFFul) * (ulong)m;
+    *hi = p >> 32;
+    return p;
+}
+
 inline uint4 philox4x32_10(uint4 ctr, uint2 key)
 {
-#pragma unroll
-    for (int round = 0; round < 10; ++round) {
-        if (round) {
-            key.x += CLSAMP_PHILOX_W0;
-            key.y += CLSAMP_PHILOX_W1;
-        }
-        const ulong p0 = (ulong)CLSAMP_PHILOX_M0 * ctr.x;
-        const ulong p1 = (ulong)CLSAMP_PHILOX_M1 * ctr.z;
-        ctr = (uint4)((uint)(p1 >> 32) ^ ctr.y ^ key.x, (uint)p1,
-                      (uint)(p0 >> 32) ^ ctr.w ^ key.y, (uint)p0);
-    }
-    return ctr;
+    uint c0 = ctr.x, c1 = ctr.y, c2 = ctr.z, c3 = ctr.w;
+    CLSAMP_PHILOX_ROUNDS(uint, clsamp_mul_wide, c0, c1, c2, c3, key);
+    return (uint4)(c0, c1, c2, c3);
 }
 
 /* Four random words of (key, stream, realization, index, block). */
@@ -49,12 +81,20 @@ inline uint clsamp_bits(uint2 key, uint stream, uint realization, uint index, ui
     return lane == 0u ? b.x : lane == 1u ? b.y : lane == 2u ? b.z : b.w;
 }
 
+/* The double in [0, 1) of 53 random bits (genrand_res53) from the words hi and lo,
+ * scalar or vector: TO_DOUBLE converts their type to double. Two 32-bit conversions are
+ * cheaper than one of 53 bits where the CPU lacks it; every step is exact. */
+#if CLSAMP_FP64
+#define CLSAMP_UNIT53(TO_DOUBLE, hi, lo) \
+    ((TO_DOUBLE((hi) >> 5) * 67108864.0 + TO_DOUBLE((lo) >> 6)) * (1.0 / 9007199254740992.0))
+#define CLSAMP_TO_DOUBLE(x) ((double)(x))
+#endif
+
 /* The bits of clsamp_unit(hi, lo). */
 inline ulong clsamp_unit_bits(uint hi, uint lo)
 {
 #if CLSAMP_FP64
-    /* two 32-bit conversions: cheaper than one of 53 bits where the CPU lacks it */
-    return as_ulong(((double)(hi >> 5) * 67108864.0 + (double)(lo >> 6)) * (1.0 / 9007199254740992.0));
+    return as_ulong(CLSAMP_UNIT53(CLSAMP_TO_DOUBLE, hi, lo));
 #else
     return f64_scaled(((ulong)(hi >> 5) << 26) | (lo >> 6), -53);
 #endif
@@ -99,35 +139,20 @@ inline double clsamp_uniform(uint2 key, uint stream, uint realization, uint inde
 CLSAMP_ALWAYS_INLINE void philox4x32_10_x4(uint4 c0, uint4 c1, uint4 c2, uint4 c3, uint2 key,
                              uint4 *w0, uint4 *w1, uint4 *w2, uint4 *w3)
 {
-    const ulong4 low = (ulong4)(0xFFFFFFFFul);
     ulong4 a = convert_ulong4(c0), b = convert_ulong4(c1), c = convert_ulong4(c2),
            e = convert_ulong4(c3);
-    ulong kx = key.x, ky = key.y;
-#pragma unroll
-    for (int round = 0; round < 10; ++round) {
-        if (round) {
-            kx = (kx + CLSAMP_PHILOX_W0) & 0xFFFFFFFFul;
-            ky = (ky + CLSAMP_PHILOX_W1) & 0xFFFFFFFFul;
-        }
-        const ulong4 p0 = (a & low) * (ulong)CLSAMP_PHILOX_M0;
-        const ulong4 p1 = (c & low) * (ulong)CLSAMP_PHILOX_M1;
-        a = (p1 >> 32) ^ b ^ kx;
-        c = (p0 >> 32) ^ e ^ ky;
-        b = p1;
-        e = p0;
-    }
-    *w0 = convert_uint4(a & low);
-    *w1 = convert_uint4(b & low);
-    *w2 = convert_uint4(c & low);
-    *w3 = convert_uint4(e & low);
+    CLSAMP_PHILOX_ROUNDS(ulong4, clsamp_mul_wide4l, a, b, c, e, key);
+    *w0 = convert_uint4(a & 0xFFFFFFFFul);
+    *w1 = convert_uint4(b & 0xFFFFFFFFul);
+    *w2 = convert_uint4(c & 0xFFFFFFFFul);
+    *w3 = convert_uint4(e & 0xFFFFFFFFul);
 }
 
 /* clsamp_unit_bits lane by lane. */
 inline ulong4 clsamp_unit4_bits(uint4 hi, uint4 lo)
 {
 #if CLSAMP_FP64
-    return as_ulong4((convert_double4(hi >> 5) * 67108864.0 + convert_double4(lo >> 6))
-                     * (1.0 / 9007199254740992.0));
+    return as_ulong4(CLSAMP_UNIT53(convert_double4, hi, lo));
 #else
     return (ulong4)(clsamp_unit_bits(hi.x, lo.x), clsamp_unit_bits(hi.y, lo.y),
                     clsamp_unit_bits(hi.z, lo.z), clsamp_unit_bits(hi.w, lo.w));

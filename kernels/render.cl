@@ -131,27 +131,12 @@ inline vuint mul_wide(const vuint a, const ulong m, vuint *hi)
 
 /* philox4x32_10 of philox.h on VW counters at once (the index differs per lane): the
  * same words, computed in vector lanes (PoCL does not vectorize a loop over lanes). */
-inline void philox_lanes(const uint2 key0, const uint stream, const uint realization,
+inline void philox_lanes(const uint2 key, const uint stream, const uint realization,
                          const vuint index, const uint pair, vuint *w0, vuint *w1, vuint *w2,
                          vuint *w3)
 {
     vuint c0 = index, c1 = (vuint)realization, c2 = (vuint)pair, c3 = (vuint)stream;
-    uint2 key = key0;
-    for (int round = 0; round < 10; ++round) {
-        if (round) {
-            key.x += CLSAMP_PHILOX_W0;
-            key.y += CLSAMP_PHILOX_W1;
-        }
-        vuint h0, h1;
-        const vuint l0 = mul_wide(c0, CLSAMP_PHILOX_M0, &h0);
-        const vuint l1 = mul_wide(c2, CLSAMP_PHILOX_M1, &h1);
-        const vuint n0 = h1 ^ c1 ^ key.x;
-        const vuint n2 = h0 ^ c3 ^ key.y;
-        c1 = l1;
-        c3 = l0;
-        c0 = n0;
-        c2 = n2;
-    }
+    CLSAMP_PHILOX_ROUNDS(vuint, mul_wide, c0, c1, c2, c3, key);
     *w0 = c0;
     *w1 = c1;
     *w2 = c2;
@@ -162,17 +147,13 @@ inline void philox_lanes(const uint2 key0, const uint stream, const uint realiza
 #if VW == 8
 inline vfloat unit_lanes(const vuint hi, const vuint lo)
 {
-    const double4 a = (convert_double4(hi.lo >> 5) * 67108864.0 + convert_double4(lo.lo >> 6))
-                      * (1.0 / 9007199254740992.0);
-    const double4 b = (convert_double4(hi.hi >> 5) * 67108864.0 + convert_double4(lo.hi >> 6))
-                      * (1.0 / 9007199254740992.0);
-    return (vfloat)(convert_float4_rtz(a), convert_float4_rtz(b));
+    return (vfloat)(convert_float4_rtz(CLSAMP_UNIT53(convert_double4, hi.lo, lo.lo)),
+                    convert_float4_rtz(CLSAMP_UNIT53(convert_double4, hi.hi, lo.hi)));
 }
 #else
 inline vfloat unit_lanes(const vuint hi, const vuint lo)
 {
-    const vdouble x = (TO_DOUBLE(hi >> 5) * 67108864.0 + TO_DOUBLE(lo >> 6)) * (1.0 / 9007199254740992.0);
-    return TO_FLOAT_RTZ(x);
+    return TO_FLOAT_RTZ(CLSAMP_UNIT53(TO_DOUBLE, hi, lo));
 }
 #endif
 #else
