@@ -104,24 +104,8 @@ inline ulongW shift32W_bits(uintW x, ulongW u)
 }
 #endif
 
-inline uintW reverse_bits32W(uintW x)
-{
-    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
-    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
-    x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
-    x = ((x >> 8) & 0x00FF00FFu) | ((x & 0x00FF00FFu) << 8);
-    return (x >> 16) | (x << 16);
-}
-
-inline uintW lk_hashW(uintW x, uintW seed)
-{
-    x ^= x * 0x3D20ADEAu;
-    x += seed;
-    x *= (seed >> 16) | 1u;
-    x ^= x * 0x05526C56u;
-    x ^= x * 0x53A22864u;
-    return x;
-}
+CLSAMP_REVERSE_BITS32(reverse_bits32W, uintW)
+CLSAMP_LK_HASH(lk_hashW, uintW)
 
 /* Sobol points in Gray-code order (as scipy): x_i = xor of V[c] over the set bits c of
  * i ^ (i >> 1), and x_(i+1) = x_i ^ V[ctz(i + 1)]. matrices is (32, padded d): row c holds

@@ -24,25 +24,32 @@ inline uint ld_ctz(uint x)
     return 31u - clz(x & (0u - x));
 }
 
-inline uint reverse_bits32(uint x)
-{
-    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
-    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
-    x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
-    x = ((x >> 8) & 0x00FF00FFu) | ((x & 0x00FF00FFu) << 8);
-    return (x >> 16) | (x << 16);
-}
+/* The 32 bits of x in reverse order, and Vegdahl's LK hash on reversed bits (a nested
+ * scramble of the binary digits; Burley 2020 after Laine and Karras 2011), for uint or a
+ * uint vector T: the twins of clsamp.number_theory.reverse_bits32 and lk_hash. */
+#define CLSAMP_REVERSE_BITS32(name, T)                                     \
+    inline T name(T x)                                                     \
+    {                                                                      \
+        x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);           \
+        x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);           \
+        x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);           \
+        x = ((x >> 8) & 0x00FF00FFu) | ((x & 0x00FF00FFu) << 8);           \
+        return (x >> 16) | (x << 16);                                      \
+    }
 
-/* Vegdahl's LK hash on reversed bits: a nested scramble of the binary digits. */
-inline uint lk_hash(uint x, uint seed)
-{
-    x ^= x * 0x3D20ADEAu;
-    x += seed;
-    x *= (seed >> 16) | 1u;
-    x ^= x * 0x05526C56u;
-    x ^= x * 0x53A22864u;
-    return x;
-}
+#define CLSAMP_LK_HASH(name, T)                                            \
+    inline T name(T x, T seed)                                             \
+    {                                                                      \
+        x ^= x * 0x3D20ADEAu;                                              \
+        x += seed;                                                         \
+        x *= (seed >> 16) | 1u;                                            \
+        x ^= x * 0x05526C56u;                                              \
+        x ^= x * 0x53A22864u;                                              \
+        return x;                                                          \
+    }
+
+CLSAMP_REVERSE_BITS32(reverse_bits32, uint)
+CLSAMP_LK_HASH(lk_hash, uint)
 
 inline uint owen_scramble_base2(uint x, uint seed)
 {
