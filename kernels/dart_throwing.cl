@@ -1,5 +1,5 @@
 /* Parallel dart throwing into tracked voids: the `poisson_disk` sampler.
- * NumPy reference: clsamp/samplers/poisson_disk.py (class _NumpyDarts, same step names).
+ * NumPy reference: clsamp/samplers/poisson_disk/reference.py (NumpyDarts, same step names).
  *
  * Ebeida et al., "Efficient maximal Poisson-disk sampling" (SIGGRAPH 2011) and
  * "A simple algorithm for maximal Poisson-disk sampling in high dimensions"
@@ -17,32 +17,15 @@
  * grid cell are contiguous and first[i] is the index of the first of them.
  *
  * Exactly rounded double operations only (no contraction), in the order of
- * clsamp.point_metrics.toroidal_distance2, so the NumPy reference gives the same bits.
+ * clsamp.geometry.torus.distance2 (kernels/torus.h), so the NumPy reference gives the same bits.
  * Build option: DIM. */
 #pragma OPENCL FP_CONTRACT OFF
-#include "philox.h"
+#include "torus.h"
 
 #ifndef DIM
 #error "DIM must be defined"
 #endif
 #define NBLOCKS (DIM / 2 + 1)   /* Philox blocks per dart: DIM coordinates + a priority word */
-
-inline double torus_delta(const double a, const double b)
-{
-    const double t = fabs(a - b);
-    return fmin(t, 1.0 - t);
-}
-
-inline double torus_distance2(const double *a, __global const double *b)
-{
-    double t = torus_delta(a[0], b[0]);
-    double total = t * t;
-    for (int k = 1; k < DIM; ++k) {
-        t = torus_delta(a[k], b[k]);
-        total = total + t * t;
-    }
-    return total;
-}
 
 inline void cell_coords(uint flat, const uint G, int *bc)
 {
@@ -163,7 +146,7 @@ __kernel void dart_throw(__global const uint *rel, __global const uint *base,
     for (uint o = 0; ok && o < nwindow; ++o) {
         const size_t nslot = (size_t)ri * cells
                              + neighbour_cell(bc, bi, inner, window + o * ROW, G);
-        if (occ[nslot] && torus_distance2(x, pts + nslot * DIM) < r2)
+        if (occ[nslot] && torus_distance2(x, pts + nslot * DIM, DIM) < r2)
             ok = 0;
     }
     for (int k = 0; k < DIM; ++k)
@@ -224,7 +207,7 @@ __kernel void dart_resolve(__global const uint *rel, __global const uint *base,
             if (!(pj > pi || (pj == pi && j < i)))
                 continue;       /* not higher (this also skips j == i) */
             const uchar sj = in[j];
-            if (sj != DART_OUT && torus_distance2(x, cand + (size_t)j * DIM) < r2) {
+            if (sj != DART_OUT && torus_distance2(x, cand + (size_t)j * DIM, DIM) < r2) {
                 if (sj == DART_IN) {
                     beaten = true;
                     break;

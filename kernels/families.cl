@@ -13,8 +13,9 @@
  * double4 load. Every operation is the NumPy reference's, in its order, with no
  * contraction; only exp may differ by an ulp.
  */
-#include "philox.h"
+#include "torus.h"
 #include "two_sum.h"
+#include "inline_builtins.h"
 
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -38,26 +39,13 @@ inline vec param(__global const double *params, const uint mp, const uint p, con
     return *(__global const vec *)(params + (size_t)p * mp + 4u * q);
 }
 
-inline vec wrapped(const double x, const vec c)
-{
-    vec w = x - c;
-    w = w > 0.5 ? w - 1.0 : w;
-    return w < -0.5 ? w + 1.0 : w;
-}
-
-/* 1.0 where the comparison holds (a lane of -1) */
-inline vec indicator(const long4 holds)
-{
-    return holds ? (vec)(1.0) : (vec)(0.0);
-}
-
 inline vec members_at(const double *x, __global const double *params, const uint mp, const uint q)
 {
 #if FAMILY == GAUSSIANS
     /* params: centre (DIM), then A row-major (DIM * DIM); f = exp(-w^T A w / 2) */
     vec w[DIM];
     for (int j = 0; j < DIM; ++j)
-        w[j] = wrapped(x[j], param(params, mp, j, q));
+        w[j] = torus_wrapped4((vec)(x[j]), param(params, mp, j, q));
     vec s = (vec)(0.0);
     for (int i = 0; i < DIM; ++i) {
         vec u = param(params, mp, DIM + i * DIM, q) * w[0];
@@ -72,16 +60,16 @@ inline vec members_at(const double *x, __global const double *params, const uint
     vec s = x[0] * param(params, mp, 0, q);
     for (int j = 1; j < DIM; ++j)
         s = s + x[j] * param(params, mp, j, q);
-    return indicator(s < param(params, mp, DIM, q));
+    return clsamp_indicator4(s < param(params, mp, DIM, q));
 #elif FAMILY == DISKS
     /* params: centre (DIM), radius^2 */
-    vec w = wrapped(x[0], param(params, mp, 0, q));
+    vec w = torus_wrapped4((vec)(x[0]), param(params, mp, 0, q));
     vec s = w * w;
     for (int j = 1; j < DIM; ++j) {
-        w = wrapped(x[j], param(params, mp, j, q));
+        w = torus_wrapped4((vec)(x[j]), param(params, mp, j, q));
         s = s + w * w;
     }
-    return indicator(s < param(params, mp, DIM, q));
+    return clsamp_indicator4(s < param(params, mp, DIM, q));
 #elif FAMILY == BOXES
     /* params: corner (DIM), sides (DIM); the box wraps */
     long4 inside = (long4)(-1);
@@ -90,7 +78,7 @@ inline vec members_at(const double *x, __global const double *params, const uint
         t = t < 0.0 ? t + 1.0 : t;
         inside = inside & (t < param(params, mp, DIM + j, q));
     }
-    return indicator(inside);
+    return clsamp_indicator4(inside);
 #elif FAMILY == CLIPPED
     /* params: centre (DIM), h (DIM), lo (DIM), hi (DIM); exp(-sum h (x - c)^2) on [lo, hi) */
     vec t = x[0] - param(params, mp, 0, q);
@@ -120,9 +108,7 @@ __kernel void family_error_sums(__global const double *points, const uint n,
         return;
 #if HOMOGENIZE
     double shift[DIM];
-    const uint2 key = (uint2)(key_lo, key_hi);
-    for (uint j = 0; j < DIM; ++j)
-        shift[j] = clsamp_uniform(key, stream, realization0 + r, 0u, j);
+    torus_homogenizing_shift(shift, (uint2)(key_lo, key_hi), stream, realization0 + r, DIM);
 #endif
     const vec integral = *(__global const vec *)(integrals + 4u * q);
     __global const double *base = points + (size_t)r * n * DIM;
@@ -130,12 +116,11 @@ __kernel void family_error_sums(__global const double *points, const uint n,
     for (uint i = 0; i < n; ++i) {
         double x[DIM];
         for (int j = 0; j < DIM; ++j) {
-            double c = base[(size_t)i * DIM + j];
 #if HOMOGENIZE
-            c = c + shift[j];
-            c = c >= 1.0 ? c - 1.0 : c;     /* (x + u) mod 1, one rounding */
+            x[j] = torus_shift(base[(size_t)i * DIM + j], shift[j]);
+#else
+            x[j] = base[(size_t)i * DIM + j];
 #endif
-            x[j] = c;
         }
         const vec v = members_at(x, params, mp, q) - integral;
         vec s, e;

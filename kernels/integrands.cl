@@ -15,8 +15,9 @@
  * the total, is what keeps a 1e-8 error from cancelling against a 0.1 integral.
  * The order of every addition depends on (n, slice, local size) only, never on timing.
  */
-#include "philox.h"
+#include "torus.h"
 #include "two_sum.h"
+#include "inline_builtins.h"
 
 /* numpy evaluates a*b + c with two roundings; so does this file, on every device */
 #pragma OPENCL FP_CONTRACT OFF
@@ -42,21 +43,6 @@
 
 typedef double4 vec;
 
-/* 1.0 where the comparison holds: select picks by the lane's sign bit */
-inline vec indicator(long4 holds)
-{
-    return select((vec)(0.0), (vec)(1.0), holds);
-}
-
-/* The difference wrapped into [-1/2, 1/2]: numpy's w - round(w) for w in (-1, 1) (half to
- * even keeps +-1/2), by comparisons, far cheaper on PoCL than its double4 rint. */
-inline vec wrapped(vec x, double c)
-{
-    vec w = x - c;
-    w = select(w, w - 1.0, w > 0.5);
-    return select(w, w + 1.0, w < -0.5);
-}
-
 /* f at four points; x[j] holds coordinate j of the four. Parameters (see kernel_params):
  * GAUSSIAN p = (s = -1/(2 sigma^2), centre, exp(2 s)), DISK p = (r^2, centre), HEAVISIDE p = (offset, normal). */
 inline vec integrand(const vec *x, __global const double *p)
@@ -66,7 +52,7 @@ inline vec integrand(const vec *x, __global const double *p)
     const double s = p[0], e2s = p[1 + DIM];
     vec f = (vec)(1.0);
     for (int j = 0; j < DIM; ++j) {
-        const vec w = wrapped(x[j], p[1 + j]);
+        const vec w = torus_wrapped4(x[j], (vec)(p[1 + j]));
         const vec e0 = exp(s * (w * w));
         const vec b = exp(s * (1.0 - 2.0 * fabs(w)));
         const vec far = select((vec)(0.0), e2s / b, b > 0.0);   /* b underflows only if far does */
@@ -76,25 +62,25 @@ inline vec integrand(const vec *x, __global const double *p)
 #elif INTEGRAND == DISK
     vec q = (vec)(0.0);
     for (int j = 0; j < DIM; ++j) {
-        const vec w = wrapped(x[j], p[1 + j]);
+        const vec w = torus_wrapped4(x[j], (vec)(p[1 + j]));
         q = q + w * w;
     }
-    return indicator(q < p[0]);
+    return clsamp_indicator4(q < p[0]);
 #elif INTEGRAND == HEAVISIDE
     vec s = x[0] * p[1];
     for (int j = 1; j < DIM; ++j)
         s = s + x[j] * p[1 + j];
-    return indicator(s < p[0]);
+    return clsamp_indicator4(s < p[0]);
 #elif INTEGRAND == PMJ_DISK
-    return indicator(x[0] * x[0] + x[1] * x[1] < M_2_PI_D);
+    return clsamp_indicator4(x[0] * x[0] + x[1] * x[1] < M_2_PI_D);
 #elif INTEGRAND == PMJ_GAUSSIAN
     return exp(-(x[0] * x[0]) - x[1] * x[1]);
 #elif INTEGRAND == PMJ_BILINEAR
     return x[0] * x[1];
 #elif INTEGRAND == PMJ_STEP
-    return indicator(x[0] < M_1_PI_D);
+    return clsamp_indicator4(x[0] < M_1_PI_D);
 #elif INTEGRAND == PMJ_TRIANGLE
-    return indicator(x[1] > x[0]);
+    return clsamp_indicator4(x[1] > x[0]);
 #else
 #error "unknown INTEGRAND"
 #endif
@@ -130,9 +116,7 @@ __kernel void integrand_error_sums(__global const double *points, const uint n, 
 
 #if HOMOGENIZE
     double shift[DIM];
-    const uint2 key = (uint2)(key_lo, key_hi);
-    for (uint j = 0; j < DIM; ++j)
-        shift[j] = clsamp_uniform(key, stream, realization0 + r, 0u, j);
+    torus_homogenizing_shift(shift, (uint2)(key_lo, key_hi), stream, realization0 + r, DIM);
 #endif
 
     vec sum = (vec)(0.0), err = (vec)(0.0);
@@ -163,8 +147,7 @@ __kernel void integrand_error_sums(__global const double *points, const uint n, 
                           base[(size_t)i2 * DIM + j], base[(size_t)i3 * DIM + j]);
 #endif
 #if HOMOGENIZE
-            c = c + shift[j];
-            c = select(c, c - 1.0, c >= 1.0);   /* (x + u) mod 1, one rounding */
+            c = torus_shift4(c, (vec)(shift[j]));
 #endif
             x[j] = c;
         }

@@ -9,32 +9,14 @@
  * when the reach is too long for three cells.
  *
  * Distances: exactly rounded double operations, no contraction, in the order of
- * clsamp.geometry.torus.distance2 (as the Poisson-disk kernels): the nearest-neighbour
+ * clsamp.geometry.torus.distance2 (kernels/torus.h, as the Poisson-disk kernels): the nearest-neighbour
  * distances agree with the NumPy twin bit for bit. The smoothing sums use exp: their
  * bits depend on the device's exp (within a few ulps). Build options: D; NR (radii) for
  * pcf_sums, UNIFORM (radii r0 + k step) and PPI (points a work-item takes).
  */
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #pragma OPENCL FP_CONTRACT OFF
-
-inline double torus_delta(const double a, const double b)
-{
-    const double d = a - b;
-    const double t = d < 0.0 ? -d : d;
-    const double u = 1.0 - t;
-    return t < u ? t : u;
-}
-
-inline double distance2(const double *a, __global const double *b)
-{
-    double t = torus_delta(a[0], b[0]);
-    double total = t * t;
-    for (int k = 1; k < D; ++k) {
-        t = torus_delta(a[k], b[k]);
-        total = total + t * t;
-    }
-    return total;
-}
+#include "torus.h"
 
 /* the flat index of neighbour o (0 .. 3^D - 1, digits -1, 0, +1) of cell coordinates c,
  * wrapped on the torus; with G == 1 the one cell */
@@ -138,7 +120,7 @@ __kernel void pcf_sums(__global const double *pts, __global const uint *cell,
             const size_t slot = (size_t)r * total_cells + neighbour(c, o, G);
             const uint s1 = start[slot + 1];
             for (uint j = o == centre ? (uint)gi + 1 : start[slot]; j < s1; ++j) {
-                const double d2 = distance2(x, pts + (size_t)j * D);
+                const double d2 = torus_distance2(x, pts + (size_t)j * D, D);
                 if (d2 >= reach2)
                     continue;
                 const double s = sqrt(d2);
@@ -213,7 +195,7 @@ __kernel void nearest_neighbor(__global const double *pts, __global const uint *
         for (uint j = start[slot]; j < s1; ++j) {
             if (j == gi)
                 continue;
-            const double v = distance2(x, pts + (size_t)j * D);
+            const double v = torus_distance2(x, pts + (size_t)j * D, D);
             best = v < best ? v : best;
         }
     }

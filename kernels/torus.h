@@ -1,0 +1,73 @@
+/* The float geometry of the unit torus [0, 1)^d: the OpenCL twin of
+ * clsamp/geometry/torus.py, operation for operation (exactly rounded double operations;
+ * build with FP_CONTRACT OFF), so distances and shifted points agree with the NumPy
+ * references bit for bit.
+ *
+ * torus_delta, torus_distance2: the wrapped difference min(|a - b|, 1 - |a - b|) and the
+ * squared distance summed from the first coordinate to the last (the Poisson-disk
+ * acceptance test, the nearest-neighbour distances).
+ * torus_shift, torus_wrapped (and their double4 forms, from one definition each):
+ * (x + u) mod 1 with one rounding (the Cranley-Patterson shift) and a difference wrapped
+ * into [-1/2, 1/2] (the vector ?: picks lane by lane).
+ * torus_homogenizing_shift: the random shift of realization r that homogenizes an
+ * experiment (Pilleboue et al. 2015), Philox point 0 of (stream, r).
+ */
+#ifndef CLSAMP_TORUS_H
+#define CLSAMP_TORUS_H
+
+#include "philox.h"
+
+#if CLSAMP_FP64
+inline double torus_delta(const double a, const double b)
+{
+    const double d = a - b;
+    const double t = d < 0.0 ? -d : d;
+    const double u = 1.0 - t;
+    return t < u ? t : u;
+}
+
+/* Squared distance of the private point a and the global point b, `dims` coordinates. */
+inline double torus_distance2(const double *a, __global const double *b, const int dims)
+{
+    double t = torus_delta(a[0], b[0]);
+    double total = t * t;
+    for (int k = 1; k < dims; ++k) {
+        t = torus_delta(a[k], b[k]);
+        total = total + t * t;
+    }
+    return total;
+}
+
+/* (x + u) mod 1 for x, u in [0, 1): x + u less 1 where it reaches 1, one rounding */
+#define CLSAMP_TORUS_SHIFT(name, T)                     \
+    inline T name(const T x, const T u)                 \
+    {                                                   \
+        const T c = x + u;                              \
+        return c >= 1.0 ? c - 1.0 : c;                  \
+    }
+
+/* x - c wrapped into [-1/2, 1/2] for x, c in [0, 1): numpy's w - round(w) for w in
+ * (-1, 1) (half to even keeps +-1/2), by comparisons */
+#define CLSAMP_TORUS_WRAPPED(name, T)                   \
+    inline T name(const T x, const T c)                 \
+    {                                                   \
+        T w = x - c;                                    \
+        w = w > 0.5 ? w - 1.0 : w;                      \
+        return w < -0.5 ? w + 1.0 : w;                  \
+    }
+
+CLSAMP_TORUS_SHIFT(torus_shift, double)
+CLSAMP_TORUS_SHIFT(torus_shift4, double4)
+CLSAMP_TORUS_WRAPPED(torus_wrapped, double)
+CLSAMP_TORUS_WRAPPED(torus_wrapped4, double4)
+
+/* The homogenizing shift of realization r: u[j] = uniform(seed, stream, r, 0, j). */
+inline void torus_homogenizing_shift(double *u, const uint2 key, const uint stream,
+                                     const uint realization, const int dims)
+{
+    for (int j = 0; j < dims; ++j)
+        u[j] = clsamp_uniform(key, stream, realization, 0u, (uint)j);
+}
+#endif
+
+#endif
