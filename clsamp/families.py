@@ -93,6 +93,16 @@ def _range(value, name, top, top_included=True):
 class Family:
     """Base: ``members`` random integrands in ``d`` dimensions with exact integrals.
 
+    Parameters
+    ----------
+    d : int
+        The dimension, 1 to 8.
+    members : int
+        How many integrands, 1 to 2^16.
+    seed : int
+        Member m is drawn from Philox stream ``Stream.FAMILY`` of this seed, realization
+        m: the first members of a larger family are the same.
+
     Attributes
     ----------
     name : str
@@ -126,19 +136,48 @@ class Family:
         return f"{type(self).__name__}(d={self.d}, members={self.members}, seed={self.seed})"
 
     def describe(self):
-        """A one-line description (for reports)."""
+        """A one-line description (for reports).
+
+        Returns
+        -------
+        str
+        """
         return f"{self.name}: {self.members} members in {self.d}-D, seed {self.seed}"
 
     def edges_when_shifted(self):
         """The discontinuities under a toroidal shift: the cube's sides join the
-        members' own edges unless the family is periodic."""
+        members' own edges unless the family is periodic.
+
+        Returns
+        -------
+        str
+            ``"none"``, ``"curved"``, ``"straight"`` or ``"axis"`` (:mod:`clsamp.theory`'s
+            cases).
+        """
         if self.periodic or self.edges in ("curved", "straight"):
             return self.edges
         return "axis"
 
     def __call__(self, points, members=None):
-        """Every member at every point: float64 of shape (..., n, members) for points
-        (n, d) or (r, n, d) (``members``: a range or index array of members to take)."""
+        """Every member at every point (the NumPy reference).
+
+        Parameters
+        ----------
+        points : array_like
+            (n, d) or (r, n, d) points in [0, 1)^d.
+        members : slice or array of int, optional
+            The members to evaluate; all by default.
+
+        Returns
+        -------
+        ndarray
+            float64 of shape (n, M) or (r, n, M) for M members.
+
+        Raises
+        ------
+        InvalidArgumentError
+            Points of the wrong shape.
+        """
         x = np.asarray(points, dtype=np.float64)
         if x.ndim not in (2, 3) or x.shape[-1] != self.d:
             raise InvalidArgumentError(
@@ -153,9 +192,15 @@ class Family:
         raise NotImplementedError
 
     def kernel_params(self):
-        """Parameters as the kernel reads them: (P, members rounded up to 4) float64,
-        parameter-major, so four members' values of one parameter are one double4 (the
-        padding repeats the last member; its sums are dropped)."""
+        """The members' parameters as ``kernels/families.cl`` reads them.
+
+        Returns
+        -------
+        ndarray
+            (P, members rounded up to 4) float64, parameter-major, so that four members'
+            values of one parameter are one double4; the padding repeats the last member
+            (its sums are dropped).
+        """
         quads = -(-self.members // 4)
         padded = np.empty((quads * 4, self.params.shape[1]))
         padded[:self.members] = self.params
@@ -408,20 +453,70 @@ _SHORT = {"gaussians": "random_gaussians", "heavisides": "random_heavisides",
 
 
 def family_names():
-    """The names :func:`make_family` knows."""
+    """The names :func:`make_family` knows.
+
+    Returns
+    -------
+    list of str
+
+    Examples
+    --------
+    >>> from clsamp.families import family_names
+    >>> family_names()[:2]
+    ['random_gaussians', 'random_heavisides']
+    """
     return list(_FAMILIES)
 
 
 def is_family(spec):
-    """Whether ``spec`` is a :class:`Family` or the name of one."""
+    """Whether ``spec`` is a :class:`Family` or the name of one.
+
+    Parameters
+    ----------
+    spec : object
+        A family, a name (full or short, any case), or anything else.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> from clsamp.families import is_family
+    >>> is_family("heavisides"), is_family("heaviside")     # the second is one integrand
+    (True, False)
+    """
     if isinstance(spec, Family):
         return True
     return isinstance(spec, str) and (spec.strip().lower() in _FAMILIES or spec.strip().lower() in _SHORT)
 
 
 def make_family(spec, d=2, members=256, seed=0):
-    """A :class:`Family` from a name (``"random_heavisides"``, or the short
-    ``"heavisides"``, ``"gaussians"``, ``"disks"``, ``"boxes"``) or a family itself.
+    """A :class:`Family` from its name, or a family itself.
+
+    Parameters
+    ----------
+    spec : str or Family
+        A name of :func:`family_names` (``"random_heavisides"``), or its short form
+        (``"heavisides"``, ``"gaussians"``, ``"disks"``, ``"boxes"``,
+        ``"clipped_gaussians"``), in any case; a family is returned as it is, and then
+        ``d``, ``members`` and ``seed`` are not used.
+    d : int
+        The dimension, 1 to 8.
+    members : int
+        How many integrands, 1 to 2^16.
+    seed : int
+        The seed of the members' draws.
+
+    Returns
+    -------
+    Family
+
+    Raises
+    ------
+    InvalidArgumentError
+        An unknown name (the message suggests the nearest known one), or a bad ``d``,
+        ``members`` or ``seed``.
 
     Examples
     --------
@@ -450,8 +545,20 @@ HOST_CHUNK = 2**22      # values per chunk of the NumPy path (32 MB)
 
 
 def errors_numpy(family, points):
-    """The NumPy reference: (r, members) errors (1/n) sum_i (f_m(x_ki) - integral_m) of
-    points (r, n, d) (already shifted where the experiment homogenizes)."""
+    """Every member's integration error of every point set (the NumPy reference of
+    :class:`FamilyKernel`).
+
+    Parameters
+    ----------
+    family : Family
+    points : ndarray
+        (r, n, d) points, already shifted where the experiment homogenizes.
+
+    Returns
+    -------
+    ndarray
+        (r, members) float64: (1/n) sum_i (f_m(x_ki) - integral_m) for set k, member m.
+    """
     r, n, _ = points.shape
     out = np.empty((r, family.members))
     step = max(1, HOST_CHUNK // max(1, n * family.members))
@@ -466,7 +573,22 @@ def errors_numpy(family, points):
 
 
 class FamilyKernel:
-    """``kernels/families.cl`` for one family on the current device, built once."""
+    """``kernels/families.cl`` for one family on the current device, built once.
+
+    Parameters
+    ----------
+    family : Family
+    homogenize : bool
+        Whether the kernel shifts each realization's points by its own random toroidal
+        vector (Philox stream ``Stream.EXPERIMENT`` of ``seed``) before evaluating.
+    seed : int
+        The experiment's seed, for those shifts.
+
+    Raises
+    ------
+    NoDeviceError
+        The current device has no fp64.
+    """
 
     def __init__(self, family, homogenize, seed):
         runtime.require_fp64()
@@ -483,7 +605,22 @@ class FamilyKernel:
         self.integrals = runtime.to_device(integrals)
 
     def errors(self, points, n, realization0):
-        """(r, members) errors of device points (r, n, d); realization0 numbers the first."""
+        """Every member's integration error of every point set, on the device.
+
+        Parameters
+        ----------
+        points : pyopencl.array.Array or ndarray
+            (r, n, d) points.
+        n : int
+            Points per set.
+        realization0 : int
+            The realization number of the first set (it selects the sets' shifts).
+
+        Returns
+        -------
+        ndarray
+            (r, members) float64, as :func:`errors_numpy` gives them.
+        """
         r = points.shape[0]
         mp = self.quads * 4
         out = runtime.Output((r, 2, mp), np.float64, host=np.empty((r, 2, mp)))

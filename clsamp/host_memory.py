@@ -32,6 +32,7 @@ class _HostPool:
         self.held = 0
 
     def take(self, nbytes):
+        """Freed memory of exactly ``nbytes`` (a uint8 array), or None where none is kept."""
         with self.lock:
             stack = self.free.get(nbytes)
             if stack:
@@ -40,6 +41,7 @@ class _HostPool:
         return None
 
     def give(self, memory):
+        """Keep freed ``memory`` for reuse, dropping the oldest beyond HOST_POOL_BYTES."""
         nbytes = memory.nbytes
         with self.lock:
             if nbytes > HOST_POOL_BYTES:
@@ -54,6 +56,7 @@ class _HostPool:
                     del self.free[size]
 
     def clear(self):
+        """Drop every piece kept (the system gets it back once no array uses it)."""
         with self.lock:
             self.free.clear()
             self.held = 0
@@ -69,8 +72,28 @@ def host_empty(shape, dtype=np.float64):
     ``HOST_POOL_BYTES`` of them (by exact size), so a loop of same-sized calls writes into
     memory that is already mapped instead of paying the operating system's page faults
     and zeroing for new pages every time (docs/performance.md has what that costs).
-    Memory goes back to the pool only when no array
-    or view uses it any more; :func:`release_host_memory` empties the pool.
+    Memory goes back to the pool only when no array or view uses it any more;
+    :func:`release_host_memory` empties the pool. Outputs under ``HOST_POOL_MIN`` bytes
+    or over ``HOST_POOL_BYTES`` come from ``np.empty``.
+
+    Parameters
+    ----------
+    shape : int or tuple of int
+    dtype : data-type
+        Default float64.
+
+    Returns
+    -------
+    ndarray
+        Uninitialized, C-contiguous, writeable.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clsamp.host_memory import host_empty
+    >>> out = host_empty((1024, 1024, 2))
+    >>> out.shape, out.dtype, out.flags.c_contiguous
+    ((1024, 1024, 2), dtype('float64'), True)
     """
     dtype = np.dtype(dtype)
     nbytes = int(np.prod(shape, dtype=np.int64)) * dtype.itemsize
@@ -86,5 +109,9 @@ def host_empty(shape, dtype=np.float64):
 
 
 def release_host_memory():
-    """Return the pooled host memory of freed outputs (:func:`host_empty`) to the system."""
+    """Return the pooled host memory of freed outputs (:func:`host_empty`) to the system.
+
+    The memory of arrays still in use is not in the pool; it enters the pool when they
+    are freed.
+    """
     _host_pool.clear()
