@@ -69,6 +69,11 @@ def _points(points, d):
 class Integrand:
     """Base: a function on [0, 1)^d with an exact integral and an OpenCL evaluation.
 
+    Parameters
+    ----------
+    d : int
+        Dimension (subclasses set it from their parameters).
+
     Attributes
     ----------
     name : str
@@ -98,19 +103,48 @@ class Integrand:
         self.d = d
 
     def __call__(self, points):
-        """Evaluate at points of shape (n, d) or (r, n, d): float64 of shape (n,) or (r, n)."""
+        """Evaluate at points (the NumPy reference).
+
+        Parameters
+        ----------
+        points : array_like
+            (n, d) or (r, n, d) points.
+
+        Returns
+        -------
+        ndarray
+            float64 of shape (n,) or (r, n).
+
+        Raises
+        ------
+        InvalidArgumentError
+            Points of the wrong shape.
+        """
         return self._evaluate(_points(points, self.d))
 
     def _evaluate(self, x):
         raise NotImplementedError
 
     def kernel_params(self):
-        """The float64 parameters the kernel reads (layout per ``kernel_code``)."""
+        """The parameters ``kernels/integrands.cl`` reads for this integrand.
+
+        Returns
+        -------
+        ndarray
+            float64, laid out as the kernel's case for ``kernel_code`` reads them (one
+            unused zero for integrands without parameters).
+        """
         return np.zeros(1)
 
     def edges_when_shifted(self):
         """The discontinuities of x -> f((x + u) mod 1): the square's sides join the
-        integrand's own edges unless it is periodic."""
+        integrand's own edges unless it is periodic.
+
+        Returns
+        -------
+        str
+            ``"none"``, ``"curved"``, ``"straight"`` or ``"axis"``.
+        """
         if self.periodic:
             return self.edges
         if self.edges in ("curved", "straight"):
@@ -124,7 +158,12 @@ class Integrand:
         return f"d={self.d}"
 
     def describe(self):
-        """A one-line description with the parameters (for reports)."""
+        """A one-line description with the parameters (for reports).
+
+        Returns
+        -------
+        str
+        """
         return f"{self.name}: {self._describe()}, integral {float(self.integral)!r}"
 
 
@@ -175,6 +214,13 @@ class Gaussian(Integrand):
         return f"center={self.center.tolist()}, sigma={self.sigma}"
 
     def kernel_params(self):
+        """The kernel's parameters: s = -1/(2 sigma^2), the centre, exp(2s).
+
+        Returns
+        -------
+        ndarray
+            float64 of length d + 2.
+        """
         s = -0.5 / self.sigma**2
         return np.array([s, *self.center, math.exp(2 * s)])
 
@@ -234,6 +280,13 @@ class Disk(Integrand):
         return f"center={self.center.tolist()}, radius={self.radius}"
 
     def kernel_params(self):
+        """The kernel's parameters: the squared radius, then the centre.
+
+        Returns
+        -------
+        ndarray
+            float64 of length d + 1.
+        """
         return np.array([self.radius**2, *self.center])
 
     def _evaluate(self, x):
@@ -251,6 +304,23 @@ def halfspace_volume(normal, offset):
     components (the others contribute a factor 1), after flipping negative components.
     Every float is an integer over a power of two, so the sum runs in Python integers
     scaled by one common power of two, and one division rounds it.
+
+    Parameters
+    ----------
+    normal : sequence of float
+        The half-space's normal, d components (zeros allowed).
+    offset : float
+
+    Returns
+    -------
+    float
+        The volume, correctly rounded.
+
+    Examples
+    --------
+    >>> from clsamp.integrands import halfspace_volume
+    >>> halfspace_volume([1.0, 1.0], 1.0), halfspace_volume([1.0, -1.0], 0.0)
+    (0.5, 0.5)
     """
     n = [Fraction(float(v)) for v in normal]
     b = Fraction(float(offset))
@@ -310,6 +380,13 @@ class Heaviside(Integrand):
         return f"normal={self.normal.tolist()}, offset={self.offset}"
 
     def kernel_params(self):
+        """The kernel's parameters: the offset, then the normal.
+
+        Returns
+        -------
+        ndarray
+            float64 of length d + 1.
+        """
         return np.array([self.offset, *self.normal])
 
     def _evaluate(self, x):
@@ -402,12 +479,23 @@ _FACTORIES = {
 
 
 def integrand_names():
-    """The names :func:`make_integrand` knows."""
+    """The names :func:`make_integrand` knows.
+
+    Returns
+    -------
+    list of str
+    """
     return list(_FACTORIES)
 
 
 def pmj_set():
-    """The five integrands of Christensen et al. (2018), in their order."""
+    """The five integrands of Christensen et al. (2018), in their order.
+
+    Returns
+    -------
+    list of Integrand
+        The quarter disk, the Gaussian, the bilinear, the step and the triangle.
+    """
     return [PMJDisk(), PMJGaussian(), PMJBilinear(), PMJStep(), PMJTriangle()]
 
 
@@ -421,6 +509,17 @@ def make_integrand(spec, d=None):
     d : int, optional
         For ``"gaussian"``, ``"disk"`` and ``"heaviside"`` by name: the dimension (the
         default centre or normal is repeated/cut to d; 2 when None).
+
+    Returns
+    -------
+    Integrand
+        ``spec`` itself where it is one.
+
+    Raises
+    ------
+    InvalidArgumentError
+        An unknown name (the message suggests the nearest), or a ``d`` that a 2-D
+        integrand cannot take.
 
     Examples
     --------
