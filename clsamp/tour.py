@@ -28,7 +28,6 @@ import json
 import platform
 import time
 import traceback
-from pathlib import Path
 
 import numpy as np
 
@@ -270,7 +269,8 @@ def section_convergence(report, quick):
                 rows.append((name, integrand, "-", "-", "-", "-", f"failed: {error}", "-", "-"))
                 data[label] = {"error": traceback.format_exc()}
     report.results["convergence"] = results
-    picture = plots.convergence(results, report.out / "img" / "convergence.png")
+    path, picture = _picture(report, "convergence")
+    plots.convergence(results, path)
     body = ("<p>Each point: the given number of realizations (sets), each shifted by its own "
             "random toroidal vector (homogenization: the estimator is unbiased); MSE of the "
             "estimate of the integral of a wrapped Gaussian (smooth: the best case) and of a disk "
@@ -292,7 +292,7 @@ def section_convergence(report, quick):
     verdicts = "".join("<tr>" + "".join(cell(i, v) for i, v in enumerate(r)) + "</tr>" for r in rows)
     body += ("<table><thead><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in headers)
              + f"</tr></thead><tbody>{verdicts}</tbody></table>")
-    body += img(Path(picture).relative_to(report.out).as_posix(), "MSE against N", 1000)
+    body += img(picture, "MSE against N", 1000)
     family_body, data["families"] = _family_sweeps(report, quick)
     return body + family_body, data
 
@@ -338,8 +338,9 @@ def _family_sweeps(report, quick):
     body += table(("sampler", "family", "mean MSE slope [95 % CI]", "theory", "verdict",
                    "worst member's slope", "mean MSE at largest N", "worst MSE", "seconds"), rows)
     if results:
-        picture = plots.family_convergence(results, report.out / "img" / "families.png")
-        body += img(Path(picture).relative_to(report.out).as_posix(), "MSE over integrand families", 1100)
+        path, picture = _picture(report, "families")
+        plots.family_convergence(results, path)
+        body += img(picture, "MSE over integrand families", 1100)
     return body, data
 
 
@@ -403,9 +404,9 @@ def section_render(report, quick):
             "samplers reuse a pool of realizations with a per-pixel random toroidal shift.</p>")
     body += table(("sampler", "spp", "MSE", "MSE - floor", "PSNR dB", "SSIM", "seconds"), rows)
     if images:
-        side = plots.render_comparison(report.out / "img" / "render_comparison.png", ref, images,
-                                       columns=len(images) + 1)
-        body += img(side.relative_to(report.out).as_posix(), "renders beside the reference", 1100)
+        path, side = _picture(report, "render_comparison")
+        plots.render_comparison(path, ref, images, columns=len(images) + 1)
+        body += img(side, "renders beside the reference", 1100)
     body += "<div class='grid'>" + "".join(
         f"<div class='cell'>{img(src, label, 220)}<br>{html.escape(label)}</div>" for label, src in cells)
     body += "</div>"
@@ -425,8 +426,8 @@ def _error_spectra(report, scene, ref, resolution, quick):
         error = rendering.mse(image, ref)
         rows.append((name, spp, error, low))
         data[name] = {"spp": spp, "mse": error, "low_frequency_share": low}
-    path = plots.error_spectra(report.out / "img" / "render_error_spectra.png", curves,
-                               title=f"error spectra, {scene.name}, {spp} spp")
+    path, picture = _picture(report, "render_error_spectra")
+    plots.error_spectra(path, curves, title=f"error spectra, {scene.name}, {spp} spp")
     body = ("<h3>Error in screen space</h3><p>The power spectrum of each render's error image, "
             "radially averaged (<code>clsamp.render.error_spectrum</code>). Independent "
             "per-pixel sampling (random, sobol:owen) leaves white error, flat across "
@@ -436,7 +437,7 @@ def _error_spectra(report, scene, ref, resolution, quick):
             "<i>Low-frequency share</i>: mean error power below 1/8 cycle per pixel over the "
             "mean at all frequencies (1 for white error).</p>")
     body += table(("sampler", "spp", "MSE", "low-frequency share"), rows)
-    body += img(path.relative_to(report.out).as_posix(), "error spectra", 700)
+    body += img(picture, "error spectra", 700)
     return body, data
 
 
