@@ -611,6 +611,14 @@ _COMMANDS = (
 
 
 def build_parser():
+    """The ``clsamp`` command line: one subcommand per task, each with ``--device``.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        Its subcommands are devices, sample, spectrum, metrics, convergence, integrate,
+        render and tour; a parsed command's ``run`` attribute is the function that runs it.
+    """
     parser = argparse.ArgumentParser(
         prog="clsamp",
         description="Sampling patterns for Monte Carlo rendering, generated and measured in OpenCL.")
@@ -632,6 +640,21 @@ def _on_sigterm(signum, frame):
 
 
 def main(argv=None):
+    """Run the ``clsamp`` command line (the ``clsamp`` console script).
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments after the program's name; ``sys.argv[1:]`` by default.
+
+    Returns
+    -------
+    int
+        The exit status: 0 on success, 2 for a usage or clsamp error (printed, not
+        raised), 130 when interrupted (Ctrl-C) and 143 when terminated (SIGTERM). Every file
+        written before an interruption is whole: outputs are written to a temporary name
+        and renamed.
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "run", None):
