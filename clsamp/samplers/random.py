@@ -32,7 +32,21 @@ class RandomSampler(Sampler):
     host_output = True
 
     def convergence_rate(self, case):
-        # the variance of i.i.d. sampling: sigma^2 / N for any square-integrable integrand
+        """The published rate of the MSE for ``case`` (:meth:`Sampler.convergence_rate`).
+
+        The variance of i.i.d. sampling, sigma^2 / N, for any square-integrable integrand
+        and dimension.
+
+        Parameters
+        ----------
+        case : {"best", "worst", "axis"}
+            The integrand as the estimator sees it (:func:`clsamp.theory.case_of`).
+
+        Returns
+        -------
+        Rate or None
+            N^-1 for every case.
+        """
         return Rate(-1.0, PILLEBOUE) if case in ("best", "worst", "axis") else None
 
     def _reference(self, n, realizations, start):

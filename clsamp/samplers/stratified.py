@@ -225,6 +225,18 @@ class _Grid(_Stratified):
         return None if self.strata is None else math.prod(self.strata)
 
     def valid_n(self, n):
+        """The valid point count nearest to ``n``.
+
+        Parameters
+        ----------
+        n : int
+
+        Returns
+        -------
+        int
+            The product of ``strata`` where given, else the nearest k^d (k strata per
+            axis).
+        """
         if self.strata is not None:
             return math.prod(self.strata)
         return nearest_power(n, self.d, self.max_n)
@@ -320,6 +332,19 @@ class JitteredSampler(_Grid):
     """
 
     def convergence_rate(self, case):
+        """The published rate of the MSE for ``case`` (:meth:`Sampler.convergence_rate`).
+
+        Parameters
+        ----------
+        case : {"best", "worst", "axis"}
+            The integrand as the estimator sees it (:func:`clsamp.theory.case_of`).
+
+        Returns
+        -------
+        Rate or None
+            :func:`jitter_rate` for k^d cubic cells; None for strata of different
+            counts per axis, for which nothing is published.
+        """
         if self.strata is not None and len(set(self.strata)) > 1:
             return None     # the published rates are for k^d cubic cells
         return jitter_rate(self.d, case)
@@ -387,6 +412,19 @@ class UncorrelatedJitterSampler(_Stratified):
         self._power = math.lcm(*groups)
 
     def convergence_rate(self, case):
+        """The published rate of the MSE for ``case`` (:meth:`Sampler.convergence_rate`).
+
+        Parameters
+        ----------
+        case : {"best", "worst", "axis"}
+            The integrand as the estimator sees it (:func:`clsamp.theory.case_of`).
+
+        Returns
+        -------
+        Rate or None
+            A jittered grid's rate for one group, a Latin hypercube's for two groups
+            of one dimension; None for other groupings.
+        """
         if self.groups == (self.d,):     # one group: a jittered grid, shuffled
             return jitter_rate(self.d, case, PILLEBOUE + " (jittered)")
         if self.groups == (1, 1):        # two shuffled 1-D strata: a Latin hypercube
@@ -394,6 +432,17 @@ class UncorrelatedJitterSampler(_Stratified):
         return None
 
     def valid_n(self, n):
+        """The valid point count nearest to ``n``: a k-th power, k the least common
+        multiple of the group sizes, so that every group has whole strata.
+
+        Parameters
+        ----------
+        n : int
+
+        Returns
+        -------
+        int
+        """
         return nearest_power(n, self._power, self.max_n)
 
     def _check_n(self, n):
@@ -521,7 +570,17 @@ class MultiJitteredSampler(Sampler):
                 f"the {self.max_n} point indices allow")
 
     def factors(self, n):
-        """The grid (mx, my) used for n points."""
+        """The grid used for n points.
+
+        Parameters
+        ----------
+        n : int
+
+        Returns
+        -------
+        (int, int)
+            (mx, my): ``strata`` where given, else :func:`balanced_factors` of n.
+        """
         return self.strata if self.strata is not None else balanced_factors(n)
 
     def _acceptable(self, n):
@@ -529,6 +588,19 @@ class MultiJitteredSampler(Sampler):
         return self.max_aspect is None or k <= self.max_aspect * m
 
     def valid_n(self, n):
+        """The valid point count nearest to ``n``.
+
+        Parameters
+        ----------
+        n : int
+
+        Returns
+        -------
+        int
+            The product of ``strata`` where given; else the nearest count whose balanced
+            grid (:func:`balanced_factors`) is within ``max_aspect``, or any count without
+            ``max_aspect``.
+        """
         if self.strata is not None:
             return math.prod(self.strata)
         for step in range(n + 1):
@@ -644,7 +716,17 @@ class CorrelatedMultiJitteredSampler(Sampler):
 
     @staticmethod
     def factors(n):
-        """The grid (m, k) used for n points: m = floor(sqrt(n)), k = ceil(n / m)."""
+        """The grid used for n points.
+
+        Parameters
+        ----------
+        n : int
+
+        Returns
+        -------
+        (int, int)
+            (m, k) with m = floor(sqrt(n)) and k = ceil(n / m).
+        """
         m = math.isqrt(n)
         return m, -(-n // m)
 

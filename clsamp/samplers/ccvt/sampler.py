@@ -249,6 +249,19 @@ class CCVTSampler(OptimizerSampler):
         self.relax = check_int(relax, "relax", minimum=0, maximum=MAX_RELAX)
 
     def convergence_rate(self, case):
+        """The published rate of the MSE for ``case`` (:meth:`Sampler.convergence_rate`).
+
+        Parameters
+        ----------
+        case : {"best", "worst", "axis"}
+            The integrand as the estimator sees it (:func:`clsamp.theory.case_of`).
+
+        Returns
+        -------
+        Rate or None
+            None with ``density="random"``: i.i.d. density points leave an N^-1 floor
+            under the MSE (see Notes), whatever the published rate.
+        """
         if self.density != "jittered":
             return None   # i.i.d. density points leave an N^-1 floor (see Notes)
         return super().convergence_rate(case)
