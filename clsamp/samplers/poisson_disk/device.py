@@ -10,7 +10,27 @@ from .grid import IN, rank_overflow, resolve_steps
 
 
 class DeviceDarts:
-    """Runs each step as one launch over every active entry of every realization."""
+    """Runs each step as one launch over every active entry of every realization.
+
+    The methods are :class:`~clsamp.samplers.poisson_disk.reference.NumpyDarts`'s, with
+    the same results bit for bit; ``m`` is the number of active entries.
+
+    Parameters
+    ----------
+    geo : Geometry
+        Dimension, radius, grid and acceptance threshold.
+    ids : array_like of int
+        The (global) realization numbers of the batch.
+    attempt : int
+        The redraw number.
+    seed : int
+        The sampler's seed.
+
+    Raises
+    ------
+    NoDeviceError
+        The current device has no fp64.
+    """
 
     def __init__(self, geo, ids, attempt, seed):
         runtime.require_fp64()
@@ -90,6 +110,18 @@ class DeviceDarts:
         return (np.uint32(self.m), np.uint32(g.G), table.data, rows, reach, np.uint32(g.cells))
 
     def throw(self, round_, level):
+        """Throw one dart per active entry, uniform in its subcell (``dart_throw``).
+
+        A dart is valid when no point accepted so far is closer than r.
+
+        Parameters
+        ----------
+        round_ : int
+            The round; with the entry's grid cell, rank and realization it numbers the
+            dart's Philox counter.
+        level : int
+            The entries' refinement level (:func:`level_of` of the round).
+        """
         self._run("dart_throw", self.m, self.rel.data, self.base.data, self.sub.data,
                   self.first.data, self.occ.data, self.pts.data, self.cand.data, self.prio.data,
                   self.valid.data, self.cand_round.data, self.cand_first.data,
@@ -99,6 +131,16 @@ class DeviceDarts:
                   np.uint32(philox.Stream.CANDIDATES))
 
     def resolve(self, round_):
+        """Accept a conflict-free subset of the round's valid darts (``dart_resolve``).
+
+        A few steps (:func:`resolve_steps`) of the greedy independent set in priority
+        order; darts still undecided stay out this round. Accepted darts are written
+        into the grid.
+
+        Parameters
+        ----------
+        round_ : int
+        """
         state, other = self.valid, self.state
         for step in range(resolve_steps(round_)):
             self._run("dart_resolve", self.m, self.rel.data, self.base.data, self.cand.data,
@@ -110,12 +152,34 @@ class DeviceDarts:
         self.won = state
 
     def accepted(self):
-        """Darts accepted so far, per realization (trimmed ones included)."""
+        """Darts accepted so far, per realization (trimmed ones included).
+
+        Returns
+        -------
+        ndarray
+            int64 of shape (B,).
+
+        Raises
+        ------
+        SamplingError
+            More entries in one grid cell than a dart's tag can number (a bug).
+        """
         if self.overflow.get()[0]:
             raise rank_overflow()
         return self.accepted_.get().astype(np.int64)
 
     def won_entries(self):
+        """The darts accepted this round.
+
+        Returns
+        -------
+        rel : ndarray
+            Each dart's realization within the batch.
+        slot : ndarray
+            Its grid slot, ``rel * cells + cell``.
+        priority : ndarray of uint32
+            Its priority (higher wins).
+        """
         m = self.m
         won = self.won[:m].get() == IN
         rel = self.rel[:m].get()[won].astype(np.int64)
@@ -123,11 +187,40 @@ class DeviceDarts:
         return rel, rel * self.geo.cells + base, self.prio[:m].get()[won]
 
     def clear(self, slots):
+        """Remove the points of grid ``slots`` (``dart_clear``): the lowest-priority darts
+        of the round that passed n, so that exactly n remain.
+
+        Parameters
+        ----------
+        slots : array_like of int
+        """
         if len(slots):
             buf = cla.to_device(self.q, np.asarray(slots, dtype=np.uint32))
             self._run("dart_clear", len(slots), self.occ.data, buf.data, np.uint32(len(slots)))
 
     def refine(self, level, split, done, tally):
+        """Find which part of every active entry is still uncovered (``dart_refine``).
+
+        Parameters
+        ----------
+        level : int
+            The entries' level.
+        split : int
+            1 to look at the 2^d halves of each entry (the next round is a level deeper),
+            0 at the entry itself.
+        done : ndarray of uint8
+            Per realization, 1 where it needs no more points (its entries are dropped).
+        tally : bool
+            Also count the uncovered children per realization.
+
+        Returns
+        -------
+        counts : ndarray
+            Per entry, its uncovered children (0 to 2^d, or 0 or 1).
+        remaining : ndarray of int64 or None
+            Per realization, the sum of ``counts``; :class:`DeviceDarts` gives None
+            without ``tally``.
+        """
         if not np.array_equal(done, self._done):
             self._done = done.copy()
             self.done.set(self._done)
@@ -141,6 +234,18 @@ class DeviceDarts:
                 self.remaining.get().astype(np.int64) if tally else None)
 
     def emit(self, counts, offs, split):
+        """Make the uncovered children of :meth:`refine` the new active entries
+        (``dart_emit``).
+
+        Parameters
+        ----------
+        counts : ndarray
+            Per entry, its uncovered children, as :meth:`refine` gave them.
+        offs : ndarray
+            The exclusive prefix sum of ``counts``: where each entry's children go.
+        split : int
+            As given to :meth:`refine`.
+        """
         total = int(offs[-1] + counts[-1]) if len(counts) else 0
         m = self.m
         if getattr(self, "_offs", None) is None or self._offs.size < m:
@@ -156,6 +261,18 @@ class DeviceDarts:
         self.m = total
 
     def gather(self, dst, out):
+        """Copy each realization's points, in grid-cell order, into ``out``
+        (``dart_gather``).
+
+        Parameters
+        ----------
+        dst : ndarray of int
+            Per realization, the row of ``out`` its first point goes to; ``SKIP`` leaves
+            it out (it will be redrawn).
+        out : ndarray or pyopencl.array.Array
+            (total, d) float64: host memory for :class:`NumpyDarts`, a device array for
+            :class:`DeviceDarts`.
+        """
         self._run("dart_gather", self.B, self.occ.data, self.pts.data,
                   cla.to_device(self.q, np.asarray(dst, dtype=np.uint32)).data, out.data,
                   np.uint32(self.geo.cells), np.uint32(self.B))

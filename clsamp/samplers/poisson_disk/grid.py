@@ -28,12 +28,41 @@ SKIP = 0xFFFFFFFF           # gather: a realization that is redrawn
 
 def grid_size(radius, d):
     """Grid cells per axis, G = floor(sqrt(d) / r) + 1: cells of side 1/G < r / sqrt(d),
-    so a cell's diagonal is shorter than r and a cell holds at most one point."""
+    so a cell's diagonal is shorter than r and a cell holds at most one point.
+
+    Parameters
+    ----------
+    radius : float
+        The disks' radius r.
+    d : int
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> from clsamp.samplers.poisson_disk.grid import grid_size
+    >>> grid_size(0.1, 2)          # sqrt(2) / 0.1 = 14.1
+    15
+    """
     return int(math.floor(math.sqrt(d) / radius)) + 1
 
 
 def reach(radius, G):
-    """K: grid cells at offset above K on some axis are r or more apart (side 1/G)."""
+    """K: grid cells at offset above K on some axis are r or more apart (side 1/G).
+
+    Parameters
+    ----------
+    radius : float
+    G : int
+        Grid cells per axis.
+
+    Returns
+    -------
+    int
+        floor(r G) + 1.
+    """
     return int(math.floor(radius * G)) + 1
 
 
@@ -45,6 +74,19 @@ def acceptance_threshold(radius, scale=1.0, target=None):
     :func:`clsamp.point_metrics.min_distance` measures (a square root of the same bits),
     divided by ``scale`` (d_max for a relative radius, whose target is rho), is never
     below the promise, not even by an ulp.
+
+    Parameters
+    ----------
+    radius : float
+    scale : float
+        What the measured distance is divided by (1 for an absolute radius).
+    target : float, optional
+        The promised minimum of distance / scale; default radius / scale.
+
+    Returns
+    -------
+    float
+        r2.
     """
     if target is None:
         target = radius / scale
@@ -56,12 +98,31 @@ def acceptance_threshold(radius, scale=1.0, target=None):
 
 def level_of(round_):
     """Refinement level of round ``round_``: level 0 for LEVEL0_ROUNDS rounds, then one
-    level deeper each round (the same for all realizations, so none depends on another)."""
+    level deeper each round (the same for all realizations, so none depends on another).
+
+    Parameters
+    ----------
+    round_ : int
+
+    Returns
+    -------
+    int
+    """
     return max(0, round_ - (LEVEL0_ROUNDS - 1))
 
 
 def resolve_steps(round_):
-    """Greedy steps of round ``round_`` (a function of the round alone, as the level)."""
+    """Greedy steps of round ``round_`` (a function of the round alone, as the level).
+
+    Parameters
+    ----------
+    round_ : int
+
+    Returns
+    -------
+    int
+        RESOLVE_STEPS[0] at level 0, RESOLVE_STEPS[1] deeper.
+    """
     return RESOLVE_STEPS[0] if level_of(round_) == 0 else RESOLVE_STEPS[1]
 
 
@@ -74,6 +135,18 @@ def window_offsets(radius, G, d):
     puts at r or more (kept, with a margin of 1e-9, when the bound is within rounding of r).
     Order does not change any result (the kernels ask "is there any"), only how soon the
     loops stop.
+
+    Parameters
+    ----------
+    radius : float
+    G : int
+        Grid cells per axis.
+    d : int
+
+    Returns
+    -------
+    ndarray
+        int64 of shape (count, d).
     """
     K = reach(radius, G)
     offsets = np.array(list(np.ndindex(*(2 * K + 1,) * d)), dtype=np.int64) - K
@@ -92,6 +165,19 @@ def cover_window(radius, G, d, level):
     of the box when o_k = 0 and (|o_k| - 1) / G + w when o_k != 0; offsets whose bound
     reaches r (with a margin of 1e-9) can cover nothing. At level 0 this leaves the 3^d
     nearest cells of the 5^d that dart_throw must search, where most entries are refined.
+
+    Parameters
+    ----------
+    radius : float
+    G : int
+        Grid cells per axis.
+    d : int
+    level : int
+
+    Returns
+    -------
+    ndarray
+        int64 of shape (count, d), a subset of :func:`window_offsets` in its order.
     """
     offsets = window_offsets(radius, G, d)
     w = 1.0 / (G * 2.0 ** level)
@@ -102,6 +188,29 @@ def cover_window(radius, G, d, level):
 
 
 def cell_coords(flat, G, d):
+    """The integer coordinates of grid cells from their flat (row-major) indices, as
+    ``cell_coords`` in the kernel.
+
+    Parameters
+    ----------
+    flat : ndarray of int
+    G : int
+        Grid cells per axis.
+    d : int
+
+    Returns
+    -------
+    ndarray
+        int64 of shape flat.shape + (d,); the last axis varies fastest in ``flat``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clsamp.samplers.poisson_disk.grid import cell_coords, flat_index
+    >>> c = cell_coords(np.array([7]), 4, 2)
+    >>> c.tolist(), flat_index(c, 4).tolist()
+    ([[1, 3]], [7])
+    """
     coords = np.empty(flat.shape + (d,), dtype=np.int64)
     rest = flat.astype(np.int64)
     for k in range(d - 1, -1, -1):
@@ -111,6 +220,21 @@ def cell_coords(flat, G, d):
 
 
 def flat_index(coords, G):
+    """The flat (row-major) indices of grid cells, each coordinate wrapped on the torus
+    first: the inverse of :func:`cell_coords`.
+
+    Parameters
+    ----------
+    coords : ndarray of int
+        (..., d) coordinates, any integers.
+    G : int
+        Grid cells per axis.
+
+    Returns
+    -------
+    ndarray
+        int64 of shape coords.shape[:-1].
+    """
     flat = np.zeros(coords.shape[:-1], dtype=np.int64)
     for k in range(coords.shape[-1]):
         flat = flat * G + coords[..., k] % G
@@ -119,7 +243,22 @@ def flat_index(coords, G):
 
 def far_corner2(c, M, p):
     """Squared distance from p to the farthest corner of the boxes with integer coordinates
-    c (side 1/M), as far_corner2 in the kernel."""
+    c (side 1/M), on the torus, as far_corner2 in the kernel.
+
+    Parameters
+    ----------
+    c : ndarray of int
+        (..., d) box coordinates.
+    M : float
+        Boxes per axis.
+    p : ndarray
+        (..., d) points, broadcast against the boxes.
+
+    Returns
+    -------
+    ndarray
+        float64 of the broadcast shape without the last axis.
+    """
     lo = c.astype(np.float64) / M
     hi = (c + 1).astype(np.float64) / M
     f = np.maximum(torus.wrapped_delta(lo, p), torus.wrapped_delta(hi, p))
@@ -131,13 +270,44 @@ def far_corner2(c, M, p):
 
 
 def child_bits(children, d):
-    """Bit k of child t is its half on axis k (axis 0 the most significant), as in the kernel."""
+    """Bit k of child t is its half on axis k (axis 0 the most significant), as in the kernel.
+
+    Parameters
+    ----------
+    children : int
+        2^d to split a box into its halves, 1 to keep it.
+    d : int
+
+    Returns
+    -------
+    ndarray
+        (children, d): row t holds child t's half (0 or 1) on each axis.
+    """
     t = np.arange(children)
     return np.stack([(t >> (d - 1 - k)) & 1 for k in range(d)], axis=-1)
 
 
 class Geometry:
-    """The parameters of one run: dimension, radius, grid and threshold."""
+    """The parameters of one run: dimension, radius, grid and threshold.
+
+    Parameters
+    ----------
+    d : int
+    radius : float
+    r2 : float
+        The acceptance threshold of squared distances (:func:`acceptance_threshold`).
+
+    Attributes
+    ----------
+    G : int
+        Grid cells per axis (:func:`grid_size`).
+    cells : int
+        G^d.
+    window : ndarray
+        :func:`window_offsets`.
+    nblocks : int
+        Philox blocks a dart draws: d coordinates and a priority word.
+    """
 
     def __init__(self, d, radius, r2):
         self.d = d
@@ -152,13 +322,28 @@ class Geometry:
         self._cover = {}
 
     def cover(self, level):
-        """The cover window for boxes at ``level`` (cached)."""
+        """The cover window for boxes at ``level`` (:func:`cover_window`, cached).
+
+        Parameters
+        ----------
+        level : int
+
+        Returns
+        -------
+        ndarray
+        """
         if level not in self._cover:
             self._cover[level] = cover_window(self.radius, self.G, self.d, level)
         return self._cover[level]
 
 
 def rank_overflow():
+    """The error for a grid cell with more active entries than a dart's tag can number.
+
+    Returns
+    -------
+    SamplingError
+    """
     return SamplingError(
         f"poisson_disk: more than {MAX_RANK} active subcells in one grid cell "
         "(a bug: please report it with the seed and radius)")

@@ -24,8 +24,21 @@ from .grid import (
 class NumpyDarts:
     """Reference backend: one method per kernel, the same arithmetic in the same order.
 
-    ``ids`` are the (global) realization numbers of the batch and ``attempt`` the
-    redraw number (see :func:`_sample_sets`).
+    A round is :meth:`throw`, :meth:`resolve`, then :meth:`refine` and :meth:`emit`; the
+    round loop (``sampler._throw_darts``) also reads :meth:`accepted` and, to stop at n
+    points, :meth:`won_entries` and :meth:`clear`; :meth:`gather` collects the sets.
+    :class:`~clsamp.samplers.poisson_disk.device.DeviceDarts` has the same methods.
+
+    Parameters
+    ----------
+    geo : Geometry
+        Dimension, radius, grid and acceptance threshold.
+    ids : array_like of int
+        The (global) realization numbers of the batch.
+    attempt : int
+        The redraw number (a realization that became maximal below n is drawn again).
+    seed : int
+        The sampler's seed.
     """
 
     def __init__(self, geo, ids, attempt, seed):
@@ -43,9 +56,22 @@ class NumpyDarts:
 
     @property
     def m(self):
+        """The number of active entries."""
         return self.rel.size
 
     def throw(self, round_, level):
+        """Throw one dart per active entry, uniform in its subcell (``dart_throw``).
+
+        A dart is valid when no point accepted so far is closer than r.
+
+        Parameters
+        ----------
+        round_ : int
+            The round; with the entry's grid cell, rank and realization it numbers the
+            dart's Philox counter.
+        level : int
+            The entries' refinement level (:func:`level_of` of the round).
+        """
         g = self.geo
         m = self.m
         slot = self.rel * g.cells + self.base
@@ -86,10 +112,26 @@ class NumpyDarts:
             raise rank_overflow()
 
     def accepted(self):
-        """Darts accepted so far, per realization (trimmed ones included)."""
+        """Darts accepted so far, per realization (trimmed ones included).
+
+        Returns
+        -------
+        ndarray
+            int64 of shape (B,).
+        """
         return self.total.copy()
 
     def resolve(self, round_):
+        """Accept a conflict-free subset of the round's valid darts (``dart_resolve``).
+
+        A few steps (:func:`resolve_steps`) of the greedy independent set in priority
+        order; darts still undecided stay out this round. Accepted darts are written
+        into the grid.
+
+        Parameters
+        ----------
+        round_ : int
+        """
         g = self.geo
         m = self.m
         slot = self.rel * g.cells + self.base
@@ -128,14 +170,53 @@ class NumpyDarts:
         self.won = state == IN
 
     def won_entries(self):
-        """(realization, slot, priority) of each dart accepted this round."""
+        """The darts accepted this round.
+
+        Returns
+        -------
+        rel : ndarray
+            Each dart's realization within the batch.
+        slot : ndarray
+            Its grid slot, ``rel * cells + cell``.
+        priority : ndarray of uint32
+            Its priority (higher wins).
+        """
         w = np.flatnonzero(self.won)
         return self.rel[w], self.rel[w] * self.geo.cells + self.base[w], self.prio[w]
 
     def clear(self, slots):
+        """Remove the points of grid ``slots`` (``dart_clear``): the lowest-priority darts
+        of the round that passed n, so that exactly n remain.
+
+        Parameters
+        ----------
+        slots : array_like of int
+        """
         self.occ[slots] = 0
 
     def refine(self, level, split, done, tally):
+        """Find which part of every active entry is still uncovered (``dart_refine``).
+
+        Parameters
+        ----------
+        level : int
+            The entries' level.
+        split : int
+            1 to look at the 2^d halves of each entry (the next round is a level deeper),
+            0 at the entry itself.
+        done : ndarray of uint8
+            Per realization, 1 where it needs no more points (its entries are dropped).
+        tally : bool
+            Also count the uncovered children per realization.
+
+        Returns
+        -------
+        counts : ndarray
+            Per entry, its uncovered children (0 to 2^d, or 0 or 1).
+        remaining : ndarray of int64 or None
+            Per realization, the sum of ``counts``; :class:`DeviceDarts` gives None
+            without ``tally``.
+        """
         g = self.geo
         children = (1 << g.d) if split else 1
         slot = self.rel * g.cells + self.base
@@ -163,6 +244,18 @@ class NumpyDarts:
         return counts, np.bincount(self.rel, weights=counts, minlength=self.B).astype(np.int64)
 
     def emit(self, counts, offs, split):
+        """Make the uncovered children of :meth:`refine` the new active entries
+        (``dart_emit``).
+
+        Parameters
+        ----------
+        counts : ndarray
+            Per entry, its uncovered children, as :meth:`refine` gave them.
+        offs : ndarray
+            The exclusive prefix sum of ``counts``: where each entry's children go.
+        split : int
+            As given to :meth:`refine`.
+        """
         g = self.geo
         # row-major nonzero: parents in order, each parent's children in bit order
         parent, t = np.nonzero(self.mask)
@@ -172,6 +265,18 @@ class NumpyDarts:
         self.rel, self.base = self.rel[parent], self.base[parent]
 
     def gather(self, dst, out):
+        """Copy each realization's points, in grid-cell order, into ``out``
+        (``dart_gather``).
+
+        Parameters
+        ----------
+        dst : ndarray of int
+            Per realization, the row of ``out`` its first point goes to; ``SKIP`` leaves
+            it out (it will be redrawn).
+        out : ndarray or pyopencl.array.Array
+            (total, d) float64: host memory for :class:`NumpyDarts`, a device array for
+            :class:`DeviceDarts`.
+        """
         occ = self.occ.reshape(self.B, self.geo.cells)
         pts = self.pts.reshape(self.B, self.geo.cells, self.geo.d)
         for r in range(self.B):
