@@ -6,6 +6,19 @@ import numpy as np
 
 
 def camera_frame(scene):
+    """The camera's position and orthonormal frame, as ``kernels/render.cl`` builds it.
+
+    Parameters
+    ----------
+    scene : Scene
+        Its camera's ``eye``, ``look_at`` and ``up``.
+
+    Returns
+    -------
+    eye, forward, right, up : ndarray
+        float64 3-vectors: the eye; the unit view direction; the unit vector forward x up;
+        and right x forward, the true up (``up`` need not be orthogonal to the view).
+    """
     cam = scene.camera
     eye = np.array(cam["eye"], dtype=np.float64)
     forward = np.array(cam["look_at"]) - eye
@@ -79,7 +92,20 @@ def _trace(scene, o, d, time, tmax, nearest):
 
 def screen_window(scene, width, height):
     """Half the width and height of the screen window at distance 1 from the eye: the
-    camera's fov spans the shorter side of the image, as in pbrt's perspective camera."""
+    camera's fov spans the shorter side of the image, as in pbrt's perspective camera.
+
+    Parameters
+    ----------
+    scene : Scene
+        Its camera's ``fov``, in degrees.
+    width, height : int
+        The image's size in pixels.
+
+    Returns
+    -------
+    (float, float)
+        Half the window's width and half its height.
+    """
     tan_half = math.tan(math.radians(scene.camera["fov"]) / 2)
     aspect = width / height
     return (tan_half * aspect, tan_half) if aspect > 1 else (tan_half, tan_half / aspect)
@@ -88,9 +114,25 @@ def screen_window(scene, width, height):
 def render_reference(scene, samples, resolution, pixel0=0):
     """NumPy reference of ``render_pixels`` (float64): pixel values for the given samples.
 
-    ``samples``: (pixels, scene.sample_dimensions, spp) in [0, 1). Follows
-    kernels/render.cl step by step; for checks on small images (it holds every ray of
-    the tile in memory). ``resolution`` is (width, height).
+    Follows ``kernels/render.cl`` step by step; for checks on small images (it holds every
+    ray of the tile in memory).
+
+    Parameters
+    ----------
+    scene : Scene
+    samples : array_like
+        (pixels, scene.sample_dimensions, spp) in [0, 1): each pixel's samples, their
+        dimensions in the scene's order (``scene.sample_groups``).
+    resolution : (int, int)
+        The image's (width, height).
+    pixel0 : int
+        The number (row-major) of the first pixel of ``samples``.
+
+    Returns
+    -------
+    ndarray
+        float32 of shape (pixels,), as the kernel writes it: each pixel's mean radiance
+        over its samples, computed in float64.
     """
     width, height = resolution
     samples = np.asarray(samples, dtype=np.float64)
