@@ -1,4 +1,7 @@
-"""Fourier power spectra of point sets, their radial mean and anisotropy, and pictures of them.
+"""Fourier power spectra of point sets, their radial mean and anisotropy.
+
+Their pictures are drawn by :mod:`clsamp.plots` (``spectrum``, ``radial_mean``,
+``spectrum_figure``).
 
 The periodogram of N points x_1..x_N in [0, 1)^d at an integer frequency ω is
 
@@ -61,7 +64,23 @@ WORKING_SET = 256 * 2**20           # device bytes a chunk of work holds at most
 
 # -- frequencies -------------------------------------------------------------------
 def frequencies(resolution):
-    """The integer frequencies of each axis of a spectrum: ``arange(-R/2, R/2)``."""
+    """The integer frequencies of each axis of a spectrum: ``arange(-R/2, R/2)``.
+
+    Parameters
+    ----------
+    resolution : int
+        R, even.
+
+    Returns
+    -------
+    ndarray of int
+        Index i of a spectrum's axis is frequency ``frequencies(R)[i]``.
+
+    Examples
+    --------
+    >>> frequencies(4)
+    array([-2, -1,  0,  1])
+    """
     resolution = _check_resolution(resolution)
     return np.arange(-(resolution // 2), resolution // 2)
 
@@ -78,6 +97,10 @@ def normalized_frequency(freqs, n, convention="psa"):
     convention : {"psa", "utk"}
         ``"psa"`` (Heck et al. 2013): 2ν/√N, so 1 is the Nyquist frequency √N/2 of a
         regular grid of N points. ``"utk"``: ν/√N.
+
+    Returns
+    -------
+    ndarray of float64
 
     Examples
     --------
@@ -102,6 +125,25 @@ def _check_resolution(resolution):
 
 
 def check_spectrum(P, name="P"):
+    """Check that ``P`` is a spectrum as :func:`power_spectrum` returns them.
+
+    Parameters
+    ----------
+    P : ndarray
+        (R,) or (R, R), R even and at least 2, finite.
+    name : str
+        The argument's name in the error message.
+
+    Returns
+    -------
+    ndarray
+        ``P`` as float64.
+
+    Raises
+    ------
+    InvalidArgumentError
+        Not a NumPy array of that shape, or NaN or infinite values.
+    """
     if not isinstance(P, np.ndarray) or P.ndim not in (1, 2):
         shape = getattr(P, "shape", type(P).__name__)
         raise InvalidArgumentError(f"'{name}' must be a 1-D or 2-D spectrum array, got {shape}")
@@ -212,7 +254,23 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
 
 def spectrum_block(sampler, n, lo, hi, resolution, method, tol, backend):
     """One task of :func:`expected_spectrum`: the sum of the periodograms of realizations
-    lo .. hi - 1 (the block's mean times its size)."""
+    lo .. hi - 1 (the block's mean times its size).
+
+    Parameters
+    ----------
+    sampler : Sampler
+    n : int
+        Points per set.
+    lo, hi : int
+        The block's realizations, lo .. hi - 1.
+    resolution, method, tol, backend
+        As :func:`power_spectrum` (``method`` already decided, not ``"auto"``).
+
+    Returns
+    -------
+    ndarray
+        (R, R) float64.
+    """
     if backend == "opencl":
         points = sampler.sample_device(n, realizations=range(lo, hi))
     else:
@@ -324,7 +382,22 @@ def _progress(total, enabled, seconds, desc):
 
 # -- direct: NumPy reference ------------------------------------------------------------
 def fixed_point(x):
-    """x in [0, 1) as the 64-bit fixed-point fraction ⌊x·2^64⌋ (uint64), by exact steps."""
+    """x in [0, 1) as the 64-bit fixed-point fraction ⌊x·2^64⌋ (uint64), by exact steps.
+
+    Parameters
+    ----------
+    x : array_like of float64
+        Values in [0, 1).
+
+    Returns
+    -------
+    ndarray of uint64
+
+    Examples
+    --------
+    >>> int(fixed_point(0.75)) == 3 << 62
+    True
+    """
     x = np.asarray(x, dtype=np.float64)
     s = x * 2.0**32
     h = np.floor(s)
@@ -338,6 +411,23 @@ def twiddles_reference(x, freqs):
     The NumPy reference of ``spectrum_twiddles``: phases reduced exactly in fixed point
     (f·X mod 2^64), and each twiddle the product of two exactly reduced factors
     e((f0 + 16q)X)·e(sX), as in the kernel.
+
+    Parameters
+    ----------
+    x : array_like of float64
+        (..., n) coordinates in [0, 1).
+    freqs : array_like of int
+        Consecutive integer frequencies.
+
+    Returns
+    -------
+    ndarray of complex128
+        (..., n, len(freqs)).
+
+    Raises
+    ------
+    InvalidArgumentError
+        ``freqs`` not consecutive.
     """
     freqs = np.asarray(freqs, dtype=np.int64)
     X = fixed_point(x)[..., None]
@@ -363,6 +453,18 @@ def direct_reference(points, resolution):
     NumPy reference of the ``direct`` method: S_r = A_rᵀ B_r with the twiddle panels of
     :func:`twiddles_reference`, P = Σ_r |S_r|² / (r N); all R frequencies of every axis
     (no symmetry shortcut), one realization at a time.
+
+    Parameters
+    ----------
+    points : array_like
+        (n, d) or (r, n, d) points in [0, 1)^d, d = 1 or 2.
+    resolution : int
+        R, even.
+
+    Returns
+    -------
+    ndarray
+        (R,) or (R, R) float64, laid out as :func:`power_spectrum`'s.
     """
     batch, _ = check_points(points, "points", d=(1, 2))
     resolution = _check_resolution(resolution)
@@ -684,11 +786,23 @@ def anisotropy(P, bin_width=1.0):
     mean (:func:`radial_mean`): 0 dB is as anisotropic as one white-noise periodogram,
     and the expected spectrum of r white-noise realizations gives about -10·log10(r) dB.
 
+    Parameters
+    ----------
+    P : ndarray, shape (R, R)
+        A 2-D spectrum from :func:`power_spectrum` (DC at [R/2, R/2]).
+    bin_width : float
+        Width of the annuli in integer frequencies (default 1).
+
     Returns
     -------
     freqs, values : ndarray
         Annulus centres as in :func:`radial_mean`; anisotropy in dB (-inf where P is
         constant on the annulus, NaN where its mean is 0).
+
+    Raises
+    ------
+    InvalidArgumentError
+        ``P`` is not a 2-D spectrum.
 
     References
     ----------
