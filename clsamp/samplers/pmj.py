@@ -171,7 +171,10 @@ class PMJ02Sampler(Sampler):
         points = target.finish()
         if start == 0:
             return points
-        return np.ascontiguousarray(runtime.to_host(points)[:, start:])
+        # a copy, not np.ascontiguousarray: a window of one realization counts as
+        # contiguous but keeps the prefix's stride on its length-1 axis, which
+        # pyopencl's concatenate of device chunks refuses
+        return runtime.to_host(points)[:, start:].copy()
 
     def _device(self, n, realizations, start, out=None):
         r = len(realizations)
