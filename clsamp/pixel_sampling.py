@@ -155,7 +155,7 @@ def sample_plan(scene, sampler, spp, sampler_params, pad, pool):
         sets.append(_Set(0, scene.sample_dimensions, scene.sample_dimensions, make, expensive))
     for s in sets:
         probe = make(s.d, 0)
-        s.indexed = bool(getattr(probe, "pixel_indexed", False))
+        s.indexed = probe.pixel_indexed
         valid = probe.valid_n(spp)
         if valid != spp:
             raise InvalidArgumentError(

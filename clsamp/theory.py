@@ -192,6 +192,17 @@ DISCREPANCY_RATES = {
 }
 
 
-def discrepancy_rate(sampler):
-    """(exponent, text) of the known rate of a sampler's L2 discrepancy in 2-D, or None."""
-    return DISCREPANCY_RATES.get(sampler.split(":")[0])
+def discrepancy_rate(label):
+    """(exponent, text) of the known rate of a sampler's L2 discrepancy in 2-D, or None.
+
+    Parameters
+    ----------
+    label : str
+        The sampler's name, with or without its randomization (``"sobol:owen"``).
+
+    Returns
+    -------
+    tuple of (float, str) or None
+        The exponent of N and the rate as text, where one is known.
+    """
+    return DISCREPANCY_RATES.get(label.split(":")[0])

@@ -21,6 +21,7 @@ what lets the base split requests into chunks that fit the device, and lets any 
 ask for realizations lo..hi alone (``realizations=range(lo, hi)``).
 """
 
+import abc
 import copy
 import dataclasses
 import difflib
@@ -29,7 +30,14 @@ import numpy as np
 
 from .. import host_memory, runtime
 from ..errors import InvalidArgumentError
-from ..validation import MAX_UINT32, check_choice, check_int, check_positive_int, check_seed
+from ..validation import (
+    MAX_UINT32,
+    check_choice,
+    check_image_size,
+    check_int,
+    check_positive_int,
+    check_seed,
+)
 
 _REGISTRY = {}   # name -> class
 _ALIASES = {}    # alias -> name
@@ -196,18 +204,27 @@ def info_field(how="concat", **kwargs):
     return dataclasses.field(metadata={"merge": how}, **kwargs)
 
 
-class Sampler:
+class Sampler(abc.ABC):
     """Base of every sampler.
 
     Subclasses set ``name`` and ``aliases`` (via :func:`register`) and the facts below,
     and write ``_reference`` and ``_device`` (module docstring). ``valid_n`` maps a
     requested n to the nearest one the sampler can make; ``convergence_rate`` gives the
-    published rate for the parameters of the instance.
+    published rate for the parameters of the instance. The facts are class attributes, or
+    properties where a parameter decides them; an instance never overwrites one.
+
+    What a renderer may ask of any sampler is declared here too, with defaults:
+    ``pixel_indexed`` and :meth:`for_image` (samplers that decorrelate the pixels of one
+    image themselves), and :meth:`sample_sets` (sets that may differ in size).
 
     Attributes
     ----------
     dimensions : tuple of int or None
-        The supported d (None: any d >= 1).
+        The supported d (None: any d from 1 to ``max_d``).
+    max_d : int
+        The largest d (a table's length where one limits it); ``max_d_source`` names it.
+    randomize : str or None
+        The randomization of this instance (one of ``randomizations``).
     randomized : bool
         Whether the seed changes the points.
     sequence : bool
@@ -233,11 +250,22 @@ class Sampler:
         Whether the OpenCL path computes in double precision (distances, energies), so
         that a device without fp64 refuses it with :class:`NoDeviceError`; the others
         build their float64 coordinates by integer arithmetic there, the same bits.
+    pixel_indexed : bool
+        Whether the sampler decorrelates the pixels of an image itself, realization k
+        being pixel k (row-major) of the image :meth:`for_image` names (``zsobol``): a
+        renderer then uses one sampler for the whole image, unpadded. False: the
+        renderer gives each pixel its own realizations and pads the dimensions.
+    variable_size : bool
+        Whether the sets may differ in size (a maximal Poisson-disk set): read them with
+        :meth:`sample_sets`.
     """
 
     name = None
     aliases = ()
     dimensions = None
+    max_d = MAX_D
+    max_d_source = None
+    randomize = None
     randomized = True
     sequence = False
     accepts_start = True
@@ -248,14 +276,21 @@ class Sampler:
     info = None
     host_output = False
     needs_fp64 = False
+    pixel_indexed = False
+    variable_size = False
     rates = {}              # case -> Rate for d = 2 (see convergence_rate)
 
     def __init__(self, d=2, seed=0, backend="opencl"):
-        self.d = check_positive_int(d, "d", maximum=MAX_D)
-        if self.dimensions is not None and self.d not in self.dimensions:
+        d = check_positive_int(d, "d")
+        if self.dimensions is not None and d not in self.dimensions:
             allowed = ", ".join(str(x) for x in self.dimensions)
             raise InvalidArgumentError(
-                f"sampler {self.name!r} supports 'd' in ({allowed}), got {self.d}")
+                f"sampler {self.name!r} supports 'd' in ({allowed}), got {d}")
+        if d > self.max_d:
+            source = f" ({self.max_d_source})" if self.max_d_source else ""
+            raise InvalidArgumentError(
+                f"'d' must be at most {self.max_d} for {self.name}{source}, got {d}")
+        self.d = d
         self.seed = check_seed(seed)
         self.backend = check_choice(backend, "backend", BACKENDS)
 
@@ -267,8 +302,7 @@ class Sampler:
     def label(self):
         """The sampler's name with its randomization, as :func:`make_sampler` reads it
         (``"sobol:owen"``, ``"jittered"``)."""
-        randomize = getattr(self, "randomize", None)
-        return f"{self.name}:{randomize}" if randomize else str(self.name)
+        return f"{self.name}:{self.randomize}" if self.randomize else str(self.name)
 
     def convergence_rate(self, case):
         """The published rate of the MSE of this sampler's estimates, or None.
@@ -292,6 +326,60 @@ class Sampler:
         other = copy.copy(self)
         other.seed = check_seed(seed)
         return other
+
+    def for_image(self, width, height):
+        """This sampler for an image of ``width`` x ``height`` pixels (what a renderer asks).
+
+        A pixel-indexed sampler (``pixel_indexed``) returns a copy whose realization k is
+        pixel k, row-major, of that image; any other sampler does not depend on the image
+        and returns itself.
+
+        Parameters
+        ----------
+        width, height : int
+            The image's size in pixels.
+
+        Returns
+        -------
+        Sampler
+        """
+        check_image_size((width, height), "(width, height)")
+        return self
+
+    def sample_sets(self, realizations, n=None, return_info=False):
+        """Sets as a list of (n_k, d) arrays, one per realization: the form for samplers
+        whose sets differ in size (``variable_size``; a maximal Poisson-disk set), and a
+        list of the rows of :meth:`sample` for every other.
+
+        Parameters
+        ----------
+        realizations : int or range
+            r for the realizations 0..r-1, or a range for exactly those; set k does not
+            depend on which others are asked for.
+        n : int, optional
+            Points per set, where the sampler needs it (as :meth:`sample`).
+        return_info : bool
+            Also return the call's info (samplers that iterate or reject).
+
+        Returns
+        -------
+        sets : list of ndarray
+        info : SampleInfo
+            Only with ``return_info``.
+
+        Examples
+        --------
+        >>> import clsamp
+        >>> sets = clsamp.make_sampler("jittered", seed=1).sample_sets(3, n=16)
+        >>> len(sets), sets[0].shape
+        (3, (16, 2))
+        """
+        if realizations is None:
+            raise InvalidArgumentError("'realizations' must be an int or a range for sample_sets")
+        result = self.sample(n, realizations=realizations, return_info=return_info)
+        points, info = result if return_info else (result, None)
+        sets = list(points)
+        return (sets, info) if return_info else sets
 
     # -- the public entry points -------------------------------------------------------
     def sample(self, n=None, realizations=None, start=0, return_info=False):
@@ -402,6 +490,7 @@ class Sampler:
     def _warn_weaker(self, n, start):
         """Warn (UserWarning) where a legal request gives a weaker set than the sampler
         promises; nothing by default."""
+        return None
 
     def _pieces(self, n):
         """[(offset, count)] of a set made in pieces of consecutive points, each fitting the
@@ -500,13 +589,13 @@ class Sampler:
                 f"the nearest valid n is {valid}")
         return n
 
+    @abc.abstractmethod
     def _reference(self, n, realizations, start):
         """NumPy reference: ndarray (len(realizations), n, d); ``realizations`` is a range."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def _device(self, n, realizations, start, out=None):
         """OpenCL: pyopencl Array (len(realizations), n, d) on ``runtime.queue()``."""
-        raise NotImplementedError
 
 
 def _check_realizations(realizations):

@@ -16,7 +16,7 @@ from .. import number_theory as nt
 from .. import runtime
 from ..errors import InvalidArgumentError
 from ..geometry import torus
-from ..validation import check_choice, check_int
+from ..validation import check_choice
 from .base import register
 from .lowdiscrepancy import LowDiscrepancySampler, shift_vectors
 
@@ -124,18 +124,26 @@ class LatticeSampler(_Shifted):
     [0.0, 0.5, 0.75, 0.25]
     """
 
+    max_d = len(_kuo()[0])
+    max_d_source = "the shipped generating vector"
+
     def __init__(self, d=2, seed=0, backend="opencl", randomize=None, generator="kuo"):
-        self.generator = check_choice(generator, "generator", ("kuo", "fibonacci"))
-        check_int(d, "d", minimum=1)
-        if generator == "fibonacci" and d != 2:
-            raise InvalidArgumentError(f"'d' must be 2 for the Fibonacci lattice, got {d}")
-        if generator == "kuo":
-            kuo_vector(d)                                   # refuses d above the table
         super().__init__(d=d, seed=seed, backend=backend, randomize=randomize)
-        if generator == "fibonacci":
-            self.sequence = False
-            self.accepts_start = False
+        self.generator = check_choice(generator, "generator", ("kuo", "fibonacci"))
+        if self.generator == "fibonacci":
+            if self.d != 2:
+                raise InvalidArgumentError(f"'d' must be 2 for the Fibonacci lattice, got {self.d}")
             self._fib = fibonacci(47)                       # F_47 < 2^32 <= F_48
+
+    @property
+    def sequence(self):
+        """The Kuo lattice is an extensible sequence; the Fibonacci lattice a point set."""
+        return self.generator == "kuo"
+
+    @property
+    def accepts_start(self):
+        """``start`` continues the Kuo sequence; the Fibonacci lattice takes only 0."""
+        return self.generator == "kuo"
 
     def valid_n(self, n):
         if self.generator == "kuo":
@@ -223,11 +231,7 @@ class KroneckerSampler(_Shifted):
     [0.0, 0.618034, 0.236068]
     """
 
-    def __init__(self, d=2, seed=0, backend="opencl", randomize=None):
-        check_int(d, "d", minimum=1)
-        if d > 256:
-            raise InvalidArgumentError(f"'d' must be at most 256 for kronecker, got {d}")
-        super().__init__(d=d, seed=seed, backend=backend, randomize=randomize)
+    max_d = 256
 
     def _reference(self, n, realizations, start):
         index = _U64(start) + np.arange(n, dtype=_U64)

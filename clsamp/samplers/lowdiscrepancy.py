@@ -22,7 +22,7 @@ import numpy as np
 
 from .. import number_theory as nt
 from .. import philox, runtime
-from ..errors import InvalidArgumentError, NoDeviceError
+from ..errors import NoDeviceError
 from ..geometry import torus
 from ..validation import check_choice, check_int
 from .base import Rate, Sampler, register
@@ -107,7 +107,11 @@ class LowDiscrepancySampler(Sampler):
     def __init__(self, d=2, seed=0, backend="opencl", randomize=None):
         super().__init__(d=d, seed=seed, backend=backend)
         self.randomize = check_choice(randomize, "randomize", self.randomizations)
-        self.randomized = randomize is not None
+
+    @property
+    def randomized(self):
+        """Whether the seed changes the points: with a randomization only."""
+        return self.randomize is not None
 
     def __repr__(self):
         return (f"{type(self).__name__}(name={self.name!r}, d={self.d}, seed={self.seed}, "
@@ -202,20 +206,15 @@ class SobolSampler(LowDiscrepancySampler):
     (8, 256, 3)
     """
 
+    max_d = nt.sobol_max_dimension()
+    max_d_source = "the Joe-Kuo direction-number table"
+
     def _warn_weaker(self, n, start):
         total = start + (n or 0)
         if total & (total - 1):
             warnings.warn(f"the balance properties of Sobol' points need a power of two points: "
                           f"{self.label!r} asked for start + n = {total}, which is not, so the "
                           "set is not a net", UserWarning, stacklevel=3)
-
-    def __init__(self, d=2, seed=0, backend="opencl", randomize=None):
-        limit = nt.sobol_max_dimension()
-        check_int(d, "d", minimum=1)
-        if d > limit:
-            raise InvalidArgumentError(
-                f"'d' must be at most {limit} for sobol (the Joe-Kuo direction-number table), got {d}")
-        super().__init__(d=d, seed=seed, backend=backend, randomize=randomize)
 
     def convergence_rate(self, case):
         # a nested-scrambled (0, m, 2)-net in base 2 (N a power of two)
@@ -448,12 +447,7 @@ class HaltonSampler(_RadicalInverse):
     [[0.0, 0.0], [0.5, 0.3333333333333333], [0.25, 0.6666666666666666]]
     """
 
-    def __init__(self, d=2, seed=0, backend="opencl", randomize=None):
-        check_int(d, "d", minimum=1)
-        if d > MAX_HALTON_DIMENSION:
-            raise InvalidArgumentError(
-                f"'d' must be at most {MAX_HALTON_DIMENSION} for halton, got {d}")
-        super().__init__(d=d, seed=seed, backend=backend, randomize=randomize)
+    max_d = MAX_HALTON_DIMENSION
 
     def bases(self):
         return nt.first_primes(self.d)
@@ -491,14 +485,8 @@ class HammersleySampler(_RadicalInverse):
     sequence = False
     accepts_start = False
     hammersley = True
+    max_d = MAX_HALTON_DIMENSION
     randomizations = (None, "shift", "xor", "owen")
-
-    def __init__(self, d=2, seed=0, backend="opencl", randomize=None):
-        check_int(d, "d", minimum=1)
-        if d > MAX_HALTON_DIMENSION:
-            raise InvalidArgumentError(
-                f"'d' must be at most {MAX_HALTON_DIMENSION} for hammersley, got {d}")
-        super().__init__(d=d, seed=seed, backend=backend, randomize=randomize)
 
     def bases(self):
         return np.concatenate([[0], nt.first_primes(self.d - 1)]).astype(np.uint32)

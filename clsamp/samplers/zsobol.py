@@ -116,10 +116,15 @@ class ZSobolSampler(Sampler):
     def _set_resolution(self, resolution):
         self.width, self.height = check_image_size(resolution)
         self.log2_side = (max(self.width, self.height) - 1).bit_length()
-        self.max_n = 1 << (32 - 2 * self.log2_side)
+
+    @property
+    def max_n(self):
+        """The most samples a pixel takes: the Morton code's bits leave 32 - 2 log2(side)."""
+        return 1 << (32 - 2 * self.log2_side)
 
     def for_image(self, width, height):
-        """A copy of this sampler for a (width, height) image (the renderer's call)."""
+        """A copy of this sampler for a (width, height) image, realization k being pixel k
+        (row-major): what a renderer asks of a pixel-indexed sampler."""
         other = self.with_seed(self.seed)
         other._set_resolution((width, height))
         return other

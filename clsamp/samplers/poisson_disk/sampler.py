@@ -267,8 +267,14 @@ class PoissonDiskSampler(Sampler):
         what = f"radius={self.radius}" if self.radius is not None else f"rho={self.rho}"
         return f"{type(self).__name__}(d={self.d}, seed={self.seed}, {what})"
 
-    def sample_sets(self, realizations, return_info=False):
-        """Maximal sets (radius mode) as a list of (m_k, d) arrays, one per realization.
+    @property
+    def variable_size(self):
+        """Maximal sets (radius mode) differ in size: read them with :meth:`sample_sets`."""
+        return self.radius is not None
+
+    def sample_sets(self, realizations, n=None, return_info=False):
+        """Sets as a list of (m_k, d) arrays, one per realization: maximal sets in radius
+        mode (n left out), else the rows of :meth:`sample`.
 
         Parameters
         ----------
@@ -276,11 +282,13 @@ class PoissonDiskSampler(Sampler):
             r for the realizations 0..r-1, or a range for exactly those. Set k is the one
             ``sample(realizations=range(k, k + 1))`` gives and does not depend on which
             others are asked for; all sets are made in one batch.
+        n : int, optional
+            Exactly n points a set instead of maximal ones.
         return_info : bool
             Also return the :class:`PoissonDiskInfo` of the call.
         """
-        if self.radius is None:
-            raise InvalidArgumentError("sample_sets needs 'radius' (maximal sets)")
+        if self.radius is None or n is not None:
+            return super().sample_sets(realizations, n=n, return_info=return_info)
         if isinstance(realizations, range):
             if len(realizations) == 0 or realizations.step != 1 or realizations.start < 0:
                 raise InvalidArgumentError(
