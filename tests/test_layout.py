@@ -198,3 +198,34 @@ def test_only_the_runtime_makes_opencl_state():
                       r"|enqueue_map_buffer|\.Kernel\(")
     outside = [m for m, p in MODULES.items() if m != "clsamp.runtime" and made.search(p.read_text())]
     assert not outside, outside
+
+
+def _sampler_protocol():
+    """The public names ``Sampler`` declares (facts, entry points, the renderer's protocol)
+    and what its ``__init__`` sets."""
+    from clsamp.samplers.base import Sampler
+    return {n for n in dir(Sampler) if not n.startswith("_")} | {"d", "seed", "backend"}
+
+
+# what holds a sampler, by the names the package gives it
+_SAMPLER_LIKE = re.compile(r"(^|\.)(\w*sampler|probe)$|make_sampler\(|\.(factory|for_image|with_seed)\(")
+
+
+def test_no_module_reads_a_sampler_attribute_the_base_does_not_declare():
+    # a renderer, an experiment or a report asks a sampler only what Sampler declares:
+    # no getattr with a default, no attribute of one subclass
+    declared = _sampler_protocol()
+    wrong = []
+    for module, path in MODULES.items():
+        if module.startswith("clsamp.samplers"):
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Load):
+                owner = ast.unparse(node.value)
+                if _SAMPLER_LIKE.search(owner) and node.attr not in declared:
+                    wrong.append((module, node.lineno, f"{owner}.{node.attr}"))
+            elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+                  and node.func.id in ("getattr", "hasattr") and node.args
+                  and _SAMPLER_LIKE.search(ast.unparse(node.args[0]))):
+                wrong.append((module, node.lineno, ast.unparse(node)))
+    assert not wrong, wrong

@@ -21,7 +21,7 @@ import pytest
 
 import clsamp
 from clsamp.errors import InvalidArgumentError
-from clsamp.samplers import Rate, SampleInfo, sampler_class
+from clsamp.samplers import Rate, SampleInfo, Sampler, sampler_class
 
 # Parameters that keep the slowest samplers small here (their defaults are run elsewhere).
 SMALL = {"ccvt": {"points_per_site": 32}, "lloyd": {"iterations": 8, "density": 32}}
@@ -83,15 +83,7 @@ def _starts(cell):
 
 # Cells that fail through a bug outside this test, marked xfail(strict=True) until it is
 # fixed: (test, cell id) -> (exception, reason).
-KNOWN_BUGS = {
-    ("chunks", f"{name}-d2-start{START}"): (
-        NotImplementedError,
-        f"{name}: with start > 0 _device returns its window of the prefix as a host view whose "
-        "length-1 realization axis keeps the prefix's stride (np.ascontiguousarray leaves it), "
-        "so sample_device split into chunks fails in runtime.concatenate (pyopencl: 'cannot "
-        "assign between arrays of differing strides')")
-    for name in ("pmj02", "pmj02bn")}
-
+KNOWN_BUGS = {}
 
 def _calls(test):
     """(cell, start) of every call of the matrix, a known bug of ``test`` marked."""
@@ -357,6 +349,50 @@ def test_facts(cell, batch):
     other = s.with_seed(99)
     assert other.seed == 99 and s.seed == 7 and type(other) is type(s)
     assert other.label == s.label and other.d == s.d
+
+
+BASE_FACTS = {name for name, value in vars(Sampler).items()
+              if not name.startswith("_") and not callable(value) and not isinstance(value, property)
+              } - {"randomize"}     # a parameter, whose default the base declares
+
+
+@pytest.mark.parametrize("cell", _params(CELLS))
+def test_facts_are_class_facts_never_overwritten_by_an_instance(cell):
+    s = FACTS[cell]
+    assert not set(vars(s)) & BASE_FACTS, set(vars(s)) & BASE_FACTS
+    assert isinstance(s.pixel_indexed, bool) and isinstance(s.variable_size, bool)
+    assert s.max_d >= s.d and s.randomize == cell.randomize
+    assert s.randomized == (cell.randomize is not None or type(s).randomized is True)
+
+
+@pytest.mark.parametrize("cell", _params(CELLS))
+def test_what_a_renderer_asks_every_sampler(cell, batch):
+    # the renderer's protocol, declared on the base: for_image, pixel_indexed, sample_sets
+    s, n, pts = batch(cell)
+    image = s.for_image(3, 2)
+    assert type(image) is type(s) and image.d == s.d
+    if s.pixel_indexed:
+        assert image is not s and image.max_n >= 1
+    else:
+        assert image is s
+    sets = s.sample_sets(range(1, 3), n=n)
+    assert len(sets) == 2 and all(np.array_equal(a, b) for a, b in zip(sets, pts[1:3], strict=True))
+
+
+def test_a_sampler_must_write_both_methods():
+    class Half(Sampler):
+        def _reference(self, n, realizations, start):
+            return np.zeros((len(realizations), n, self.d))
+
+    with pytest.raises(TypeError, match="_device"):
+        Half()
+
+
+def test_a_maximal_poisson_disk_set_has_its_own_size():
+    s = clsamp.make_sampler("poisson_disk", radius=0.1, seed=3)
+    assert s.variable_size and not clsamp.make_sampler("poisson_disk").variable_size
+    sets = s.sample_sets(2)
+    assert len(sets) == 2 and all(x.ndim == 2 and x.shape[1] == 2 for x in sets)
 
 
 @pytest.mark.parametrize("cell", _params(CELLS))
