@@ -63,6 +63,15 @@ def _sieve(limit):
 def first_primes(count):
     """The first ``count`` primes (2, 3, 5, ...) as uint32: the Halton bases.
 
+    Parameters
+    ----------
+    count : int
+        How many; 0 or less gives an empty array.
+
+    Returns
+    -------
+    ndarray of uint32
+
     Examples
     --------
     >>> first_primes(5).tolist()
@@ -79,7 +88,22 @@ def first_primes(count):
 
 # -- radical inverse -----------------------------------------------------------------
 def digit_count(base):
-    """m, the number of base-``base`` digits of every 32-bit index: the least m with b^m >= 2^32."""
+    """m, the number of base-``base`` digits of every 32-bit index: the least m with b^m >= 2^32.
+
+    Parameters
+    ----------
+    base : int
+        At least 2.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> digit_count(2), digit_count(3), digit_count(2**16)
+    (32, 21, 2)
+    """
     m, power = 0, 1
     while power < 2**INDEX_BITS:
         power *= int(base)
@@ -88,7 +112,26 @@ def digit_count(base):
 
 
 def index_digits(index, base, m=None):
-    """Base-``base`` digits of ``index``, least significant first: array (..., m) of uint64."""
+    """Base-``base`` digits of ``index``, least significant first.
+
+    Parameters
+    ----------
+    index : int or array_like of int
+        Non-negative indices.
+    base : int
+    m : int, optional
+        Digits to return; :func:`digit_count` of the base by default.
+
+    Returns
+    -------
+    ndarray of uint64
+        (..., m), digit k in column k.
+
+    Examples
+    --------
+    >>> index_digits(5, 3, 3).tolist()          # 5 = 2 + 1 * 3
+    [2, 1, 0]
+    """
     m = digit_count(base) if m is None else m
     a = np.asarray(index, dtype=_U64)
     b = _U64(base)
@@ -104,6 +147,16 @@ def radical_inverse_numerator(index, base):
 
     Φ_b(i) = Σ_k d_k b^-(k+1) for i = Σ_k d_k b^k, so Φ_b(i) = v / b^m with
     v = Σ_{k<m} d_k b^(m-1-k) (the digits of i reversed), m = :func:`digit_count`.
+
+    Parameters
+    ----------
+    index : int or array_like of int in [0, 2^32)
+    base : int in [2, 2^20]
+
+    Returns
+    -------
+    ndarray of uint64
+        v, below b^m.
     """
     m = digit_count(base)
     digits = index_digits(index, base, m)
@@ -121,6 +174,10 @@ def radical_inverse(index, base):
     index : int or array_like of int in [0, 2^32)
     base : int in [2, 2^20]
 
+    Returns
+    -------
+    ndarray of float64
+
     Examples
     --------
     >>> radical_inverse([0, 1, 2, 3], 2).tolist()
@@ -134,7 +191,18 @@ def radical_inverse(index, base):
 
 # -- hashes and permutations ---------------------------------------------------------
 def mix64(v):
-    """A 64-bit bijective finalizer (pbrt-v4's MixBits; Stafford's variant 13 constants)."""
+    """A 64-bit bijective finalizer (pbrt-v4's MixBits; Stafford's variant 13 constants).
+
+    Parameters
+    ----------
+    v : int or array_like of int
+        Taken as uint64.
+
+    Returns
+    -------
+    ndarray of uint64
+        The mixed values; arithmetic wraps modulo 2^64.
+    """
     v = np.asarray(v, dtype=_U64)
     with np.errstate(over="ignore"):
         v = v ^ (v >> _U64(31))
@@ -150,13 +218,35 @@ def digit_hash(seed64, key):
 
     ``key`` is the digit position k for the random digit shift and permutation
     (the same for every point).
+
+    Parameters
+    ----------
+    seed64 : int or array_like of int
+        The randomization's 64-bit seed.
+    key : int or array_like of int
+        Broadcast against ``seed64``.
+
+    Returns
+    -------
+    ndarray of uint32
     """
     mixed = mix64(np.asarray(seed64, dtype=_U64) ^ np.asarray(key, dtype=_U64))
     return (mixed >> _U64(32)).astype(_U32)
 
 
 def digit_shift(h, base):
-    """A digit in [0, base) from 32 random bits: floor(h · base / 2^32) (bias below base/2^32)."""
+    """A digit in [0, base) from 32 random bits: floor(h · base / 2^32) (bias below base/2^32).
+
+    Parameters
+    ----------
+    h : int or array_like of int
+        32-bit words.
+    base : int
+
+    Returns
+    -------
+    ndarray of uint32
+    """
     return ((np.asarray(h, dtype=_U64) * _U64(base)) >> _U64(32)).astype(_U32)
 
 
@@ -168,6 +258,25 @@ def permutation_element(i, length, p):
     rotated by p: ``(i + p) mod length``, the sum taken in 64 bits (pbrt's 32-bit sum
     wraps for p > 2^32 - length, and the result is then not a permutation). All
     arguments broadcast; the hash's arithmetic wraps modulo 2^32.
+
+    Parameters
+    ----------
+    i : int or array_like of int
+        Positions in [0, length).
+    length : int or array_like of int
+        The permutations' lengths, 1 to 2^32 - 1.
+    p : int or array_like of int
+        32-bit seeds, one per permutation.
+
+    Returns
+    -------
+    ndarray of uint32
+        The broadcast shape.
+
+    Examples
+    --------
+    >>> sorted(permutation_element(np.arange(7), 7, 12345).tolist())
+    [0, 1, 2, 3, 4, 5, 6]
     """
     i, length, p = np.broadcast_arrays(np.asarray(i, dtype=_U32), np.asarray(length, dtype=_U32),
                                        np.asarray(p, dtype=_U32))
@@ -211,7 +320,22 @@ def permutation_element(i, length, p):
 
 
 def reverse_bits32(x):
-    """The 32 bits of ``x`` in reverse order (bit k goes to bit 31 - k)."""
+    """The 32 bits of ``x`` in reverse order (bit k goes to bit 31 - k).
+
+    Parameters
+    ----------
+    x : int or array_like of int
+        Taken as uint32.
+
+    Returns
+    -------
+    ndarray of uint32
+
+    Examples
+    --------
+    >>> int(reverse_bits32(1)) == 2**31
+    True
+    """
     x = np.asarray(x, dtype=_U32)
     x = ((x >> _U32(1)) & _U32(0x55555555)) | ((x & _U32(0x55555555)) << _U32(1))
     x = ((x >> _U32(2)) & _U32(0x33333333)) | ((x & _U32(0x33333333)) << _U32(2))
@@ -227,6 +351,17 @@ def lk_hash(x, seed):
     function of bits below k, so on reversed bits each binary digit is flipped by a
     function of all digits above it: a nested (Owen) scramble [4]_ [5]_. Vegdahl's
     constants fix the original hash's poor low bits (empty buckets, XeGTAO issue 7).
+
+    Parameters
+    ----------
+    x : int or array_like of int
+        Bit-reversed 32-bit words.
+    seed : int or array_like of int
+        32-bit seeds, broadcast against ``x``.
+
+    Returns
+    -------
+    ndarray of uint32
     """
     x = np.asarray(x, dtype=_U32)
     seed = np.asarray(seed, dtype=_U32)
@@ -244,6 +379,17 @@ def owen_scramble_base2(x, seed):
 
     ``reverse(lk_hash(reverse(x), seed))``: digit k (from the top) is flipped by a hash
     of the seed and the digits above it [5]_.
+
+    Parameters
+    ----------
+    x : int or array_like of int
+        32-bit fractions (x · 2^-32 in [0, 1)).
+    seed : int or array_like of int
+        32-bit seeds.
+
+    Returns
+    -------
+    ndarray of uint32
     """
     return reverse_bits32(lk_hash(reverse_bits32(x), seed))
 
@@ -253,7 +399,16 @@ OWEN_ATTEMPT_STRIDE = 2**27   # word slots per rejection attempt (more than any 
 
 
 def owen_chunk_length(base):
-    """g, the draws per 32-bit word of a node's Fisher-Yates shuffle: the largest g with b^g <= 2^32."""
+    """g, the draws per 32-bit word of a node's Fisher-Yates shuffle: the largest g with b^g <= 2^32.
+
+    Parameters
+    ----------
+    base : int
+
+    Returns
+    -------
+    int
+    """
     g, power = 0, 1
     while power * int(base) <= 2**32:
         power *= int(base)
@@ -262,13 +417,36 @@ def owen_chunk_length(base):
 
 
 def owen_node_key(seed64, node):
-    """The 64-bit key of the digit-tree node ``node`` = b^k + (i mod b^k): mix64(seed64 ^ node)."""
+    """The 64-bit key of the digit-tree node ``node`` = b^k + (i mod b^k): mix64(seed64 ^ node).
+
+    Parameters
+    ----------
+    seed64 : int or array_like of int
+    node : int or array_like of int
+
+    Returns
+    -------
+    ndarray of uint64
+    """
     return mix64(np.asarray(seed64, dtype=_U64) ^ np.asarray(node, dtype=_U64))
 
 
 def owen_word(key, slot):
     """32-bit word number ``slot`` of a node: a half of block slot // 2, where block 0 is the
-    node key itself and block u > 0 is mix64(key ^ u); even slots take the low half."""
+    node key itself and block u > 0 is mix64(key ^ u); even slots take the low half.
+
+    Parameters
+    ----------
+    key : int or array_like of int
+        Node keys (:func:`owen_node_key`).
+    slot : int or array_like of int
+        Broadcast against ``key``.
+
+    Returns
+    -------
+    ndarray of uint64
+        Values below 2^32.
+    """
     key = np.asarray(key, dtype=_U64)
     slot = np.asarray(slot, dtype=_U64)
     u = slot >> _U64(1)
@@ -286,6 +464,20 @@ def owen_chunk_draws(key, base, chunk):
     x_last < 2^32 mod P makes them exactly uniform and independent; a rejected word is
     replaced by word slot c + a * OWEN_ATTEMPT_STRIDE of attempt a. ``key`` and ``chunk``
     broadcast.
+
+    Parameters
+    ----------
+    key : int or array_like of int
+        Node keys.
+    base : int
+        b >= 3.
+    chunk : int or array_like of int
+        Chunk numbers c.
+
+    Returns
+    -------
+    ndarray of uint64
+        (..., g), g = :func:`owen_chunk_length` of the base.
     """
     base = int(base)
     g = owen_chunk_length(base)
@@ -331,6 +523,20 @@ def owen_permutation_element(key, base, digit):
     needs only r_0..r_d: start at p = d + r_d and walk back, for j = d - 1, ..., 0,
     setting p = j where j + r_j = p (the swap that brought p's value); then π(d) = p.
     ``key`` and ``digit`` broadcast.
+
+    Parameters
+    ----------
+    key : int or array_like of int
+        Node keys (:func:`owen_node_key`).
+    base : int
+        b >= 3.
+    digit : int or array_like of int
+        Digits d in [0, b).
+
+    Returns
+    -------
+    ndarray of uint64
+        π(d), the broadcast shape.
     """
     base = int(base)
     key, digit = np.broadcast_arrays(np.asarray(key, dtype=_U64), np.asarray(digit, dtype=_U64))
@@ -375,7 +581,25 @@ def owen_permutation_element(key, base, digit):
 
 
 def owen_permutation(key, base):
-    """The whole permutation [π(0), ..., π(b-1)] of one node ``key`` (scalar), by Fisher-Yates."""
+    """The whole permutation [π(0), ..., π(b-1)] of one node ``key`` (scalar), by Fisher-Yates.
+
+    Parameters
+    ----------
+    key : int
+        A node key.
+    base : int
+        b >= 3.
+
+    Returns
+    -------
+    ndarray of uint64
+        (b,); equal to :func:`owen_permutation_element` at every digit.
+
+    Examples
+    --------
+    >>> sorted(owen_permutation(12345, 5).tolist())
+    [0, 1, 2, 3, 4]
+    """
     base = int(base)
     draws = _node_draws(np.asarray([key], dtype=_U64), base, base - 1)[0, :base].tolist()
     a = list(range(base))
@@ -406,6 +630,16 @@ def scrambled_radical_inverse_numerator(index, base, randomize, seed64):
     seed64 : int
         The randomization's 64-bit seed (one per realization and dimension).
         In base 2 ``"owen"`` uses its low 32 bits.
+
+    Returns
+    -------
+    ndarray of uint64
+        v, below b^m.
+
+    Raises
+    ------
+    InvalidArgumentError
+        An unknown ``randomize``.
 
     Notes
     -----
@@ -445,14 +679,34 @@ def scrambled_radical_inverse_numerator(index, base, randomize, seed64):
 # -- Sobol ---------------------------------------------------------------------------
 @functools.lru_cache(maxsize=1)
 def sobol_table():
-    """(poly, vinit, source) of the shipped Joe-Kuo direction numbers (see clsamp/data)."""
+    """The shipped Joe-Kuo direction numbers (``clsamp/data``).
+
+    Returns
+    -------
+    poly : ndarray of int64
+        Each dimension's primitive polynomial, its degree s the bit length minus 1.
+    vinit : ndarray of int64
+        (dimensions, columns): the initial direction numbers m_1 .. m_s.
+    source : str
+        Where the table comes from.
+    """
     with resources.files("clsamp.data").joinpath(SOBOL_TABLE).open("rb") as f:
         table = np.load(f)
         return table["poly"].astype(np.int64), table["vinit"].astype(np.int64), str(table["source"])
 
 
 def sobol_max_dimension():
-    """How many dimensions the shipped direction numbers cover (21201)."""
+    """How many dimensions the shipped direction numbers cover.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> sobol_max_dimension()
+    21201
+    """
     return len(sobol_table()[0])
 
 
@@ -492,6 +746,21 @@ def sobol_matrices(d):
     Column c of dimension j is the direction number V_(j,c) = m_(j,c) 2^(31-c), the
     image of index bit c [2]_. Point i of dimension j is the xor of V_(j,c) over the set
     bits c of the Gray code i ^ (i >> 1), times 2^-32 (scipy's order).
+
+    Parameters
+    ----------
+    d : int
+        1 to :func:`sobol_max_dimension`.
+
+    Returns
+    -------
+    ndarray of uint32
+        (d, 32), a copy.
+
+    Raises
+    ------
+    InvalidArgumentError
+        ``d`` out of range.
     """
     if not 1 <= d <= sobol_max_dimension():
         raise InvalidArgumentError(
@@ -500,15 +769,44 @@ def sobol_matrices(d):
 
 
 def gray_code(index):
-    """The reflected binary Gray code i ^ (i >> 1) of 32-bit indices."""
+    """The reflected binary Gray code i ^ (i >> 1) of 32-bit indices.
+
+    Parameters
+    ----------
+    index : int or array_like of int
+
+    Returns
+    -------
+    ndarray of uint32
+
+    Examples
+    --------
+    >>> gray_code([0, 1, 2, 3]).tolist()
+    [0, 1, 3, 2]
+    """
     index = np.asarray(index, dtype=_U32)
     return index ^ (index >> _U32(1))
 
 
 def sobol_integers(index, matrices):
-    """Sobol points as 32-bit integers: array (len(index), d) of uint32.
+    """Sobol points as 32-bit integers (point i of dimension j is ``out[i, j] * 2^-32``).
 
-    ``index`` are 32-bit point indices; ``matrices`` is (d, 32) from :func:`sobol_matrices`.
+    Parameters
+    ----------
+    index : array_like of int
+        32-bit point indices (flattened).
+    matrices : ndarray of uint32
+        (d, 32), from :func:`sobol_matrices`.
+
+    Returns
+    -------
+    ndarray of uint32
+        (len(index), d).
+
+    Examples
+    --------
+    >>> (sobol_integers([0, 1, 2, 3], sobol_matrices(2)) / 2**32).tolist()
+    [[0.0, 0.0], [0.5, 0.5], [0.75, 0.25], [0.25, 0.75]]
     """
     g = gray_code(np.asarray(index, dtype=_U32).ravel())
     out = np.zeros((g.size, matrices.shape[0]), dtype=_U32)
