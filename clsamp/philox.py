@@ -42,7 +42,22 @@ class Stream:
 
 
 def seed_key(seed):
-    """The Philox key words (low, high) of a 64-bit seed."""
+    """The Philox key words (low, high) of a 64-bit seed.
+
+    Parameters
+    ----------
+    seed : int
+        0 to 2^64 - 1.
+
+    Returns
+    -------
+    (numpy.uint32, numpy.uint32)
+
+    Examples
+    --------
+    >>> [int(w) for w in seed_key(2**32 + 7)]
+    [7, 1]
+    """
     seed = int(seed)
     return np.uint32(seed & 0xFFFFFFFF), np.uint32((seed >> 32) & 0xFFFFFFFF)
 
@@ -58,6 +73,11 @@ def philox4x32(counter, key):
     Returns
     -------
     ndarray of uint32, shape (..., 4) (the broadcast of counter and key)
+
+    Examples
+    --------
+    >>> [hex(w) for w in philox4x32([0, 0, 0, 0], [0, 0]).tolist()]   # Random123's answer
+    ['0x6627e8d5', '0xe169c58d', '0xbc57ac4c', '0x9b00dbd8']
     """
     counter = np.asarray(counter, dtype=np.uint32)
     key = np.asarray(key, dtype=np.uint32)
@@ -92,6 +112,19 @@ def random_words(seed, stream, realization, index, word):
 
     Arguments broadcast. Words 4b..4b+3 come from one Philox call with block b,
     exactly as ``clsamp_bits`` in ``kernels/philox.h``.
+
+    Parameters
+    ----------
+    seed : int
+        64-bit seed (the key).
+    stream : int or array_like of int
+        The purpose (:class:`Stream`).
+    realization, index, word : int or array_like of int
+
+    Returns
+    -------
+    ndarray of uint32
+        The broadcast shape.
     """
     word = np.asarray(word, dtype=np.uint32)
     out = philox4x32(_counter(stream, realization, index, word >> np.uint32(2)),
@@ -101,7 +134,23 @@ def random_words(seed, stream, realization, index, word):
 
 
 def words_to_unit(hi, lo):
-    """A double in [0, 1) with 53 random bits from two 32-bit words (genrand_res53)."""
+    """A double in [0, 1) with 53 random bits from two 32-bit words (genrand_res53).
+
+    Parameters
+    ----------
+    hi, lo : int or array_like of int
+        32-bit words: the top 27 bits of ``hi`` and of ``lo`` the top 26 are used.
+
+    Returns
+    -------
+    ndarray of float64
+        (hi >> 5) 2^-27 + (lo >> 6) 2^-53.
+
+    Examples
+    --------
+    >>> float(words_to_unit(2**31, 0)), float(words_to_unit(2**32 - 1, 2**32 - 1)) == 1 - 2**-53
+    (0.5, True)
+    """
     hi = np.asarray(hi, dtype=np.uint32) >> np.uint32(5)
     lo = np.asarray(lo, dtype=np.uint32) >> np.uint32(6)
     return (hi.astype(np.float64) * 67108864.0 + lo.astype(np.float64)) * (1.0 / 9007199254740992.0)
@@ -112,6 +161,19 @@ def uniform(seed, stream, realization, index, dim):
 
     Dimension pair (2b, 2b+1) comes from Philox block b: words (0, 1) make the
     even dimension and words (2, 3) the odd one. Arguments broadcast.
+
+    Parameters
+    ----------
+    seed : int
+        64-bit seed.
+    stream : int
+        The purpose (:class:`Stream`).
+    realization, index, dim : int or array_like of int
+
+    Returns
+    -------
+    ndarray of float64
+        The broadcast shape.
     """
     dim = np.asarray(dim, dtype=np.uint32)
     out = philox4x32(_counter(stream, realization, index, dim >> np.uint32(1)),
@@ -123,7 +185,29 @@ def uniform(seed, stream, realization, index, dim):
 
 
 def uniform_block(seed, stream, realizations, n, d, start=0):
-    """Uniform points of shape (len(realizations), n, d): the reference of ``random``."""
+    """Uniform points: the NumPy reference of the ``random`` sampler.
+
+    Parameters
+    ----------
+    seed : int
+    stream : int
+        The purpose (:class:`Stream`); the sampler uses ``Stream.POINTS``.
+    realizations : array_like of int
+    n, d : int
+        Points a set and their dimension.
+    start : int
+        The index of the first point.
+
+    Returns
+    -------
+    ndarray of float64
+        (len(realizations), n, d).
+
+    Examples
+    --------
+    >>> uniform_block(1, Stream.POINTS, [0, 3], 4, 2).shape
+    (2, 4, 2)
+    """
     r = np.asarray(realizations, dtype=np.uint32)[:, None, None]
     i = (np.uint64(start) + np.arange(n, dtype=np.uint64)).astype(np.uint32)[None, :, None]
     j = np.arange(d, dtype=np.uint32)[None, None, :]
