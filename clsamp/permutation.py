@@ -208,6 +208,27 @@ def bounded_integers(seed, stream, realization, step, perm, range_):
     broadcast; ``1 <= range_ < 2^32``): Lemire's multiply-and-reject, so each value is
     exactly uniform. Fisher–Yates step ``t`` of permutation ``perm`` uses
     ``range_ = t + 1``.
+
+    Parameters
+    ----------
+    seed : int
+        Seed in [0, 2^64): the Philox key.
+    stream : int
+        Philox stream (a :class:`clsamp.philox.Stream` number).
+    realization, step, perm : int or array_like of int
+        Which draw: together they name the Philox words it comes from.
+    range_ : int or array_like of int
+        Exclusive upper bounds, 1 to 2^32 - 1.
+
+    Returns
+    -------
+    ndarray of uint32
+        The broadcast shape.
+
+    Raises
+    ------
+    InvalidArgumentError
+        A ``range_`` of 0.
     """
     realization, step, perm, range_ = (np.array(a, dtype=np.uint32) for a in np.broadcast_arrays(
         np.asarray(realization), np.asarray(step), np.asarray(perm), np.asarray(range_)))
@@ -222,10 +243,19 @@ def bounded_integers(seed, stream, realization, step, perm, range_):
 def fisher_yates_draws(seed, stream, realizations, length, perms):
     """The bounded integers Fisher–Yates uses: ``j[k, q, t]`` uniform in [0, t].
 
-    Shape (len(realizations), len(perms), length), uint32; ``j[..., 0]`` is 0 (unused).
     Step ``t`` swaps positions ``t`` and ``j[..., t]``, for t = length-1 down to 1.
     Equal to ``bounded_integers(seed, stream, k, t, q, t + 1)``, computed with one
     Philox call per four steps.
+
+    Parameters
+    ----------
+    seed, stream, realizations, length, perms
+        As :func:`random_permutations`.
+
+    Returns
+    -------
+    ndarray of uint32
+        (len(realizations), len(perms), length); ``j[..., 0]`` is 0 (unused).
     """
     realizations, length, perms = _check(realizations, length, perms)
     shape = (len(realizations), len(perms), length)
@@ -302,6 +332,11 @@ def random_permutations(seed, stream, realizations, length, perms, progress=True
 def random_permutations_device(seed, stream, realizations, length, perms):
     """:func:`random_permutations` made by the OpenCL kernel, as a device array.
 
+    Parameters
+    ----------
+    seed, stream, realizations, length, perms
+        As :func:`random_permutations`.
+
     Returns
     -------
     pyopencl.array.Array of uint32, shape (len(realizations), len(perms), length),
@@ -353,7 +388,20 @@ def _device_args(*arrays):
 def permute_device(i, length, p):
     """:func:`permute` evaluated by ``clsamp_permute`` on the device (same values).
 
-    Returns an ndarray of uint32 of the broadcast shape of ``i`` and ``p``.
+    Parameters
+    ----------
+    i, length, p
+        As :func:`permute`.
+
+    Returns
+    -------
+    ndarray of uint32
+        The broadcast shape of ``i`` and ``p``, on the host.
+
+    Raises
+    ------
+    InvalidArgumentError
+        ``length`` out of range, or an ``i`` not below it.
     """
     length = check_int(length, "length", minimum=1, maximum=MAX_UINT32)
     i, p = np.broadcast_arrays(_u32(i), _u32(p))
@@ -371,8 +419,27 @@ def permute_device(i, length, p):
 
 
 def bounded_integers_device(seed, stream, realization, step, perm, range_):
-    """:func:`bounded_integers` evaluated by ``clsamp_bounded`` on the device (one
-    realization and perm; ``step`` and ``range_`` arrays). Returns an ndarray of uint32."""
+    """:func:`bounded_integers` evaluated by ``clsamp_bounded`` on the device.
+
+    Parameters
+    ----------
+    seed, stream
+        As :func:`bounded_integers`.
+    realization, perm : int
+        One realization and permutation number.
+    step, range_ : int or array_like of int
+        Broadcast against each other.
+
+    Returns
+    -------
+    ndarray of uint32
+        The broadcast shape of ``step`` and ``range_``, on the host.
+
+    Raises
+    ------
+    InvalidArgumentError
+        A ``range_`` of 0.
+    """
     step, range_ = np.broadcast_arrays(_u32(step), _u32(range_))
     if np.any(range_ == 0):
         raise InvalidArgumentError("'range_' must be >= 1 everywhere")
