@@ -32,7 +32,23 @@ def _kuo():
 
 
 def kuo_vector(d):
-    """The first ``d`` entries of the shipped generating vector (Cools, Kuo, Nuyens 2006)."""
+    """The first ``d`` entries of the shipped generating vector (Cools, Kuo, Nuyens 2006).
+
+    Parameters
+    ----------
+    d : int
+        1 to the table's length.
+
+    Returns
+    -------
+    ndarray of uint32
+        A copy.
+
+    Raises
+    ------
+    InvalidArgumentError
+        ``d`` beyond the table.
+    """
     z, _ = _kuo()
     if not 1 <= d <= len(z):
         raise InvalidArgumentError(f"'d' must be in [1, {len(z)}] for the shipped lattice, got {d}")
@@ -40,7 +56,22 @@ def kuo_vector(d):
 
 
 def fibonacci(count):
-    """The Fibonacci numbers F_1 .. F_count (1, 1, 2, 3, 5, ...)."""
+    """The Fibonacci numbers F_1 .. F_count (1, 1, 2, 3, 5, ...).
+
+    Parameters
+    ----------
+    count : int
+        At least 2.
+
+    Returns
+    -------
+    list of int
+
+    Examples
+    --------
+    >>> fibonacci(7)
+    [1, 1, 2, 3, 5, 8, 13]
+    """
     out = [1, 1]
     while len(out) < count:
         out.append(out[-1] + out[-2])
@@ -146,6 +177,18 @@ class LatticeSampler(_Shifted):
         return self.generator == "kuo"
 
     def valid_n(self, n):
+        """The valid point count nearest to ``n``.
+
+        Parameters
+        ----------
+        n : int
+
+        Returns
+        -------
+        int
+            ``n`` itself for the Kuo lattice (an extensible sequence); the nearest
+            Fibonacci number for ``generator="fibonacci"`` (the smaller on a tie).
+        """
         if self.generator == "kuo":
             return n
         return min(self._fib, key=lambda f: (abs(f - n), f))
@@ -180,7 +223,21 @@ class LatticeSampler(_Shifted):
 def kronecker_alphas(d):
     """Roberts' R_d generators as 64-bit fractions: round(2^64 / φ_d^(j+1)), j < d, where
     φ_d is the positive root of x^(d+1) = x + 1 (the golden ratio for d = 1), computed in
-    60-digit decimal arithmetic."""
+    60-digit decimal arithmetic.
+
+    Parameters
+    ----------
+    d : int
+
+    Returns
+    -------
+    ndarray of uint64
+        (d,): α_j 2^64, so that x_ij = frac(i α_j) is (i * alphas[j]) mod 2^64 times 2^-64.
+
+    References
+    ----------
+    .. [1] M. Roberts, "The unreasonable effectiveness of quasirandom sequences" (2018).
+    """
     getcontext().prec = 60
     phi = Decimal(2)
     for _ in range(200):                                # Newton on x^(d+1) - x - 1

@@ -33,7 +33,20 @@ MAX_HALTON_DIMENSION = 21201
 
 
 def scramble_words(seed, realizations, d):
-    """The four Philox words seeding dimension j's scramble in each realization: (r, d, 4) uint32."""
+    """The four Philox words seeding dimension j's scramble in each realization.
+
+    Parameters
+    ----------
+    seed : int
+    realizations : array_like of int
+    d : int
+
+    Returns
+    -------
+    ndarray of uint32
+        (len(realizations), d, 4): words (0, 1) are the 64-bit seed of the digit
+        randomizations (``Stream.SCRAMBLE``, counter (j, realization, 0, stream)).
+    """
     r = np.asarray(realizations, dtype=np.uint32)[:, None, None]
     j = np.arange(d, dtype=np.uint32)[None, :, None]
     w = np.arange(4, dtype=np.uint32)[None, None, :]
@@ -41,7 +54,19 @@ def scramble_words(seed, realizations, d):
 
 
 def shift_vectors(seed, realizations, d):
-    """Cranley-Patterson shifts: (r, d) uniform doubles, one vector per realization."""
+    """Cranley-Patterson shifts: one uniform vector in [0, 1)^d per realization.
+
+    Parameters
+    ----------
+    seed : int
+    realizations : array_like of int
+    d : int
+
+    Returns
+    -------
+    ndarray of float64
+        (len(realizations), d), from ``Stream.SHIFT``.
+    """
     r = np.asarray(realizations, dtype=np.uint32)[:, None]
     return philox.uniform(seed, philox.Stream.SHIFT, r, 0, np.arange(d, dtype=np.uint32)[None, :])
 
@@ -61,10 +86,23 @@ def owen_table_layout(bases, n, realizations=1):
     realizations pass OWEN_TABLE_BYTES, the largest deepest table goes. A choice of
     speed only: a table holds the same permutations the kernel computes without it.
 
-    Returns ``(layout, segments, nodes, entries)``: the uint32 ``owen_layout`` of
-    ``kernels/lowdiscrepancy.cl`` (per dimension: first segment, tabulated depths; then per
-    segment: dimension, depth, first node, offset), and the counts of segments, nodes and
-    table entries per realization.
+    Parameters
+    ----------
+    bases : sequence of int
+        Each dimension's base (0 or 2: no table).
+    n : int
+        Points of the launch.
+    realizations : int
+        Realizations of the launch (each has its own tables).
+
+    Returns
+    -------
+    layout : ndarray of uint32
+        The ``owen_layout`` of ``kernels/lowdiscrepancy.cl``: per dimension, its first
+        segment and its tabulated depths; then per segment, dimension, depth, first node
+        and offset.
+    segments, nodes, entries : int
+        Per realization: the tables, the nodes they hold and their entries.
     """
     bases = [int(b) for b in bases]
     depths = []
@@ -217,7 +255,22 @@ class SobolSampler(LowDiscrepancySampler):
                           "set is not a net", UserWarning, stacklevel=3)
 
     def convergence_rate(self, case):
-        # a nested-scrambled (0, m, 2)-net in base 2 (N a power of two)
+        """The published rate of the MSE for ``case`` (:meth:`Sampler.convergence_rate`).
+
+        Owen-scrambled Sobol' points in 2-D are a nested-scrambled (0, m, 2)-net in base 2
+        for N a power of two: N^-3 for smooth integrands (Owen 1997), N^-1.5 for
+        discontinuous ones (He and Wang 2015).
+
+        Parameters
+        ----------
+        case : {"best", "worst", "axis"}
+            The integrand as the estimator sees it (:func:`clsamp.theory.case_of`).
+
+        Returns
+        -------
+        Rate or None
+            None for other randomizations or dimensions.
+        """
         if self.randomize != "owen" or self.d != 2:
             return None
         return {"best": Rate(-3.0, "Owen 1997"), "worst": Rate(-1.5, "He and Wang 2015")}.get(case)
@@ -269,7 +322,13 @@ class _RadicalInverse(LowDiscrepancySampler):
     hammersley = False
 
     def bases(self):
-        """The base of each dimension (dimension 0 of Hammersley, i/n, has none: 0)."""
+        """The base of each dimension (dimension 0 of Hammersley, i/n, has none: 0).
+
+        Returns
+        -------
+        ndarray
+            uint32 of shape (d,).
+        """
         raise NotImplementedError
 
     def _reference(self, n, realizations, start):
@@ -400,6 +459,13 @@ class VanDerCorputSampler(_RadicalInverse):
         super().__init__(d=d, seed=seed, backend=backend, randomize=randomize)
 
     def bases(self):
+        """The base of the one dimension.
+
+        Returns
+        -------
+        ndarray
+            uint32 of shape (1,).
+        """
         return np.array([self.base], dtype=np.uint32)
 
 
@@ -450,6 +516,13 @@ class HaltonSampler(_RadicalInverse):
     max_d = MAX_HALTON_DIMENSION
 
     def bases(self):
+        """The base of each dimension: the first d primes.
+
+        Returns
+        -------
+        ndarray
+            uint32 of shape (d,).
+        """
         return nt.first_primes(self.d)
 
 
@@ -489,4 +562,12 @@ class HammersleySampler(_RadicalInverse):
     randomizations = (None, "shift", "xor", "owen")
 
     def bases(self):
+        """The base of each dimension: 0 for the first (i/n, no base), then the first
+        d - 1 primes.
+
+        Returns
+        -------
+        ndarray
+            uint32 of shape (d,).
+        """
         return np.concatenate([[0], nt.first_primes(self.d - 1)]).astype(np.uint32)

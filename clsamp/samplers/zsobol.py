@@ -25,7 +25,22 @@ DEFAULT_RESOLUTION = 256
 
 def morton2(x, y):
     """The Morton (Z-order) code of pixel (x, y): the bits of x and y interleaved, x in the
-    even bits (pbrt-v4's EncodeMorton2)."""
+    even bits (pbrt-v4's EncodeMorton2).
+
+    Parameters
+    ----------
+    x, y : int or array_like of int
+        Coordinates below 2^16.
+
+    Returns
+    -------
+    ndarray of uint64
+
+    Examples
+    --------
+    >>> morton2([1, 0, 3], [0, 1, 3]).tolist()
+    [1, 2, 15]
+    """
     def spread(v):
         v = np.asarray(v, dtype=_U64) & _U64(0xFFFF)
         v = (v | (v << _U64(8))) & _U64(0x00FF00FF)
@@ -124,7 +139,18 @@ class ZSobolSampler(Sampler):
 
     def for_image(self, width, height):
         """A copy of this sampler for a (width, height) image, realization k being pixel k
-        (row-major): what a renderer asks of a pixel-indexed sampler."""
+        (row-major): what a renderer asks of a pixel-indexed sampler.
+
+        Parameters
+        ----------
+        width, height : int
+            The image's size in pixels.
+
+        Returns
+        -------
+        ZSobolSampler
+            The same seed and dimension.
+        """
         other = self.with_seed(self.seed)
         other._set_resolution((width, height))
         return other
@@ -134,6 +160,17 @@ class ZSobolSampler(Sampler):
                 f"resolution=({self.width}, {self.height}))")
 
     def valid_n(self, n):
+        """The valid point count nearest to ``n``: a power of two (the smaller on a tie),
+        at most ``max_n`` (which the resolution sets).
+
+        Parameters
+        ----------
+        n : int
+
+        Returns
+        -------
+        int
+        """
         if n <= 1:
             return 1
         low = 1 << (n.bit_length() - 1)
@@ -141,7 +178,21 @@ class ZSobolSampler(Sampler):
         return min(best, self.max_n)
 
     def convergence_rate(self, case):
-        # each pixel's set is a nested-scrambled (0, m, 2)-net
+        """The published rate of the MSE for ``case`` (:meth:`Sampler.convergence_rate`).
+
+        Each pixel's set is a nested-scrambled (0, m, 2)-net: N^-3 for smooth integrands
+        (Owen 1997), N^-1.5 for discontinuous ones (He and Wang 2015).
+
+        Parameters
+        ----------
+        case : {"best", "worst", "axis"}
+            The integrand as the estimator sees it (:func:`clsamp.theory.case_of`).
+
+        Returns
+        -------
+        Rate or None
+            None for d other than 2.
+        """
         if self.d != 2:
             return None
         return {"best": Rate(-3.0, "Owen 1997"), "worst": Rate(-1.5, "He and Wang 2015")}.get(case)
@@ -162,8 +213,22 @@ class ZSobolSampler(Sampler):
 
     # -- NumPy reference --------------------------------------------------------------------
     def sample_indices(self, n, pixels, pair_seed):
-        """The Sobol' indices of ``pixels`` (array of pixel numbers) with n samples each under
-        the 64-bit digit seed ``pair_seed``: uint64 array (len(pixels), n)."""
+        """The Sobol' indices of the samples of ``pixels`` (the NumPy reference).
+
+        Parameters
+        ----------
+        n : int
+            Samples a pixel, a power of two.
+        pixels : array_like of int
+            Pixel numbers, row-major in the image.
+        pair_seed : int
+            The 64-bit seed of the digit permutations.
+
+        Returns
+        -------
+        ndarray
+            uint64 of shape (len(pixels), n).
+        """
         m = n.bit_length() - 1
         odd = m & 1
         pixels = np.asarray(pixels, dtype=_U64)

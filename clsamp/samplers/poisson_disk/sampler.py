@@ -286,6 +286,16 @@ class PoissonDiskSampler(Sampler):
             Exactly n points a set instead of maximal ones.
         return_info : bool
             Also return the :class:`PoissonDiskInfo` of the call.
+
+        Returns
+        -------
+        list of ndarray, or (list of ndarray, PoissonDiskInfo)
+            One (m_k, d) array per realization.
+
+        Raises
+        ------
+        InvalidArgumentError
+            ``realizations`` is not a count or a non-empty range of step 1.
         """
         if self.radius is None or n is not None:
             return super().sample_sets(realizations, n=n, return_info=return_info)
@@ -301,6 +311,19 @@ class PoissonDiskSampler(Sampler):
         return (sets, info) if return_info else sets
 
     def convergence_rate(self, case):
+        """The published rate of the MSE for ``case`` (:meth:`Sampler.convergence_rate`).
+
+        Parameters
+        ----------
+        case : {"best", "worst", "axis"}
+            The integrand as the estimator sees it (:func:`clsamp.theory.case_of`).
+
+        Returns
+        -------
+        Rate or None
+            The 2-D rates for sets of a given n (``rho`` mode); None in other
+            dimensions and for maximal sets (``radius`` mode), whose n is not chosen.
+        """
         return self.rates.get(case) if self.d == 2 and self.radius is None else None
 
     # -- what the base calls ------------------------------------------------------------
