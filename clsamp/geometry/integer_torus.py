@@ -27,7 +27,23 @@ DEFINES = {"VOR_BITS": BITS}  # the build options every kernel on the integer to
 
 def to_torus(points):
     """Points in [0, 1) as integer torus coordinates (uint32, ``floor(x 2^BITS)``); a
-    device array stays on the device (``kernels/integer_torus.cl``, the same integers)."""
+    device array stays on the device (``kernels/integer_torus.cl``, the same integers).
+
+    Parameters
+    ----------
+    points : array_like or pyopencl.array.Array
+        Coordinates in [0, 1), any shape.
+
+    Returns
+    -------
+    ndarray or pyopencl.array.Array of uint32
+        The same shape, where the points are.
+
+    Examples
+    --------
+    >>> to_torus([0.0, 0.5, 0.9999999999]).tolist()
+    [0, 2097152, 4194303]
+    """
     from .. import runtime
     if runtime.is_device_array(points):
         import pyopencl.array as cla
@@ -41,13 +57,38 @@ def to_torus(points):
 
 
 def to_unit(coords):
-    """Integer torus coordinates back to float64 points in [0, 1) (exact)."""
+    """Integer torus coordinates back to float64 points in [0, 1) (exact).
+
+    Parameters
+    ----------
+    coords : array_like of int
+
+    Returns
+    -------
+    ndarray of float64
+        ``coords * 2^-BITS``.
+    """
     return np.asarray(coords, dtype=np.float64) * UNIT
 
 
 def delta(a, b):
     """a - b on the integer torus, in [-2^(BITS-1), 2^(BITS-1)), as int64 (``vor_delta``):
-    ((a - b + HALF) mod SIZE) - HALF."""
+    ((a - b + HALF) mod SIZE) - HALF.
+
+    Parameters
+    ----------
+    a, b : array_like of int
+        Integer coordinates, broadcast.
+
+    Returns
+    -------
+    ndarray of int64
+
+    Examples
+    --------
+    >>> delta(1, SIZE - 1).tolist()          # across the seam
+    2
+    """
     d = np.asarray(a, dtype=np.int64) - np.asarray(b, dtype=np.int64)
     d += HALF
     d &= MASK
@@ -56,7 +97,17 @@ def delta(a, b):
 
 
 def distance2(ax, ay, bx, by):
-    """Exact squared toroidal distances (int64, units of 2^-2BITS), broadcasting."""
+    """Exact squared toroidal distances (int64, units of 2^-2BITS), broadcasting.
+
+    Parameters
+    ----------
+    ax, ay, bx, by : array_like of int
+        The two points' integer coordinates.
+
+    Returns
+    -------
+    ndarray of int64
+    """
     dx, dy = delta(ax, bx), delta(ay, by)
     return dx * dx + dy * dy
 
@@ -66,6 +117,22 @@ def round_mean(s, c):
 
     Moving a site by it never raises its cell's energy: with mean m and step q,
     sum (d - q)^2 - sum d^2 = c q (q - 2 m) <= 0 whenever |q - m| <= 1/2.
+
+    Parameters
+    ----------
+    s : array_like of int
+        Sums (of a cell's offsets from its site).
+    c : array_like of int
+        Counts, positive.
+
+    Returns
+    -------
+    ndarray of int64
+
+    Examples
+    --------
+    >>> round_mean([5, -5, 7], [2, 2, 2]).tolist()       # 2.5, -2.5, 3.5: halves up
+    [3, -2, 4]
     """
     s = np.asarray(s, dtype=np.int64)
     c = np.asarray(c, dtype=np.int64)
@@ -73,15 +140,40 @@ def round_mean(s, c):
 
 
 def cell_of(x, G):
-    """Grid cell (per axis) of integer coordinates in a G x G grid (``vor_cell``)."""
+    """Grid cell (per axis) of integer coordinates in a G x G grid (``vor_cell``).
+
+    Parameters
+    ----------
+    x : array_like of int
+        Integer coordinates along one axis.
+    G : int
+        Cells per axis.
+
+    Returns
+    -------
+    ndarray of int64
+        ``floor(x G / 2^BITS)``, in [0, G).
+    """
     return ((np.asarray(x, dtype=np.uint64) * np.uint64(G)) >> np.uint64(BITS)).astype(np.int64)
 
 
 def build_grid(sites, G):
     """Counting sort of one realization's sites into G x G cells (``voronoi_build_grid``).
 
-    Returns ``(cell_start, cell_sites)``: the sites of cell ``c = cy * G + cx`` are
-    ``cell_sites[cell_start[c]:cell_start[c + 1]]``, in index order.
+    Parameters
+    ----------
+    sites : ndarray of int
+        (n, 2) integer coordinates.
+    G : int
+        Cells per axis.
+
+    Returns
+    -------
+    cell_start : ndarray of int64
+        (G * G + 1,): the sites of cell ``c = cy * G + cx`` are
+        ``cell_sites[cell_start[c]:cell_start[c + 1]]``.
+    cell_sites : ndarray of int
+        Site indices, grouped by cell, in index order within a cell.
     """
     cell = cell_of(sites[:, 1], G) * G + cell_of(sites[:, 0], G)
     order = np.argsort(cell, kind="stable")
@@ -91,13 +183,38 @@ def build_grid(sites, G):
 
 
 def exact_total(lo, hi):
-    """Exact totals of int64 sums kept as (low 32 bits, high bits) parts, as Python ints."""
+    """Exact totals of int64 sums kept as (low 32 bits, high bits) parts, as Python ints.
+
+    Parameters
+    ----------
+    lo, hi : array_like of int
+        The parts, one pair per total (the kernels' two atomic accumulators).
+
+    Returns
+    -------
+    list of int
+        ``lo + hi * 2^32`` for each pair.
+    """
     lo = np.asarray(lo, dtype=np.int64)
     hi = np.asarray(hi, dtype=np.int64)
     return [int(a) + (int(b) << 32) for a, b in zip(lo.ravel(), hi.ravel(), strict=True)]
 
 
 def split_total(values):
-    """Exact sum of int64 values (each < 2^63) as a Python int, whatever their count."""
+    """Exact sum of int64 values (each < 2^63) as a Python int, whatever their count.
+
+    Parameters
+    ----------
+    values : array_like of int
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> split_total([2**62, 2**62, 2**62]) == 3 * 2**62
+    True
+    """
     v = np.asarray(values, dtype=np.int64).ravel()
     return int(np.sum(v & 0xFFFFFFFF)) + (int(np.sum(v >> 32)) << 32)

@@ -65,14 +65,38 @@ def shift(points, offsets):
 
 
 def homogenization_shifts(seed, realizations, d):
-    """The toroidal shift of each realization of an experiment: (len(realizations), d)
-    doubles in [0, 1), ``philox.uniform(seed, Stream.EXPERIMENT, k, 0, j)`` (the
-    integrand kernels draw the same)."""
+    """The toroidal shift of each realization of an experiment.
+
+    Parameters
+    ----------
+    seed : int
+        The experiment's seed.
+    realizations : array_like of int
+    d : int
+
+    Returns
+    -------
+    ndarray of float64
+        (len(realizations), d) in [0, 1): component j of realization k is
+        ``philox.uniform(seed, Stream.EXPERIMENT, k, 0, j)``, as the integrand kernels
+        draw it.
+    """
     k = np.asarray(realizations, dtype=np.uint32)[:, None]
     return philox.uniform(seed, philox.Stream.EXPERIMENT, k, 0, np.arange(d, dtype=np.uint32)[None, :])
 
 def wrapped_delta(a, b):
-    """``min(|a - b|, 1 - |a - b|)``: the toroidal distance of coordinates, broadcast."""
+    """``min(|a - b|, 1 - |a - b|)``: the toroidal distance of coordinates, broadcast.
+
+    Parameters
+    ----------
+    a, b : array_like of float
+        Coordinates in [0, 1).
+
+    Returns
+    -------
+    ndarray of float64
+        In [0, 1/2].
+    """
     t = np.abs(a - b)
     return np.minimum(t, 1.0 - t)
 
@@ -82,6 +106,16 @@ def distance2(a, b):
 
     The operations and their order are those of ``kernels/dart_throwing.cl``, so the
     results agree with the kernels bit for bit.
+
+    Parameters
+    ----------
+    a, b : ndarray
+        Points in [0, 1)^d, (..., d), broadcast against each other.
+
+    Returns
+    -------
+    ndarray of float64
+        The broadcast shape without the last axis.
 
     Examples
     --------
@@ -98,7 +132,22 @@ def distance2(a, b):
 
 
 def ball_volume(d, radius=1.0):
-    """Volume of the d-ball of ``radius``: pi^(d/2) r^d / Gamma(d/2 + 1)."""
+    """Volume of the d-ball of ``radius``: pi^(d/2) r^d / Gamma(d/2 + 1).
+
+    Parameters
+    ----------
+    d : int
+    radius : float
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> round(ball_volume(3), 6)       # 4 pi / 3
+    4.18879
+    """
     return math.pi ** (d / 2) * radius**d / math.gamma(d / 2 + 1)
 
 

@@ -27,7 +27,22 @@ DEFINES = {**it.DEFINES, "VOR_SEGMENT": SEGMENT}
 
 def site_grid_size(n):
     """Cells per axis of the site grid: the largest power of two G with G^2 <= n (1 to 4
-    sites a cell); a power of two makes every cell exactly 2^BITS / G wide."""
+    sites a cell); a power of two makes every cell exactly 2^BITS / G wide.
+
+    Parameters
+    ----------
+    n : int
+        Sites.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> site_grid_size(3), site_grid_size(16), site_grid_size(1024)
+    (1, 4, 32)
+    """
     G = 1
     while 4 * G * G <= n:
         G *= 2
@@ -35,25 +50,79 @@ def site_grid_size(n):
 
 
 def density_side(n, density):
-    """Side g of the regular g x g density grid: the smallest with g^2 >= n * density."""
+    """Side g of the regular g x g density grid: the smallest with g^2 >= n * density.
+
+    Parameters
+    ----------
+    n : int
+        Sites.
+    density : int
+        Density points per site.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> density_side(1024, 256), density_side(10, 10)
+    (512, 10)
+    """
     return math.isqrt(n * density - 1) + 1
 
 
 def density_coordinates(g):
-    """Integer coordinates of the density grid's cell centres along one axis (length g)."""
+    """Integer coordinates of the density grid's cell centres along one axis.
+
+    Parameters
+    ----------
+    g : int
+        Side of the density grid.
+
+    Returns
+    -------
+    ndarray of int64
+        (g,): ``floor((2k + 1) 2^BITS / (2g))``, the centres rounded down.
+    """
     k = np.arange(g, dtype=np.int64)
     return ((2 * k + 1) << it.BITS) // (2 * g)
 
 
 def segment_count(g):
     """Work-items of voronoi_assign per realization: each row of the g x g density grid in
-    pieces of SEGMENT points."""
+    pieces of SEGMENT points.
+
+    Parameters
+    ----------
+    g : int
+        Side of the density grid.
+
+    Returns
+    -------
+    int
+    """
     return g * (-(-g // SEGMENT))
 
 
 def segment_far(d2, g):
-    """Each segment's farthest density point (d2, index), as the kernel's far_d2 and
-    far_index: where an empty site is re-seeded."""
+    """Each segment's farthest density point, as the kernel's far_d2 and far_index: where
+    an empty site is re-seeded.
+
+    Parameters
+    ----------
+    d2 : ndarray of int64
+        (g * g,) squared distances of the density points to their sites
+        (:func:`assign_reference`).
+    g : int
+        Side of the density grid.
+
+    Returns
+    -------
+    d2 : ndarray of int64
+        (:func:`segment_count`,): each segment's largest squared distance.
+    index : ndarray of int64
+        The density point it belongs to (the first on a tie).
+    """
     per_row = -(-g // SEGMENT)
     padded = np.full((g, per_row * SEGMENT), -1, dtype=np.int64)
     padded[:, :g] = d2.reshape(g, g)
@@ -104,6 +173,15 @@ class DeviceAssignment:
     points to ``acc`` (r, n, 3) int64, and the pass's sum of squared distances to entry t
     of ``energy`` (r, passes, 2) as (low 32 bits, high bits); ``far_d2`` / ``far_index``
     get each segment's farthest point. The caller clears ``acc`` between passes.
+
+    Parameters
+    ----------
+    r, n : int
+        Realizations and sites.
+    g : int
+        Side of the density grid.
+    passes : int
+        Passes whose energies are kept (entries of ``energy``).
     """
 
     def __init__(self, r, n, g, passes):
@@ -133,21 +211,49 @@ class DeviceAssignment:
                      self.far_d2.data, self.far_index.data)
 
     def energies(self):
-        """Per realization, the exact energy sums of every pass (Python ints)."""
+        """Per realization, the exact energy sums of every pass.
+
+        Returns
+        -------
+        list of list of int
+            ``[k][t]``: realization k's sum of squared distances in pass t, exact.
+        """
         e = self.energy.get()
         return [it.exact_total(e[k, :, 0], e[k, :, 1]) for k in range(self.r)]
 
 
 def require_device(what):
     """Refuse where the assignment pass cannot run: it needs 64-bit integer atomics (not
-    fp64: every quantity is an exact integer) and loops long per work-item."""
+    fp64: every quantity is an exact integer) and loops long per work-item.
+
+    Parameters
+    ----------
+    what : str
+        The caller, named in the message.
+
+    Raises
+    ------
+    NoDeviceError
+        The current device lacks ``cl_khr_int64_base_atomics`` or stops long loops.
+    """
     runtime.require_extension("cl_khr_int64_base_atomics", what)
     runtime.require_short_loops(what)
 
 
 def energy_scale(g):
     """The divisor that turns an exact energy sum into E: g^2 density points, each
-    distance in units of 2^-BITS."""
+    distance in units of 2^-BITS.
+
+    Parameters
+    ----------
+    g : int
+        Side of the density grid.
+
+    Returns
+    -------
+    float
+        g^2 2^(2 BITS).
+    """
     return float(g * g) * float(it.SIZE) ** 2
 
 
