@@ -24,9 +24,22 @@ MAX_WIDTH = 16                # nufft.cl holds a point's weights on one axis in 
 def kernel_error(sigma, width):
     """Worst relative error of one point's Fourier sum after spreading, FFT and deconvolution.
 
-    Measured: points at 64 offsets in a cell, spread, transformed and deconvolved on
-    M = 128σ nodes; max |S̃(k)/S(k) - 1| over |k| <= M/(2σ). N points: |P̃ - P| <= (2e + e²)·N
-    (the error depends on M/R, >= σ in use, not on R)."""
+    Computed, not bounded: points at 64 offsets in a cell, spread, transformed and
+    deconvolved on M = 128σ nodes; max |S̃(k)/S(k) - 1| over |k| <= M/(2σ). N points:
+    |P̃ - P| <= (2e + e²)·N (the error depends on M/R, >= σ in use, not on R).
+
+    Parameters
+    ----------
+    sigma : float
+        The oversampling factor σ.
+    width : int
+        The kernel's width w in grid nodes.
+
+    Returns
+    -------
+    float
+        e.
+    """
     beta = _beta(sigma, width)
     M = int(round(128 * sigma))
     half = int(M / (2 * sigma))
@@ -51,6 +64,27 @@ def nufft_parameters(tol, d=2, sigma=None):
     margin for offsets between the measured ones). Among those, the σ with the lowest
     modelled cost (spreading ~ w^d per point against the FFT ~ (σR)^d per realization, in
     the proportions of the benchmark case, 4096 points at R = 256).
+
+    Parameters
+    ----------
+    tol : float
+        The error allowed, relative to N.
+    d : int
+        1 or 2.
+    sigma : float, optional
+        Use this σ instead of choosing among ``SIGMAS``.
+
+    Returns
+    -------
+    sigma : float
+    width : int
+    beta : float
+        The kernel's shape parameter.
+
+    Raises
+    ------
+    InvalidArgumentError
+        ``tol`` below what a width of at most 16 reaches.
     """
     best = None
     for s in (SIGMAS if sigma is None else (sigma,)):
@@ -83,12 +117,41 @@ def _smooth(m):
 
 
 def grid_size(resolution, sigma, width):
-    """Nodes per axis of the oversampled grid: the smallest FFT-friendly size >= σR and >= 2w."""
+    """Nodes per axis of the oversampled grid: the smallest FFT-friendly size >= σR and >= 2w.
+
+    Parameters
+    ----------
+    resolution : int
+        The spectrum's R.
+    sigma : float
+    width : int
+
+    Returns
+    -------
+    int
+        An even 2^a 3^b 5^c.
+
+    Examples
+    --------
+    >>> grid_size(256, 1.25, 8)
+    320
+    """
     return _smooth(max(math.ceil(sigma * resolution), 2 * width))
 
 
 def es_kernel(z, beta):
-    """φ(z) = exp(β(√(1 - z²) - 1)) on |z| <= 1, zero outside (Barnett et al. 2019)."""
+    """φ(z) = exp(β(√(1 - z²) - 1)) on |z| <= 1, zero outside (Barnett et al. 2019).
+
+    Parameters
+    ----------
+    z : array_like of float
+    beta : float
+
+    Returns
+    -------
+    ndarray of float64
+        Evaluated as exp(-β z² / (1 + √(1 - z²))), which does not cancel.
+    """
     z = np.asarray(z, dtype=np.float64)
     inside = np.abs(z) <= 1.0
     z2 = np.where(inside, z * z, 1.0)
@@ -102,7 +165,24 @@ def kernel_transform(freqs, grid, width, beta, extended=False):
     always): computed to about an ulp. With z = sin θ the integrand
     exp(-2β sin²(θ/2)) cos θ cos(πkw sin θ / M) is smooth, and 2w + 60 Gauss-Legendre
     nodes in extended precision (where NumPy's longdouble has it, as on x86-64 Linux)
-    give it correctly rounded to float64 or one ulp off (``extended``: in longdouble)."""
+    give it correctly rounded to float64 or one ulp off.
+
+    Parameters
+    ----------
+    freqs : array_like of int
+        Frequencies k.
+    grid : int
+        M, nodes per axis.
+    width : int
+    beta : float
+    extended : bool
+        Return longdouble values instead of float64.
+
+    Returns
+    -------
+    ndarray
+        ψ̂ at every frequency.
+    """
     x, weight = _gauss_legendre(2 * width + 60)
     pi = np.arccos(np.longdouble(-1.0))
     theta, weight = x * (pi / 2), weight * (pi / 2)
@@ -135,7 +215,21 @@ def spread_reference(points, grid, width, beta):
     """Spread a batch (r, n, d) onto r periodic grids of ``grid`` nodes per axis.
 
     NumPy reference of ``spectrum_spread``: node j of an axis gets φ((j - xM)·2/w) from every
-    point within w/2 nodes, a 2-D node the product of its axes' weights: (r, M) or (r, M, M).
+    point within w/2 nodes, a 2-D node the product of its axes' weights.
+
+    Parameters
+    ----------
+    points : array_like
+        (r, n, d) points in [0, 1)^d, d = 1 or 2.
+    grid : int
+        M, nodes per axis.
+    width : int
+    beta : float
+
+    Returns
+    -------
+    ndarray of float64
+        (r, M) or (r, M, M).
     """
     batch = np.asarray(points, dtype=np.float64)
     r, n, d = batch.shape
