@@ -53,7 +53,22 @@ def _dask():
 
 
 def check_client(client):
-    """``client`` if it is None or a dask.distributed.Client, else a clear error."""
+    """``client`` if it is None or a dask.distributed.Client, else a clear error.
+
+    Parameters
+    ----------
+    client : dask.distributed.Client or None
+
+    Returns
+    -------
+    dask.distributed.Client or None
+        ``client`` itself.
+
+    Raises
+    ------
+    InvalidArgumentError
+        Anything else, or a client given where dask.distributed is not installed.
+    """
     if client is None:
         return None
     distributed = _dask()
@@ -71,6 +86,24 @@ def connect(address, timeout=CONNECT_TIMEOUT):
     machine (each worker's PoCL limited to its share of the cores); ``"tcp://host:port"``
     (or ``"host:port"``) connects to a running scheduler, failing with a clear error after
     ``timeout`` seconds when nothing answers there.
+
+    Parameters
+    ----------
+    address : str
+        ``"local"``, ``"local:N"``, ``"tcp://host:port"`` or ``"host:port"``.
+    timeout : float
+        Seconds to wait for a remote scheduler.
+
+    Returns
+    -------
+    dask.distributed.Client
+        Close it (``client.close()``) when done; a local cluster stops with it.
+
+    Raises
+    ------
+    InvalidArgumentError
+        A bad ``"local:N"``, a scheduler that does not answer, or dask.distributed not
+        installed.
     """
     distributed = _dask()
     text = str(address).strip()
@@ -101,7 +134,25 @@ def connect(address, timeout=CONNECT_TIMEOUT):
 def block_ranges(realizations, work_per_realization, work=None):
     """Realization blocks [(lo, hi), ...] of about ``work`` (default :data:`TASK_WORK`)
     units each (a unit: about the cost of generating and evaluating one point), covering
-    range(realizations) in order."""
+    range(realizations) in order.
+
+    Parameters
+    ----------
+    realizations : int
+    work_per_realization : float
+        Units of one realization.
+    work : float, optional
+        Units a block aims at.
+
+    Returns
+    -------
+    list of (int, int)
+
+    Examples
+    --------
+    >>> block_ranges(10, 4, work=12)
+    [(0, 3), (3, 6), (6, 9), (9, 10)]
+    """
     work = TASK_WORK if work is None else work
     per = max(1, int(work // max(1, work_per_realization)))
     return [(lo, min(realizations, lo + per)) for lo in range(0, realizations, per)]
