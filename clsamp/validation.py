@@ -16,7 +16,21 @@ MAX_UINT32 = 2**32 - 1
 
 def plain(value):
     """``value`` as a message shows it: NumPy scalars as the Python numbers they hold
-    (``0.25``, not ``np.float64(0.25)``), arrays as lists, anything else as ``repr``."""
+    (``0.25``, not ``np.float64(0.25)``), arrays as lists, anything else as ``repr``.
+
+    Parameters
+    ----------
+    value : object
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> plain(np.float64(0.25)), plain(np.arange(3)), plain("x")
+    ('0.25', '[0, 1, 2]', "'x'")
+    """
     if isinstance(value, np.generic):
         value = value.item()
     elif isinstance(value, np.ndarray):
@@ -29,6 +43,32 @@ def check_int(value, name, minimum=None, maximum=None):
 
     Booleans and floats are refused even when integral (``n=4.0`` is a bug in
     the caller more often than a request for four points).
+
+    Parameters
+    ----------
+    value : object
+    name : str
+        The argument's name, for the message.
+    minimum, maximum : int, optional
+        Inclusive bounds.
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    InvalidArgumentError
+        Not an integer, or out of bounds.
+
+    Examples
+    --------
+    >>> check_int(np.int64(3), "n")
+    3
+    >>> check_int(-1, "n", minimum=1)
+    Traceback (most recent call last):
+    ...
+    clsamp.errors.InvalidArgumentError: 'n' must be an integer >= 1, got -1
     """
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
         raise InvalidArgumentError(f"'{name}' must be an integer, got {plain(value)}")
@@ -41,13 +81,48 @@ def check_int(value, name, minimum=None, maximum=None):
 
 
 def check_positive_int(value, name, maximum=None):
-    """An integer >= 1."""
+    """An integer >= 1 (:func:`check_int` with ``minimum=1``).
+
+    Parameters
+    ----------
+    value : object
+    name : str
+    maximum : int, optional
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    InvalidArgumentError
+    """
     return check_int(value, name, minimum=1, maximum=maximum)
 
 
 def check_image_size(resolution, name="resolution"):
     """(width, height) of an image from ``resolution``: an int r (an r x r image) or a pair
-    (width, height), each in [1, 65535], as pbrt's film takes it."""
+    (width, height), each in [1, 65535], as pbrt's film takes it.
+
+    Parameters
+    ----------
+    resolution : int or (int, int)
+    name : str
+        The argument's name, for the message.
+
+    Returns
+    -------
+    (int, int)
+
+    Raises
+    ------
+    InvalidArgumentError
+
+    Examples
+    --------
+    >>> check_image_size(64), check_image_size((320, 180))
+    ((64, 64), (320, 180))
+    """
     if isinstance(resolution, (tuple, list)) or (isinstance(resolution, np.ndarray)
                                                  and resolution.ndim == 1):
         if len(resolution) != 2:
@@ -61,12 +136,51 @@ def check_image_size(resolution, name="resolution"):
 
 
 def check_seed(seed):
-    """A seed is an integer in [0, 2^64): the two 32-bit words of the Philox key."""
+    """A seed is an integer in [0, 2^64): the two 32-bit words of the Philox key.
+
+    Parameters
+    ----------
+    seed : object
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    InvalidArgumentError
+        Not an integer in that range.
+    """
     return check_int(seed, "seed", minimum=0, maximum=2**64 - 1)
 
 
 def check_real(value, name, minimum=None, maximum=None, open_minimum=False, open_maximum=False):
-    """Return ``value`` as a finite float within the given bounds, or raise naming ``name``."""
+    """Return ``value`` as a finite float within the given bounds, or raise naming ``name``.
+
+    Parameters
+    ----------
+    value : object
+        A real number (bool refused).
+    name : str
+        The argument's name, for the message.
+    minimum, maximum : float, optional
+        Bounds, inclusive unless ``open_minimum`` / ``open_maximum``.
+    open_minimum, open_maximum : bool
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    InvalidArgumentError
+        Not a finite real number, or out of bounds.
+
+    Examples
+    --------
+    >>> check_real(1, "sigma", minimum=0.0, open_minimum=True)
+    1.0
+    """
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
         raise InvalidArgumentError(f"'{name}' must be a real number, got {plain(value)}")
     value = float(value)
@@ -82,7 +196,24 @@ def check_real(value, name, minimum=None, maximum=None, open_minimum=False, open
 
 
 def check_choice(value, name, choices):
-    """``value`` must be one of ``choices``; the message lists them."""
+    """``value`` must be one of ``choices``; the message lists them.
+
+    Parameters
+    ----------
+    value : object
+    name : str
+        The argument's name, for the message.
+    choices : sequence
+
+    Returns
+    -------
+    object
+        ``value`` itself.
+
+    Raises
+    ------
+    InvalidArgumentError
+    """
     if value not in choices:
         listed = ", ".join(repr(c) for c in choices)
         raise InvalidArgumentError(f"'{name}' must be one of {listed}; got {plain(value)}")
@@ -95,6 +226,23 @@ def point_sets(points, name="points", d=None):
     ``[a_0, a_1, ...]`` with each ``a_k`` an (n_k, d) array (``sample_sets`` output: maximal
     Poisson-disk sets) gives the list of the validated (n_k, d) float64 arrays, all of one
     d. A nested list of numbers (one set written out) is not such a list.
+
+    Parameters
+    ----------
+    points : object
+    name : str
+        The argument's name, for messages.
+    d : int or tuple of int, optional
+        The dimension(s) accepted.
+
+    Returns
+    -------
+    list of ndarray or None
+
+    Raises
+    ------
+    InvalidArgumentError
+        A set that :func:`check_points` refuses, or sets of different dimensions.
     """
     if not (isinstance(points, (list, tuple)) and points
             and all(isinstance(p, np.ndarray) or _is_device_array(p) for p in points)
