@@ -107,7 +107,12 @@ def _norm(a):
 
 def shipped_scene_folder():
     """Where the shipped scenes are: the installed package data ``clsamp/scenes``, or
-    ``scenes/`` beside the package in a source checkout."""
+    ``scenes/`` beside the package in a source checkout.
+
+    Returns
+    -------
+    importlib.resources.abc.Traversable
+    """
     from importlib import resources
     try:
         folder = resources.files("clsamp.scenes")
@@ -119,7 +124,18 @@ def shipped_scene_folder():
 
 
 def shipped_scenes():
-    """Names of the scenes shipped with clsamp (``Scene.from_file(name)`` loads them)."""
+    """Names of the scenes shipped with clsamp (``Scene.from_file(name)`` loads them).
+
+    Returns
+    -------
+    list of str
+        Sorted.
+
+    Examples
+    --------
+    >>> "ao" in shipped_scenes()
+    True
+    """
     folder = shipped_scene_folder()
     return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".json"))
 
@@ -146,15 +162,44 @@ class Scene:
     # -- construction ------------------------------------------------------------
     @classmethod
     def from_dict(cls, data):
-        """A scene from a dict in the file format; an error names the bad field."""
+        """A scene from a dict in the file format.
+
+        Parameters
+        ----------
+        data : dict
+            As a scene file holds it (see the module docstring); defaults fill what is
+            left out.
+
+        Returns
+        -------
+        Scene
+
+        Raises
+        ------
+        InvalidArgumentError
+            Naming the bad field and what was expected.
+        """
         return cls(data)
 
     @classmethod
     def from_file(cls, path):
         """A scene from a JSON file, or a shipped scene by its bare name (``"ao"``).
 
-        A malformed file raises :class:`~clsamp.InvalidArgumentError` naming the field
-        and what was expected (or the JSON syntax error's line and column).
+        Parameters
+        ----------
+        path : str or Path
+            A JSON file, or the name of a shipped scene (:func:`shipped_scenes`).
+
+        Returns
+        -------
+        Scene
+            Named after the file's stem unless the file names it.
+
+        Raises
+        ------
+        InvalidArgumentError
+            No such file or shipped scene; or a malformed file, naming the field and what
+            was expected (or the JSON syntax error's line and column).
         """
         candidate = Path(path)
         if not candidate.is_file():
@@ -185,7 +230,13 @@ class Scene:
             raise InvalidArgumentError(f"{where}: {error}") from None
 
     def to_dict(self):
-        """The scene with every default filled in (the file format; JSON-ready)."""
+        """The scene with every default filled in (the file format; JSON-ready).
+
+        Returns
+        -------
+        dict
+            A copy; ``Scene.from_dict(scene.to_dict())`` is the same scene.
+        """
         return json.loads(json.dumps(self._data))
 
     # -- validation --------------------------------------------------------------
@@ -353,18 +404,36 @@ class Scene:
         return sum(d for _, d in self.sample_groups)
 
     def rays_per_sample(self):
-        """Rays one pixel sample casts: the camera ray, the AO rays, the shadow ray."""
+        """Rays one pixel sample casts: the camera ray, the AO rays, the shadow ray.
+
+        Returns
+        -------
+        int
+        """
         return 1 + self.ao_rays + (1 if self.light is not None else 0)
 
     def kernel_defines(self):
-        """The ``-D`` options of ``kernels/render.cl`` for this scene's effects."""
+        """The ``-D`` options of ``kernels/render.cl`` for this scene's effects.
+
+        Returns
+        -------
+        dict
+            Name to value, the ``defines`` of the kernel's build (False or None: left
+            undefined).
+        """
         effects = self.effects
         return {"EFFECT_AA": "antialiasing" in effects, "EFFECT_DOF": "depth_of_field" in effects,
                 "EFFECT_MB": "motion_blur" in effects, "AO_RAYS": self.ao_rays or None,
                 "HAS_LIGHT": self.light is not None, "EFFECT_SOFT": "soft_shadows" in effects}
 
     def content_hash(self):
-        """SHA-256 of what determines the image (everything but name and description)."""
+        """SHA-256 of what determines the image (everything but name and description).
+
+        Returns
+        -------
+        str
+            64 hexadecimal digits; part of the cache key of the scene's reference images.
+        """
         content = {k: v for k, v in self._data.items() if k not in ("name", "description")}
         return hashlib.sha256(json.dumps(content, sort_keys=True).encode()).hexdigest()
 
