@@ -81,7 +81,24 @@ CURVATURE_ALLOWANCE = 0.15
 
 
 def case_of(traits):
-    """``"best"``, ``"worst"`` or ``"axis"`` from an integrand's traits (see the module)."""
+    """``"best"``, ``"worst"`` or ``"axis"`` from an integrand's traits (see the module).
+
+    Parameters
+    ----------
+    traits : dict
+        ``smooth`` (bool) and ``edges`` (``"none"``, ``"curved"``, ``"straight"`` or
+        ``"axis"``), as an integrand's attributes give them.
+
+    Returns
+    -------
+    str
+        The case, or ``"unknown"`` for a discontinuous integrand without edges named.
+
+    Examples
+    --------
+    >>> case_of({"smooth": True}), case_of({"edges": "curved"}), case_of({"edges": "axis"})
+    ('best', 'worst', 'axis')
+    """
     if traits.get("smooth") and traits.get("edges", "none") == "none":
         return "best"
     if traits.get("edges") in ("curved", "straight"):
@@ -102,6 +119,17 @@ def expected_rate(sampler, case, d=2):
     case : {"best", "worst", "axis"}
     d : int
         The dimension, for a sampler given by name.
+
+    Returns
+    -------
+    exponent : float or None
+    source : str or None
+        The publication the rate comes from.
+
+    Examples
+    --------
+    >>> expected_rate("jittered", "worst")
+    (-1.5, 'Pilleboue et al. 2015')
     """
     from .errors import InvalidArgumentError
     from .samplers import Sampler, make_sampler
