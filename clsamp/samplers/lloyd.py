@@ -58,8 +58,25 @@ def _reseed(sites, counts, far_d2, far_index, g):
 
 
 def lloyd_reference(sites, g, iterations):
-    """NumPy twin of :func:`lloyd_device`: integer sites (r, n, 2) -> (sites, energies, counts),
-    energies as Python ints (sums of squared distances) for passes 0..iterations."""
+    """NumPy twin of :func:`lloyd_device`: the same integers, one realization at a time.
+
+    Parameters
+    ----------
+    sites : ndarray
+        (r, n, 2) integer coordinates.
+    g : int
+        Side of the density grid.
+    iterations : int
+
+    Returns
+    -------
+    sites : ndarray of uint32
+        (r, n, 2), after the iterations.
+    energies : list of list of int
+        Per realization, the exact energy sums of passes 0 .. iterations.
+    counts : ndarray of int64
+        (r, n): density points per site in the last pass.
+    """
     sites = np.array(sites, dtype=np.int64)
     r, n, _ = sites.shape
     energies = [[0] * (iterations + 1) for _ in range(r)]
@@ -86,7 +103,23 @@ def lloyd_reference(sites, g, iterations):
 
 
 def lloyd_device(sites, g, iterations):
-    """OpenCL Lloyd on integer sites (r, n, 2): (sites, energies, counts) as the reference."""
+    """Lloyd's iterations on the device, on integer sites.
+
+    Parameters
+    ----------
+    sites, g, iterations
+        As :func:`lloyd_reference`.
+
+    Returns
+    -------
+    sites, energies, counts
+        As :func:`lloyd_reference`, the same bits.
+
+    Raises
+    ------
+    NoDeviceError
+        The device lacks 64-bit integer atomics or stops long loops.
+    """
     import pyopencl.array as cla
     voronoi.require_device("lloyd")
     q = runtime.queue()

@@ -15,8 +15,23 @@ from .base import Sampler
 
 
 def initial_sites(seed, realizations, n, start=0):
-    """Initial sites, uint32 (r, n, 2): words 0 and 1 of Philox (seed, Stream.INIT, r, start + i),
-    top BITS bits each. The optimizers' density points use other words of the stream."""
+    """Initial sites: words 0 and 1 of Philox (seed, Stream.INIT, r, start + i), top BITS
+    bits each. The optimizers' density points use other words of the stream.
+
+    Parameters
+    ----------
+    seed : int
+    realizations : array_like of int
+    n : int
+        Sites.
+    start : int
+        The index of the first site.
+
+    Returns
+    -------
+    ndarray of uint32
+        (len(realizations), n, 2), integer torus coordinates.
+    """
     r = np.asarray(realizations, dtype=np.uint32)[:, None, None]
     i = (np.uint64(start) + np.arange(n, dtype=np.uint64)).astype(np.uint32)[None, :, None]
     w = np.arange(2, dtype=np.uint32)[None, None, :]
@@ -24,7 +39,27 @@ def initial_sites(seed, realizations, n, start=0):
 
 
 def check_sites(sites, name="sites"):
-    """Starting sites (n, 2) or (r, n, 2) in [0, 1) as integer torus coordinates (r, n, 2)."""
+    """Starting sites given by a user, as integer torus coordinates.
+
+    Parameters
+    ----------
+    sites : array_like
+        (n, 2) or (r, n, 2) points in [0, 1).
+    name : str
+        The argument's name, for messages.
+
+    Returns
+    -------
+    sites : ndarray of uint32
+        (r, n, 2).
+    single : bool
+        Whether one (n, 2) set was given.
+
+    Raises
+    ------
+    InvalidArgumentError
+        Points :func:`clsamp.validation.check_points` refuses.
+    """
     batch, single = check_points(sites, name, d=2)
     return it.to_torus(batch), single
 

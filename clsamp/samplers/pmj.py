@@ -44,6 +44,16 @@ def generator_matrices(size=LEVELS + 1):
     binom(c, r) mod 2, Sobol's second dimension. These are the matrices implied by the xor
     table of Helmer et al. (2021) that Cycles ships: :func:`xor_masks` reproduces its 64
     values.
+
+    Parameters
+    ----------
+    size : int
+        Rows and columns.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        C_x and C_y, uint8 (size, size) of 0 and 1.
     """
     inverse = np.zeros((size, size), dtype=np.uint8)
     inverse[0, 0] = 1
@@ -65,6 +75,11 @@ def xor_masks():
     For a digital sequence with upper-triangular generator C (unit diagonal), points N + i
     and i ^ a share their first m digits and differ in digit m exactly when
     C[:m, :m] a = C[:m, m] over GF(2): the new point goes in the other half of that stratum.
+
+    Returns
+    -------
+    ndarray of uint32
+        (2, 32); cached, do not modify.
     """
     out = np.zeros((2, LEVELS), dtype=_U32)
     for axis, c in enumerate(generator_matrices()):
@@ -90,6 +105,18 @@ def pmj02_integers(seed, realizations, total):
     is those bits; for N = 2^m and i < min(N, total - N), axis a of point N + i keeps the
     first m + 1 bits of point i ^ mask[a][m] with the last of them flipped, and its own
     random bits below.
+
+    Parameters
+    ----------
+    seed : int
+    realizations : range
+    total : int
+        Points a realization (the first ``total`` of the sequence).
+
+    Returns
+    -------
+    ndarray of uint64
+        (len(realizations), total, 2).
     """
     ks = np.arange(realizations.start, realizations.stop, dtype=_U32)
     words = philox.random_words(seed, philox.Stream.POINTS, ks[:, None, None],
@@ -316,8 +343,20 @@ class _BlueNoiseState:
 
 
 def pmj02bn_integers(seed, realizations, total):
-    """The NumPy reference of ``pmj02bn``: uint64 array (len(realizations), total, 2), as
-    :func:`pmj02_integers`; a sequential loop, for tests at small sizes."""
+    """The NumPy reference of ``pmj02bn``: a sequential loop, for tests at small sizes.
+
+    Parameters
+    ----------
+    seed : int
+    realizations : iterable of int
+    total : int
+        Points a realization.
+
+    Returns
+    -------
+    ndarray of uint64
+        (len(realizations), total, 2), as :func:`pmj02_integers`.
+    """
     out = np.zeros((len(realizations), total, 2), dtype=_U64)
     for row, k in enumerate(realizations):
         state = _BlueNoiseState(seed, k, total)

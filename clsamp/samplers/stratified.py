@@ -64,7 +64,24 @@ def stratum_point(k, u, count):
 
 
 def integer_root(n, s):
-    """The largest integer k with k**s <= n (exact, for any size of n)."""
+    """The largest integer k with k**s <= n (exact, for any size of n).
+
+    Parameters
+    ----------
+    n : int
+    s : int
+        The exponent, at least 1.
+
+    Returns
+    -------
+    int
+        0 for n < 1.
+
+    Examples
+    --------
+    >>> integer_root(26, 3), integer_root(27, 3), integer_root(10**30, 2)
+    (2, 3, 1000000000000000)
+    """
     if n < 1:
         return 0
     k = int(round(n ** (1.0 / s)))
@@ -76,7 +93,23 @@ def integer_root(n, s):
 
 
 def nearest_power(n, s, maximum):
-    """The s-th power k**s (k >= 1, at most ``maximum``) nearest to n; ties go down."""
+    """The s-th power k**s (k >= 1, at most ``maximum``) nearest to n; ties go down.
+
+    Parameters
+    ----------
+    n : int
+    s : int
+    maximum : int
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> nearest_power(20, 2, 2**32), nearest_power(30, 2, 2**32)
+    (16, 25)
+    """
     k = max(1, integer_root(n, s))
     best = k ** s
     if (k + 1) ** s <= maximum and abs((k + 1) ** s - n) < abs(best - n):
@@ -85,7 +118,22 @@ def nearest_power(n, s, maximum):
 
 
 def balanced_factors(n):
-    """(m, k) with m * k = n, m <= k and m the largest divisor of n not above sqrt(n)."""
+    """(m, k) with m * k = n, m <= k and m the largest divisor of n not above sqrt(n).
+
+    Parameters
+    ----------
+    n : int
+        At least 1.
+
+    Returns
+    -------
+    (int, int)
+
+    Examples
+    --------
+    >>> balanced_factors(12), balanced_factors(13)
+    ((3, 4), (1, 13))
+    """
     m = math.isqrt(n)
     while n % m:
         m -= 1
@@ -121,7 +169,20 @@ LATIN_RATES = {"best": Rate(-1.0, STEIN), "worst": Rate(-1.0, STEIN)}
 def jitter_rate(d, case, source=PILLEBOUE):
     """The published rate of jittered sampling of k^d cells (Pilleboue et al. 2015): in 2-D
     N^-2 for smooth integrands and N^-1.5 for edges (curved, or along the axes, where the
-    cells of one column or row are cut); in d-D N^(-1-2/d) and N^(-1-1/d)."""
+    cells of one column or row are cut); in d-D N^(-1-2/d) and N^(-1-1/d).
+
+    Parameters
+    ----------
+    d : int
+    case : {"best", "worst", "axis"}
+    source : str
+        The citation the rate carries.
+
+    Returns
+    -------
+    Rate or None
+        None for ``"axis"`` beyond 2-D.
+    """
     if d == 2:
         return {"best": Rate(-2.0, source), "worst": Rate(-1.5, source),
                 "axis": Rate(-1.5, source)}.get(case)

@@ -19,7 +19,17 @@ DENSITIES = ("jittered", "random")
 def density_rows(M):
     """Rows of the jittered density: isqrt(M). Row i holds points floor(i M / k) to
     floor((i+1) M / k) - 1, so every row has isqrt(M) to isqrt(M) + 2 cells and every
-    cell is within a factor (1 + 2 / isqrt(M))^2 of square."""
+    cell is within a factor (1 + 2 / isqrt(M))^2 of square.
+
+    Parameters
+    ----------
+    M : int
+        Density points.
+
+    Returns
+    -------
+    int
+    """
     return max(1, math.isqrt(M))
 
 
@@ -35,7 +45,21 @@ def density_points(seed, realizations, M, density="jittered"):
     strips for prime M); then the whole set is shifted by a random toroidal offset (words
     6, 7 of (seed, Stream.INIT, r, 0)), which makes the density, hence the optimized
     sites, stationary on the torus. All integer arithmetic, exact in 64 bits. The sites'
-    starting positions use words 0, 1 of block 0."""
+    starting positions use words 0, 1 of block 0.
+
+    Parameters
+    ----------
+    seed : int
+    realizations : array_like of int
+    M : int
+        Density points a realization.
+    density : {"jittered", "random"}
+
+    Returns
+    -------
+    ndarray of uint32
+        (len(realizations), M, 2), integer torus coordinates.
+    """
     check_choice(density, "density", DENSITIES)
     r = np.asarray(realizations, dtype=np.uint32)[:, None, None]
     j = np.arange(M, dtype=np.uint32)[None, :, None]
@@ -62,7 +86,18 @@ def density_points(seed, realizations, M, density="jittered"):
 
 def density_points_device(seed, realizations, M, density="jittered"):
     """:func:`density_points` made by the ``ccvt_density`` / ``ccvt_density_jittered``
-    kernels (the same integers), as a device array (r, M, 2) of uint32."""
+    kernels (the same integers).
+
+    Parameters
+    ----------
+    seed, realizations, M, density
+        As :func:`density_points`; the realizations must be consecutive.
+
+    Returns
+    -------
+    pyopencl.array.Array of uint32
+        (len(realizations), M, 2).
+    """
     import pyopencl.array as cla
     check_choice(density, "density", DENSITIES)
     realizations = np.asarray(realizations)

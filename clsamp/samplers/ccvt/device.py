@@ -13,7 +13,22 @@ TAIL_SHARE = 8    # the last iterations, from n / TAIL_SHARE exchanges or fewer,
 def device_buffers(q, sites, points, members):
     """Device buffers of both OpenCL paths: members (ids) and their coordinates (xy), the
     scratch slots of the rebuilds, the sites, the per-site records and bucket ranges.
-    ``points`` may be on the device already."""
+
+    Parameters
+    ----------
+    q : pyopencl.CommandQueue
+    sites : ndarray
+        (r, n, 2) integer coordinates.
+    points : ndarray or pyopencl.array.Array
+        (r, M, 2) density points, on the host or the device.
+    members : ndarray
+        (r, n, p) point indices of each site.
+
+    Returns
+    -------
+    dict of pyopencl.array.Array
+        ``ids``, ``xy``, ``tids``, ``txy``, ``sites``, ``meta``, ``bstart``.
+    """
     import pyopencl.array as cla
     r, n, p = members.shape
     ids = cla.to_device(q, np.ascontiguousarray(members, dtype=np.uint32))
@@ -51,6 +66,36 @@ def ccvt_device(sites, points, members, iterations, callback=None, fused=None, t
     All of these give the same bits. The members come back as sets: the kernels keep
     each site's slots grouped by bucket. ``progress`` shows a bar over the iterations once
     the run has taken 2 s.
+
+    Parameters
+    ----------
+    sites : ndarray
+        (r, n, 2) integer coordinates.
+    points : ndarray or pyopencl.array.Array
+        (r, M, 2) density points, M = n p.
+    members : ndarray
+        (r, n, p) the starting ownership.
+    iterations : int
+        At most this many.
+    callback : callable, optional
+        ``callback(members, sites)`` after every iteration (stepwise launches only).
+    fused : bool, optional
+    tail : int, optional
+    progress : bool
+
+    Returns
+    -------
+    sites : ndarray of uint32
+    energies : list of list of int
+        Per realization, the exact energy sum after each iteration run.
+    members : ndarray of uint32
+    converged : ndarray of bool
+        Per realization: an iteration made no exchange.
+
+    Raises
+    ------
+    NoDeviceError
+        The current device has no fp64.
     """
     import pyopencl as cl
     import pyopencl.array as cla
@@ -154,7 +199,29 @@ def solve_device(b, n, p, iterations, active, running, resume, energies, bar=Non
     The iterations run in launches of at most :data:`SOLVE_CHUNK`, each resuming where the
     last stopped (every piece of state is in the buffers, the energy in ``status``), with
     the realizations that converged taken out: the same bits as one launch, and a Ctrl-C
-    waits for one chunk at most."""
+    waits for one chunk at most.
+
+    Parameters
+    ----------
+    b : dict
+        The buffers (:func:`device_buffers`, with the grid and scratch ones added).
+    n, p : int
+        Sites and points per site.
+    iterations : int
+    active : pyopencl.array.Array
+        Per realization, whether it still runs.
+    running : array_like of int
+        The indices of the active realizations.
+    resume : bool
+    energies : list of list
+        Appended to, per realization.
+    bar : tqdm, optional
+
+    Returns
+    -------
+    ndarray of bool
+        Per realization, whether it converged.
+    """
     import pyopencl.array as cla
     q = runtime.queue()
     r = b["ids"].shape[0]

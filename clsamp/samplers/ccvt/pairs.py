@@ -25,13 +25,38 @@ NEAR = 2   # neighbours: sites closer than NEAR / sqrt(n) (about twice the hexag
 def ccvt_near2(n):
     """Squared distance (integer torus units) below which two sites are neighbours and
     exchange points: (NEAR / sqrt(n))^2. A site's Voronoi neighbours in a CCVT lie within
-    about 1.4 / sqrt(n); this is the pair graph, found through the grid, never all pairs."""
+    about 1.4 / sqrt(n); this is the pair graph, found through the grid, never all pairs.
+
+    Parameters
+    ----------
+    n : int
+        Sites.
+
+    Returns
+    -------
+    int
+    """
     return (NEAR * NEAR * it.SIZE * it.SIZE) // n
 
 
 def ccvt_grid_size(n):
     """Cells per axis of the site grid: even, at least 2, and with cells at least NEAR /
-    sqrt(n) wide, so every neighbour pair is in the same or adjacent cells."""
+    sqrt(n) wide, so every neighbour pair is in the same or adjacent cells.
+
+    Parameters
+    ----------
+    n : int
+        Sites.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> ccvt_grid_size(16), ccvt_grid_size(1024)
+    (2, 16)
+    """
     return max(2, (math.isqrt(n) // NEAR) // 2 * 2)
 
 

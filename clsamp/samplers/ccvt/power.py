@@ -20,7 +20,26 @@ START_CHUNK = 1 << 16  # candidate distances computed at once by the NumPy twin
 def start_table(xy, ids, G, pad):
     """Candidate table of one realization for :func:`start_partition`: row c lists the
     sites (global ids, ascending, padded with ``pad``) of the 3 x 3 cells of a G x G grid
-    around cell c, or all the sites when G == 1. Returns (table, lengths)."""
+    around cell c, or all the sites when G == 1.
+
+    Parameters
+    ----------
+    xy : ndarray of int64
+        (n, 2) the realization's site coordinates.
+    ids : ndarray of int
+        (n,) the sites' ids.
+    G : int
+        Cells per axis (:func:`start_grid_size`).
+    pad : int
+        The id that fills short rows.
+
+    Returns
+    -------
+    table : ndarray of int64
+        (G * G, width).
+    lengths : ndarray of int
+        Each row's sites.
+    """
     if G == 1:
         return ids[None, :].copy(), np.array([len(ids)])
     start, order = it.build_grid(xy, G)
@@ -42,7 +61,22 @@ def start_table(xy, ids, G, pad):
 
 def start_grid_size(n):
     """Cells per axis of the start's candidate grid: about START_OCCUPANCY sites per cell,
-    and 1 (every site a candidate) below 4, where 3 x 3 cells would repeat."""
+    and 1 (every site a candidate) below 4, where 3 x 3 cells would repeat.
+
+    Parameters
+    ----------
+    n : int
+        Sites.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> start_grid_size(16), start_grid_size(1024)
+    (1, 22)
+    """
     G = math.isqrt(n // START_OCCUPANCY)
     return G if G >= 4 else 1
 
@@ -75,7 +109,18 @@ def power_pass_reference(points, sites, weight, G):
 
 
 def power_pass_device(points, sites, weight, G):
-    """:func:`power_pass_reference` by the ``ccvt_power`` kernel (the same integers)."""
+    """:func:`power_pass_reference` by the ``ccvt_power`` kernel (the same integers).
+
+    Parameters
+    ----------
+    points, sites, weight, G
+        As :func:`power_pass_reference`.
+
+    Returns
+    -------
+    owner, second, margin : ndarray
+        As :func:`power_pass_reference`.
+    """
     return PowerPass(sites, G, "opencl")(points, weight)
 
 
@@ -176,7 +221,20 @@ class PowerPass:
 
 
 def power_counts(owner, n):
-    """Points per site (r, n) from a power pass's owners (points with none left out)."""
+    """Points per site from a power pass's owners (points with none left out).
+
+    Parameters
+    ----------
+    owner : ndarray of uint32
+        (r, M), site indices or ``NO_OWNER``.
+    n : int
+        Sites.
+
+    Returns
+    -------
+    ndarray of int64
+        (r, n).
+    """
     r = owner.shape[0]
     flat = owner.astype(np.int64) + (np.arange(r) * n)[:, None]
     flat = flat[owner != NO_OWNER]
@@ -184,9 +242,23 @@ def power_counts(owner, n):
 
 
 def nearest_site2(sites, G, tables=None):
-    """Squared distance (r, n) from each site to its nearest other site among the 3 x 3
-    cells around it (every site when G == 1; SIZE^2 when it has none there); ``tables``:
-    the sites' :func:`start_table` rows, when already built."""
+    """Squared distance from each site to its nearest other site among the 3 x 3 cells
+    around it (every site when G == 1; SIZE^2 when it has none there).
+
+    Parameters
+    ----------
+    sites : ndarray
+        (r, n, 2) integer coordinates.
+    G : int
+        Cells per axis.
+    tables : list of ndarray, optional
+        The sites' :func:`start_table` rows, when already built.
+
+    Returns
+    -------
+    ndarray of float64
+        (r, n).
+    """
     r, n, _ = sites.shape
     out = np.full((r, n), float(it.SIZE) ** 2)
     for k in range(r):

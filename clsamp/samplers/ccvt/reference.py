@@ -97,8 +97,21 @@ def _sweep_reference(sites, points, members, G, touched):
 
 
 def ccvt_reference(sites, points, members, iterations, callback=None):
-    """NumPy twin of :func:`ccvt_device`: (sites, energies, members, converged), energies as
-    Python ints (sums of squared distances), one per iteration run."""
+    """NumPy twin of :func:`ccvt_device`: the same integers, one realization at a time.
+
+    Parameters
+    ----------
+    sites, points, members, iterations, callback
+        As :func:`ccvt_device` (the callback runs once, at the end).
+
+    Returns
+    -------
+    sites : ndarray of uint32
+    energies : list of list of int
+        Per realization, the exact energy sum after each iteration run.
+    members : ndarray of uint32
+    converged : ndarray of bool
+    """
     sites = np.array(sites, dtype=np.int64)
     members = np.array(members, dtype=np.int64)
     r, n, p = members.shape

@@ -14,7 +14,24 @@ RELAY_BATCH = 128      # carried points a site hands on per round (more wait a r
 def members_matrix(owner, S, p):
     """Owners (-1: none yet) as a (S, p) matrix of point ids, ascending in each row, rows
     of sites with room ending in -1. A site given more than p keeps its first p (in id
-    order). Returns (matrix, the ids it could not keep, ascending)."""
+    order).
+
+    Parameters
+    ----------
+    owner : ndarray of int
+        Each point's site (global id), -1 for none.
+    S : int
+        Sites, over all realizations.
+    p : int
+        Capacity.
+
+    Returns
+    -------
+    matrix : ndarray of int
+        (S, p).
+    extra : ndarray of int
+        The ids no site could keep, ascending.
+    """
     key = np.where(owner < 0, S, owner)
     # a radix sort where the site ids fit in 16 bits; each site's ids are then one run of
     # `order`, ascending, and a row is the first p of its run, gathered in one go
@@ -58,7 +75,23 @@ def relay(sites, points, mat, room, left, start):
     carried last) are carried on to b, and the carried ones not chosen take the freed
     slots. The distance to the target falls with every hop and room is never lost, so
     every point comes to rest; the capacities stay
-    exact at every step. Updates ``mat`` (rows left ascending) and ``room`` in place."""
+    exact at every step. Updates ``mat`` (rows left ascending) and ``room`` in place.
+
+    Parameters
+    ----------
+    sites : ndarray
+        (r, n, 2) integer coordinates.
+    points : ndarray
+        (r, M, 2) density points.
+    mat : ndarray of int
+        (S, p), S = r n: each site's point ids, -1 for room.
+    room : ndarray of int
+        (S,) free slots per site.
+    left : ndarray of int
+        The carried points' global ids.
+    start : ndarray of int
+        Each carried point's first site, -1 for none.
+    """
     if not left.size:
         return
     r, n, _ = sites.shape

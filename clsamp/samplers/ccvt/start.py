@@ -42,7 +42,19 @@ def kd_partition(sites, points, p):
     the split is canonical. Vectorized over realizations (the tree's sizes depend only
     on n).
 
-    Returns members (r, n, p), point indices.
+    Parameters
+    ----------
+    sites : ndarray
+        (r, n, 2) integer coordinates.
+    points : ndarray
+        (r, n p, 2) density points.
+    p : int
+        Points per site.
+
+    Returns
+    -------
+    ndarray of uint32
+        (r, n, p): the point indices each site owns.
     """
     r, n, _ = sites.shape
     rows = np.arange(r)[:, None]
@@ -80,7 +92,20 @@ def start_lattice(n, p):
     """The proxy density of the start's weights: a regular lattice of up to
     ``START_LATTICE``^2 points per site (at most p / START_SHARE, at least
     ``START_MIN_SIDE``^2: the relaxation of :func:`start_sites` moves the sites to means
-    of these), (1, m, 2)."""
+    of these).
+
+    Parameters
+    ----------
+    n : int
+        Sites.
+    p : int
+        Points per site.
+
+    Returns
+    -------
+    ndarray of uint32
+        (1, m, 2) integer coordinates, one set for every realization.
+    """
     side = max(START_MIN_SIDE, min(START_LATTICE, math.isqrt(p // START_SHARE)))
     side *= max(1, math.isqrt(n))
     g = ((2 * np.arange(side, dtype=np.int64) + 1) << it.BITS) // (2 * side)
