@@ -148,6 +148,16 @@ class Scene:
     ``sample_dimensions``, ``camera``, ``shapes``, ``light``, ``ao_rays``,
     ``ao_distance``, ``ambient``, ``background``, ``epsilon``.
 
+    Parameters
+    ----------
+    data : dict
+        The scene in the file format.
+
+    Raises
+    ------
+    InvalidArgumentError
+        Naming the bad field and what was expected.
+
     Examples
     --------
     >>> from clsamp.scene import Scene

@@ -136,7 +136,18 @@ def owen_table_layout(bases, n, realizations=1):
 
 class LowDiscrepancySampler(Sampler):
     """What the low-discrepancy samplers share (also lattice.py's): ``randomize=``, the launch and
-    the Philox draws."""
+    the Philox draws.
+
+    Parameters
+    ----------
+    d : int
+        Dimension.
+    seed : int
+        Seeds the randomization; without one the points do not depend on it.
+    backend : {"opencl", "numpy"}
+    randomize : str or None
+        One of the subclass's ``randomizations``.
+    """
 
     sequence = True
     host_output = True

@@ -127,7 +127,16 @@ def power_pass_device(points, sites, weight, G):
 class PowerPass:
     """The power passes over one set of sites (:func:`power_pass_reference`), their
     candidate tables (and, in OpenCL, their buffers and the last point set's) prepared
-    once."""
+    once.
+
+    Parameters
+    ----------
+    sites : ndarray
+        (r, n, 2) integer coordinates.
+    G : int
+        Cells per axis of the candidate grid (:func:`start_grid_size`).
+    backend : {"opencl", "numpy"}
+    """
 
     def __init__(self, sites, G, backend):
         self.sites, self.G, self.backend = sites, G, backend
@@ -150,7 +159,22 @@ class PowerPass:
         self.points = (None, None)
 
     def __call__(self, points, weight, owner_only=False):
-        """(owner, second, margin) of ``points`` under ``weight``; ``owner_only``: owner."""
+        """One power pass.
+
+        Parameters
+        ----------
+        points : ndarray or pyopencl.array.Array
+            (r, M, 2) or (1, M, 2) integer coordinates.
+        weight : ndarray of int64
+            (r, n) the sites' power weights.
+        owner_only : bool
+            Return ``(owner,)`` alone.
+
+        Returns
+        -------
+        tuple of ndarray
+            (owner, second, margin), as :func:`power_pass_reference`.
+        """
         if self.backend == "numpy":
             out = self._reference(points, weight)
         else:
