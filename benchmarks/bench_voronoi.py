@@ -16,19 +16,20 @@ Cases (``--quick`` in brackets):
   start, optimization; the start's share named), iterations, N*E and rho. Balzer's three
   cases again with ``relax=8`` (the sites relaxed before the partition: faster and lower
   in energy, but more regular; see :class:`clsamp.samplers.ccvt.CCVTSampler`).
-  Balzer's code, built on the project machine, took 4.9 s for 1024 x 1024 (N*E 0.1677,
-  rho 0.710), 1.0 s for 256 x 1024, 4.5 s for 4096 x 256. Those are published figures,
-  not code run here, and the machine's speed drifts from hour to hour, so the full run
-  also times the machine gauge (:func:`common.machine_gauge`) before and after the CCVT
-  cases and the rows with a published peer give it: their ratio compares like with like
-  when the gauge is near the 2.98 s it took when the figures were taken.
+  ``BALZER`` holds the seconds Balzer's code took for its three cases, built on the
+  project machine (docs/performance.md, "CCVT: start and optimization", gives them with
+  its N*E and rho). Those are published figures, not code run here, and the machine's
+  speed drifts from hour to hour, so the full run also times the machine gauge
+  (:func:`common.machine_gauge`) before and after the CCVT cases and the rows with a
+  published peer give it: their ratio compares like with like when the gauge is near
+  GAUGE_PUBLISHED, what it took when the figures were taken.
 
 N*E of a set is :func:`clsamp.point_metrics.normalized_energy`: n times the mean squared
 toroidal distance to the nearest point over a regular grid of 4096 points per site,
 0.160375 for the hexagonal lattice, 1/pi for white noise; the same figure for the CCVT,
 the Lloyd sets and the cKDTree Lloyd. A CCVT row also gives its own objective, the
 capacity-constrained energy over its density points ("capacity N*E"), which is never
-lower. Which of the two Balzer's 0.1677 is, the issue that reports it does not say.
+lower. Which of the two Balzer's published N*E is, its source does not say.
 """
 
 import numpy as np
