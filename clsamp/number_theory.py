@@ -98,11 +98,7 @@ def digit_count(base):
     Returns
     -------
     int
-
-    Examples
-    --------
-    >>> digit_count(2), digit_count(3), digit_count(2**16)
-    (32, 21, 2)
+        32 in base 2, 21 in base 3.
     """
     m, power = 0, 1
     while power < 2**INDEX_BITS:
@@ -196,12 +192,10 @@ def mix64(v):
     Parameters
     ----------
     v : int or array_like of int
-        Taken as uint64.
 
     Returns
     -------
     ndarray of uint64
-        The mixed values; arithmetic wraps modulo 2^64.
     """
     v = np.asarray(v, dtype=_U64)
     with np.errstate(over="ignore"):
@@ -221,10 +215,7 @@ def digit_hash(seed64, key):
 
     Parameters
     ----------
-    seed64 : int or array_like of int
-        The randomization's 64-bit seed.
-    key : int or array_like of int
-        Broadcast against ``seed64``.
+    seed64, key : int or array_like of int
 
     Returns
     -------
@@ -240,7 +231,6 @@ def digit_shift(h, base):
     Parameters
     ----------
     h : int or array_like of int
-        32-bit words.
     base : int
 
     Returns
@@ -325,16 +315,10 @@ def reverse_bits32(x):
     Parameters
     ----------
     x : int or array_like of int
-        Taken as uint32.
 
     Returns
     -------
     ndarray of uint32
-
-    Examples
-    --------
-    >>> int(reverse_bits32(1)) == 2**31
-    True
     """
     x = np.asarray(x, dtype=_U32)
     x = ((x >> _U32(1)) & _U32(0x55555555)) | ((x & _U32(0x55555555)) << _U32(1))
@@ -354,10 +338,8 @@ def lk_hash(x, seed):
 
     Parameters
     ----------
-    x : int or array_like of int
-        Bit-reversed 32-bit words.
-    seed : int or array_like of int
-        32-bit seeds, broadcast against ``x``.
+    x, seed : int or array_like of int
+        Bit-reversed 32-bit words and 32-bit seeds, broadcast.
 
     Returns
     -------
@@ -382,10 +364,8 @@ def owen_scramble_base2(x, seed):
 
     Parameters
     ----------
-    x : int or array_like of int
-        32-bit fractions (x · 2^-32 in [0, 1)).
-    seed : int or array_like of int
-        32-bit seeds.
+    x, seed : int or array_like of int
+        32-bit fractions and seeds.
 
     Returns
     -------
@@ -421,8 +401,7 @@ def owen_node_key(seed64, node):
 
     Parameters
     ----------
-    seed64 : int or array_like of int
-    node : int or array_like of int
+    seed64, node : int or array_like of int
 
     Returns
     -------
@@ -437,10 +416,8 @@ def owen_word(key, slot):
 
     Parameters
     ----------
-    key : int or array_like of int
-        Node keys (:func:`owen_node_key`).
-    slot : int or array_like of int
-        Broadcast against ``key``.
+    key, slot : int or array_like of int
+        Node keys (:func:`owen_node_key`) and word numbers, broadcast.
 
     Returns
     -------
@@ -778,11 +755,6 @@ def gray_code(index):
     Returns
     -------
     ndarray of uint32
-
-    Examples
-    --------
-    >>> gray_code([0, 1, 2, 3]).tolist()
-    [0, 1, 3, 2]
     """
     index = np.asarray(index, dtype=_U32)
     return index ^ (index >> _U32(1))

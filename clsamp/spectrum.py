@@ -788,21 +788,14 @@ def anisotropy(P, bin_width=1.0):
 
     Parameters
     ----------
-    P : ndarray, shape (R, R)
-        A 2-D spectrum from :func:`power_spectrum` (DC at [R/2, R/2]).
-    bin_width : float
-        Width of the annuli in integer frequencies (default 1).
+    P, bin_width
+        As :func:`radial_mean`; P must be 2-D (else InvalidArgumentError).
 
     Returns
     -------
     freqs, values : ndarray
         Annulus centres as in :func:`radial_mean`; anisotropy in dB (-inf where P is
         constant on the annulus, NaN where its mean is 0).
-
-    Raises
-    ------
-    InvalidArgumentError
-        ``P`` is not a 2-D spectrum.
 
     References
     ----------

@@ -76,11 +76,6 @@ def integer_root(n, s):
     -------
     int
         0 for n < 1.
-
-    Examples
-    --------
-    >>> integer_root(26, 3), integer_root(27, 3), integer_root(10**30, 2)
-    (2, 3, 1000000000000000)
     """
     if n < 1:
         return 0
@@ -176,7 +171,6 @@ def jitter_rate(d, case, source=PILLEBOUE):
     d : int
     case : {"best", "worst", "axis"}
     source : str
-        The citation the rate carries.
 
     Returns
     -------
@@ -493,8 +487,7 @@ class UncorrelatedJitterSampler(_Stratified):
         return None
 
     def valid_n(self, n):
-        """The valid point count nearest to ``n``: a k-th power, k the least common
-        multiple of the group sizes, so that every group has whole strata.
+        """The nearest k^l to ``n``, l the groups' least common multiple (whole strata).
 
         Parameters
         ----------
