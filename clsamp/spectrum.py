@@ -1,7 +1,5 @@
-"""Fourier power spectra of point sets, their radial mean and anisotropy.
-
-Their pictures are drawn by :mod:`clsamp.plots` (``spectrum``, ``radial_mean``,
-``spectrum_figure``).
+"""Fourier power spectra of point sets, their radial mean and anisotropy (pictures of them
+are :mod:`clsamp.plots`'s).
 
 The periodogram of N points x_1..x_N in [0, 1)^d at an integer frequency ω is
 
@@ -75,11 +73,6 @@ def frequencies(resolution):
     -------
     ndarray of int
         Index i of a spectrum's axis is frequency ``frequencies(R)[i]``.
-
-    Examples
-    --------
-    >>> frequencies(4)
-    array([-2, -1,  0,  1])
     """
     resolution = _check_resolution(resolution)
     return np.arange(-(resolution // 2), resolution // 2)
@@ -130,7 +123,7 @@ def check_spectrum(P, name="P"):
     Parameters
     ----------
     P : ndarray
-        (R,) or (R, R), R even and at least 2, finite.
+        (R,) or (R, R), R even and at least 2, finite (else InvalidArgumentError).
     name : str
         The argument's name in the error message.
 
@@ -138,11 +131,6 @@ def check_spectrum(P, name="P"):
     -------
     ndarray
         ``P`` as float64.
-
-    Raises
-    ------
-    InvalidArgumentError
-        Not a NumPy array of that shape, or NaN or infinite values.
     """
     if not isinstance(P, np.ndarray) or P.ndim not in (1, 2):
         shape = getattr(P, "shape", type(P).__name__)
@@ -258,18 +246,14 @@ def spectrum_block(sampler, n, lo, hi, resolution, method, tol, backend):
 
     Parameters
     ----------
-    sampler : Sampler
-    n : int
-        Points per set.
-    lo, hi : int
-        The block's realizations, lo .. hi - 1.
+    sampler, n, lo, hi
+        The sampler, its points per set, and the block.
     resolution, method, tol, backend
         As :func:`power_spectrum` (``method`` already decided, not ``"auto"``).
 
     Returns
     -------
     ndarray
-        (R, R) float64.
     """
     if backend == "opencl":
         points = sampler.sample_device(n, realizations=range(lo, hi))
@@ -392,11 +376,6 @@ def fixed_point(x):
     Returns
     -------
     ndarray of uint64
-
-    Examples
-    --------
-    >>> int(fixed_point(0.75)) == 3 << 62
-    True
     """
     x = np.asarray(x, dtype=np.float64)
     s = x * 2.0**32
@@ -417,17 +396,11 @@ def twiddles_reference(x, freqs):
     x : array_like of float64
         (..., n) coordinates in [0, 1).
     freqs : array_like of int
-        Consecutive integer frequencies.
+        Consecutive integer frequencies (else InvalidArgumentError).
 
     Returns
     -------
     ndarray of complex128
-        (..., n, len(freqs)).
-
-    Raises
-    ------
-    InvalidArgumentError
-        ``freqs`` not consecutive.
     """
     freqs = np.asarray(freqs, dtype=np.int64)
     X = fixed_point(x)[..., None]
@@ -456,15 +429,13 @@ def direct_reference(points, resolution):
 
     Parameters
     ----------
-    points : array_like
-        (n, d) or (r, n, d) points in [0, 1)^d, d = 1 or 2.
-    resolution : int
-        R, even.
+    points, resolution
+        As :func:`power_spectrum` (d = 1 or 2).
 
     Returns
     -------
     ndarray
-        (R,) or (R, R) float64, laid out as :func:`power_spectrum`'s.
+        Laid out as :func:`power_spectrum`'s.
     """
     batch, _ = check_points(points, "points", d=(1, 2))
     resolution = _check_resolution(resolution)

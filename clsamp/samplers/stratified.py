@@ -68,9 +68,8 @@ def integer_root(n, s):
 
     Parameters
     ----------
-    n : int
-    s : int
-        The exponent, at least 1.
+    n, s : int
+        s at least 1.
 
     Returns
     -------
@@ -92,18 +91,11 @@ def nearest_power(n, s, maximum):
 
     Parameters
     ----------
-    n : int
-    s : int
-    maximum : int
+    n, s, maximum : int
 
     Returns
     -------
     int
-
-    Examples
-    --------
-    >>> nearest_power(20, 2, 2**32), nearest_power(30, 2, 2**32)
-    (16, 25)
     """
     k = max(1, integer_root(n, s))
     best = k ** s
@@ -118,16 +110,10 @@ def balanced_factors(n):
     Parameters
     ----------
     n : int
-        At least 1.
 
     Returns
     -------
     (int, int)
-
-    Examples
-    --------
-    >>> balanced_factors(12), balanced_factors(13)
-    ((3, 4), (1, 13))
     """
     m = math.isqrt(n)
     while n % m:
@@ -175,7 +161,6 @@ def jitter_rate(d, case, source=PILLEBOUE):
     Returns
     -------
     Rate or None
-        None for ``"axis"`` beyond 2-D.
     """
     if d == 2:
         return {"best": Rate(-2.0, source), "worst": Rate(-1.5, source),
@@ -280,7 +265,8 @@ class _Grid(_Stratified):
         return None if self.strata is None else math.prod(self.strata)
 
     def valid_n(self, n):
-        """The valid point count nearest to ``n``.
+        """The valid point count nearest to ``n``: the product of ``strata`` where given,
+        else the nearest k^d (k strata per axis).
 
         Parameters
         ----------
@@ -289,8 +275,6 @@ class _Grid(_Stratified):
         Returns
         -------
         int
-            The product of ``strata`` where given, else the nearest k^d (k strata per
-            axis).
         """
         if self.strata is not None:
             return math.prod(self.strata)
@@ -392,13 +376,11 @@ class JitteredSampler(_Grid):
         Parameters
         ----------
         case : {"best", "worst", "axis"}
-            The integrand as the estimator sees it (:func:`clsamp.theory.case_of`).
 
         Returns
         -------
         Rate or None
-            :func:`jitter_rate` for k^d cubic cells; None for strata of different
-            counts per axis, for which nothing is published.
+            :func:`jitter_rate` for k^d cubic cells; None for unequal strata per axis.
         """
         if self.strata is not None and len(set(self.strata)) > 1:
             return None     # the published rates are for k^d cubic cells
@@ -472,13 +454,11 @@ class UncorrelatedJitterSampler(_Stratified):
         Parameters
         ----------
         case : {"best", "worst", "axis"}
-            The integrand as the estimator sees it (:func:`clsamp.theory.case_of`).
 
         Returns
         -------
         Rate or None
-            A jittered grid's rate for one group, a Latin hypercube's for two groups
-            of one dimension; None for other groupings.
+            A jittered grid's for one group, a Latin hypercube's for groups (1, 1).
         """
         if self.groups == (self.d,):     # one group: a jittered grid, shuffled
             return jitter_rate(self.d, case, PILLEBOUE + " (jittered)")
@@ -624,7 +604,8 @@ class MultiJitteredSampler(Sampler):
                 f"the {self.max_n} point indices allow")
 
     def factors(self, n):
-        """The grid used for n points.
+        """The grid (mx, my) used for n points: ``strata`` where given, else
+        :func:`balanced_factors` of n.
 
         Parameters
         ----------
@@ -633,7 +614,6 @@ class MultiJitteredSampler(Sampler):
         Returns
         -------
         (int, int)
-            (mx, my): ``strata`` where given, else :func:`balanced_factors` of n.
         """
         return self.strata if self.strata is not None else balanced_factors(n)
 
@@ -642,7 +622,9 @@ class MultiJitteredSampler(Sampler):
         return self.max_aspect is None or k <= self.max_aspect * m
 
     def valid_n(self, n):
-        """The valid point count nearest to ``n``.
+        """The valid point count nearest to ``n``: the product of ``strata`` where given;
+        else the nearest count whose balanced grid is within ``max_aspect`` (any count
+        without it).
 
         Parameters
         ----------
@@ -651,9 +633,6 @@ class MultiJitteredSampler(Sampler):
         Returns
         -------
         int
-            The product of ``strata`` where given; else the nearest count whose balanced
-            grid (:func:`balanced_factors`) is within ``max_aspect``, or any count without
-            ``max_aspect``.
         """
         if self.strata is not None:
             return math.prod(self.strata)
@@ -770,7 +749,7 @@ class CorrelatedMultiJitteredSampler(Sampler):
 
     @staticmethod
     def factors(n):
-        """The grid used for n points.
+        """The grid (m, k) used for n points: m = floor(sqrt(n)), k = ceil(n / m).
 
         Parameters
         ----------
@@ -779,7 +758,6 @@ class CorrelatedMultiJitteredSampler(Sampler):
         Returns
         -------
         (int, int)
-            (m, k) with m = floor(sqrt(n)) and k = ceil(n / m).
         """
         m = math.isqrt(n)
         return m, -(-n // m)
