@@ -68,7 +68,7 @@ def test_refuses_pixels_outside_the_image_and_too_many_samples():
 
 def test_zsobol_error_is_bluer_than_sobol_owen_on_the_ao_scene():
     # a test-sized image: 64^2 at 16 spp over two seeds (the shares at 128^2:
-    # docs/performance.md, "Renderer samplers")
+    # docs/performance.md, "Renderer samplers: zsobol, the reference, error spectra")
     scene = Scene.from_file("ao")
     ref = rendering.reference(scene, 64, spp=2048, progress=False)
     low = {}
