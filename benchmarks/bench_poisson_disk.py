@@ -27,7 +27,7 @@ from scipy.spatial import cKDTree
 from scipy.stats import qmc
 
 import clsamp
-from clsamp.point_metrics import min_distance, relative_radius
+from clsamp.metrics import min_distance, relative_radius
 
 try:
     import bridson

@@ -24,7 +24,7 @@ Cases (``--quick`` in brackets):
   published peer give it: their ratio compares like with like when the gauge is near
   GAUGE_PUBLISHED, what it took when the figures were taken.
 
-N*E of a set is :func:`clsamp.point_metrics.normalized_energy`: n times the mean squared
+N*E of a set is :func:`clsamp.metrics.normalized_energy`: n times the mean squared
 toroidal distance to the nearest point over a regular grid of 4096 points per site,
 0.160375 for the hexagonal lattice, 1/pi for white noise; the same figure for the CCVT,
 the Lloyd sets and the cKDTree Lloyd. A CCVT row also gives its own objective, the
@@ -35,7 +35,7 @@ lower. Which of the two Balzer's published N*E is, its source does not say.
 import numpy as np
 from common import GAUGE_PUBLISHED, Row, machine_gauge, main, on_device, short_name, timed
 
-from clsamp import point_metrics
+from clsamp import metrics
 from clsamp.geometry import integer_torus as it
 from clsamp.samplers import lloyd
 from clsamp.samplers.ccvt import ccvt_optimize, density, start
@@ -100,8 +100,8 @@ def run(devices, quick):
                         "scipy cKDTree Lloyd", t_kd,
                         f"N*E after 10: {ne[9]:.5f} (cKDTree {n_lloyd * e_kd10[9]:.5f}); "
                         f"after 1: {ne[0]:.5f} ({n_lloyd * e_kd[0]:.5f}); set N*E after "
-                        f"11: {point_metrics.normalized_energy(relaxed[0]):.5f} "
-                        f"(cKDTree {point_metrics.normalized_energy(kd_sites):.5f})"))
+                        f"11: {metrics.normalized_energy(relaxed[0]):.5f} "
+                        f"(cKDTree {metrics.normalized_energy(kd_sites):.5f})"))
         for n, p, relax in ccvt_cases:
             sites = initial_sites(1, np.arange(1), n)
             ccvt_optimize(it.to_unit(initial_sites(2, np.arange(1), 16)),
@@ -113,8 +113,8 @@ def run(devices, quick):
             start_seconds, _ = timed(lambda: ccvt_start(sites, dense, p, relax),  # noqa: B023
                                      repeats=1, warmup=0)
             capacity = n * res.energy_history[0, -1]
-            ne = point_metrics.normalized_energy(points[0])
-            rho = point_metrics.relative_radius(points[0])
+            ne = metrics.normalized_energy(points[0])
+            rho = metrics.relative_radius(points[0])
             peer = BALZER.get((n, p))
             name = f"ccvt relax={relax}" if relax else "ccvt"
             ccvt_rows.append(Row(name, f"{n} x {p}", dev, seconds,

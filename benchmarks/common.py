@@ -357,7 +357,7 @@ def machine():
 
 
 def write_json(path, rows):
-    from clsamp.io import write_text
+    from clsamp.files import write_text
     write_text(path, json.dumps({"machine": machine(), "rows": [r.as_dict() for r in rows]},
                                 indent=2, default=str))
 
@@ -393,7 +393,7 @@ def finish(args, rows):
     if args.out:
         write_json(args.out, rows)
     if args.markdown:
-        from clsamp.io import write_text
+        from clsamp.files import write_text
         write_text(args.markdown, with_table(args.markdown, markdown_table(rows)))
         print(f"wrote {args.markdown}", file=sys.stderr)
 

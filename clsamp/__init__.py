@@ -9,9 +9,10 @@ See README.md for a tour and ``clsamp --help`` for the command line.
 """
 
 # clsamp.render is the module (its function is clsamp.render.render); clsamp.convergence is the
-# function, while `from clsamp.convergence import x` still reads the module.
-from . import families, integrands, metrics, parallel, plots, render, theory, variance
-from .convergence import convergence
+# function (its module is clsamp.sweep).
+import sys as _sys
+
+from . import families, files, integrands, metrics, parallel, plots, render, results, theory
 from .errors import (
                      BuildError,
                      ClsampError,
@@ -26,15 +27,22 @@ from .metrics import StarBounds, discrepancy, nearest_neighbor_distances, pair_c
 from .runtime import current_device, devices, use_device
 from .samplers import Rate, SampleInfo, Sampler, as_qmc_engine, make_sampler, sampler_names
 from .spectrum import anisotropy, expected_spectrum, power_spectrum, radial_mean
+from .sweep import convergence
 
 __version__ = "0.1.0"
+
+# The file module is `files`, so that inside the package no module shadows the standard
+# library's io; `clsamp.io`, the name the design gives it, is the same module.
+io = files
+_sys.modules[__name__ + ".io"] = files
 
 __all__ = [
     "BuildError", "ClsampError", "DeviceMemoryError", "IntegrationResult",
     "InvalidArgumentError", "NoDeviceError", "Rate", "SampleInfo", "Sampler", "SamplingError",
     "StarBounds", "anisotropy", "as_qmc_engine", "convergence", "current_device", "devices",
-    "discrepancy", "expected_spectrum", "families", "family_names", "integrands", "integrate", "make_family",
+    "discrepancy", "expected_spectrum", "families", "family_names", "files", "integrands",
+    "integrate", "make_family",
     "make_sampler", "metrics", "nearest_neighbor_distances", "pair_correlation", "parallel", "plots",
     "power_spectrum", "radial_mean", "render", "sampler_names", "star_discrepancy", "theory",
-    "use_device", "variance",
+    "use_device", "results",
 ]

@@ -101,7 +101,7 @@ def _add_sample(sub):
 
 
 def _run_sample(args):
-    from . import io
+    from . import files
     from .samplers import make_sampler, sampler_names
     if args.list or not args.name:
         print("\n".join(sampler_names(aliases=True)))
@@ -111,10 +111,10 @@ def _run_sample(args):
                            **_parse_params(args.param))
     points = sampler.sample(args.n, realizations=args.realizations, start=args.start)
     if output:
-        io.save_points(output, points)
+        files.save_points(output, points)
         _wrote([output], f"{'x'.join(str(s) for s in points.shape)} points of {args.name}")
     else:
-        sys.stdout.write(io.format_points(points))
+        sys.stdout.write(files.format_points(points))
     return 0
 
 
@@ -171,7 +171,7 @@ def _add_source(p, dimensions="dimension (sampler only; default 2)"):
 
 def _points_from_source(args):
     """(points, label) from a sampler name (with -n, -d, ...) or a point file (without)."""
-    from . import io
+    from . import files
     from .samplers import make_sampler, sampler_names
     source = Path(args.source)
     is_sampler = args.source.split(":")[0] in sampler_names(aliases=True)
@@ -188,7 +188,7 @@ def _points_from_source(args):
             raise InvalidArgumentError(
                 f"{', '.join(repr(g) for g in given)} applies to a sampler source, not to the "
                 f"point file {args.source!r}")
-        return io.load_points(source), source.name
+        return files.load_points(source), source.name
     if args.n is None:
         raise InvalidArgumentError("'-n' is required when the source is a sampler name")
     sampler = make_sampler(args.source, d=2 if args.d is None else args.d,
@@ -217,7 +217,7 @@ def _add_spectrum(sub):
 def _run_spectrum(args):
     import numpy as np
 
-    from . import io, plots, spectrum
+    from . import files, plots, spectrum
     output = _output(args.output, (".png", ".exr", ".npy"), "spectrum")
     outputs = [("-o", output)]
     if args.plots:
@@ -232,7 +232,7 @@ def _run_spectrum(args):
         import io as _io
         buffer = _io.BytesIO()
         np.save(buffer, P)
-        io.write_bytes(output, buffer.getvalue())
+        files.write_bytes(output, buffer.getvalue())
     else:
         plots.save_spectrum_png(output, P, scale=args.scale)
     n = points.shape[-2]
@@ -277,7 +277,7 @@ def _run_metrics(args):
 
     import numpy as np
 
-    from . import io, metrics, plots
+    from . import files, metrics, plots
     output = _output(args.output, (".json",), "metrics")
     wanted = [m.strip().lower() for m in args.metric.split(",") if m.strip()]
     unknown = [m for m in wanted if m not in METRICS]
@@ -318,7 +318,7 @@ def _run_metrics(args):
                                          "quantiles": dict(zip(("5%", "50%", "95%"),
                                                                np.quantile(nn, [0.05, 0.5, 0.95]).tolist(),
                                                                strict=True))}
-    io.write_text(output, json.dumps(document, indent=1))
+    files.write_text(output, json.dumps(document, indent=1))
     if "pcf" in wanted:
         entry = document["metrics"]["pcf"]
         plots.pcf_figure(outputs[1][1], entry["radii"], entry["pcf"], n=n, d=d,
@@ -394,8 +394,9 @@ def _checkpoint(args, *labels):
 def _convergence_runs(args, client):
     import json
 
-    from . import io, plots, theory
-    from .convergence import convergence, pareto_front, parse_ns
+    from . import files, plots, theory
+    from .results import pareto_front
+    from .sweep import convergence, parse_ns
     output = _output(args.output, FIGURES, "convergence")
     time_path = output.with_name(output.stem + "_time" + output.suffix)
     json_path = output.with_suffix(".json")
@@ -433,15 +434,15 @@ def _convergence_runs(args, client):
     document = {"ns": ns, "realizations": realizations, "seed": args.seed,
                 "homogenize": not args.no_homogenize, "backend": args.backend,
                 "results": records, "pareto_front": fronts}
-    io.write_text(json_path, json.dumps(document, indent=1, default=str))
+    files.write_text(json_path, json.dumps(document, indent=1, default=str))
     _wrote([output, time_path, json_path])
 
 
 def _run_family_convergence(args, samplers, output, json_path, client):
     import json
 
-    from . import families, io, plots, variance
-    from .convergence import convergence, parse_ns
+    from . import families, files, plots, theory
+    from .sweep import convergence, parse_ns
     names = [f.strip() for f in args.family.split(",") if f.strip()]
     if not samplers or not names:
         raise InvalidArgumentError("'--samplers' and '--family' must each name at least one")
@@ -455,7 +456,7 @@ def _run_family_convergence(args, samplers, output, json_path, client):
                               homogenize=not args.no_homogenize, seed=args.seed,
                               progress=not args.no_progress, backend=args.backend, client=client,
                               checkpoint=_checkpoint(args, name, family))
-            verdict = variance.compare(res)
+            verdict = theory.compare(res)
             results.append(res)
             records.append({**res.to_dict(), "comparison": verdict})
             lo, hi = verdict["ci"]
@@ -466,7 +467,7 @@ def _run_family_convergence(args, samplers, output, json_path, client):
     plots.family_convergence(results, output)
     document = {"ns": ns, "realizations": realizations, "members": args.members, "seed": args.seed,
                 "homogenize": not args.no_homogenize, "backend": args.backend, "results": records}
-    io.write_text(json_path, json.dumps(document, indent=1, default=str))
+    files.write_text(json_path, json.dumps(document, indent=1, default=str))
     _wrote([output, json_path])
 
 
@@ -513,7 +514,7 @@ def _run_integrate(args):
     import json
     import warnings
 
-    from . import io
+    from . import files
     from .integration import integrate
     output = _output(args.output, (".json",), "integrate") if args.output else None
     f = _load_function(args.function)
@@ -528,7 +529,7 @@ def _run_integrate(args):
           f"{res.replications} x {res.n} points of {res.sampler}, {res.evaluations} evaluations, "
           f"{res.seconds:.3f} s; {'converged' if res.converged else 'NOT converged'})")
     if output is not None:
-        io.write_text(output, json.dumps(dataclasses.asdict(res), indent=1))
+        files.write_text(output, json.dumps(dataclasses.asdict(res), indent=1))
         _wrote([output])
     return 0 if res.converged else 1
 # -- render --------------------------------------------------------------------

@@ -625,7 +625,7 @@ class FamilyKernel:
         mp = self.quads * 4
         out = runtime.Output((r, 2, mp), np.float64, host=np.empty((r, 2, mp)))
         self.kernel(runtime.queue(), (self.quads, r), None, runtime.to_device(points).data,
-                    np.uint32(n), np.uint32(realization0), *runtime.key_args(self.seed),
+                    np.uint32(n), np.uint32(realization0), *philox.seed_key(self.seed),
                     np.uint32(philox.Stream.EXPERIMENT), self.params.data, np.uint32(mp),
                     self.integrals.data, out.buffer)
         sums = out.finish()

@@ -11,7 +11,7 @@ Two families:
   x^2 + y^2 < 2/pi, the Gaussian exp(-x^2 - y^2), the bilinear xy, the step x < 1/pi
   and the triangle y > x. A toroidal shift keeps their estimators unbiased but makes
   the square's sides edges of the shifted integrand; use ``homogenize=False`` in
-  :func:`clsamp.convergence.convergence` to compare with that paper.
+  :func:`clsamp.convergence` to compare with that paper.
 
 Each integrand is a callable on points of shape (n, d) or (r, n, d) (NumPy, the
 reference), has its exact ``.integral`` over [0, 1)^d, and an OpenCL evaluation in
@@ -34,6 +34,7 @@ from fractions import Fraction
 
 import numpy as np
 
+from . import philox, runtime
 from .errors import InvalidArgumentError
 from .geometry.torus import ball_volume
 from .validation import check_real, plain
@@ -549,3 +550,58 @@ def make_integrand(spec, d=None):
     first = "center" if factory is not Heaviside else "normal"
     values = [default[j % 2] * (1 + 0.01 * (j // 2)) for j in range(d)]
     return factory(**{first: values})
+
+
+# -- on the device ---------------------------------------------------------------------
+SLICE = 4096            # points one work-group sums (fixed: the summation order depends on n only)
+
+
+class IntegrandKernel:
+    """The integrand's program and parameters on the current device, built once
+    (``kernels/integrands.cl``; ``homogenize`` shifts realization k by its own vector)."""
+
+    def __init__(self, f, homogenize, seed):
+        import pyopencl.array as cla
+        runtime.require_fp64()
+        self.f = f
+        self.seed = seed
+        self.kernel = runtime.kernel("integrands.cl", "integrand_error_sums",
+                                     defines={"DIM": f.d, "INTEGRAND": f.kernel_code,
+                                              "HOMOGENIZE": int(bool(homogenize))})
+        self.params = cla.to_device(runtime.queue(), np.ascontiguousarray(f.kernel_params(),
+                                                                          dtype=np.float64))
+
+    def error_sums(self, points, n, realization0):
+        """(r, groups, 2) double-double partial sums of f - integral, on the host."""
+        import pyopencl as cl
+        import pyopencl.array as cla
+        queue = runtime.queue()
+        r = points.shape[0]
+        if points.shape != (r, n, self.f.d) or not points.flags.c_contiguous:
+            points = cla.to_device(queue, np.ascontiguousarray(points.get()).reshape(r, n, self.f.d))
+        groups = -(-n // SLICE)
+        # a quad of points per work-item step: no more work-items than quads in a slice
+        quads = -(-min(n, SLICE) // 4)
+        local = min(runtime.local_size(64), 1 << max(0, (quads - 1).bit_length()))
+        out = cla.empty(queue, (r, groups, 2), np.float64)
+        self.kernel(queue, (groups * local, r), (local, 1), points.data, np.uint32(n),
+                    np.uint32(SLICE), np.uint32(realization0), *philox.seed_key(self.seed),
+                    np.uint32(philox.Stream.EXPERIMENT), self.params.data,
+                    np.float64(self.f.integral), out.data, cl.LocalMemory(16 * local))
+        return out.get()
+
+
+def _two_sum(a, b):
+    s = a + b
+    bb = s - a
+    return s, (a - (s - bb)) + (b - bb)
+
+
+def combine_sums(parts):
+    """Double-double partial sums (..., groups, 2) added in order to one double per row."""
+    hi = np.zeros(parts.shape[:-2])
+    lo = np.zeros(parts.shape[:-2])
+    for g in range(parts.shape[-2]):
+        hi, e = _two_sum(hi, parts[..., g, 0])
+        lo = lo + e + parts[..., g, 1]
+    return hi + lo

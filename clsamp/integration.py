@@ -24,9 +24,8 @@ import warnings
 import numpy as np
 
 from . import runtime
-from .convergence import IntegrandKernel, combine_sums
 from .errors import InvalidArgumentError
-from .integrands import Integrand, make_integrand
+from .integrands import Integrand, IntegrandKernel, combine_sums, make_integrand
 from .samplers import Sampler, make_sampler
 from .validation import check_int, check_real, check_seed
 

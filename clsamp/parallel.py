@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import io
+from . import files
 from .errors import InvalidArgumentError
 
 TASK_WORK = 2**25       # points a task aims at: long beside the scheduler's cost per task
@@ -195,7 +195,7 @@ class _Checkpoint:
         else:
             self.folder.mkdir(parents=True, exist_ok=True)
             what = f"{fn.__module__}.{fn.__qualname__}"
-            io.write_text(manifest, json.dumps({"fingerprint": fingerprint, "tasks": len(tasks),
+            files.write_text(manifest, json.dumps({"fingerprint": fingerprint, "tasks": len(tasks),
                                                 "what": what, "format": 1}))
 
     def _paths(self, index):
@@ -222,8 +222,8 @@ class _Checkpoint:
         buffer = _io.BytesIO()
         np.save(buffer, np.asarray(value), allow_pickle=False)
         raw = buffer.getvalue()
-        io.write_bytes(data, raw)
-        io.write_text(digest, hashlib.sha256(raw).hexdigest())
+        files.write_bytes(data, raw)
+        files.write_text(digest, hashlib.sha256(raw).hexdigest())
 
 
 # -- running -------------------------------------------------------------------------

@@ -50,7 +50,7 @@ OpenCL (``#include "permutation.h"``, which includes ``philox.h``)::
     void clsamp_fisher_yates(__global uint *a, uint length, uint2 key, uint stream,
                              uint realization, uint perm);       /* one row of random_permutations */
 
-where ``key`` is the seed as (low, high) words (:func:`clsamp.runtime.key_args`).
+where ``key`` is the seed as (low, high) words (:func:`clsamp.philox.seed_key`).
 
 Philox counters: step ``t`` of permutation ``perm`` first draws lane ``t % 4`` of
 block ``perm << 8`` at index ``t // 4`` (one Philox call serves four steps); its
@@ -354,7 +354,7 @@ def random_permutations_device(seed, stream, realizations, length, perms):
     runtime.kernel("permutation.cl", "fisher_yates_draws")(
         queue, (-(-items // local) * local, rows), (local, 1), draws.data, np.uint32(length),
         np.uint32(len(perms)), np.uint32(perms.start), np.uint32(realizations.start),
-        *runtime.key_args(seed), np.uint32(stream))
+        *philox.seed_key(seed), np.uint32(stream))
     # Few, long work-items: small work-groups let a CPU device spread them over its cores.
     compute_units = max(1, runtime.current_device().compute_units)
     local = runtime.local_size(max(1, rows // (4 * compute_units)))
@@ -451,6 +451,6 @@ def bounded_integers_device(seed, stream, realization, step, perm, range_):
     local = runtime.local_size()
     runtime.kernel("permutation.cl", "bounded_integers")(
         runtime.queue(), (-(-count // local) * local,), (local,), out.data, s_d.data, r_d.data,
-        np.uint32(step.size), np.uint32(perm), np.uint32(realization), *runtime.key_args(seed),
+        np.uint32(step.size), np.uint32(perm), np.uint32(realization), *philox.seed_key(seed),
         np.uint32(stream))
     return out.get()[:step.size].reshape(shape)

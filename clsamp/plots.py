@@ -1,6 +1,6 @@
 """Pictures of what clsamp measures: spectra, radial means, anisotropy, pair correlation,
 discrepancy against N, and MSE against N or against time, as matplotlib figures or
-PNG/OpenEXR files (written whole, through :mod:`clsamp.io`).
+PNG/OpenEXR files (written whole, through :mod:`clsamp.files`).
 
 matplotlib is imported when a picture is made (the Agg backend: no screen needed).
 """
@@ -9,10 +9,10 @@ import math
 
 import numpy as np
 
-from . import io, theory
+from . import files, theory
 from . import spectrum as spectra
-from .convergence import pareto_front
 from .errors import InvalidArgumentError
+from .results import pareto_front
 from .validation import check_choice, check_points, check_positive_int, check_real, point_sets
 
 __all__ = ["points", "points_figure", "spectrum", "radial_mean", "anisotropy", "spectrum_figure",
@@ -119,7 +119,7 @@ def points_figure(path, points, title=None, columns=4):
     if title:
         fig.suptitle(title)
     fig.tight_layout()
-    return io.save_figure(path, fig)
+    return files.save_figure(path, fig)
 
 
 # -- spectra --------------------------------------------------------------------------------
@@ -165,7 +165,7 @@ def spectrum_image(P, scale="linear", vmin=None, vmax=None):
 def save_spectrum_png(path, P, scale="linear", vmin=None, vmax=None):
     """Write a 2-D spectrum as a grey PNG (:func:`spectrum_image`; gamma 2.2 for "linear")."""
     image = spectrum_image(P, scale, vmin, vmax)
-    return io.write_png(path, image, gamma=2.2 if scale == "linear" else 1.0)
+    return files.write_png(path, image, gamma=2.2 if scale == "linear" else 1.0)
 
 
 def save_spectrum_exr(path, P, header=None):
@@ -177,7 +177,7 @@ def save_spectrum_exr(path, P, header=None):
     info = {"clsamp": "power spectrum",
             "layout": "row j: fy = R/2 - 1 - j (+y up); column i: fx = i - R/2"}
     info.update(header or {})
-    return io.write_exr(path, np.ascontiguousarray(image), header=info)
+    return files.write_exr(path, np.ascontiguousarray(image), header=info)
 
 
 def spectrum(ax, P, scale="linear", vmin=None, vmax=None, title=None):
@@ -268,7 +268,7 @@ def spectrum_figure(path, P, n=None, realizations=None, label=None, bin_width=1.
         if label:
             axes[0].set_title(label)
     figure.tight_layout()
-    return io.save_figure(path, figure)
+    return files.save_figure(path, figure)
 
 
 def sampler_figure(path, points, P, pcf, n=None, label=None):
@@ -320,7 +320,7 @@ def sampler_figure(path, points, P, pcf, n=None, label=None):
     axes[3].set_ylim(0, max(2.5, float(np.max(g)) * 1.05))
     axes[3].set_title(f"expected PCF{several}" if several else "PCF", fontsize=10)
     fig.tight_layout()
-    return io.save_figure(path, fig)
+    return files.save_figure(path, fig)
 
 
 def radial_mean_families(path, curves, families, n=None, reference="random", note=None):
@@ -367,7 +367,7 @@ def radial_mean_families(path, curves, families, n=None, reference="random", not
         ax.set_title(f"{family} ({note})" if note else family, fontsize=10)
         ax.legend(fontsize=8)
     fig.tight_layout()
-    return io.save_figure(path, fig)
+    return files.save_figure(path, fig)
 
 
 # -- metrics ------------------------------------------------------------------------------
@@ -389,13 +389,13 @@ def pair_correlation(ax, radii, pcf, n=None, d=2, label=None, **line_args):
 
 
 def pcf_figure(path, radii, pcf, n=None, d=2, label=None):
-    """One PCF, saved as a figure (.png, .pdf, .svg) with :func:`clsamp.io.save_figure`."""
+    """One PCF, saved as a figure (.png, .pdf, .svg) with :func:`clsamp.files.save_figure`."""
     fig, ax = pyplot().subplots(figsize=(5.5, 3.8))
     pair_correlation(ax, radii, pcf, n=n, d=d)
     if label:
         ax.set_title(label)
     fig.tight_layout()
-    return io.save_figure(path, fig)
+    return files.save_figure(path, fig)
 
 
 def discrepancy(ax, sweep, expected=None, **line_args):
@@ -460,7 +460,7 @@ def discrepancy_figure(path, sweeps):
         ax.grid(True, which="both", alpha=0.2)
         ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
-    return io.save_figure(path, fig)
+    return files.save_figure(path, fig)
 
 
 # -- convergence --------------------------------------------------------------------------
@@ -490,7 +490,7 @@ def convergence(results, path):
     Each result is a line with error bars (one standard error); where
     :func:`clsamp.theory.compare` knows the published rate, a dashed line of that
     slope in the same colour passes through the result's largest N. Saved with
-    :func:`clsamp.io.save_figure`; returns its path.
+    :func:`clsamp.files.save_figure`; returns its path.
     """
     fig, panels = _panels(results)
     for ax, name, group in panels:
@@ -510,17 +510,16 @@ def convergence(results, path):
         ax.set_yscale("log")
         _label(ax, "N (samples)", f"{name}: MSE against N (dashed: theory)")
     fig.tight_layout()
-    return io.save_figure(path, fig)
+    return files.save_figure(path, fig)
 
 
 def family_spread(ax, res, color=None, label=None):
     """One family result on ``ax``: the mean MSE over members as a line, the band between
     the members' 10 % and 90 % quantiles shaded, the worst member dotted, and the
-    published rate (:func:`clsamp.variance.compare`) dashed through the largest N."""
-    from . import variance
+    published rate (:func:`clsamp.theory.compare`) dashed through the largest N."""
     n = res.ns.astype(np.float64)
     lo, hi = np.quantile(res.mse, [0.1, 0.9], axis=1)
-    cmp = variance.compare(res)
+    cmp = theory.compare(res)
     text = label or res.sampler
     if np.isfinite(cmp["slope"]):
         text += f": {cmp['slope']:.2f} [{cmp['ci'][0]:.2f}, {cmp['ci'][1]:.2f}]"
@@ -539,19 +538,19 @@ def family_spread(ax, res, color=None, label=None):
 def family_convergence(results, path):
     """MSE against N over integrand families, one panel per family: per sampler the mean
     over members (line), the 10-90 % band across members (shaded), the worst member
-    (dotted) and the theory (dashed). ``results``: :class:`clsamp.variance.FamilyResult`."""
+    (dotted) and the theory (dashed). ``results``: :class:`clsamp.results.FamilyResult`."""
     fig, panels = _panels(results)
     for ax, name, group in panels:
         for res in group:
             family_spread(ax, res)
         _label(ax, "N (samples)", f"{name} ({group[0].members} members): MSE against N")
     fig.tight_layout()
-    return io.save_figure(path, fig)
+    return files.save_figure(path, fig)
 
 
 def accuracy_time(results, path):
     """MSE against seconds per estimate (generation included), one panel per integrand,
-    with the accuracy-time front (:func:`clsamp.convergence.pareto_front`) drawn in black;
+    with the accuracy-time front (:func:`clsamp.results.pareto_front`) drawn in black;
     returns the path."""
     fig, panels = _panels(results)
     for ax, name, group in panels:
@@ -564,7 +563,7 @@ def accuracy_time(results, path):
                     linewidth=1.5, alpha=0.6, label="front")
         _label(ax, "seconds per estimate (generation included)", f"{name}: accuracy against time")
     fig.tight_layout()
-    return io.save_figure(path, fig)
+    return files.save_figure(path, fig)
 
 
 def error_time(ax, curves, xlabel="seconds", ylabel="MSE", title=None, exact=None,
@@ -634,7 +633,7 @@ def error_time_figure(path, panels):
         if panel is not None:
             error_time(ax, **panel)
     fig.tight_layout()
-    return io.save_figure(path, fig)
+    return files.save_figure(path, fig)
 
 
 # -- renders ---------------------------------------------------------------------------
@@ -677,10 +676,10 @@ def render_comparison(path, reference, images, columns=4):
     for ax in axes.ravel():
         ax.axis("off")
     for ax, (label, image, error) in zip(axes.ravel(), panels, strict=False):
-        ax.imshow(io.tone_map(image), cmap="gray", vmin=0, vmax=255, interpolation="nearest")
+        ax.imshow(files.tone_map(image), cmap="gray", vmin=0, vmax=255, interpolation="nearest")
         ax.set_title(label if error is None else f"{label}\nMSE {error:.3g}", fontsize=9)
     fig.tight_layout()
-    return io.save_figure(path, fig)
+    return files.save_figure(path, fig)
 
 
 def error_spectra(path, curves, title=None):
@@ -709,4 +708,4 @@ def error_spectra(path, curves, title=None):
     if title:
         ax.set_title(title, fontsize=10)
     fig.tight_layout()
-    return io.save_figure(path, fig)
+    return files.save_figure(path, fig)

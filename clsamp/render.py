@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import io, parallel, philox, runtime
+from . import files, parallel, philox, runtime
 from .errors import InvalidArgumentError
 from .pixel_sampling import (  # noqa: F401  (block_size, float32_samples: public here too)
     DEFAULT_POOL,
@@ -381,7 +381,7 @@ def reference(scene, resolution, spp=None, progress=True, seed=REFERENCE_SEED, c
     result = None
     if cache and path.is_file():
         try:
-            image, header = io.read_exr(path, with_header=True, channel_names=("Y", "stderr"))
+            image, header = files.read_exr(path, with_header=True, channel_names=("Y", "stderr"))
             if image.shape == (height, width, 2) and _header_text(header.get("key")) == key:
                 result = np.ascontiguousarray(image.transpose(2, 0, 1), dtype=np.float32)
         except Exception:  # a corrupt or foreign file: render again and overwrite it
@@ -389,7 +389,7 @@ def reference(scene, resolution, spp=None, progress=True, seed=REFERENCE_SEED, c
     if result is None:
         result = _render_reference(scene, (width, height), spp, seed, progress)
         if cache:
-            io.write_exr(path, result.transpose(1, 2, 0), channel_names=("Y", "stderr"),
+            files.write_exr(path, result.transpose(1, 2, 0), channel_names=("Y", "stderr"),
                          header={"key": key, "scene": scene.name, "spp": spp, "seed": seed,
                                  "sampler": f"{REFERENCE_SAMPLER} (reference, {REFERENCE_PASSES} passes)",
                                  "resolution": f"{width}x{height}"})
@@ -582,7 +582,7 @@ def save(path, image, sampler, spp, seed, scene=None, preview=True):
               "seed": seed}
     if scene is not None:
         header["scene"] = scene.name
-    written = [io.write_exr(path.with_suffix(".exr"), image, header)]
+    written = [files.write_exr(path.with_suffix(".exr"), image, header)]
     if preview:
-        written.append(io.write_png(path.with_suffix(".png"), image))
+        written.append(files.write_png(path.with_suffix(".png"), image))
     return [Path(p) for p in written]

@@ -1,7 +1,7 @@
 """The scaffolding of the tour's HTML report: sections, the output folder, tables.
 
 :class:`Report` owns the output folder (``img/`` for pictures, ``data/`` for raw data, every
-file written whole through :mod:`clsamp.io`); :func:`write_html` turns its sections into
+file written whole through :mod:`clsamp.files`); :func:`write_html` turns its sections into
 ``index.html``; :func:`json_safe` makes numbers JSON can hold (non-finite ones as strings).
 """
 
@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import io
+from . import files
 
 
 @dataclasses.dataclass
@@ -91,7 +91,7 @@ class Report:
         str
             The file's path relative to the output folder (for an ``<img>`` tag).
         """
-        path = io.save_figure(self.out / "img" / f"{name}.png", fig)
+        path = files.save_figure(self.out / "img" / f"{name}.png", fig)
         return path.relative_to(self.out).as_posix()
 
     def points(self, name, points):
@@ -103,7 +103,7 @@ class Report:
             The file's name without its suffix.
         points : ndarray or list of ndarray
             (n, d) or (r, n, d) points, written in NumPy's format; or sets of different
-            sizes, written as text (:func:`clsamp.io.format_points`), one set after
+            sizes, written as text (:func:`clsamp.files.format_points`), one set after
             another, separated by a line ``#``.
 
         Returns
@@ -114,9 +114,9 @@ class Report:
         suffix = ".txt" if isinstance(points, list) else ".npy"
         if isinstance(points, list):
             path = self.out / "data" / f"{name}{suffix}"
-            io.write_text(path, "#\n".join(io.format_points(p) for p in points))
+            files.write_text(path, "#\n".join(files.format_points(p) for p in points))
         else:
-            path = io.save_points(self.out / "data" / f"{name}{suffix}", points)
+            path = files.save_points(self.out / "data" / f"{name}{suffix}", points)
         return path.relative_to(self.out).as_posix()
 
     def array(self, name, array):
@@ -137,11 +137,11 @@ class Report:
         buffer = BytesIO()
         np.save(buffer, np.asarray(array))
         path = self.out / "data" / f"{name}.npy"
-        io.write_bytes(path, buffer.getvalue())
+        files.write_bytes(path, buffer.getvalue())
         return path.relative_to(self.out).as_posix()
 
     def exr(self, name, image, header=None):
-        """Save a float image as OpenEXR, ``data/<name>.exr`` (:func:`clsamp.io.write_exr`).
+        """Save a float image as OpenEXR, ``data/<name>.exr`` (:func:`clsamp.files.write_exr`).
 
         Parameters
         ----------
@@ -157,11 +157,11 @@ class Report:
         str
             The file's path relative to the output folder.
         """
-        path = io.write_exr(self.out / "data" / f"{name}.exr", image, header)
+        path = files.write_exr(self.out / "data" / f"{name}.exr", image, header)
         return path.relative_to(self.out).as_posix()
 
     def png(self, name, image, **tone):
-        """Save an image as PNG, ``img/<name>.png`` (:func:`clsamp.io.write_png`).
+        """Save an image as PNG, ``img/<name>.png`` (:func:`clsamp.files.write_png`).
 
         Parameters
         ----------
@@ -177,7 +177,7 @@ class Report:
         str
             The file's path relative to the output folder.
         """
-        path = io.write_png(self.out / "img" / f"{name}.png", image, **tone)
+        path = files.write_png(self.out / "img" / f"{name}.png", image, **tone)
         return path.relative_to(self.out).as_posix()
 
 
@@ -336,7 +336,7 @@ def write_html(report, meta):
         parts.append(s.body)
         parts.append(f"<p class='note'>{s.seconds:.1f} s</p></section>")
     parts.append("</body></html>")
-    io.write_text(report.out / "index.html", "\n".join(parts))
+    files.write_text(report.out / "index.html", "\n".join(parts))
 
 
 def versions():

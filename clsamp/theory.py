@@ -146,15 +146,16 @@ def _text(exponent):
     return f"N^{exponent:g}"
 
 
-def compare(result):
+def compare(result, statistic="mean", allowance=None):
     """Hold a measured rate against the published one.
 
     Parameters
     ----------
-    result : ConvergenceResult
+    result : ConvergenceResult or FamilyResult
         Its ``rates`` (the sampler's own answer, recorded by :func:`clsamp.convergence`)
         give the published rate; a result without them asks a sampler made from its
-        ``kind``.
+        ``kind``. A :class:`~clsamp.results.FamilyResult` (a sweep over a family) is
+        compared by :func:`compare_family`, with ``statistic`` and ``allowance``.
 
     Returns
     -------
@@ -166,6 +167,8 @@ def compare(result):
         an expected rate, and ``verdict``, whose first word is ``matches``,
         ``pre-asymptotic``, ``differs`` or ``unknown`` (see the module).
     """
+    if hasattr(result, "members"):
+        return compare_family(result, statistic, allowance)
     slope, stderr = result.rate()
     case = case_of(getattr(result, "traits", {}) or {})
     kind = getattr(result, "kind", "") or str(result.sampler)
@@ -218,6 +221,35 @@ DISCREPANCY_RATES = {
     "hammersley": (-1.0, "N^-1 log N"),
     "sobol": (-1.0, "N^-1 log N"),
 }
+
+
+def family_expected(result):
+    """(exponent, source) the sampler publishes for the family's case, or (None, None)."""
+    rate = result.rates.get(case_of(result.traits))
+    return (None, None) if rate is None else (rate[0], rate[1])
+
+
+def compare_family(result, statistic="mean", allowance=None):
+    """The fitted rate of a family sweep's ``statistic`` held against the published one.
+
+    Returns a dict: ``slope``, ``ci`` (lower, upper), ``expected`` (exponent or None),
+    ``source`` and ``verdict``: "matches" when the expected exponent lies in the
+    confidence interval, "pre-asymptotic" when within ``allowance`` (default
+    ``theory.CURVATURE_ALLOWANCE``) of it, "differs" beyond, "unknown" without a rate.
+    """
+    allowance = CURVATURE_ALLOWANCE if allowance is None else allowance
+    slope, lo, hi = result.rate(statistic)
+    exponent, source = family_expected(result)
+    if exponent is None or not math.isfinite(lo):
+        verdict = "unknown"
+    elif lo <= exponent <= hi:
+        verdict = "matches"
+    elif lo - allowance <= exponent <= hi + allowance:
+        verdict = "pre-asymptotic"
+    else:
+        verdict = "differs"
+    return {"statistic": statistic, "slope": slope, "ci": (lo, hi), "expected": exponent,
+            "source": source, "verdict": verdict}
 
 
 def discrepancy_rate(label):

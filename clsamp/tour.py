@@ -31,7 +31,7 @@ import traceback
 
 import numpy as np
 
-from . import io, plots, runtime
+from . import files, plots, runtime
 from .report import Report, Section, fmt, img, json_safe, table, versions, write_html
 
 # Samplers shown in section 1, with the parameters that make each one its textbook self.
@@ -88,7 +88,7 @@ def tour_sampler_params(name, quick):
 def section_samplers(report, quick):
     """Every sampler: a point set, its expected power spectrum, radial mean and pair
     correlation; the radial means by family; the discrepancies against N."""
-    from . import metrics, point_metrics, spectrum
+    from . import metrics, spectrum
     from .samplers import make_sampler, sampler_names
     n, realizations, resolution = (256, 8, 64) if quick else (1024, 32, 128)
     known = set(sampler_names())
@@ -100,7 +100,7 @@ def section_samplers(report, quick):
         try:
             params = tour_sampler_params(name, quick)
             if name == "poisson_disk":        # maximal sets: a list of different sizes
-                params["radius"] = MAXIMAL_RHO * point_metrics.max_min_distance(n)
+                params["radius"] = MAXIMAL_RHO * metrics.max_min_distance(n)
             sampler = make_sampler(name, d=2, seed=1, **params)
             t0 = time.perf_counter()
             if sampler.needs_n:
@@ -113,7 +113,7 @@ def section_samplers(report, quick):
             freqs, mean = spectrum.radial_mean(P)
             _, aniso = spectrum.anisotropy(P)
             radii, pcf = metrics.pair_correlation(points)
-            rho = np.asarray(point_metrics.relative_radius(points))
+            rho = np.asarray(metrics.relative_radius(points))
             report.points(f"points_{name}", points)
             report.array(f"spectrum_{name}", P)
             plots.save_spectrum_exr(report.out / "data" / f"spectrum_{name}.exr", P,
@@ -246,7 +246,7 @@ def _sampler_for_convergence(name, quick):
 def section_convergence(report, quick):
     """MSE against N for a smooth and a discontinuous integrand, rates against theory."""
     from . import theory
-    from .convergence import convergence
+    from .sweep import convergence
     samplers, integrands, sweeps = tour_convergence_plan(quick)
     results, rows, data = [], [], {}
     for integrand in integrands:
@@ -304,8 +304,8 @@ TOUR_FAMILY_SAMPLERS = ("random", "regular", "jittered", "sobol:owen")
 def _family_sweeps(report, quick):
     """Section 2's second part: MSE over families of random integrands, the spread across
     members shaded, the worst member dotted."""
-    from . import variance
-    from .convergence import convergence
+    from . import theory
+    from .sweep import convergence
     ns, realizations, members = (([16, 64, 256, 1024], 32, 32) if quick
                                   else ([16, 64, 256, 1024, 4096, 16384], 64, 256))
     results, rows, data = [], [], {}
@@ -315,7 +315,7 @@ def _family_sweeps(report, quick):
                 res = convergence(name, family, ns, realizations=realizations, members=members,
                                   seed=3, progress=False, client=report.client)
                 results.append(res)
-                cmp = variance.compare(res)
+                cmp = theory.compare(res)
                 worst = res.rate("max")
                 rows.append((name, family, f"{cmp['slope']:.2f} [{cmp['ci'][0]:.2f}, {cmp['ci'][1]:.2f}]",
                              "-" if cmp["expected"] is None else f"N^{cmp['expected']:g}", cmp["verdict"],
@@ -489,7 +489,7 @@ def section_cost(report, quick):
         failures.append(("spectra", traceback.format_exc()))
     # samplers
     try:
-        from .convergence import pareto_front, time_to_mse
+        from .results import pareto_front, time_to_mse
         results = report.results.get("convergence")
         if not results:
             raise RuntimeError("section 2 produced no convergence results")
@@ -624,7 +624,7 @@ def _stability_cases(quick):
     case("Philox kernel vs NumPy (800k doubles)", "mismatching values", philox_identity, 0.0)
 
     def owen_mse():
-        from .convergence import convergence
+        from .sweep import convergence
         n = 2**12 if quick else 2**16
         res = convergence("sobol:owen", "gaussian", [n], realizations=64, seed=7, progress=False)
         from math import fsum
@@ -642,7 +642,7 @@ def _stability_cases(quick):
     case("CCVT capacities and energy", "capacity spread + largest energy rise", ccvt_capacities, 0.0)
 
     def poisson_radius():
-        from .point_metrics import relative_radius
+        from .metrics import relative_radius
         pts = make_sampler("poisson_disk", rho=0.75, seed=2).sample(512, realizations=4)
         return 0.75 - float(np.min(relative_radius(pts)))
     case("Poisson disk ρ >= 0.75", "0.75 - smallest ρ", poisson_radius, 0.0)
@@ -730,7 +730,7 @@ def run_tour(out, quick=False, progress=True, client=None):
         report.sections.append(section)
         results[key] = {"title": title, "seconds": section.seconds, "error": section.error,
                         "data": section.data}
-        io.write_text(report.out / "tour.json",
+        files.write_text(report.out / "tour.json",
                       json.dumps(json_safe({"meta": meta, "sections": results}), indent=1))
         write_html(report, meta)
     return report.out / "index.html"

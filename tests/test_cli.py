@@ -6,7 +6,7 @@ import sys
 
 import numpy as np
 
-from clsamp import io
+from clsamp import files
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -27,7 +27,7 @@ def test_devices_lists_the_default_device():
 def test_sample_writes_text_and_npy(tmp_path):
     out = clsamp_cli("sample", "random", "-n", "64", "-d", "3", "--seed", "5", "-o", str(tmp_path / "p.txt"))
     assert out.returncode == 0, out.stderr
-    points = io.load_points(tmp_path / "p.txt")
+    points = files.load_points(tmp_path / "p.txt")
     assert points.shape == (64, 3)
     import clsamp
     np.testing.assert_array_equal(points, clsamp.make_sampler("random", d=3, seed=5).sample(64))
@@ -68,7 +68,7 @@ def test_metrics_writes_json_and_the_pcf_figure(tmp_path):
     assert m["star"]["values"] == clsamp.star_discrepancy(points).tolist()
     assert len(m["pcf"]["radii"]) == 100 and m["nn"]["min"] > 0
     # a point file, and bounds beyond the exact dimensions
-    io.save_points(tmp_path / "p.npy", clsamp.make_sampler("sobol", d=5).sample(128))
+    files.save_points(tmp_path / "p.npy", clsamp.make_sampler("sobol", d=5).sample(128))
     out = clsamp_cli("metrics", str(tmp_path / "p.npy"), "--metric", "star", "--bounds",
                      "-o", str(tmp_path / "b.json"))
     assert out.returncode == 0, out.stderr

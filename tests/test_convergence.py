@@ -22,16 +22,11 @@ import pytest
 
 import clsamp
 from clsamp import philox, theory
-from clsamp.convergence import (
-    ConvergenceResult,
-    homogenization_shifts,
-    pareto_front,
-    parse_ns,
-    time_to_mse,
-)
 from clsamp.errors import InvalidArgumentError
-from clsamp.geometry.torus import shift
+from clsamp.geometry.torus import homogenization_shifts, shift
 from clsamp.integrands import Gaussian, make_integrand
+from clsamp.results import ConvergenceResult, pareto_front, time_to_mse
+from clsamp.sweep import parse_ns
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -166,8 +161,7 @@ def test_every_registered_sampler_runs():
 
 
 def test_chunks_give_the_same_errors(monkeypatch):
-    from clsamp import convergence as _  # noqa: F401  (the function; the module is in sys.modules)
-    module = sys.modules["clsamp.convergence"]
+    from clsamp import estimates as module
     whole = run("jittered", "disk", [64], 10, seed=9)
     whole_np = run("jittered", "disk", [64], 10, seed=9, backend="numpy")
     monkeypatch.setattr(module, "DEVICE_CHUNK", {"cpu": 3 * 64 * 2, "gpu": 3 * 64 * 2, "other": 3 * 64 * 2})

@@ -152,9 +152,9 @@ def test_a_dimension_split_gives_the_same_bits(monkeypatch, name, d, params):
     n = s.valid_n(81 if n is None else n)
     whole = s.sample(n, realizations=2)
     split = runtime.dimension_split
-    monkeypatch.setattr(runtime, "loop_limit", lambda: 2000)
+    monkeypatch.setattr(runtime.discovery, "loop_limit", lambda: 2000)
     # 4 for random (pairs) and Sobol' (4-wide), 3 for the others
-    monkeypatch.setattr(runtime, "dimension_split",
+    monkeypatch.setattr(runtime.discovery, "dimension_split",
                         lambda d, per_item, *a: split(d, 4 if per_item == 256 else 3, *a))
     parts = s.sample(n, realizations=2)
     assert np.array_equal(whole.view(np.uint64), parts.view(np.uint64))

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import clsamp
-from clsamp import families, variance
+from clsamp import families, results, theory
 from clsamp.errors import InvalidArgumentError
 
 NAMES = families.family_names()
@@ -96,7 +96,7 @@ def test_heavisides_include_axis_aligned_members():
 def test_family_result_summaries_and_json():
     res = clsamp.convergence("jittered", "random_disks", [16, 64, 256, 1024], realizations=16,
                              members=10, seed=2, progress=False)
-    assert isinstance(res, variance.FamilyResult)
+    assert isinstance(res, results.FamilyResult)
     assert res.mse.shape == (4, 10)
     np.testing.assert_allclose(res.mean, res.mse.mean(axis=1))
     np.testing.assert_allclose(res.max, res.mse.max(axis=1))
@@ -112,15 +112,15 @@ def test_rates_over_families_match_the_theory():
     ns = [16, 64, 256, 1024, 4096, 16384]
     kw = dict(realizations=48, members=48, seed=1, progress=False)
     jit = clsamp.convergence("jittered", "random_heavisides", ns, **kw)
-    assert variance.compare(jit)["verdict"] in ("matches", "pre-asymptotic")
+    assert theory.compare(jit)["verdict"] in ("matches", "pre-asymptotic")
     assert abs(jit.rate("mean")[0] + 1.5) < 0.15
     # a regular grid's worst members stall at N^-1: no better than random points
     grid = clsamp.convergence("regular", "random_heavisides", ns, **kw)
     assert grid.rate("max")[0] > -1.2 > jit.rate("max")[0] + 0.1
     smooth = clsamp.convergence("jittered", "random_gaussians", ns, **kw)
-    assert variance.compare(smooth)["verdict"] in ("matches", "pre-asymptotic")
+    assert theory.compare(smooth)["verdict"] in ("matches", "pre-asymptotic")
     owen = clsamp.convergence("sobol:owen", "random_gaussians", [2**k for k in range(8, 17, 2)], **kw)
-    check = variance.compare(owen)
+    check = theory.compare(owen)
     assert check["expected"] == -3 and check["verdict"] in ("matches", "pre-asymptotic")
     assert owen.rate("mean")[0] < -2.6
 

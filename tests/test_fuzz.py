@@ -14,7 +14,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import clsamp
-from clsamp import families, io
+from clsamp import families, files
 from clsamp.errors import InvalidArgumentError
 
 ALLOWED = (InvalidArgumentError,)
@@ -159,7 +159,7 @@ def test_render(sampler, spp, resolution, seed):
 def test_files(tmp_path_factory, data, suffix):
     path = tmp_path_factory.mktemp("fuzz") / f"f{suffix}"
     path.write_bytes(data)
-    reader = io.read_exr if suffix == ".exr" else io.load_points
+    reader = files.read_exr if suffix == ".exr" else files.load_points
     _call(reader, path)
     with pytest.raises(FileNotFoundError):
         reader(path.with_name("missing" + suffix))

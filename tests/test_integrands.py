@@ -117,12 +117,12 @@ def test_batch_shape_and_call():
 # -- the kernel against the NumPy functions --------------------------------------------
 @pytest.mark.parametrize("name", I.integrand_names())
 def test_kernel_evaluation_equals_numpy(name):
-    from clsamp.convergence import _errors_numpy
+    from clsamp.estimates import IntegrandErrors
     f = I.make_integrand(name)
     sampler = clsamp.make_sampler("random", seed=4)
     res = clsamp.convergence(sampler, f, [37, 4096 + 5], realizations=6, seed=9, progress=False)
     for n, e in zip(res.ns, res.errors, strict=True):
-        want = _errors_numpy(sampler, f, int(n), 6, True, 9)
+        want = IntegrandErrors(sampler, f, True, 9, "numpy").block(int(n), 0, 6)
         np.testing.assert_allclose(e, want, rtol=1e-12, atol=1e-15)
 
 

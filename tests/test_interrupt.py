@@ -13,7 +13,7 @@ import time
 import numpy as np
 import pytest
 
-from clsamp import io
+from clsamp import files
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -56,7 +56,7 @@ CASES = [
      {"c.png": _whole_png, "c_time.png": _whole_png,
       "c.json": lambda p: len(json.loads(p.read_text())["results"]) == 2}),
     (["render", "ao", "--sampler", "jittered", "--spp", "256", "--resolution", "384", "-o", "r.exr"],
-     {"r.exr": lambda p: io.read_exr(p).shape[:2] == (384, 384), "r.png": _whole_png}),
+     {"r.exr": lambda p: files.read_exr(p).shape[:2] == (384, 384), "r.png": _whole_png}),
 ]
 
 

@@ -7,7 +7,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 import clsamp
-from clsamp import philox, point_metrics
+from clsamp import metrics, philox
 from clsamp.errors import InvalidArgumentError
 from clsamp.geometry import integer_torus as it
 from clsamp.geometry import voronoi
@@ -74,9 +74,9 @@ def test_lloyd_quality():
     pts, info = s.sample(128, realizations=2, return_info=True)
     ne = 128 * info.energy_history[:, -1]               # N*E on the sampler's density grid
     assert np.all(ne < 0.168)                           # white noise: 1/pi
-    assert np.all(ne > point_metrics.HEXAGONAL_NE)
-    assert np.all(point_metrics.normalized_energy(pts, density=128) == ne)
-    assert np.all(point_metrics.relative_radius(pts) > 0.6)
+    assert np.all(ne > metrics.HEXAGONAL_NE)
+    assert np.all(metrics.normalized_energy(pts, density=128) == ne)
+    assert np.all(metrics.relative_radius(pts) > 0.6)
 
 
 def test_lloyd_degenerate_starts_recover():
@@ -88,7 +88,7 @@ def test_lloyd_degenerate_starts_recover():
     assert np.all(a.counts > 0)                            # no site left with an empty cell
     assert np.all(np.diff(a.energy_history, axis=1) <= 0)
     assert np.all(a.energy_history[:, 0] <= a.initial_energy)
-    assert np.all(point_metrics.min_distance(points) > 0)
+    assert np.all(metrics.min_distance(points) > 0)
 
 
 # -- CCVT --------------------------------------------------------------------------------
@@ -227,8 +227,8 @@ def test_start_sites_relax_the_sites_and_both_backends_agree():
     assert a.dtype == np.uint32 and wa.dtype == np.int64 and wa.shape == (3, 90)
     assert np.array_equal(a[2], sites[2]) and not wa[2].any()
     for k in range(2):
-        before = point_metrics.relative_radius(it.to_unit(sites[k, 3:]))
-        after = point_metrics.relative_radius(it.to_unit(a[k]))
+        before = metrics.relative_radius(it.to_unit(sites[k, 3:]))
+        after = metrics.relative_radius(it.to_unit(a[k]))
         assert before < 0.3 and after > 0.55, (before, after)
     for k in range(2):                                        # realizations do not interact
         one, _ = start.start_sites(sites[k:k + 1], 64, steps=8)
@@ -448,14 +448,14 @@ def test_ccvt_quality():
     # holds each set and the Voronoi energy below the mean.
     capacity_ne = 128 * info.energy_history[:, -1]
     assert np.all(capacity_ne < 0.173)
-    assert np.all(capacity_ne > point_metrics.HEXAGONAL_NE)
+    assert np.all(capacity_ne > metrics.HEXAGONAL_NE)
     # the energy of the sites' own Voronoi cells, on a fine grid: the continuous quality,
     # which the discrete E over the density points only estimates
     c = (np.arange(512) + 0.5) / 512
     grid = np.stack(np.meshgrid(c, c), -1).reshape(-1, 2)
     ne = [128 * np.mean(cKDTree(q, boxsize=1.0).query(grid)[0] ** 2) for q in pts]
-    assert np.mean(ne) < 0.170 and np.all(np.array(ne) > point_metrics.HEXAGONAL_NE)
-    assert np.all(point_metrics.relative_radius(pts) > 0.65)
+    assert np.mean(ne) < 0.170 and np.all(np.array(ne) > metrics.HEXAGONAL_NE)
+    assert np.all(metrics.relative_radius(pts) > 0.65)
 
 
 def test_ccvt_degenerate_starts():
@@ -466,7 +466,7 @@ def test_ccvt_degenerate_starts():
     assert np.array_equal(a.energy_history, b.energy_history)
     assert np.all(a.capacities == 16)
     assert np.all(np.diff(a.energy_history, axis=1) <= 0)
-    assert np.all(point_metrics.min_distance(points) > 0)      # the duplicates separated
+    assert np.all(metrics.min_distance(points) > 0)      # the duplicates separated
     assert np.all(a.capacities.shape == (3, 24))
 
 

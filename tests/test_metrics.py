@@ -10,8 +10,7 @@ import pytest
 
 import clsamp
 from clsamp.errors import InvalidArgumentError
-from clsamp.metrics import l2, neighbors, star
-from clsamp.point_metrics import min_distance
+from clsamp.metrics import l2, min_distance, neighbors, star
 
 qmc = pytest.importorskip("scipy.stats.qmc")
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import clsamp
-from clsamp import io, point_metrics
+from clsamp import files, metrics
 from clsamp.cli import main
 
 
@@ -20,7 +20,7 @@ def run(capsys, *argv):
     return code, captured.out + captured.err
 
 
-def files(folder):
+def listing(folder):
     return sorted(p.name for p in folder.iterdir())
 
 
@@ -29,7 +29,7 @@ def files(folder):
 def test_sample_writes_each_accepted_suffix(tmp_path, capsys, suffix):
     code, text = run(capsys, "sample", "jittered", "-n", "16", "-o", str(tmp_path / f"p{suffix}"))
     assert code == 0 and f"p{suffix}" in text
-    assert io.load_points(tmp_path / f"p{suffix}").shape == (16, 2)
+    assert files.load_points(tmp_path / f"p{suffix}").shape == (16, 2)
 
 
 @pytest.mark.parametrize("argv, option", [
@@ -44,7 +44,7 @@ def test_sample_writes_each_accepted_suffix(tmp_path, capsys, suffix):
 def test_a_wrong_suffix_is_refused_and_nothing_is_written(tmp_path, capsys, argv, option):
     code, text = run(capsys, *(a.format(tmp_path) for a in argv))
     assert code == 2 and option in text and "Traceback" not in text
-    assert files(tmp_path) == []
+    assert listing(tmp_path) == []
 
 
 def test_spectrum_outputs_and_a_collision(tmp_path, capsys):
@@ -67,9 +67,9 @@ def test_render_writes_one_stem_twice_never_over_itself(tmp_path, capsys, suffix
     code, text = run(capsys, "render", "ao", "--sampler", "jittered", "--spp", "16",
                      "--resolution", "8", "--no-progress", "-o", str(tmp_path / f"x{suffix}"))
     assert code == 0
-    assert files(tmp_path) == ["x.exr", "x.png"]
+    assert listing(tmp_path) == ["x.exr", "x.png"]
     assert "x.exr" in text and "x.png" in text
-    image, header = io.read_exr(tmp_path / "x.exr", with_header=True)
+    image, header = files.read_exr(tmp_path / "x.exr", with_header=True)
     assert image.shape == (8, 8) and str(header["sampler"]) == "jittered"
     assert (tmp_path / "x.png").read_bytes()[:4] == b"\x89PNG"
 
@@ -79,8 +79,8 @@ def test_convergence_companions_follow_the_plot(tmp_path, capsys, suffix):
     code, text = run(capsys, "convergence", "--samplers", "random", "--ns", "16,64",
                      "--realizations", "8", "--no-progress", "-o", str(tmp_path / f"c{suffix}"))
     assert code == 0
-    assert files(tmp_path) == sorted([f"c{suffix}", f"c_time{suffix}", "c.json"])
-    for name in files(tmp_path):
+    assert listing(tmp_path) == sorted([f"c{suffix}", f"c_time{suffix}", "c.json"])
+    for name in listing(tmp_path):
         assert name in text
 
 
@@ -98,7 +98,7 @@ def test_a_missing_file_is_not_a_bad_sampler_name(tmp_path, capsys):
                                   ("-d", "2"), ("--param", "randomize=owen")])
 def test_a_flag_that_does_not_apply_to_a_file_is_refused(tmp_path, capsys, flag):
     source = tmp_path / "pts.npy"
-    io.save_points(source, clsamp.make_sampler("random", seed=1).sample(64))
+    files.save_points(source, clsamp.make_sampler("random", seed=1).sample(64))
     code, text = run(capsys, "spectrum", str(source), *flag, "-o", str(tmp_path / "x.png"))
     assert code == 2 and repr(flag[0]) in text and "applies to a sampler" in text
     assert not (tmp_path / "x.png").exists()
@@ -111,16 +111,16 @@ def test_a_flag_that_does_not_apply_to_a_file_is_refused(tmp_path, capsys, flag)
 def test_files_get_the_mode_the_umask_gives(tmp_path, mask, mode):
     old = os.umask(mask)
     try:
-        paths = [io.write_text(tmp_path / "a.txt", "x") or tmp_path / "a.txt",
-                 io.save_points(tmp_path / "p.npy", np.full((2, 2), 0.5)),
-                 io.write_png(tmp_path / "i.png", np.zeros((4, 4))),
-                 io.write_exr(tmp_path / "i.exr", np.zeros((4, 4), dtype=np.float32))]
+        paths = [files.write_text(tmp_path / "a.txt", "x") or tmp_path / "a.txt",
+                 files.save_points(tmp_path / "p.npy", np.full((2, 2), 0.5)),
+                 files.write_png(tmp_path / "i.png", np.zeros((4, 4))),
+                 files.write_exr(tmp_path / "i.exr", np.zeros((4, 4), dtype=np.float32))]
     finally:
         os.umask(old)
     for path in paths:
         assert stat.S_IMODE(os.stat(path).st_mode) == mode, path
     os.chmod(paths[0], 0o640)                      # an existing file keeps its own mode
-    io.write_text(paths[0], "y")
+    files.write_text(paths[0], "y")
     assert stat.S_IMODE(os.stat(paths[0]).st_mode) == 0o640
 
 
@@ -134,19 +134,19 @@ def test_maximal_sets_have_a_spectrum_and_metrics():
                               for s in sets], axis=0)
         assert np.allclose(P, one_by_one, rtol=1e-13, atol=1e-12)
         assert P[16, 16] == pytest.approx(np.mean([len(s) for s in sets]))
-    for metric in (point_metrics.min_distance, point_metrics.relative_radius,
-                   point_metrics.normalized_energy):
+    for metric in (metrics.min_distance, metrics.relative_radius,
+                   metrics.normalized_energy):
         got = metric(sets)
         assert got.shape == (4,)
         assert np.array_equal(got, [metric(s) for s in sets])
-    assert np.all(point_metrics.min_distance(sets) >= 0.06)
+    assert np.all(metrics.min_distance(sets) >= 0.06)
     with pytest.raises(clsamp.InvalidArgumentError, match=r"'points\[1\]'"):
         clsamp.power_spectrum([sets[0], np.full((3, 2), 1.5)], 16)
 
 
 def test_a_list_of_lists_is_still_one_set():
     pts = [[0.1, 0.2], [0.6, 0.7]]
-    assert point_metrics.min_distance(pts) == point_metrics.min_distance(np.array(pts))
+    assert metrics.min_distance(pts) == metrics.min_distance(np.array(pts))
 
 
 # -- numbers as people read them -----------------------------------------------------------

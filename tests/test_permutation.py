@@ -10,7 +10,7 @@ import pytest
 from scipy import stats
 
 import clsamp
-from clsamp import permutation
+from clsamp import permutation, philox
 from clsamp.errors import InvalidArgumentError
 from clsamp.philox import Stream
 
@@ -167,7 +167,7 @@ def test_inline_fisher_yates_equals_the_batch():
     out = cla.empty(runtime.queue(), (3, 3, length), np.uint32)
     runtime.kernel("permutation.cl", "fisher_yates_inline")(
         runtime.queue(), (9,), None, out.data, np.uint32(length), np.uint32(3), np.uint32(3),
-        np.uint32(1), np.uint32(2), *runtime.key_args(8), np.uint32(Stream.PERMUTATION))
+        np.uint32(1), np.uint32(2), *philox.seed_key(8), np.uint32(Stream.PERMUTATION))
     want = permutation.random_permutations(8, Stream.PERMUTATION, reals, length, perms)
     assert np.array_equal(out.get(), want)
 

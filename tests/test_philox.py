@@ -55,7 +55,7 @@ def test_uniform_bits_identical_between_kernel_and_numpy():
     seed = 0x1234_5678_9ABC_DEF0
     kernel = runtime.kernel(PROBE_KERNEL, "uniform_probe")
     kernel(q, (n, realizations), None, out.data, words.data, np.uint32(n), np.uint32(d),
-           *runtime.key_args(seed), np.uint32(philox.Stream.SHIFT))
+           *philox.seed_key(seed), np.uint32(philox.Stream.SHIFT))
     r = np.arange(realizations)[:, None, None]
     i = np.arange(n)[None, :, None]
     j = np.arange(d)[None, None, :]

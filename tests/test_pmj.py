@@ -8,7 +8,7 @@ import pytest
 from conftest import is_net
 
 import clsamp
-from clsamp.point_metrics import relative_radius
+from clsamp.metrics import relative_radius
 from clsamp.samplers import pmj
 
 

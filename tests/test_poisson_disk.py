@@ -7,7 +7,7 @@ from scipy.spatial import cKDTree
 
 import clsamp
 from clsamp.errors import InvalidArgumentError
-from clsamp.point_metrics import max_min_distance, min_distance, relative_radius
+from clsamp.metrics import max_min_distance, min_distance, relative_radius
 from clsamp.samplers import poisson_disk
 from clsamp.samplers.poisson_disk import sampler as poisson_sampler
 

@@ -64,7 +64,7 @@ def test_chunked_generation_equals_one_launch(monkeypatch):
     from clsamp import runtime
     sampler = clsamp.make_sampler("random", d=2, seed=4)
     whole = sampler.sample(100, realizations=7)
-    monkeypatch.setattr(runtime, "chunk_ranges",
+    monkeypatch.setattr(runtime.memory, "chunk_ranges",
                         lambda total, _: [(lo, min(total, lo + 2)) for lo in range(0, total, 2)])
     np.testing.assert_array_equal(sampler.sample(100, realizations=7), whole)
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import clsamp
-from clsamp import io
+from clsamp import files
 from clsamp import render as rendering
 from clsamp.errors import InvalidArgumentError
 from clsamp.scene import Scene, shipped_scenes
@@ -241,17 +241,17 @@ def test_ccvt_beats_poisson_disk_at_96_ao_rays():
 def test_reference_is_cached_and_a_corrupt_cache_renders_again(monkeypatch):
     scene = Scene.from_file("ao")
     first = rendering.reference(scene, 8, spp=512, progress=False)
-    files = list(rendering.cache_folder().glob("*.exr"))
-    assert len(files) == 1
+    cached = list(rendering.cache_folder().glob("*.exr"))
+    assert len(cached) == 1
     calls = []
     real = rendering.render
     monkeypatch.setattr(rendering, "render", lambda *a, **k: calls.append(1) or real(*a, **k))
     np.testing.assert_array_equal(first, rendering.reference(scene, 8, spp=512, progress=False))
     assert not calls                         # read from the cache
-    files[0].write_bytes(b"not an exr")
+    cached[0].write_bytes(b"not an exr")
     np.testing.assert_array_equal(first, rendering.reference(scene, 8, spp=512, progress=False))
     assert calls                             # rendered again, the same image
-    assert io.read_exr(files[0]).shape == (8, 8)
+    assert files.read_exr(cached[0]).shape == (8, 8)
     other = rendering.reference(scene, 8, spp=256, progress=False)   # another key, another file
     assert len(list(rendering.cache_folder().glob("*.exr"))) == 2 and not np.array_equal(other, first)
 
@@ -275,7 +275,7 @@ def test_exr_round_trip_with_header_and_png_preview(tmp_path):
     image = rendering.render(scene, "jittered", 16, 8, seed=5, progress=False)
     exr, png = rendering.save(tmp_path / "ao.exr", image, "jittered", 16, 5, scene=scene)
     assert (exr, png) == (tmp_path / "ao.exr", tmp_path / "ao.png")
-    back, header = io.read_exr(exr, with_header=True)
+    back, header = files.read_exr(exr, with_header=True)
     np.testing.assert_array_equal(back, image)
     assert {k: str(header[k]) for k in ("sampler", "spp", "seed", "scene")} == {
         "sampler": "jittered", "spp": "16", "seed": "5", "scene": "ao"}
@@ -291,7 +291,7 @@ def test_cli_render_writes_exr_and_png_and_measures_against_the_reference(tmp_pa
                          timeout=300)
     assert out.returncode == 0, out.stderr
     assert "MSE" in out.stdout and "SSIM" in out.stdout
-    image, header = io.read_exr(tmp_path / "ao.exr", with_header=True)
+    image, header = files.read_exr(tmp_path / "ao.exr", with_header=True)
     assert image.shape == (8, 8) and str(header["sampler"]) == "jittered"
     assert (tmp_path / "ao.png").is_file()
     bad = subprocess.run([sys.executable, "-m", "clsamp", "render", "ao", "--sampler", "jittered",

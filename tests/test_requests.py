@@ -28,7 +28,7 @@ def test_huge_outputs_are_refused_at_once(name, d, n, r):
 def small_device(monkeypatch):
     """The current device as if its largest buffer were 64 KiB (global memory 1 MiB)."""
     record = dataclasses.replace(runtime.current_device(), max_allocation=2**16, global_memory=2**20)
-    monkeypatch.setattr(runtime, "current_device", lambda: record)
+    monkeypatch.setattr(runtime.discovery, "current_device", lambda: record)
     return record
 
 

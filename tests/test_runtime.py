@@ -36,8 +36,8 @@ def test_a_device_whose_compiler_fails_is_skipped_and_explained(monkeypatch):
     for broken_too in (False, True):
         failing = {r.index for r in records if broken_too or r.index != good.index}
         log = ["clBuildProgram failed: BUILD_PROGRAM_FAILURE", "error: unknown target CPU 'generic'"]
-        monkeypatch.setattr(runtime, "_broken", {i: log for i in failing})
-        monkeypatch.setattr(runtime, "_current", None)
+        monkeypatch.setattr(runtime.discovery, "_broken", {i: log for i in failing})
+        monkeypatch.setattr(runtime.discovery, "_current", None)
         assert not any(runtime.compiles(i) for i in failing)
         if not broken_too:
             assert clsamp.current_device() == good
@@ -92,7 +92,7 @@ def test_defines_make_distinct_cached_variants():
 
 def test_build_failure_names_file_device_and_log(tmp_path, monkeypatch):
     (tmp_path / "broken.cl").write_text("__kernel void f(__global float *x) { x[0] = undefined_name; }\n")
-    monkeypatch.setattr(runtime, "kernel_folder", lambda: tmp_path)
+    monkeypatch.setattr(runtime.programs, "kernel_folder", lambda: tmp_path)
     with pytest.raises(BuildError) as info:
         runtime.program("broken.cl")
     message = str(info.value)

@@ -190,7 +190,7 @@ def test_a_call_split_into_chunks_is_the_same_call(cell, start, batch, monkeypat
     s, n, pts = batch(cell, start)
     whole_info = (s.sample(n, realizations=REALIZATIONS, start=start, return_info=True)[1]
                   if s.info else None)
-    monkeypatch.setattr(clsamp.runtime, "work_budget", lambda: 8 * n * s.d)
+    monkeypatch.setattr(clsamp.runtime.memory, "work_budget", lambda: 8 * n * s.d)
     if s.info is None:
         assert np.array_equal(s.sample(n, realizations=REALIZATIONS, start=start), pts)
     else:

@@ -281,13 +281,13 @@ def test_normalized_frequency():
 
 # -- pictures and command line -------------------------------------------------------------
 def test_pictures(tmp_path, medium2):
-    from clsamp import io
+    from clsamp import files
     pts, P = medium2
     png = plots.save_spectrum_png(tmp_path / "s.png", P)
     assert png.stat().st_size > 100
     plots.save_spectrum_png(tmp_path / "log.png", P, scale="log")
     plots.save_spectrum_exr(tmp_path / "s.exr", P)
-    back = io.read_exr(tmp_path / "s.exr")
+    back = files.read_exr(tmp_path / "s.exr")
     assert np.allclose(back, P.T[::-1].astype(np.float32))             # +y up, as the PNG
     image = plots.spectrum_image(P)
     assert image.shape == (64, 64) and image[31, 32] == 1.0 and image.min() >= 0
@@ -296,7 +296,7 @@ def test_pictures(tmp_path, medium2):
 
 
 def test_cli_spectrum(tmp_path):
-    from clsamp import cli, io
+    from clsamp import cli, files
     out = tmp_path / "random.npy"
     assert cli.main(["spectrum", "random", "-n", "256", "--realizations", "3", "--resolution", "32",
                      "-o", str(out), "--plots", str(tmp_path / "p.png")]) == 0
@@ -304,7 +304,7 @@ def test_cli_spectrum(tmp_path):
     pts = clsamp.make_sampler("random", seed=0).sample(256, realizations=3)
     assert np.abs(P - clsamp.power_spectrum(pts, 32)).max() < 1e-9
     points_file = tmp_path / "pts.txt"
-    io.save_points(points_file, pts[0])
+    files.save_points(points_file, pts[0])
     assert cli.main(["spectrum", str(points_file), "--resolution", "32", "-o",
                      str(tmp_path / "f.png")]) == 0
     assert (tmp_path / "f.png").stat().st_size > 100

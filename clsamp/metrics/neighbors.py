@@ -31,7 +31,7 @@ def mean_spacing(n, d):
     return float(n) ** (-1.0 / d)
 
 
-def _grid(batch, cells):
+def sorted_by_cell(batch, cells):
     """The points of all realizations sorted by (realization, cell) of a ``cells``^d grid:
     (sorted points (r n, d), their flat cells (uint32), the first sorted index of each
     (realization, cell) (r cells^d + 1, uint32), the order (sorted -> original))."""
@@ -122,7 +122,7 @@ def _pcf_sums_device(sets, radii, sigma, cut, uniform):
     batch = np.stack(sets)
     reach = float(radii[-1] + cut * sigma)
     cells = _cells_for(reach)
-    pts, cell, start, _ = _grid(batch, cells)
+    pts, cell, start, _ = sorted_by_cell(batch, cells)
     items = -(-n // POINTS_PER_ITEM)
     defines = {"D": d, "NR": len(radii), "UNIFORM": int(uniform), "PPI": POINTS_PER_ITEM}
     kernel = runtime.kernel("neighbors.cl", "pcf_sums", defines)
@@ -267,7 +267,7 @@ def _nearest_device(batch):
     r, n, d = batch.shape
     cells = int(math.floor(1.0 / (NN_CELL_SPACINGS * mean_spacing(n, d))))
     cells = cells if cells >= 3 and cells ** d * r < 2**31 else 1
-    pts, cell, start, order = _grid(batch, cells)
+    pts, cell, start, order = sorted_by_cell(batch, cells)
     total = r * n
     kernel = runtime.kernel("neighbors.cl", "nearest_neighbor", {"D": d})
     out = runtime.Output((total,), np.float64, host=np.empty(total))
@@ -303,7 +303,7 @@ def nearest_neighbor_distances(points, backend="opencl"):
     -------
     ndarray (n,) for one set, (r, n) for a batch, a list of (n_k,) arrays for a list:
     the distances in the points' order. Their minimum is the set's minimum distance
-    (:func:`clsamp.point_metrics.min_distance`), their distribution tells how evenly
+    (:func:`min_distance`), their distribution tells how evenly
     the points are spread (a delta at the lattice spacing, a Rayleigh law for white
     noise in 2-D: P(NN > r) = exp(-pi n r^2)).
 

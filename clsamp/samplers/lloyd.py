@@ -244,7 +244,7 @@ class LloydSampler(OptimizerSampler):
     re-assigning points to their nearest site can only lower it. A site whose cell is
     empty (possible after a degenerate start: duplicate sites, a cluster) is moved onto
     the density point farthest from its site, which it then captures; that cannot raise
-    E either. N*E of the returned set is :func:`clsamp.point_metrics.normalized_energy`
+    E either. N*E of the returned set is :func:`clsamp.metrics.normalized_energy`
     (0.160375 for the hexagonal lattice, about 1/pi for white noise).
 
     References

@@ -198,7 +198,7 @@ class LowDiscrepancySampler(Sampler):
                                          **defines, **split})
         kernel(queue, grid, group, target.buffer, table.data,
                np.uint32(n), np.uint32(self.d), np.uint32(start), np.uint32(realizations.start),
-               *runtime.key_args(self.seed), np.uint32(philox.Stream.SCRAMBLE),
+               *philox.seed_key(self.seed), np.uint32(philox.Stream.SCRAMBLE),
                np.uint32(philox.Stream.SHIFT), *extra)
         return target.finish()
 
@@ -405,7 +405,7 @@ class _RadicalInverse(LowDiscrepancySampler):
             kernel(queue, (-(-nodes // local) * local, len(realizations)), (local, 1), tables.data,
                    layout_dev.data, bases_table.data, np.uint32(self.d), np.uint32(segments),
                    np.uint32(nodes), np.uint32(entries), np.uint32(realizations.start),
-                   *runtime.key_args(self.seed), np.uint32(philox.Stream.SCRAMBLE))
+                   *philox.seed_key(self.seed), np.uint32(philox.Stream.SCRAMBLE))
         return tables.data, layout_dev.data, np.uint32(entries)
 
 

@@ -209,7 +209,7 @@ class PMJ02Sampler(Sampler):
         target = runtime.Output((r, total, 2), host=out if start == 0 else None)
         masks = runtime.table(("pmj02 masks",), xor_masks)
         local = runtime.local_size()
-        key = runtime.key_args(self.seed)
+        key = philox.seed_key(self.seed)
         first = runtime.kernel("pmj.cl", "pmj02_first")
         first(runtime.queue(), (r,), None, target.buffer, np.uint32(total),
               np.uint32(realizations.start), *key)
@@ -445,7 +445,7 @@ class PMJ02BNSampler(PMJ02Sampler):
         kernel = runtime.kernel("pmj.cl", "pmj02bn_points")
         kernel(runtime.queue(), (r,), None, target.buffer, occupied.data, grid.data, status.data,
                np.uint32(total), np.uint64(occupied_words), np.uint64(grid_cells),
-               np.uint32(realizations.start), *runtime.key_args(self.seed))
+               np.uint32(realizations.start), *philox.seed_key(self.seed))
         failed = status.get()
         if failed.any():
             k = int(np.flatnonzero(failed)[0])

@@ -67,6 +67,6 @@ class RandomSampler(Sampler):
         defines = {**defines, "POINTS_PER_ITEM": per_item}
         kernel = runtime.kernel("random.cl", "random_points", defines=defines)
         kernel(runtime.queue(), grid, group, target.buffer, np.uint32(n), np.uint32(self.d),
-               np.uint32(start), np.uint32(realizations.start), *runtime.key_args(self.seed),
+               np.uint32(start), np.uint32(realizations.start), *philox.seed_key(self.seed),
                np.uint32(philox.Stream.POINTS))
         return target.finish()

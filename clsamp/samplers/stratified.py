@@ -245,7 +245,7 @@ class _Stratified(Sampler):
                                          "CENTERED": int(self.centered), **split})
         kernel(queue, grid, group, target.buffer, np.uint32(n),
                np.uint32(self.d), np.uint32(start), np.uint32(realizations.start),
-               *runtime.key_args(self.seed), np.uint32(philox.Stream.POINTS),
+               *philox.seed_key(self.seed), np.uint32(philox.Stream.POINTS),
                radix_d.data, group_d.data, perms.data, np.uint32(groups))
         return target.finish()
 
@@ -694,7 +694,7 @@ class MultiJitteredSampler(Sampler):
         runtime.kernel("stratified.cl", "multijittered_points")(
             queue, (-(-quads // local) * local, r), (local, 1), target.buffer, np.uint32(mx),
             np.uint32(my), np.uint32(start), np.uint32(realizations.start),
-            *runtime.key_args(self.seed), np.uint32(philox.Stream.POINTS), colperm.data,
+            *philox.seed_key(self.seed), np.uint32(philox.Stream.POINTS), colperm.data,
             rowperm.data)
         return target.finish()
 
@@ -791,6 +791,6 @@ class CorrelatedMultiJitteredSampler(Sampler):
         runtime.kernel("stratified.cl", "correlated_multijittered_points")(
             queue, (-(-quads // local) * local, r), (local, 1), target.buffer, np.uint32(n),
             np.uint32(m), np.uint32(k), np.uint32(start), np.uint32(realizations.start),
-            *runtime.key_args(self.seed), np.uint32(philox.Stream.POINTS),
+            *philox.seed_key(self.seed), np.uint32(philox.Stream.POINTS),
             np.uint32(philox.Stream.PERMUTATION))
         return target.finish()

@@ -107,7 +107,7 @@ def density_points_device(seed, realizations, M, density="jittered"):
         raise ValueError("realizations must be consecutive")
     if r == 0:
         return out
-    key = (*runtime.key_args(seed), np.uint32(philox.Stream.INIT))
+    key = (*philox.seed_key(seed), np.uint32(philox.Stream.INIT))
     if density == "random":
         kernel = runtime.kernel("ccvt_density.cl", "ccvt_density", ccvt_defines())
         kernel(runtime.queue(), (M, r), None, out.data, np.uint32(M),

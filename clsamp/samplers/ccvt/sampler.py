@@ -31,7 +31,7 @@ class CCVTInfo(SampleInfo):
         points to the site that owns them, after each iteration (exchanges, then sites to
         centroids). Never rising; a realization that converged before the others repeats
         its final value. n times its last entry is the set's capacity N*E, never below
-        :func:`clsamp.point_metrics.normalized_energy` of the returned sites (which counts
+        :func:`clsamp.metrics.normalized_energy` of the returned sites (which counts
         every point of the torus at its nearest site).
     capacities : ndarray (r, n)
         Density points owned by each site at the end, counted from the ownership: all
@@ -213,7 +213,7 @@ class CCVTSampler(OptimizerSampler):
     ``sample(..., return_info=True)`` also returns a :class:`CCVTInfo`: the energy
     after every iteration, the capacities, the iterations run and whether each
     realization converged. The N*E of the returned set on the scale of every other
-    sampler is :func:`clsamp.point_metrics.normalized_energy` (0.160375 for the
+    sampler is :func:`clsamp.metrics.normalized_energy` (0.160375 for the
     hexagonal lattice, about 1/pi for white noise). Timings and iteration counts are in
     docs/performance.md.
 

@@ -127,7 +127,7 @@ class DeviceDarts:
                   self.valid.data, self.cand_round.data, self.cand_first.data,
                   self.overflow.data, *self._common(),
                   np.uint32(level), np.uint32(round_), np.float64(self.geo.r2), self.ids.data,
-                  np.uint32(self.attempt), *runtime.key_args(self.seed),
+                  np.uint32(self.attempt), *philox.seed_key(self.seed),
                   np.uint32(philox.Stream.CANDIDATES))
 
     def resolve(self, round_):

@@ -71,7 +71,7 @@ def acceptance_threshold(radius, scale=1.0, target=None):
     arithmetic (target defaults to radius / scale).
 
     Darts are accepted when their squared distance is >= r2, so the minimum distance that
-    :func:`clsamp.point_metrics.min_distance` measures (a square root of the same bits),
+    :func:`clsamp.metrics.min_distance` measures (a square root of the same bits),
     divided by ``scale`` (d_max for a relative radius, whose target is rho), is never
     below the promise, not even by an ulp.
 

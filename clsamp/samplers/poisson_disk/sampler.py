@@ -124,7 +124,7 @@ class PoissonDiskInfo(SampleInfo):
         The radius the call kept (``rho * d_max(n)`` with a fixed n).
     rho_bound : ndarray (r,) of float
         ``radius / d_max(count)``: a lower bound of each set's relative radius
-        (:func:`clsamp.point_metrics.relative_radius` measures it).
+        (:func:`clsamp.metrics.relative_radius` measures it).
     rounds : int
         Rounds of darts the longest batch took.
     darts : int
@@ -154,7 +154,7 @@ class PoissonDiskSampler(Sampler):
     rho : float, optional
         Relative radius in (0, 0.9069] for a fixed n (default 0.75 when ``radius`` is not
         given): the points are at least ``rho * d_max(n)`` apart, d_max from
-        :func:`clsamp.point_metrics.max_min_distance` (2-D: sqrt(2 / (sqrt(3) n))).
+        :func:`clsamp.metrics.max_min_distance` (2-D: sqrt(2 / (sqrt(3) n))).
         Saturated (maximal) dart throwing reaches about 0.77 in 2-D (0.80 in 3-D, 0.75 in
         1-D), so values close to that may need redraws and values above it fail: the
         error says so.
@@ -216,7 +216,7 @@ class PoissonDiskSampler(Sampler):
     Examples
     --------
     >>> import clsamp
-    >>> from clsamp.point_metrics import relative_radius
+    >>> from clsamp.metrics import relative_radius
     >>> pts = clsamp.make_sampler("poisson_disk", seed=1).sample(256, realizations=2)
     >>> pts.shape, bool(relative_radius(pts).min() >= 0.75)
     ((2, 256, 2), True)

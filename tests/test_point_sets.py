@@ -8,12 +8,12 @@ import pytest
 
 import clsamp
 from clsamp.errors import InvalidArgumentError
-from clsamp.point_metrics import (
+from clsamp.geometry.torus import distance2 as toroidal_distance2
+from clsamp.metrics import (
     max_min_distance,
     min_distance,
     normalized_energy,
     relative_radius,
-    toroidal_distance2,
 )
 
 

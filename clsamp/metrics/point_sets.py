@@ -19,14 +19,15 @@ the Poisson-disk kernels test acceptance with, so a sampler that promises "min d
 
 import numpy as np
 
-from .errors import InvalidArgumentError
-from .geometry import integer_torus, voronoi
-from .geometry.torus import PACKING_DENSITY, max_min_distance
-from .geometry.torus import distance2 as toroidal_distance2
-from .validation import check_points, check_positive_int, point_sets
+from ..errors import InvalidArgumentError
+from ..geometry import integer_torus, voronoi
+from ..geometry.torus import PACKING_DENSITY, max_min_distance
+from ..geometry.torus import distance2 as toroidal_distance2
+from ..validation import check_points, check_positive_int, point_sets
+from .neighbors import sorted_by_cell
 
 __all__ = ["min_distance", "relative_radius", "max_min_distance", "normalized_energy",
-           "toroidal_distance2", "HEXAGONAL_NE", "WHITE_NOISE_NE"]
+           "HEXAGONAL_NE", "WHITE_NOISE_NE"]
 
 HEXAGONAL_NE = 5.0 / (18.0 * np.sqrt(3.0))   # N*E of the hexagonal lattice, 0.160375
 WHITE_NOISE_NE = 1.0 / np.pi                 # expected N*E of independent uniform points
@@ -45,20 +46,13 @@ def _min_distance2_grid(batch, cells):
     """Smallest squared distance per realization among pairs in the same or adjacent
     cells of a ``cells``^d grid (cells >= 3, so the 3^d neighbours are distinct)."""
     r, n, d = batch.shape
-    index = np.minimum((batch * cells).astype(np.int64), cells - 1)
-    flat = np.zeros((r, n), dtype=np.int64)
-    for k in range(d):
-        flat = flat * cells + index[..., k]
-    total_cells = cells ** d
-    key = (np.arange(r, dtype=np.int64)[:, None] * total_cells + flat).ravel()
-    order = np.argsort(key, kind="stable")
-    key_sorted = key[order]
-    pts = batch.reshape(r * n, d)[order]
-    counts = np.bincount(key_sorted, minlength=r * total_cells)
-    starts = np.concatenate(([0], np.cumsum(counts)[:-1]))
+    pts, flat, start, _ = sorted_by_cell(batch, cells)
+    starts = start[:-1].astype(np.int64)
+    counts = np.diff(start.astype(np.int64))
     occupancy = int(counts.max())
-    realization = key_sorted // total_cells
-    cell = index.reshape(r * n, d)[order]
+    total_cells = cells ** d
+    realization = np.repeat(np.arange(r, dtype=np.int64), n)      # sorted realization-major
+    cell = np.stack(np.unravel_index(flat.astype(np.int64), (cells,) * d), axis=-1)
     own = np.arange(r * n)
     best = np.full(r * n, np.inf)
     strides = cells ** np.arange(d - 1, -1, -1)
@@ -131,7 +125,7 @@ def min_distance(points):
     Examples
     --------
     >>> import numpy as np
-    >>> from clsamp.point_metrics import min_distance
+    >>> from clsamp.metrics import min_distance
     >>> round(min_distance(np.array([[0.05, 0.5], [0.95, 0.5]])), 12)
     0.1
     """
@@ -172,7 +166,7 @@ def relative_radius(points):
     Examples
     --------
     >>> import numpy as np
-    >>> from clsamp.point_metrics import relative_radius
+    >>> from clsamp.metrics import relative_radius
     >>> g = (np.stack(np.meshgrid(np.arange(8), np.arange(8)), -1).reshape(-1, 2) + 0.5) / 8
     >>> round(relative_radius(g), 4)
     0.9306
@@ -221,7 +215,7 @@ def normalized_energy(points, density=4096, backend="opencl"):
     Examples
     --------
     >>> import numpy as np
-    >>> from clsamp.point_metrics import normalized_energy
+    >>> from clsamp.metrics import normalized_energy
     >>> g = (np.stack(np.meshgrid(np.arange(8), np.arange(8)), -1).reshape(-1, 2) + 0.5) / 8
     >>> round(normalized_energy(g), 5)
     0.16663

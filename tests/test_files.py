@@ -5,7 +5,7 @@ import os
 import numpy as np
 import pytest
 
-from clsamp import io
+from clsamp import files
 from clsamp.errors import InvalidArgumentError
 
 
@@ -13,40 +13,40 @@ from clsamp.errors import InvalidArgumentError
 @pytest.mark.parametrize("shape", [(7, 2), (3, 5, 3), (4, 1)])
 def test_points_round_trip_exactly(tmp_path, suffix, shape):
     points = np.random.default_rng(1).random(shape)
-    path = io.save_points(tmp_path / f"p{suffix}", points)
-    np.testing.assert_array_equal(io.load_points(path), points)
+    path = files.save_points(tmp_path / f"p{suffix}", points)
+    np.testing.assert_array_equal(files.load_points(path), points)
 
 
 def test_text_format_is_one_point_a_line(tmp_path):
-    path = io.save_points(tmp_path / "p.txt", np.array([[0.25, 0.5], [0.125, 0.75]]))
+    path = files.save_points(tmp_path / "p.txt", np.array([[0.25, 0.5], [0.125, 0.75]]))
     assert path.read_text().splitlines() == ["0.25 0.5", "0.125 0.75"]
 
 
 def test_reads_utk_style_text(tmp_path):
     path = tmp_path / "utk.dat"
     path.write_text("0.1\t0.2\n0.3 0.4\n\n")
-    np.testing.assert_array_equal(io.load_points(path), [[0.1, 0.2], [0.3, 0.4]])
+    np.testing.assert_array_equal(files.load_points(path), [[0.1, 0.2], [0.3, 0.4]])
 
 
 def test_malformed_text_names_the_line(tmp_path):
     path = tmp_path / "bad.txt"
     path.write_text("0.1 0.2\n0.3 oops\n")
     with pytest.raises(InvalidArgumentError, match="line 2"):
-        io.load_points(path)
+        files.load_points(path)
     path.write_text("0.1 0.2\n0.3\n")
     with pytest.raises(InvalidArgumentError, match="different dimensions"):
-        io.load_points(path)
+        files.load_points(path)
     path.write_text("0.1 1.5\n")
     with pytest.raises(InvalidArgumentError, match=r"\[0, 1\)"):
-        io.load_points(path)
+        files.load_points(path)
 
 
 def test_a_failed_write_leaves_the_old_file_and_no_temporary(tmp_path):
     path = tmp_path / "p.txt"
-    io.save_points(path, np.array([[0.5, 0.5]]))
+    files.save_points(path, np.array([[0.5, 0.5]]))
     before = path.read_bytes()
     with pytest.raises(RuntimeError):
-        with io.atomic_path(path) as tmp:
+        with files.atomic_path(path) as tmp:
             tmp.write_text("half a fi")
             raise RuntimeError("crash in the middle")
     assert path.read_bytes() == before
@@ -55,22 +55,22 @@ def test_a_failed_write_leaves_the_old_file_and_no_temporary(tmp_path):
 
 def test_invalid_points_are_not_written(tmp_path):
     with pytest.raises(InvalidArgumentError):
-        io.save_points(tmp_path / "p.txt", np.array([[0.5, np.nan]]))
+        files.save_points(tmp_path / "p.txt", np.array([[0.5, np.nan]]))
     assert not (tmp_path / "p.txt").exists()
 
 
 def test_exr_round_trip_with_header(tmp_path):
     image = np.random.default_rng(2).random((6, 9, 3)).astype(np.float32)
-    io.write_exr(tmp_path / "i.exr", image, {"sampler": "jittered", "spp": 16, "seed": 3})
-    back, header = io.read_exr(tmp_path / "i.exr", with_header=True)
+    files.write_exr(tmp_path / "i.exr", image, {"sampler": "jittered", "spp": 16, "seed": 3})
+    back, header = files.read_exr(tmp_path / "i.exr", with_header=True)
     np.testing.assert_array_equal(back, image)
     assert header["sampler"] == "jittered" and header["spp"] == "16" and header["seed"] == "3"
     gray = image[:, :, 0]
-    io.write_exr(tmp_path / "g.exr", gray)
-    np.testing.assert_array_equal(io.read_exr(tmp_path / "g.exr"), gray)
+    files.write_exr(tmp_path / "g.exr", gray)
+    np.testing.assert_array_equal(files.read_exr(tmp_path / "g.exr"), gray)
 
 
 def test_png_preview(tmp_path):
-    path = io.write_png(tmp_path / "i.png", np.linspace(0, 2, 30, dtype=np.float32).reshape(5, 6))
+    path = files.write_png(tmp_path / "i.png", np.linspace(0, 2, 30, dtype=np.float32).reshape(5, 6))
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert io.tone_map(np.array([[2.0, 0.0]]))[0, 0] == 255
+    assert files.tone_map(np.array([[2.0, 0.0]]))[0, 0] == 255

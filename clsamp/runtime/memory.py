@@ -1,0 +1,200 @@
+"""Device memory: outputs over host memory, copies, small tables, and the one rule that
+sizes every launch (:func:`fit`, :func:`chunk_ranges`).
+
+Work too large for the device is split into chunks of a quarter of its largest allocation,
+never refused or truncated; a host result the machine cannot hold is refused before any
+work (:func:`check_host_bytes`).
+"""
+
+import os
+
+import numpy as np
+
+from ..errors import InvalidArgumentError
+from . import discovery, programs
+
+__all__ = [
+    'table', 'Output', 'is_device_array', 'to_device', 'to_host', 'bounds', 'device_block',
+    'concatenate', 'host_memory_available', 'check_host_bytes', 'gib', 'work_budget', 'fit',
+    'chunk_ranges']
+
+
+_tables = {}            # (device index, key) -> pyopencl.array.Array, least recently used first
+
+
+_TABLES = 64            # tables kept per process
+
+
+def table(key, build, dtype=np.uint32):
+    """A small read-only device array, uploaded once per (device, ``key``).
+
+    ``build()`` makes the host array the first time; later calls on the same device get
+    the same device array (the most recently used tables are kept, at most 64).
+    """
+    import pyopencl.array as cla
+    full = (discovery.current_device().index, key)
+    with discovery._lock:
+        found = _tables.pop(full, None)
+        if found is None:
+            found = cla.to_device(discovery.queue(), np.ascontiguousarray(build(), dtype=dtype))
+        _tables[full] = found
+        while len(_tables) > _TABLES:
+            _tables.pop(next(iter(_tables)))
+        return found
+
+
+class Output:
+    """Where a kernel writes its result.
+
+    Without ``host`` a new device array; with ``host`` (a C-contiguous NumPy array) a
+    buffer over that array's memory, so that on a CPU device the kernel writes straight
+    into the array the caller gets. Pass :attr:`buffer` to the kernel, then
+    :meth:`finish` gives the result (the host array, its writes visible, or the device
+    array).
+    """
+
+    def __init__(self, shape, dtype=np.float64, host=None):
+        import pyopencl.array as cla
+        self.host = host
+        if host is None:
+            self.array = cla.empty(discovery.queue(), shape, dtype)
+            self.buffer = self.array.data
+        else:
+            cl = discovery._cl()
+            self.array = host
+            self.buffer = cl.Buffer(discovery.context(), cl.mem_flags.WRITE_ONLY | cl.mem_flags.USE_HOST_PTR,
+                                    hostbuf=host)
+
+    def finish(self):
+        if self.host is not None:
+            # mapping makes the kernel's writes visible in host memory (no copy on PoCL)
+            cl = discovery._cl()
+            # (a blocking map waits about 100 us longer on PoCL than map, unmap and finish;
+            # rusticl refuses to unmap a map that has not completed)
+            pocl = discovery.current_device().platform == "Portable Computing Language"
+            mapped, _ = cl.enqueue_map_buffer(discovery.queue(), self.buffer, cl.map_flags.READ, 0,
+                                              self.host.shape, self.host.dtype, is_blocking=not pocl)
+            mapped.base.release(discovery.queue())
+            discovery.queue().finish()
+        return self.array
+
+
+def is_device_array(value):
+    """Whether ``value`` is a ``pyopencl.array.Array``."""
+    import pyopencl.array as cla
+    return isinstance(value, cla.Array)
+
+
+def to_device(array):
+    """``array`` on the current device: itself if it is a device array, else a copy."""
+    if is_device_array(array):
+        return array
+    import pyopencl.array as cla
+    return cla.to_device(discovery.queue(), np.ascontiguousarray(array))
+
+
+def to_host(array, into=None):
+    """``array`` as a NumPy array (a device array read back), in ``into`` when given."""
+    if is_device_array(array):
+        return array.get() if into is None else array.get(ary=into)
+    if into is None:
+        return np.asarray(array)
+    into[...] = array
+    return into
+
+
+def bounds(array):
+    """(smallest, largest, count of NaN or infinite) of the doubles of a device array,
+    computed on the device (``kernels/points.cl``); smallest/largest over finite values."""
+    import pyopencl.array as cla
+    discovery.require_fp64()
+    items = 64 * max(1, discovery.current_device().compute_units)
+    q = discovery.queue()
+    lo = cla.empty(q, items, np.float64)
+    hi = cla.empty(q, items, np.float64)
+    bad = cla.empty(q, items, np.uint32)
+    programs.kernel("points.cl", "points_bounds")(q, (items,), None, array.base_data, np.uint64(array.size),
+                                         lo.data, hi.data, bad.data)
+    return float(lo.get().min()), float(hi.get().max()), int(bad.get().sum())
+
+
+def device_block(array, r0, r1, k0=0, k1=None):
+    """``array[r0:r1, k0:k1]`` of a device array (r, n, d) as a contiguous device array:
+    the array itself when that is all of it, else a copy made on the device."""
+    import pyopencl.array as cla
+    r, n, d = array.shape
+    k1 = n if k1 is None else k1
+    if (r0, r1, k0, k1) == (0, r, 0, n) and array.offset == 0:
+        return array
+    out = cla.empty(discovery.queue(), (r1 - r0, k1 - k0, d), array.dtype)
+    item = array.dtype.itemsize
+    row = n * d * item
+    discovery._cl().enqueue_copy(discovery.queue(), out.data, array.base_data,
+                       src_origin=(array.offset + k0 * d * item, r0, 0), dst_origin=(0, 0, 0),
+                       region=((k1 - k0) * d * item, r1 - r0, 1), src_pitches=(row, 0),
+                       dst_pitches=((k1 - k0) * d * item, 0))
+    return out
+
+
+def concatenate(parts):
+    """Device arrays joined along their first axis (the one part itself when alone)."""
+    if len(parts) == 1:
+        return parts[0]
+    import pyopencl.array as cla
+    return cla.concatenate(parts, axis=0, queue=discovery.queue())
+
+
+def host_memory_available():
+    """Bytes of host memory free for new allocations (Linux: MemAvailable), or None where
+    the system does not say."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def check_host_bytes(need, what):
+    """Refuse, before any work, a result of ``need`` bytes that the host's available
+    memory cannot hold (the figure is read only for requests above 256 MiB)."""
+    if need <= 2**28:
+        return
+    room = host_memory_available()
+    if room is not None and need > room:
+        raise InvalidArgumentError(
+            f"{what} needs {gib(need)}; this machine has {gib(room)} available. Ask for less "
+            "at a time")
+
+
+def gib(nbytes):
+    """Bytes as a message shows them."""
+    return f"{nbytes / 2**30:.1f} GiB" if nbytes >= 2**30 else f"{nbytes / 2**20:.1f} MiB"
+
+
+def work_budget():
+    """Bytes one launch's buffers may hold on the current device: a quarter of its largest
+    single allocation (the one rule every module asks, through :func:`fit`)."""
+    return max(1, discovery.current_device().max_allocation // 4)
+
+
+def fit(bytes_per_item, limit=None):
+    """How many items of ``bytes_per_item`` one launch may hold (at least one).
+
+    ``limit`` caps the bytes further where a caller has its own reason (a working set
+    that should stay in the caches, a host-memory cap).
+    """
+    budget = work_budget() if limit is None else min(work_budget(), int(limit))
+    return max(1, budget // max(1, int(bytes_per_item)))
+
+
+def chunk_ranges(total, bytes_per_item, limit=None):
+    """Split ``total`` items into contiguous ranges that each fit one launch (:func:`fit`),
+    so work too large for the device is split, never refused or truncated."""
+    step = fit(bytes_per_item, limit)
+    return [(lo, min(total, lo + step)) for lo in range(0, total, step)]

@@ -1,0 +1,235 @@
+"""Kernel sources and built programs: read, their headers inlined, built once per process.
+
+Programs are cached by (device, kernel file, build options), so a kernel is compiled once
+per process (PoCL also keeps binaries on disk between processes), and kernel objects are
+fetched once per program. A source that computes in double never reaches a compiler
+without fp64 (:func:`active_source`, :func:`needs_fp64`).
+"""
+
+import re
+import threading
+from importlib import resources
+
+from ..errors import BuildError, NoDeviceError
+from . import discovery
+
+__all__ = [
+    'CAPABILITIES', 'needs_fp64', 'capabilities', 'kernel_folder', 'kernel_source', 'active_source',
+    'program', 'kernel', 'build_count']
+
+
+_programs = {}          # (device index, file, options) -> pyopencl.Program
+
+
+_kernels = {}           # (program key, kernel name, instance) -> pyopencl.Kernel
+
+
+_build_count = 0
+
+
+# What each capability builds (the kernel files its code asks for), for `clsamp devices`.
+CAPABILITIES = {
+    "samplers": ("random.cl", "stratified.cl", "lowdiscrepancy.cl", "lattice.cl", "zsobol.cl",
+                 "pmj.cl", "permutation.cl"),
+    # poisson_disk and ccvt: distances and energies in double precision (lloyd's integer
+    # kernels need 64-bit atomics instead, which runtime.require_extension checks)
+    "distance samplers": ("dart_throwing.cl", "ccvt.cl"),
+    "spectra": ("spectrum.cl", "nufft.cl"),
+    "metrics": ("discrepancy.cl", "star_discrepancy.cl", "anchored_counts.cl", "neighbors.cl"),
+    "experiments": ("integrands.cl", "families.cl"),
+    "render": ("render.cl",),
+}
+
+
+def needs_fp64(file):
+    """Whether ``kernels/<file>`` (its headers inlined) computes in double precision even
+    where ``CLSAMP_FP64`` is 0 (its integer paths left out of account)."""
+    return bool(_DOUBLE.search(active_source(kernel_source(file), fp64=False)))
+
+
+def capabilities(spec=None):
+    """What runs on a device: ``{capability: None}`` where it runs, else the reason it refuses.
+
+    A capability runs where every kernel file it builds compiles for the device; on a
+    device without fp64 those that compute in double refuse with :class:`NoDeviceError`
+    before any compiler sees them, and the value here is "needs fp64".
+    """
+    device = discovery.devices()[discovery._resolve(spec)] if spec is not None else discovery.current_device()
+    out = {}
+    for name, files in CAPABILITIES.items():
+        if not discovery.compiles(device.index):
+            out[name] = "its compiler fails"
+        elif not device.fp64 and any(needs_fp64(f) for f in files):
+            out[name] = "needs fp64"
+        else:
+            out[name] = None
+    return out
+
+
+def kernel_folder():
+    """Where the kernel sources are: the installed package data ``clsamp/kernels``,
+    or ``kernels/`` beside the package in a source checkout."""
+    try:
+        folder = resources.files("clsamp.kernels")
+        if folder.joinpath("philox.h").is_file():
+            return folder
+    except ModuleNotFoundError:
+        pass
+    return resources.files("clsamp").joinpath("..", "kernels")
+
+
+def kernel_source(file):
+    """The text of ``kernels/<file>`` with its ``#include "x.h"`` lines inlined.
+
+    Headers are inlined here rather than found through ``-I`` so that the
+    source handed to the compiler is complete, and binary caches keyed by the
+    source (pyopencl's, PoCL's) see a header change.
+    """
+    folder = kernel_folder()
+    seen = set()
+
+    def expand(name):
+        if name in seen:
+            return ""
+        seen.add(name)
+        path = folder / name
+        if not path.is_file():
+            raise BuildError(f"kernel file {name!r} not found in {folder}")
+        text = path.read_text()
+        return re.sub(r'^\s*#include\s+"([^"]+)"\s*$', lambda m: expand(m.group(1)), text, flags=re.M)
+
+    return expand(file)
+
+
+def _options(defines, extra):
+    options = []
+    for key in sorted(defines or {}):
+        value = defines[key]
+        if value is True:
+            options.append(f"-D{key}=1")
+        elif value is False or value is None:
+            continue
+        else:
+            options.append(f"-D{key}={value}")
+    options.extend(extra or ())
+    return tuple(options)
+
+
+_DOUBLE = re.compile(r"\bdouble[0-9]*\b")
+
+
+def _strip_comments(source):
+    return re.sub(r"/\*.*?\*/|//[^\n]*", " ", source, flags=re.S)
+
+
+_CONDITIONAL = re.compile(r"^\s*#\s*(if|ifdef|ifndef|elif|else|endif)\b(.*)$")
+
+
+def active_source(source, fp64):
+    """``source`` without comments and without the lines a compiler skips when
+    ``CLSAMP_FP64`` is ``fp64``: the branches of ``#if CLSAMP_FP64`` / ``#if !CLSAMP_FP64``
+    (and their ``#else``) that do not apply. Other conditionals are kept whole, so a
+    ``double`` left here may still be compiled."""
+    out = []
+    stack = []          # per open #if: None (not ours) or whether its branch is live
+    for line in _strip_comments(source).splitlines():
+        m = _CONDITIONAL.match(line)
+        if m:
+            word, rest = m.group(1), m.group(2).strip()
+            if word == "if" and rest in ("CLSAMP_FP64", "!CLSAMP_FP64"):
+                stack.append(fp64 if rest == "CLSAMP_FP64" else not fp64)
+                continue
+            if word in ("if", "ifdef", "ifndef"):
+                stack.append(None)
+            elif word == "else" and stack and stack[-1] is not None:
+                stack[-1] = not stack[-1]
+                continue
+            elif word == "elif" and stack and stack[-1] is not None:
+                raise BuildError("kernels: '#elif' after '#if CLSAMP_FP64' is not supported")
+            elif word == "endif" and stack:
+                if stack.pop() is not None:
+                    continue
+        if all(live is not False for live in stack):
+            out.append(line)
+    return "\n".join(out)
+
+
+def program(file, defines=None, options=()):
+    """The built program of ``kernels/<file>`` for the current device.
+
+    Parameters
+    ----------
+    file : str
+        Kernel file name inside ``kernels/``.
+    defines : dict, optional
+        ``-D`` build options (``{"DIM": 3}`` becomes ``-DDIM=3``; ``True`` becomes 1;
+        ``False``/``None`` leave the name undefined). Code-changing parameters go
+        here so each variant compiles only what it needs.
+    options : sequence of str
+        Other compiler options (``-cl-mad-enable``: only where results need not be
+        bit-identical across devices).
+
+    Raises
+    ------
+    NoDeviceError
+        When the source uses ``double`` and the device has no fp64 (``cl_khr_fp64``): the
+        kernel never reaches a compiler that lacks the type.
+    BuildError
+        With the file, the device and the compiler's log.
+    """
+    global _build_count
+    cl = discovery._cl()
+    device = discovery.current_device()
+    defines = {"CLSAMP_FP64": int(device.fp64), **(defines or {})}
+    key = (device.index, file, _options(defines, options))
+    with discovery._lock:
+        built = _programs.get(key)
+        if built is not None:
+            return built
+        ctx = discovery._state(device.index)[0]
+        source = kernel_source(file)
+        if not device.fp64 and _DOUBLE.search(active_source(source, fp64=False)):
+            raise NoDeviceError(
+                f"kernels/{file} computes in double precision and device {device.name} "
+                f"({device.platform}) has none (no cl_khr_fp64); choose another with "
+                "clsamp.use_device or CLSAMP_DEVICE (`clsamp devices` lists them)")
+        try:
+            built = cl.Program(ctx, source).build(options=list(key[2]))
+        except cl.RuntimeError as error:
+            hint = f"\n{discovery._UNKNOWN_CPU_HINT}" if "unknown target CPU" in str(error) else ""
+            raise BuildError(
+                f"OpenCL build of kernels/{file} failed on {device.name} "
+                f"({device.platform}) with options {' '.join(key[2]) or '(none)'}:\n{error}{hint}") from None
+        if not built.kernel_names:
+            raise BuildError(
+                f"OpenCL build of kernels/{file} on {device.name} ({device.platform}) with options "
+                f"{' '.join(key[2]) or '(none)'} gave a program without kernels (a broken binary "
+                "from the driver's cache?); clearing ~/.cache/pocl or setting POCL_KERNEL_CACHE=0 "
+                "builds it afresh")
+        _build_count += 1
+        _programs[key] = built
+        return built
+
+
+def kernel(file, name, defines=None, options=(), instance=None):
+    """A kernel object from :func:`program`, fetched once per program and thread.
+
+    Callers in one thread share the object, so each launch sets all its arguments. A loop
+    that sets arguments once and launches many times asks for its own ``instance`` (any
+    hashable key): a distinct object per key, kept with the program. Each thread gets
+    objects of its own: setting a kernel's arguments and launching it are two steps, which
+    two threads must not interleave on one object.
+    """
+    prog = program(file, defines, options)
+    key = (id(prog), name, instance, threading.get_ident())
+    with discovery._lock:
+        k = _kernels.get(key)
+        if k is None:
+            k = discovery._cl().Kernel(prog, name)
+            _kernels[key] = k
+        return k
+
+
+def build_count():
+    """How many programs this process has built (a cache hit builds nothing)."""
+    return _build_count
