@@ -142,6 +142,16 @@ def _sampler_factory(sampler, sampler_params):
 
 
 def sample_plan(scene, sampler, spp, sampler_params, pad, pool):
+    """The sets one pixel sample is made of: one per group of the scene's dimensions
+    (``pad``) or one for all of them, each with its factory, dimension and whether the
+    sampler is pixel-indexed or pooled. Parameters are those of :func:`pixel_samples`.
+
+    Raises
+    ------
+    InvalidArgumentError
+        An ``spp`` the sampler cannot make in a set's dimension (naming the nearest valid
+        one).
+    """
     name, make, supports, expensive = _sampler_factory(sampler, sampler_params)
     sets, offset = [], 0
     if pad:

@@ -662,6 +662,7 @@ def section_stability(report, quick):
 
 
 def section_device(report, quick, timings):
+    """Section 6: the device and versions the tour ran on, and how long each section took."""
     device = runtime.current_device()
     rows = [(k, v) for k, v in dataclasses.asdict(device).items()]
     rows += [(f"version: {k}", v) for k, v in versions().items()]

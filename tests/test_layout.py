@@ -230,3 +230,18 @@ def test_no_module_reads_a_sampler_attribute_the_base_does_not_declare():
                   and _SAMPLER_LIKE.search(ast.unparse(node.args[0]))):
                 wrong.append((module, node.lineno, ast.unparse(node)))
     assert not wrong, wrong
+
+
+def test_every_public_function_class_and_method_has_a_docstring():
+    missing = []
+    for module, path in MODULES.items():
+        def visit(body, prefix):
+            for node in body:
+                if (isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))
+                        and not node.name.startswith("_")):
+                    if not ast.get_docstring(node):
+                        missing.append(f"{module}:{node.lineno} {prefix}{node.name}")
+                    if isinstance(node, ast.ClassDef):
+                        visit(node.body, f"{prefix}{node.name}.")
+        visit(ast.parse(path.read_text()).body, "")
+    assert not missing, missing

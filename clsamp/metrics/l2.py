@@ -255,6 +255,7 @@ class DiscrepancySweep:
         return float(fit[0]), float(math.sqrt(cov[0, 0])) if cov is not None else float("nan")
 
     def to_dict(self):
+        """The sweep as JSON-able Python types, with its fitted slope."""
         slope, stderr = self.slope()
         return {"sampler": self.sampler, "method": self.method, "ns": self.ns.tolist(),
                 "values": self.values.tolist(), "stderr": self.stderr.tolist(),

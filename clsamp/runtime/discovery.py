@@ -131,7 +131,26 @@ def _discover():
 
 
 def devices():
-    """All OpenCL devices found, as :class:`Device` records (index, name, platform, type, fp64, ...)."""
+    """All OpenCL devices found, in the order of their platforms.
+
+    Returns
+    -------
+    list of Device
+        One record a device: ``index`` (what :func:`use_device` and ``CLSAMP_DEVICE``
+        take), ``name``, ``platform``, ``type`` (``"cpu"``, ``"gpu"`` or ``"other"``),
+        ``fp64``, memory sizes, the platform's version and the device's extensions.
+
+    Raises
+    ------
+    NoDeviceError
+        No OpenCL platform or device is installed (with how to install PoCL).
+
+    Examples
+    --------
+    >>> import clsamp
+    >>> any(d.type == "cpu" for d in clsamp.devices())
+    True
+    """
     with _lock:
         if _records is None:
             _discover()
@@ -166,10 +185,30 @@ def _resolve(spec):
 
 
 def use_device(spec):
-    """Make ``spec`` the current device and return its :class:`Device` record.
+    """Make ``spec`` the device every later kernel runs on.
 
-    ``spec`` is an index into :func:`devices`, a substring of a device or platform
-    name (case-insensitive), ``"cpu"``/``"gpu"``, or a :class:`Device`.
+    Parameters
+    ----------
+    spec : int, str or Device
+        An index into :func:`devices`, a substring of a device or platform name
+        (case-insensitive), ``"cpu"`` or ``"gpu"`` (the first of that type), or a
+        :class:`Device`.
+
+    Returns
+    -------
+    Device
+        The record of the device now current.
+
+    Raises
+    ------
+    InvalidArgumentError
+        An index out of range or a name no device matches (listing the devices).
+
+    Examples
+    --------
+    >>> import clsamp
+    >>> clsamp.use_device("cpu").type
+    'cpu'
     """
     global _current
     with _lock:
@@ -178,8 +217,14 @@ def use_device(spec):
 
 
 def current_device():
-    """The :class:`Device` kernels run on now (chosen by :func:`use_device`,
-    ``CLSAMP_DEVICE``, or the first CPU device)."""
+    """The device kernels run on now.
+
+    Returns
+    -------
+    Device
+        The one :func:`use_device` chose, else the one ``CLSAMP_DEVICE`` names, else the
+        first CPU device with fp64 whose compiler works.
+    """
     global _current
     with _lock:
         if _current is None:

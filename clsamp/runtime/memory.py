@@ -66,6 +66,8 @@ class Output:
                                     hostbuf=host)
 
     def finish(self):
+        """The result, once the kernel that wrote :attr:`buffer` is done: the host array
+        (its writes visible) or the device array."""
         if self.host is not None:
             # mapping makes the kernel's writes visible in host memory (no copy on PoCL)
             cl = discovery._cl()
