@@ -50,10 +50,20 @@ def _mode_for(path):
 
 @contextlib.contextmanager
 def atomic_path(path):
-    """Yield a temporary path beside ``path``; on success rename it to ``path``.
+    """A temporary path beside ``path``, renamed to ``path`` when the block succeeds.
 
-    On any exception the temporary file is removed and ``path`` is untouched. The file
-    that lands has the mode ``open`` would have given it (not mkstemp's 0600).
+    On any exception the temporary file is removed and ``path`` is untouched. The file that
+    lands has the mode ``open`` would have given it (not mkstemp's 0600).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write; its folder is made if missing.
+
+    Yields
+    ------
+    Path
+        Where to write.
     """
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
@@ -71,7 +81,13 @@ def atomic_path(path):
 
 
 def write_bytes(path, data):
-    """Write ``data`` to ``path`` atomically."""
+    """Write bytes to a file atomically (:func:`atomic_path`).
+
+    Parameters
+    ----------
+    path : str or Path
+    data : bytes
+    """
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as f:
             f.write(data)
@@ -80,13 +96,40 @@ def write_bytes(path, data):
 
 
 def write_text(path, text):
-    """Write ``text`` (UTF-8) to ``path`` atomically."""
+    """Write text, UTF-8 encoded, to a file atomically (:func:`atomic_path`).
+
+    Parameters
+    ----------
+    path : str or Path
+    text : str
+    """
     write_bytes(path, text.encode("utf-8"))
 
 
 def format_points(points):
-    """Points as text: one point a line, ``%.17g`` (round-trips float64 exactly);
-    realizations of a batch separated by a line ``#``."""
+    r"""Points as text: one point a line, coordinates separated by spaces in ``%.17g`` (which
+    round-trips float64 exactly), realizations separated by a line ``#``.
+
+    Parameters
+    ----------
+    points : array_like
+        Shape (n, d) or (r, n, d), coordinates in [0, 1).
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    InvalidArgumentError
+        ``points`` is not a valid point set.
+
+    Examples
+    --------
+    >>> from clsamp.files import format_points
+    >>> format_points([[0.5, 0.25], [0.0, 0.75]])
+    '0.5 0.25\n0 0.75\n'
+    """
     batch, _ = check_points(points)
     blocks = []
     for block in batch:
@@ -97,7 +140,34 @@ def format_points(points):
 
 
 def parse_points(text, name="text"):
-    """Inverse of :func:`format_points`: (n, d) for one set, (r, n, d) for several."""
+    r"""Points from text, the inverse of :func:`format_points`.
+
+    Lines starting with ``#`` separate realizations; commas count as spaces; blank lines
+    are skipped.
+
+    Parameters
+    ----------
+    text : str
+    name : str, optional
+        What the text is, for error messages.
+
+    Returns
+    -------
+    ndarray
+        float64 of shape (n, d) for one set, (r, n, d) for several.
+
+    Raises
+    ------
+    InvalidArgumentError
+        A line that is not numbers, no points, points or realizations of different sizes,
+        or coordinates outside [0, 1).
+
+    Examples
+    --------
+    >>> from clsamp.files import parse_points
+    >>> parse_points("0.5 0.25\n0 0.75\n#\n0.1 0.2\n0.3 0.4\n").shape
+    (2, 2, 2)
+    """
     blocks, current = [], []
     for number, line in enumerate(text.splitlines(), 1):
         stripped = line.strip()
@@ -129,7 +199,25 @@ def parse_points(text, name="text"):
 
 
 def save_points(path, points):
-    """Write points to ``path``: ``.npy`` as NumPy's format, anything else as text."""
+    """Write points to a file atomically: ``.npy`` in NumPy's format, any other suffix as text
+    (:func:`format_points`).
+
+    Parameters
+    ----------
+    path : str or Path
+        Where to write; ``.npy`` selects NumPy's format.
+    points : array_like
+        One set (n, d) or several (r, n, d).
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    InvalidArgumentError
+        ``points`` is not a valid point set.
+    """
     batch, single = check_points(points)
     data = batch[0] if single else batch
     path = Path(path)
@@ -143,7 +231,25 @@ def save_points(path, points):
 
 
 def load_points(path):
-    """Read points written by :func:`save_points` (or by UTK/PSA as text), validated."""
+    """Read points written by :func:`save_points` (or by UTK or PSA as text), validated.
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.npy`` file, or a text file of :func:`parse_points`'s format.
+
+    Returns
+    -------
+    ndarray
+        The points, as :func:`parse_points` gives them.
+
+    Raises
+    ------
+    FileNotFoundError
+        No file at ``path``.
+    InvalidArgumentError
+        A file that cannot be read as points, or points outside [0, 1).
+    """
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no point file at {str(path)!r}")
@@ -182,12 +288,31 @@ def _check_image(image, name="image", channels=None):
 
 
 def write_exr(path, image, header=None, channel_names=None):
-    """Write a float image as OpenEXR (float32 channels; Y for one channel, RGB(A) else).
+    """Write a float image as OpenEXR, atomically (:func:`atomic_path`).
 
-    ``header`` entries are stored as string attributes (sampler, spp, seed, ...);
-    ``channel_names`` names the channels of an (h, w, c) image instead (e.g. a reference
-    render and its standard error: ``("Y", "stderr")``). The file appears whole or not at
-    all (written beside it, then renamed).
+    Channels are float32, named Y for one channel and R, G, B (and A) for three or four,
+    unless ``channel_names`` names them.
+
+    Parameters
+    ----------
+    path : str or Path
+    image : ndarray
+        Float, shape (h, w) or (h, w, c).
+    header : dict, optional
+        Entries stored as string attributes (sampler, spp, seed, ...).
+    channel_names : sequence of str, optional
+        Names of the c channels (a reference render and its standard error:
+        ``("Y", "stderr")``).
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    InvalidArgumentError
+        An image that is not float or has a shape the channels do not fit, or channel
+        names that are not distinct.
     """
     import OpenEXR
     if channel_names is not None:
@@ -207,11 +332,29 @@ def write_exr(path, image, header=None, channel_names=None):
 
 
 def read_exr(path, with_header=False, channel_names=None):
-    """Read an OpenEXR image written by :func:`write_exr` as float32 (h, w) or (h, w, c).
+    """Read an OpenEXR image written by :func:`write_exr` as float32.
 
-    ``channel_names`` picks those channels, in that order (an image written with them).
-    Raises ``FileNotFoundError`` for a missing file and :class:`InvalidArgumentError`
-    ("not an OpenEXR file", or a channel it lacks) for one the library cannot read.
+    Parameters
+    ----------
+    path : str or Path
+    with_header : bool, optional
+        Return the header too.
+    channel_names : sequence of str, optional
+        Those channels, in that order; else R, G, B, A, Y as present (or all, sorted).
+
+    Returns
+    -------
+    image : ndarray
+        float32 of shape (h, w) for one channel, (h, w, c) for several.
+    header : dict
+        Only with ``with_header``: the file's attributes.
+
+    Raises
+    ------
+    FileNotFoundError
+        No file at ``path``.
+    InvalidArgumentError
+        Not an OpenEXR file, an unreadable one, or one without a channel asked for.
     """
     import OpenEXR
     path = Path(path)
@@ -242,13 +385,47 @@ def read_exr(path, with_header=False, channel_names=None):
 
 
 def tone_map(image, exposure=1.0, gamma=2.2):
-    """Clamp and gamma-encode a linear image to 8-bit (the PNG preview's look)."""
+    """A linear image clamped to [0, 1] and gamma-encoded to 8 bits (the PNG preview's look).
+
+    Parameters
+    ----------
+    image : array_like
+        Linear values.
+    exposure : float, optional
+        Factor applied before clamping.
+    gamma : float, optional
+
+    Returns
+    -------
+    ndarray
+        uint8, of ``image``'s shape.
+    """
     image = np.clip(np.asarray(image, dtype=np.float64) * exposure, 0.0, 1.0)
     return np.round(255.0 * image ** (1.0 / gamma)).astype(np.uint8)
 
 
 def write_png(path, image, tone=True, **tone_args):
-    """Write an image as PNG: tone-mapped from linear floats by default, or uint8 as is."""
+    """Write an image as PNG, atomically (:func:`atomic_path`).
+
+    Parameters
+    ----------
+    path : str or Path
+    image : ndarray
+        Shape (h, w) or (h, w, c).
+    tone : bool, optional
+        Tone-map linear floats (:func:`tone_map`); False writes uint8 values as they are.
+    **tone_args
+        ``exposure`` and ``gamma`` for :func:`tone_map`.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    InvalidArgumentError
+        With ``tone``, an image that is not float or not of a shape above.
+    """
     import matplotlib.image as mpimg
     image = np.asarray(image)
     if tone:
@@ -263,7 +440,19 @@ def write_png(path, image, tone=True, **tone_args):
 
 
 def save_figure(path, figure, dpi=110):
-    """Save a matplotlib figure (PNG) atomically and close it."""
+    """Save a matplotlib figure atomically (:func:`atomic_path`) and close it.
+
+    Parameters
+    ----------
+    path : str or Path
+        Its suffix gives the format (PNG where it has none).
+    figure : matplotlib.figure.Figure
+    dpi : int, optional
+
+    Returns
+    -------
+    Path
+    """
     import matplotlib.pyplot as plt
     buffer = _io.BytesIO()
     figure.savefig(buffer, format=Path(path).suffix.lstrip(".") or "png", dpi=dpi, bbox_inches="tight")

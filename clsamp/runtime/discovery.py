@@ -271,10 +271,24 @@ def without_fp64():
 
 
 def compiles(spec):
-    """Whether the device ``spec`` (as :func:`use_device` takes it) builds a one-line kernel.
+    """Whether a device builds a one-line kernel.
 
-    A driver can list a device it cannot compile for (PoCL 3.0's LLVM 14 on CPUs newer
-    than itself); the default choice skips such devices.
+    A driver can list a device it cannot compile for (PoCL 3.0's LLVM 14 on CPUs newer than
+    itself); the default choice skips such devices.
+
+    Parameters
+    ----------
+    spec : int, str or Device
+        The device, as :func:`use_device` takes it.
+
+    Returns
+    -------
+    bool
+
+    Raises
+    ------
+    InvalidArgumentError
+        ``spec`` names no device.
     """
     cl = _cl()
     with _lock:
@@ -355,10 +369,28 @@ def loop_limit():
 
 
 def dimension_split(d, per_item, global_size, local_size=None):
-    """``(defines, global_size, local_size)`` of a sampler launch over ``d`` dimensions:
-    unchanged where the device has no :func:`loop_limit`; else ``-DDIMS_PER_ITEM`` and a
-    third grid axis of ``ceil(d / per_item)`` chunks (``kernels/dims.h``). The bits do
-    not depend on it."""
+    """How a sampler launch over ``d`` dimensions is split on the current device.
+
+    Unchanged where the device has no :func:`loop_limit`; else ``-DDIMS_PER_ITEM`` and a
+    third grid axis of ``ceil(d / per_item)`` chunks (``kernels/dims.h``). The bits the
+    kernel writes do not depend on it.
+
+    Parameters
+    ----------
+    d : int
+        Dimensions of the points.
+    per_item : int
+        Most dimensions one work-item computes where there is a limit.
+    global_size : tuple of int
+        The launch's grid without the split.
+    local_size : tuple of int, optional
+        Its work-group shape.
+
+    Returns
+    -------
+    tuple of (dict, tuple, tuple or None)
+        The defines, the global size and the local size of the launch.
+    """
     if loop_limit() is None or d <= per_item:
         return {}, tuple(global_size), None if local_size is None else tuple(local_size)
     chunks = -(-d // per_item)
@@ -378,8 +410,25 @@ def require_fp64():
 
 
 def require_extension(extension, what):
-    """Raise :class:`NoDeviceError` unless the current device has the OpenCL ``extension``
-    (``what`` names the caller in the message)."""
+    """Raise unless the current device has an OpenCL extension.
+
+    Parameters
+    ----------
+    extension : str
+        Such as ``"cl_khr_int64_base_atomics"``.
+    what : str
+        The caller, for the message.
+
+    Returns
+    -------
+    Device
+        The current device.
+
+    Raises
+    ------
+    NoDeviceError
+        The device lacks ``extension``.
+    """
     device = current_device()
     if extension not in device.extensions:
         raise NoDeviceError(
@@ -389,9 +438,19 @@ def require_extension(extension, what):
 
 
 def require_short_loops(what):
-    """Raise :class:`NoDeviceError` where the current device stops long loops
-    (:func:`loop_limit`) and ``what`` (a kernel with long per-work-item loops) would give
-    wrong numbers there."""
+    """Raise where the current device stops long loops (:func:`loop_limit`), on which a
+    kernel with long per-work-item loops would give wrong numbers.
+
+    Parameters
+    ----------
+    what : str
+        The kernel, for the message.
+
+    Raises
+    ------
+    NoDeviceError
+        The device has a loop limit.
+    """
     limit = loop_limit()
     if limit is not None:
         device = current_device()
@@ -402,7 +461,18 @@ def require_short_loops(what):
 
 
 def local_size(preferred=64):
-    """A work-group size no larger than the device allows (a power of two)."""
+    """A work-group size the current device allows.
+
+    Parameters
+    ----------
+    preferred : int, optional
+        The size wanted.
+
+    Returns
+    -------
+    int
+        The largest power of two no larger than ``preferred`` and the device's limit.
+    """
     limit = current_device().max_work_group_size
     size = 1
     while size * 2 <= min(preferred, limit):

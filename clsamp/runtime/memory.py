@@ -28,8 +28,21 @@ _TABLES = 64            # tables kept per process
 def table(key, build, dtype=np.uint32):
     """A small read-only device array, uploaded once per (device, ``key``).
 
-    ``build()`` makes the host array the first time; later calls on the same device get
-    the same device array (the most recently used tables are kept, at most 64).
+    Later calls on the same device get the same device array (the 64 most recently used
+    tables are kept).
+
+    Parameters
+    ----------
+    key : hashable
+        What the table is, unique within the process.
+    build : callable
+        Makes the host array, called only when the table is not kept already.
+    dtype : numpy dtype, optional
+        The element type of the device array.
+
+    Returns
+    -------
+    pyopencl.array.Array
     """
     import pyopencl.array as cla
     full = (discovery.current_device().index, key)
@@ -82,13 +95,33 @@ class Output:
 
 
 def is_device_array(value):
-    """Whether ``value`` is a ``pyopencl.array.Array``."""
+    """Whether ``value`` is a device array.
+
+    Parameters
+    ----------
+    value : object
+
+    Returns
+    -------
+    bool
+        True for a ``pyopencl.array.Array``.
+    """
     import pyopencl.array as cla
     return isinstance(value, cla.Array)
 
 
 def to_device(array):
-    """``array`` on the current device: itself if it is a device array, else a copy."""
+    """``array`` on the current device.
+
+    Parameters
+    ----------
+    array : array_like or pyopencl.array.Array
+
+    Returns
+    -------
+    pyopencl.array.Array
+        ``array`` itself if it is a device array, else a copy of it.
+    """
     if is_device_array(array):
         return array
     import pyopencl.array as cla
@@ -96,7 +129,20 @@ def to_device(array):
 
 
 def to_host(array, into=None):
-    """``array`` as a NumPy array (a device array read back), in ``into`` when given."""
+    """``array`` as a NumPy array.
+
+    Parameters
+    ----------
+    array : array_like or pyopencl.array.Array
+        A device array is read back; anything else goes through ``np.asarray``.
+    into : ndarray, optional
+        Where to write the result (of ``array``'s shape).
+
+    Returns
+    -------
+    ndarray
+        ``into`` when given.
+    """
     if is_device_array(array):
         return array.get() if into is None else array.get(ary=into)
     if into is None:
@@ -106,8 +152,24 @@ def to_host(array, into=None):
 
 
 def bounds(array):
-    """(smallest, largest, count of NaN or infinite) of the doubles of a device array,
-    computed on the device (``kernels/points.cl``); smallest/largest over finite values."""
+    """The range of the doubles of a device array, computed on the device
+    (``kernels/points.cl``).
+
+    Parameters
+    ----------
+    array : pyopencl.array.Array
+        float64 values.
+
+    Returns
+    -------
+    tuple of (float, float, int)
+        The smallest and largest finite value and how many values are NaN or infinite.
+
+    Raises
+    ------
+    NoDeviceError
+        The current device has no double precision.
+    """
     import pyopencl.array as cla
     discovery.require_fp64()
     items = 64 * max(1, discovery.current_device().compute_units)
@@ -121,8 +183,22 @@ def bounds(array):
 
 
 def device_block(array, r0, r1, k0=0, k1=None):
-    """``array[r0:r1, k0:k1]`` of a device array (r, n, d) as a contiguous device array:
-    the array itself when that is all of it, else a copy made on the device."""
+    """``array[r0:r1, k0:k1]`` of a device array of shape (r, n, d), contiguous.
+
+    Parameters
+    ----------
+    array : pyopencl.array.Array
+        Shape (r, n, d).
+    r0, r1 : int
+        The first and past-the-last index on the first axis.
+    k0, k1 : int, optional
+        The same on the second axis (``k1=None``: to its end).
+
+    Returns
+    -------
+    pyopencl.array.Array
+        ``array`` itself where the block is all of it, else a copy made on the device.
+    """
     import pyopencl.array as cla
     r, n, d = array.shape
     k1 = n if k1 is None else k1
@@ -139,7 +215,17 @@ def device_block(array, r0, r1, k0=0, k1=None):
 
 
 def concatenate(parts):
-    """Device arrays joined along their first axis (the one part itself when alone)."""
+    """Device arrays joined along their first axis.
+
+    Parameters
+    ----------
+    parts : sequence of pyopencl.array.Array
+
+    Returns
+    -------
+    pyopencl.array.Array
+        The one part itself when it is alone.
+    """
     if len(parts) == 1:
         return parts[0]
     import pyopencl.array as cla
@@ -163,8 +249,22 @@ def host_memory_available():
 
 
 def check_host_bytes(need, what):
-    """Refuse, before any work, a result of ``need`` bytes that the host's available
-    memory cannot hold (the figure is read only for requests above 256 MiB)."""
+    """Refuse, before any work, a result the host's available memory cannot hold.
+
+    The available memory is read only for requests above 256 MiB.
+
+    Parameters
+    ----------
+    need : int
+        Bytes the result takes.
+    what : str
+        What asks, for the message.
+
+    Raises
+    ------
+    InvalidArgumentError
+        ``need`` exceeds the memory available.
+    """
     if need <= 2**28:
         return
     room = host_memory_available()
@@ -175,7 +275,17 @@ def check_host_bytes(need, what):
 
 
 def gib(nbytes):
-    """Bytes as a message shows them."""
+    """Bytes as a message shows them.
+
+    Parameters
+    ----------
+    nbytes : int
+
+    Returns
+    -------
+    str
+        ``"1.5 GiB"``, or ``"12.0 MiB"`` below a GiB.
+    """
     return f"{nbytes / 2**30:.1f} GiB" if nbytes >= 2**30 else f"{nbytes / 2**20:.1f} MiB"
 
 
@@ -186,10 +296,20 @@ def work_budget():
 
 
 def fit(bytes_per_item, limit=None):
-    """How many items of ``bytes_per_item`` one launch may hold (at least one).
+    """How many items one launch may hold: :func:`work_budget` over ``bytes_per_item``.
 
-    ``limit`` caps the bytes further where a caller has its own reason (a working set
-    that should stay in the caches, a host-memory cap).
+    Parameters
+    ----------
+    bytes_per_item : int
+        Bytes of device memory one item takes.
+    limit : int, optional
+        A further cap on the bytes, where a caller has its own reason (a working set that
+        should stay in the caches, a host-memory cap).
+
+    Returns
+    -------
+    int
+        At least 1.
     """
     budget = work_budget() if limit is None else min(work_budget(), int(limit))
     return max(1, budget // max(1, int(bytes_per_item)))
@@ -197,6 +317,19 @@ def fit(bytes_per_item, limit=None):
 
 def chunk_ranges(total, bytes_per_item, limit=None):
     """Split ``total`` items into contiguous ranges that each fit one launch (:func:`fit`),
-    so work too large for the device is split, never refused or truncated."""
+    so work too large for the device is split, never refused or truncated.
+
+    Parameters
+    ----------
+    total : int
+        How many items.
+    bytes_per_item, limit
+        As :func:`fit` takes them.
+
+    Returns
+    -------
+    list of (int, int)
+        The (start, stop) of each range, in order.
+    """
     step = fit(bytes_per_item, limit)
     return [(lo, min(total, lo + step)) for lo in range(0, total, step)]

@@ -42,17 +42,43 @@ CAPABILITIES = {
 
 
 def needs_fp64(file):
-    """Whether ``kernels/<file>`` (its headers inlined) computes in double precision even
-    where ``CLSAMP_FP64`` is 0 (its integer paths left out of account)."""
+    """Whether a kernel file computes in double precision even where ``CLSAMP_FP64`` is 0
+    (its integer paths left out of account).
+
+    Parameters
+    ----------
+    file : str
+        A file name inside ``kernels/``; its headers are inlined.
+
+    Returns
+    -------
+    bool
+    """
     return bool(_DOUBLE.search(active_source(kernel_source(file), fp64=False)))
 
 
 def capabilities(spec=None):
-    """What runs on a device: ``{capability: None}`` where it runs, else the reason it refuses.
+    """What runs on a device.
 
     A capability runs where every kernel file it builds compiles for the device; on a
     device without fp64 those that compute in double refuse with :class:`NoDeviceError`
-    before any compiler sees them, and the value here is "needs fp64".
+    before any compiler sees them.
+
+    Parameters
+    ----------
+    spec : int, str or Device, optional
+        The device, as :func:`use_device` takes it; the current device when None.
+
+    Returns
+    -------
+    dict
+        ``{capability: None}`` for each capability of :data:`CAPABILITIES` that runs, else
+        the reason it refuses (``"needs fp64"``, ``"its compiler fails"``).
+
+    Raises
+    ------
+    InvalidArgumentError
+        ``spec`` names no device.
     """
     device = discovery.devices()[discovery._resolve(spec)] if spec is not None else discovery.current_device()
     out = {}
@@ -79,11 +105,26 @@ def kernel_folder():
 
 
 def kernel_source(file):
-    """The text of ``kernels/<file>`` with its ``#include "x.h"`` lines inlined.
+    """The text of a kernel file with its ``#include "x.h"`` lines inlined.
 
-    Headers are inlined here rather than found through ``-I`` so that the
-    source handed to the compiler is complete, and binary caches keyed by the
-    source (pyopencl's, PoCL's) see a header change.
+    Headers are inlined here rather than found through ``-I`` so that the source handed to
+    the compiler is complete, and binary caches keyed by the source (pyopencl's, PoCL's)
+    see a header change.
+
+    Parameters
+    ----------
+    file : str
+        A file name inside :func:`kernel_folder`.
+
+    Returns
+    -------
+    str
+        The source a compiler is given.
+
+    Raises
+    ------
+    BuildError
+        The file or one of its headers is missing.
     """
     folder = kernel_folder()
     seen = set()
@@ -126,10 +167,30 @@ _CONDITIONAL = re.compile(r"^\s*#\s*(if|ifdef|ifndef|elif|else|endif)\b(.*)$")
 
 
 def active_source(source, fp64):
-    """``source`` without comments and without the lines a compiler skips when
-    ``CLSAMP_FP64`` is ``fp64``: the branches of ``#if CLSAMP_FP64`` / ``#if !CLSAMP_FP64``
-    (and their ``#else``) that do not apply. Other conditionals are kept whole, so a
-    ``double`` left here may still be compiled."""
+    """``source`` without comments and without the lines a compiler skips for a given
+    ``CLSAMP_FP64``.
+
+    The branches of ``#if CLSAMP_FP64`` / ``#if !CLSAMP_FP64`` (and their ``#else``) that do
+    not apply are dropped. Other conditionals are kept whole, so a ``double`` left here may
+    still be compiled.
+
+    Parameters
+    ----------
+    source : str
+        OpenCL C source, headers inlined (:func:`kernel_source`).
+    fp64 : bool
+        The value of ``CLSAMP_FP64``.
+
+    Returns
+    -------
+    str
+        What the compiler sees of it.
+
+    Raises
+    ------
+    BuildError
+        An ``#elif`` follows ``#if CLSAMP_FP64``.
+    """
     out = []
     stack = []          # per open #if: None (not ours) or whether its branch is live
     for line in _strip_comments(source).splitlines():
@@ -155,7 +216,8 @@ def active_source(source, fp64):
 
 
 def program(file, defines=None, options=()):
-    """The built program of ``kernels/<file>`` for the current device.
+    """The built program of ``kernels/<file>`` for the current device, built once per
+    (device, file, options).
 
     Parameters
     ----------
@@ -168,6 +230,10 @@ def program(file, defines=None, options=()):
     options : sequence of str
         Other compiler options (``-cl-mad-enable``: only where results need not be
         bit-identical across devices).
+
+    Returns
+    -------
+    pyopencl.Program
 
     Raises
     ------
@@ -214,11 +280,28 @@ def program(file, defines=None, options=()):
 def kernel(file, name, defines=None, options=(), instance=None):
     """A kernel object from :func:`program`, fetched once per program and thread.
 
-    Callers in one thread share the object, so each launch sets all its arguments. A loop
-    that sets arguments once and launches many times asks for its own ``instance`` (any
-    hashable key): a distinct object per key, kept with the program. Each thread gets
-    objects of its own: setting a kernel's arguments and launching it are two steps, which
-    two threads must not interleave on one object.
+    Callers in one thread share the object, so each launch sets all its arguments. Each
+    thread gets objects of its own: setting a kernel's arguments and launching it are two
+    steps, which two threads must not interleave on one object.
+
+    Parameters
+    ----------
+    file, defines, options
+        As :func:`program` takes them.
+    name : str
+        The kernel's name in the file.
+    instance : hashable, optional
+        A key for an object of its own, kept with the program: for a loop that sets
+        arguments once and launches many times.
+
+    Returns
+    -------
+    pyopencl.Kernel
+
+    Raises
+    ------
+    NoDeviceError, BuildError
+        As :func:`program` raises them.
     """
     prog = program(file, defines, options)
     key = (id(prog), name, instance, threading.get_ident())
