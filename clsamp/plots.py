@@ -31,6 +31,12 @@ def pyplot():
     return plt
 
 
+def _save(fig, path):
+    """Lay ``fig`` out and save it whole (:func:`clsamp.files.save_figure`)."""
+    fig.tight_layout()
+    return files.save_figure(path, fig)
+
+
 # -- point sets -----------------------------------------------------------------------------
 def _point_sets(points, name="points"):
     """The (n, 2) sets of one set, a batch (r, n, 2) or a list of sets of different sizes."""
@@ -59,11 +65,10 @@ def points(ax, points, title=None, size=None, color="black"):
     ----------
     ax : matplotlib Axes
     points : ndarray (n, 2) or (r, n, 2), or list of (n_k, 2) arrays
-        One set, or a batch or list of sets (``sample``, ``sample_sets``), of which the
-        first is drawn.
+        One set, or sets (``sample``, ``sample_sets``) of which the first is drawn.
     title : str, optional
     size : float, optional
-        Marker area in points^2; by default it shrinks as n grows (1600 / n, at least 0.5).
+        Marker area in points^2; by default 1600 / n, at least 0.5.
     color : matplotlib colour
 
     Returns
@@ -73,9 +78,8 @@ def points(ax, points, title=None, size=None, color="black"):
     Examples
     --------
     >>> import clsamp
-    >>> from clsamp import plots
-    >>> fig, ax = plots.pyplot().subplots()
-    >>> dots = plots.points(ax, clsamp.make_sampler("jittered", seed=1).sample(256), "jittered")
+    >>> ax = clsamp.plots.pyplot().gca()
+    >>> dots = clsamp.plots.points(ax, clsamp.make_sampler("jittered", seed=1).sample(256), "jittered")
     """
     if size is not None:
         size = check_real(size, "size", minimum=0.0, open_minimum=True)
@@ -83,15 +87,13 @@ def points(ax, points, title=None, size=None, color="black"):
 
 
 def points_figure(path, points, title=None, columns=4):
-    """Point sets saved as a figure (.png, .pdf or .svg, written whole), one panel a set.
+    """Point sets saved as a figure, one panel a set, titled with its n.
 
     Parameters
     ----------
     path : str or Path
     points : ndarray (n, 2) or (r, n, 2), or list of (n_k, 2) arrays
-        One set (one panel), or a batch or list of sets (a panel each, titled with its n).
     title : str, optional
-        Above the panels.
     columns : int
         Panels per row.
 
@@ -104,8 +106,7 @@ def points_figure(path, points, title=None, columns=4):
     >>> import clsamp, tempfile, pathlib
     >>> from clsamp import plots
     >>> sets = clsamp.make_sampler("poisson_disk", rho=0.75, seed=2).sample(256, realizations=2)
-    >>> out = plots.points_figure(pathlib.Path(tempfile.mkdtemp()) / "pd.png", sets)
-    >>> out.suffix
+    >>> plots.points_figure(pathlib.Path(tempfile.mkdtemp()) / "pd.png", sets).suffix
     '.png'
     """
     sets = _point_sets(points)
@@ -118,23 +119,19 @@ def points_figure(path, points, title=None, columns=4):
         _scatter(ax, one, f"set {k}, n = {len(one)}" if len(sets) > 1 else f"n = {len(one)}")
     if title:
         fig.suptitle(title)
-    fig.tight_layout()
-    return files.save_figure(path, fig)
+    return _save(fig, path)
 
 
 # -- spectra --------------------------------------------------------------------------------
 def spectrum_image(P, scale="linear", vmin=None, vmax=None):
     """A 2-D spectrum as a grey image in [0, 1], DC at the centre, +y up and +x right.
 
-    The array keeps clsamp's layout, ``P[i, j]`` = (x frequency i - R/2, y frequency
-    j - R/2); the image is that as people read a picture: row 0 (the top) is the highest
-    y frequency R/2 - 1, the last row -R/2, columns x from -R/2 (left):
-    ``image[R - 1 - j, i] = P[i, j]``. (``plt.imshow(P)`` would show it transposed.)
+    ``image[R - 1 - j, i] = P[i, j]``, ``P[i, j]`` being at (x, y) frequency (i - R/2, j - R/2):
+    the picture as people read one (``plt.imshow(P)`` would show it transposed).
 
     Parameters
     ----------
     P : ndarray (R, R)
-        A spectrum from :func:`clsamp.power_spectrum`.
     scale : {"linear", "log"}
         ``"linear"``: P / vmax clipped to [0, 1] (vmax default 4, so white noise is a
         mid grey after the PNG's gamma, the look of PSA and UTK pictures). ``"log"``:
@@ -163,15 +160,36 @@ def spectrum_image(P, scale="linear", vmin=None, vmax=None):
 
 
 def save_spectrum_png(path, P, scale="linear", vmin=None, vmax=None):
-    """Write a 2-D spectrum as a grey PNG (:func:`spectrum_image`; gamma 2.2 for "linear")."""
+    """Write a 2-D spectrum as a grey PNG (gamma 2.2 for ``"linear"``).
+
+    Parameters
+    ----------
+    path : str or Path
+    P, scale, vmin, vmax
+        As :func:`spectrum_image` takes them.
+
+    Returns
+    -------
+    Path
+    """
     image = spectrum_image(P, scale, vmin, vmax)
     return files.write_png(path, image, gamma=2.2 if scale == "linear" else 1.0)
 
 
 def save_spectrum_exr(path, P, header=None):
-    """Write a spectrum's raw values as a one-channel OpenEXR (float32), oriented as
-    :func:`spectrum_image` (+y up: row j = y frequency R/2 - 1 - j, column i = x frequency
-    i - R/2). A 1-D spectrum is one row."""
+    """Write a spectrum's values as a float32 OpenEXR oriented as :func:`spectrum_image`.
+
+    Parameters
+    ----------
+    path : str or Path
+    P : ndarray (R,) or (R, R)
+    header : dict, optional
+        More attributes for the file's header.
+
+    Returns
+    -------
+    Path
+    """
     P = spectra.check_spectrum(P)
     image = P[None, :] if P.ndim == 1 else P.T[::-1]
     info = {"clsamp": "power spectrum",
@@ -186,10 +204,8 @@ def spectrum(ax, P, scale="linear", vmin=None, vmax=None, title=None):
     Parameters
     ----------
     ax : matplotlib Axes
-    P : ndarray (R, R)
-        A spectrum from :func:`clsamp.power_spectrum` (``P[i, j]`` = (x, y)).
-    scale, vmin, vmax
-        As :func:`spectrum_image`.
+    P, scale, vmin, vmax
+        As :func:`spectrum_image` takes them.
     title : str, optional
 
     Returns
@@ -218,11 +234,23 @@ def _frequency_axis(ax, freqs, n, convention):
 
 
 def radial_mean(ax, freqs, values, label=None, n=None, convention="psa", **line_args):
-    """Plot a radial mean (from :func:`clsamp.radial_mean`) on a matplotlib Axes.
+    """Plot a radial mean (:func:`clsamp.radial_mean`), a dotted line at 1 (white noise).
 
-    With ``n`` (points per set) the frequency axis is normalized as PSA (2ν/√N,
-    ``convention="psa"``) or UTK (ν/√N) do, so sets of different N line up.
-    Returns the Line2D.
+    Parameters
+    ----------
+    ax : matplotlib Axes
+    freqs, values : ndarray
+    label : str, optional
+    n : int, optional
+        Points per set: frequencies are then normalized as PSA (2ν/√N,
+        ``convention="psa"``) or UTK (ν/√N) do, so sets of different N line up.
+    convention : {"psa", "utk"}
+    **line_args
+        For ``ax.plot``.
+
+    Returns
+    -------
+    matplotlib Line2D
     """
     x = _frequency_axis(ax, freqs, n, convention)
     (line,) = ax.plot(x, values, label=label, **line_args)
@@ -235,9 +263,18 @@ def radial_mean(ax, freqs, values, label=None, n=None, convention="psa", **line_
 
 def anisotropy(ax, freqs, values, label=None, n=None, convention="psa", realizations=None,
                     **line_args):
-    """Plot an anisotropy curve (dB, from :func:`clsamp.anisotropy`) on a matplotlib Axes.
+    """Plot an anisotropy curve (dB, :func:`clsamp.anisotropy`) on a matplotlib Axes.
 
-    With ``realizations`` a dotted line marks -10·log10(r) dB, white noise's level.
+    Parameters
+    ----------
+    ax, freqs, values, label, n, convention, **line_args
+        As :func:`radial_mean` takes them.
+    realizations : int, optional
+        Sets averaged: a dotted line marks -10·log10(r) dB, white noise's level.
+
+    Returns
+    -------
+    matplotlib Line2D
     """
     x = _frequency_axis(ax, freqs, n, convention)
     (line,) = ax.plot(x, values, label=label, **line_args)
@@ -251,7 +288,21 @@ def anisotropy(ax, freqs, values, label=None, n=None, convention="psa", realizat
 
 def spectrum_figure(path, P, n=None, realizations=None, label=None, bin_width=1.0,
                     convention="psa", scale="linear"):
-    """One figure, saved as PNG: the spectrum, its radial mean and (2-D) its anisotropy."""
+    """A spectrum, its radial mean and (2-D) its anisotropy, saved as one figure.
+
+    Parameters
+    ----------
+    path : str or Path
+    P : ndarray (R,) or (R, R)
+    n, realizations, label, convention
+        As :func:`anisotropy` takes them (``label`` is the title).
+    bin_width, scale
+        As :func:`clsamp.radial_mean` and :func:`spectrum_image` take them.
+
+    Returns
+    -------
+    Path
+    """
     plt = pyplot()
     P = spectra.check_spectrum(P)
     panels = 3 if P.ndim == 2 else 1
@@ -267,30 +318,23 @@ def spectrum_figure(path, P, n=None, realizations=None, label=None, bin_width=1.
         radial_mean(axes[0], freqs, mean, n=n, convention=convention)
         if label:
             axes[0].set_title(label)
-    figure.tight_layout()
-    return files.save_figure(path, figure)
+    return _save(figure, path)
 
 
 def sampler_figure(path, points, P, pcf, n=None, label=None):
-    """A sampler at a glance, saved as one row of four panels: its first point set, the
-    (expected) spectrum, its radial mean and the pair correlation function.
+    """A sampler at a glance: its first point set, spectrum, radial mean and PCF.
 
     Parameters
     ----------
     path : str or Path
-        The figure (.png, .pdf or .svg), written whole.
     points : ndarray (n, 2) or (r, n, 2), or list of (n_k, 2) arrays
-        The sets the spectrum and the PCF were measured over.
     P : ndarray (R, R)
-        Their spectrum (:func:`clsamp.power_spectrum`).
+        Their :func:`clsamp.power_spectrum`.
     pcf : (radii, g)
-        Their pair correlation function (:func:`clsamp.pair_correlation`), its radius
-        axis drawn in mean spacings of the sets' mean size.
+        Their :func:`clsamp.pair_correlation`.
     n : int, optional
-        Points per set for the radial mean's frequency axis (2ν/√N); by default the sets'
-        mean size, rounded.
+        Points per set for the radial mean's axis (2ν/√N); the sets' mean size by default.
     label : str, optional
-        The sampler's name, in the first panel's title.
 
     Returns
     -------
@@ -319,13 +363,11 @@ def sampler_figure(path, points, P, pcf, n=None, label=None):
     pair_correlation(axes[3], radii, g, n=size)
     axes[3].set_ylim(0, max(2.5, float(np.max(g)) * 1.05))
     axes[3].set_title(f"expected PCF{several}" if several else "PCF", fontsize=10)
-    fig.tight_layout()
-    return files.save_figure(path, fig)
+    return _save(fig, path)
 
 
 def radial_mean_families(path, curves, families, n=None, reference="random", note=None):
-    """Radial means of many samplers, saved as one panel per family (a shared y axis),
-    with a reference curve (white noise) in grey in every panel.
+    """Radial means of many samplers, one panel per family, a reference curve in grey in each.
 
     Parameters
     ----------
@@ -336,10 +378,8 @@ def radial_mean_families(path, curves, families, n=None, reference="random", not
         The panels, each with the samplers it shows (those in ``curves``, in this order).
     n : int, optional
         Points per set, to draw frequencies as 2ν/√N.
-    reference : str, optional
-        The entry of ``curves`` drawn in every panel.
-    note : str, optional
-        Added to each panel's title, in parentheses.
+    reference, note : str, optional
+        The entry of ``curves`` drawn in every panel; a note for each title.
 
     Returns
     -------
@@ -349,9 +389,8 @@ def radial_mean_families(path, curves, families, n=None, reference="random", not
     --------
     >>> import clsamp, tempfile, pathlib
     >>> from clsamp import plots
-    >>> curves = {s: clsamp.radial_mean(clsamp.power_spectrum(
-    ...     clsamp.make_sampler(s, seed=1).sample(256, realizations=4), resolution=64,
-    ...     progress=False)) for s in ("random", "jittered", "halton")}
+    >>> curves = {s: clsamp.radial_mean(clsamp.power_spectrum(clsamp.make_sampler(s, seed=1).sample(
+    ...     256, realizations=4), resolution=64, progress=False)) for s in ("random", "jittered", "halton")}
     >>> out = plots.radial_mean_families(pathlib.Path(tempfile.mkdtemp()) / "r.png", curves,
     ...     [("stratified", ["jittered"]), ("low discrepancy", ["halton"])], n=256)
     """
@@ -366,16 +405,27 @@ def radial_mean_families(path, curves, families, n=None, reference="random", not
         ax.set_ylim(0, 2.5)
         ax.set_title(f"{family} ({note})" if note else family, fontsize=10)
         ax.legend(fontsize=8)
-    fig.tight_layout()
-    return files.save_figure(path, fig)
+    return _save(fig, path)
 
 
 # -- metrics ------------------------------------------------------------------------------
 def pair_correlation(ax, radii, pcf, n=None, d=2, label=None, **line_args):
-    """Plot a pair correlation function (from :func:`clsamp.pair_correlation`).
+    """Plot a pair correlation function (:func:`clsamp.pair_correlation`), a dotted line at 1.
 
-    With ``n`` (points per set) the radius axis is in mean spacings, r n^(1/d), so sets of
-    different N line up; a dotted line marks 1, a Poisson process. Returns the Line2D.
+    Parameters
+    ----------
+    ax : matplotlib Axes
+    radii, pcf : ndarray
+    n, d : int, optional
+        Points per set and dimension: radii are then drawn in mean spacings, r n^(1/d),
+        so sets of different N line up.
+    label : str, optional
+    **line_args
+        For ``ax.plot``.
+
+    Returns
+    -------
+    matplotlib Line2D
     """
     radii = np.asarray(radii, dtype=np.float64)
     x = radii * float(n) ** (1.0 / d) if n else radii
@@ -389,19 +439,41 @@ def pair_correlation(ax, radii, pcf, n=None, d=2, label=None, **line_args):
 
 
 def pcf_figure(path, radii, pcf, n=None, d=2, label=None):
-    """One PCF, saved as a figure (.png, .pdf, .svg) with :func:`clsamp.files.save_figure`."""
+    """One pair correlation function, saved as a figure.
+
+    Parameters
+    ----------
+    path : str or Path
+    radii, pcf, n, d, label
+        As :func:`pair_correlation` takes them (``label`` is the title).
+
+    Returns
+    -------
+    Path
+    """
     fig, ax = pyplot().subplots(figsize=(5.5, 3.8))
     pair_correlation(ax, radii, pcf, n=n, d=d)
     if label:
         ax.set_title(label)
-    fig.tight_layout()
-    return files.save_figure(path, fig)
+    return _save(fig, path)
 
 
 def discrepancy(ax, sweep, expected=None, **line_args):
-    """A discrepancy against N (a :class:`clsamp.metrics.DiscrepancySweep`), log-log, its
-    fitted slope in the label; ``expected`` (exponent, text) draws a dashed line of the
-    known slope through the largest N. Returns the line."""
+    """Plot a discrepancy against N, log-log, its fitted slope in the label.
+
+    Parameters
+    ----------
+    ax : matplotlib Axes
+    sweep : clsamp.metrics.DiscrepancySweep
+    expected : (float, str), optional
+        A known exponent and its text: a dashed line through the largest N.
+    **line_args
+        For ``ax.errorbar``.
+
+    Returns
+    -------
+    matplotlib ErrorbarContainer
+    """
     slope, _ = sweep.slope()
     label = f"{sweep.sampler}: {slope:.2f}" + (f" ({expected[1]})" if expected else "")
     line_args = {"marker": "o", "markersize": 3, "capsize": 2, **line_args}
@@ -418,16 +490,15 @@ def discrepancy(ax, sweep, expected=None, **line_args):
 
 
 def discrepancy_figure(path, sweeps):
-    """Discrepancies of many samplers against N, saved as one log-log panel per method,
-    each sampler with its fitted slope and, where :func:`clsamp.theory.discrepancy_rate`
-    knows it, a dashed line of the known rate.
+    """Discrepancies of many samplers against N, a log-log panel per method, each with its fitted
+    slope and a dashed line of the rate :func:`clsamp.theory.discrepancy_rate` knows.
 
     Parameters
     ----------
     path : str or Path
     sweeps : sequence of dict
         One :func:`clsamp.metrics.discrepancy_sweep` result (``{method: DiscrepancySweep}``)
-        per sampler, all with the methods of the first.
+        per sampler (at least one), all with the methods of the first.
 
     Returns
     -------
@@ -436,10 +507,9 @@ def discrepancy_figure(path, sweeps):
     Examples
     --------
     >>> import clsamp, tempfile, pathlib
-    >>> from clsamp import plots
-    >>> from clsamp.metrics import discrepancy_sweep
-    >>> sweeps = [discrepancy_sweep(clsamp.make_sampler(s, seed=3), [16, 64, 256, 1024],
-    ...                             progress=False) for s in ("random", "halton")]
+    >>> from clsamp import plots, metrics
+    >>> sweeps = [metrics.discrepancy_sweep(clsamp.make_sampler(s, seed=3), [16, 64, 256, 1024],
+    ...                                     progress=False) for s in ("random", "halton")]
     >>> out = plots.discrepancy_figure(pathlib.Path(tempfile.mkdtemp()) / "d.png", sweeps)
     """
     sweeps = list(sweeps)
@@ -459,8 +529,7 @@ def discrepancy_figure(path, sweeps):
         ax.set_title(f"{method} discrepancy (RMS of D over {sets} sets; dashed: known)")
         ax.grid(True, which="both", alpha=0.2)
         ax.legend(fontsize=7, ncol=2)
-    fig.tight_layout()
-    return files.save_figure(path, fig)
+    return _save(fig, path)
 
 
 # -- convergence --------------------------------------------------------------------------
@@ -485,12 +554,19 @@ def _label(ax, xlabel, title):
 
 
 def convergence(results, path):
-    """MSE against N (log-log), one panel per integrand, with the theory slopes drawn.
+    """MSE against N (log-log) of one or more results, one panel per integrand.
 
-    Each result is a line with error bars (one standard error); where
-    :func:`clsamp.theory.compare` knows the published rate, a dashed line of that
-    slope in the same colour passes through the result's largest N. Saved with
-    :func:`clsamp.files.save_figure`; returns its path.
+    Each result is a line with error bars (one standard error) and, where
+    :func:`clsamp.theory.compare` knows it, a dashed line of the published rate.
+
+    Parameters
+    ----------
+    results : sequence of ConvergenceResult
+    path : str or Path
+
+    Returns
+    -------
+    Path
     """
     fig, panels = _panels(results)
     for ax, name, group in panels:
@@ -509,14 +585,25 @@ def convergence(results, path):
         ax.set_xscale("log")
         ax.set_yscale("log")
         _label(ax, "N (samples)", f"{name}: MSE against N (dashed: theory)")
-    fig.tight_layout()
-    return files.save_figure(path, fig)
+    return _save(fig, path)
 
 
 def family_spread(ax, res, color=None, label=None):
-    """One family result on ``ax``: the mean MSE over members as a line, the band between
-    the members' 10 % and 90 % quantiles shaded, the worst member dotted, and the
-    published rate (:func:`clsamp.theory.compare`) dashed through the largest N."""
+    """Plot one family result: the mean MSE over members (a line), the members' 10-90 %
+    quantile band (shaded), the worst member (dotted) and the published rate (dashed).
+
+    Parameters
+    ----------
+    ax : matplotlib Axes
+    res : clsamp.results.FamilyResult
+    color : matplotlib colour, optional
+    label : str, optional
+
+    Returns
+    -------
+    matplotlib Line2D
+        The mean's.
+    """
     n = res.ns.astype(np.float64)
     lo, hi = np.quantile(res.mse, [0.1, 0.9], axis=1)
     cmp = theory.compare(res)
@@ -536,22 +623,38 @@ def family_spread(ax, res, color=None, label=None):
 
 
 def family_convergence(results, path):
-    """MSE against N over integrand families, one panel per family: per sampler the mean
-    over members (line), the 10-90 % band across members (shaded), the worst member
-    (dotted) and the theory (dashed). ``results``: :class:`clsamp.results.FamilyResult`."""
+    """MSE against N over integrand families, a panel per family, :func:`family_spread` each.
+
+    Parameters
+    ----------
+    results, path
+        As :func:`convergence` takes them, with FamilyResult here.
+
+    Returns
+    -------
+    Path
+    """
     fig, panels = _panels(results)
     for ax, name, group in panels:
         for res in group:
             family_spread(ax, res)
         _label(ax, "N (samples)", f"{name} ({group[0].members} members): MSE against N")
-    fig.tight_layout()
-    return files.save_figure(path, fig)
+    return _save(fig, path)
 
 
 def accuracy_time(results, path):
-    """MSE against seconds per estimate (generation included), one panel per integrand,
-    with the accuracy-time front (:func:`clsamp.results.pareto_front`) drawn in black;
-    returns the path."""
+    """MSE against seconds per estimate (generation included) per integrand, with its
+    :func:`clsamp.results.pareto_front` in black.
+
+    Parameters
+    ----------
+    results, path
+        As :func:`convergence` takes them.
+
+    Returns
+    -------
+    Path
+    """
     fig, panels = _panels(results)
     for ax, name, group in panels:
         for res in group:
@@ -562,8 +665,7 @@ def accuracy_time(results, path):
             ax.step([p["seconds"] for p in front], [p["mse"] for p in front], "k-", where="post",
                     linewidth=1.5, alpha=0.6, label="front")
         _label(ax, "seconds per estimate (generation included)", f"{name}: accuracy against time")
-    fig.tight_layout()
-    return files.save_figure(path, fig)
+    return _save(fig, path)
 
 
 def error_time(ax, curves, xlabel="seconds", ylabel="MSE", title=None, exact=None,
@@ -584,13 +686,6 @@ def error_time(ax, curves, xlabel="seconds", ylabel="MSE", title=None, exact=Non
     Returns
     -------
     list of Line2D
-
-    Examples
-    --------
-    >>> from clsamp import plots
-    >>> fig, ax = plots.pyplot().subplots()
-    >>> lines = plots.error_time(ax, {"fast": ([0.01, 0.02, 0.05], [1e-3, 1e-6, 1e-12])},
-    ...                          ylabel="max error / N", exact=("direct", 0.4))
     """
     lines = [ax.loglog(x, y, "o-", label=label, markersize=markersize)[0]
              for label, (x, y) in curves.items()]
@@ -605,14 +700,14 @@ def error_time(ax, curves, xlabel="seconds", ylabel="MSE", title=None, exact=Non
 
 
 def error_time_figure(path, panels):
-    """Panels of error against time (:func:`error_time`) side by side, saved whole.
+    """Panels of error against time (:func:`error_time`) side by side.
 
     Parameters
     ----------
     path : str or Path
     panels : sequence of dict or None
-        The keyword arguments of :func:`error_time` for each panel, or None for a panel
-        left empty (a measurement that failed).
+        At least one: the keyword arguments of :func:`error_time` for each panel, or None for a
+        panel left empty (a measurement that failed).
 
     Returns
     -------
@@ -632,8 +727,7 @@ def error_time_figure(path, panels):
     for ax, panel in zip(axes[0], panels, strict=True):
         if panel is not None:
             error_time(ax, **panel)
-    fig.tight_layout()
-    return files.save_figure(path, fig)
+    return _save(fig, path)
 
 
 # -- renders ---------------------------------------------------------------------------
@@ -643,11 +737,9 @@ def render_comparison(path, reference, images, columns=4):
     Parameters
     ----------
     path : str or Path
-        The figure (.png, .pdf or .svg), written whole.
     reference : ndarray (H, W)
         The reference image (:func:`clsamp.render.reference`).
     images : dict or sequence of (label, image)
-        The renders to compare, in order.
     columns : int
         Panels per row.
 
@@ -657,14 +749,12 @@ def render_comparison(path, reference, images, columns=4):
 
     Examples
     --------
+    >>> import tempfile, pathlib
     >>> from clsamp import plots, render
     >>> ref = render.render("ao", "random", 64, 16, seed=1, progress=False)
     >>> images = {s: render.render("ao", s, 16, 16, seed=2, progress=False)
     ...           for s in ("random", "sobol:owen")}
-    >>> import tempfile, pathlib
     >>> out = plots.render_comparison(pathlib.Path(tempfile.mkdtemp()) / "c.png", ref, images)
-    >>> out.stat().st_size > 1000
-    True
     """
     from . import render
     items = list(images.items()) if isinstance(images, dict) else list(images)
@@ -678,8 +768,7 @@ def render_comparison(path, reference, images, columns=4):
     for ax, (label, image, error) in zip(axes.ravel(), panels, strict=False):
         ax.imshow(files.tone_map(image), cmap="gray", vmin=0, vmax=255, interpolation="nearest")
         ax.set_title(label if error is None else f"{label}\nMSE {error:.3g}", fontsize=9)
-    fig.tight_layout()
-    return files.save_figure(path, fig)
+    return _save(fig, path)
 
 
 def error_spectra(path, curves, title=None):
@@ -688,7 +777,6 @@ def error_spectra(path, curves, title=None):
     Parameters
     ----------
     path : str or Path
-        The figure, written whole.
     curves : dict
         ``{label: (frequencies, power)}``, drawn on log power against frequency (cycles
         per pixel); a flat curve is white error, one rising with frequency blue.
@@ -707,5 +795,4 @@ def error_spectra(path, curves, title=None):
     ax.legend(fontsize=8)
     if title:
         ax.set_title(title, fontsize=10)
-    fig.tight_layout()
-    return files.save_figure(path, fig)
+    return _save(fig, path)
