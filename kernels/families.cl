@@ -108,7 +108,7 @@ __kernel void family_error_sums(__global const double *points, const uint n,
         return;
 #if HOMOGENIZE
     double shift[DIM];
-    torus_homogenizing_shift(shift, (uint2)(key_lo, key_hi), stream, realization0 + r, DIM);
+    TORUS_HOMOGENIZING_SHIFT(shift, (uint2)(key_lo, key_hi), stream, realization0 + r, DIM);
 #endif
     const vec integral = *(__global const vec *)(integrals + 4u * q);
     __global const double *base = points + (size_t)r * n * DIM;

@@ -116,7 +116,7 @@ __kernel void integrand_error_sums(__global const double *points, const uint n, 
 
 #if HOMOGENIZE
     double shift[DIM];
-    torus_homogenizing_shift(shift, (uint2)(key_lo, key_hi), stream, realization0 + r, DIM);
+    TORUS_HOMOGENIZING_SHIFT(shift, (uint2)(key_lo, key_hi), stream, realization0 + r, DIM);
 #endif
 
     vec sum = (vec)(0.0), err = (vec)(0.0);

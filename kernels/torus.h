@@ -6,10 +6,10 @@
  * torus_delta, torus_distance2: the wrapped difference min(|a - b|, 1 - |a - b|) and the
  * squared distance summed from the first coordinate to the last (the Poisson-disk
  * acceptance test, the nearest-neighbour distances).
- * torus_shift, torus_wrapped (and their double4 forms, from one definition each):
- * (x + u) mod 1 with one rounding (the Cranley-Patterson shift) and a difference wrapped
- * into [-1/2, 1/2] (the vector ?: picks lane by lane).
- * torus_homogenizing_shift: the random shift of realization r that homogenizes an
+ * torus_shift (double, double4) and torus_wrapped4, each from one definition over its
+ * type: (x + u) mod 1 with one rounding (the Cranley-Patterson shift) and a difference
+ * wrapped into [-1/2, 1/2].
+ * TORUS_HOMOGENIZING_SHIFT: the random shift of realization r that homogenizes an
  * experiment (Pilleboue et al. 2015), Philox point 0 of (stream, r).
  */
 #ifndef CLSAMP_TORUS_H
@@ -39,35 +39,34 @@ inline double torus_distance2(const double *a, __global const double *b, const i
 }
 
 /* (x + u) mod 1 for x, u in [0, 1): x + u less 1 where it reaches 1, one rounding */
-#define CLSAMP_TORUS_SHIFT(name, T)                     \
-    inline T name(const T x, const T u)                 \
-    {                                                   \
-        const T c = x + u;                              \
-        return c >= 1.0 ? c - 1.0 : c;                  \
+#define CLSAMP_TORUS_SHIFT(name, T)                             \
+    CLSAMP_ALWAYS_INLINE T name(const T x, const T u)           \
+    {                                                           \
+        const T c = x + u;                                      \
+        return c >= 1.0 ? c - 1.0 : c;                          \
     }
 
-/* x - c wrapped into [-1/2, 1/2] for x, c in [0, 1): numpy's w - round(w) for w in
- * (-1, 1) (half to even keeps +-1/2), by comparisons */
-#define CLSAMP_TORUS_WRAPPED(name, T)                   \
-    inline T name(const T x, const T c)                 \
-    {                                                   \
-        T w = x - c;                                    \
-        w = w > 0.5 ? w - 1.0 : w;                      \
-        return w < -0.5 ? w + 1.0 : w;                  \
+/* x - c wrapped into [-1/2, 1/2] for x, c in [0, 1), T a double vector: numpy's
+ * w - round(w) for w in (-1, 1) (half to even keeps +-1/2), by comparisons and select,
+ * which PoCL compiles to blends here (docs/performance.md, "One definition per primitive") */
+#define CLSAMP_TORUS_WRAPPED(name, T)                           \
+    CLSAMP_ALWAYS_INLINE T name(const T x, const T c)           \
+    {                                                           \
+        T w = x - c;                                            \
+        w = select(w, w - 1.0, w > 0.5);                        \
+        return select(w, w + 1.0, w < -0.5);                    \
     }
 
 CLSAMP_TORUS_SHIFT(torus_shift, double)
 CLSAMP_TORUS_SHIFT(torus_shift4, double4)
-CLSAMP_TORUS_WRAPPED(torus_wrapped, double)
 CLSAMP_TORUS_WRAPPED(torus_wrapped4, double4)
 
-/* The homogenizing shift of realization r: u[j] = uniform(seed, stream, r, 0, j). */
-inline void torus_homogenizing_shift(double *u, const uint2 key, const uint stream,
-                                     const uint realization, const int dims)
-{
-    for (int j = 0; j < dims; ++j)
-        u[j] = clsamp_uniform(key, stream, realization, 0u, (uint)j);
-}
+/* The homogenizing shift of realization r: u[j] = uniform(seed, stream, r, 0, j) for j <
+ * dims. A statement, not a function, so that the loop unrolls in the kernel and the shift
+ * stays in registers (docs/performance.md, "One definition per primitive"). */
+#define TORUS_HOMOGENIZING_SHIFT(u, key, stream, realization, dims)              \
+    for (uint j_ = 0; j_ < (uint)(dims); ++j_)                                   \
+        (u)[j_] = clsamp_uniform((key), (stream), (realization), 0u, j_)
 #endif
 
 #endif
