@@ -48,7 +48,8 @@ inline double torus_distance2(const double *a, __global const double *b, const i
 
 /* x - c wrapped into [-1/2, 1/2] for x, c in [0, 1), T a double vector: numpy's
  * w - round(w) for w in (-1, 1) (half to even keeps +-1/2), by comparisons and select,
- * which PoCL compiles to blends here (docs/performance.md, "One definition per primitive") */
+ * the faster form on PoCL (docs/performance.md, "One definition per primitive (issue
+ * 36)") */
 #define CLSAMP_TORUS_WRAPPED(name, T)                           \
     CLSAMP_ALWAYS_INLINE T name(const T x, const T c)           \
     {                                                           \
@@ -63,7 +64,7 @@ CLSAMP_TORUS_WRAPPED(torus_wrapped4, double4)
 
 /* The homogenizing shift of realization r: u[j] = uniform(seed, stream, r, 0, j) for j <
  * dims. A statement, not a function, so that the loop unrolls in the kernel and the shift
- * stays in registers (docs/performance.md, "One definition per primitive"). */
+ * stays in registers (docs/performance.md, "One definition per primitive (issue 36)"). */
 #define TORUS_HOMOGENIZING_SHIFT(u, key, stream, realization, dims)              \
     for (uint j_ = 0; j_ < (uint)(dims); ++j_)                                   \
         (u)[j_] = clsamp_uniform((key), (stream), (realization), 0u, j_)
