@@ -35,7 +35,7 @@ inline void cell_coords(uint flat, const uint G, int *bc)
     }
 }
 
-/* Window tables (clsamp.samplers.poisson_disk.window_offsets, cover_window) list the
+/* Window tables (clsamp.samplers.poisson_disk.grid.window_offsets, cover_window) list the
  * offsets whose cells can matter, nearest first, so the loops that stop at the first
  * conflict or cover stop early; each row is DIM offsets and the flat-index difference
  * the offset makes when no coordinate wraps. */

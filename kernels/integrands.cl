@@ -1,6 +1,6 @@
 /* Integrands evaluated at sample points and summed per realization, in fp64.
  * NumPy reference: clsamp/integrands.py (the functions) and
- * clsamp.convergence._errors_numpy (shift, evaluation, sum).
+ * clsamp.estimates.IntegrandErrors with backend="numpy" (shift, evaluation, sum).
  *
  * Build options: DIM (dimension), INTEGRAND (code from clsamp/integrands.py),
  * HOMOGENIZE (1: shift realization r by the Philox vector uniform(seed, stream, r, 0, j),
