@@ -135,8 +135,9 @@ __kernel void spectrum_direct2(__global const double *A, __global const double *
                     double4 re0 = acc[i][j][0], re1 = acc[i][j][1], re2 = acc[i][j][2], re3 = acc[i][j][3];
                     double4 im0 = acc[i][j][4], im1 = acc[i][j][5], im2 = acc[i][j][6], im3 = acc[i][j][7];
                     for (uint k = 0; k < kn; ++k) {
-                        /* typed loads, not vload4: PoCL did not inline vload4, and the call
-                         * spilled every accumulator on each step */
+                        /* typed loads, not vload4: PoCL calls vload4 as a function, and the
+                         * call spills every accumulator on each step (docs/design.md,
+                         * "Kernels and the runtime") */
                         const double4 ar = ((__global const double4 *)pa)[0];
                         const double4 ai = ((__global const double4 *)pa)[1];
 #define CLSAMP_MAC(t) { const double br = pb[t], bi = pb[TILE_V + t]; \

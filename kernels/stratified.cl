@@ -29,8 +29,9 @@
 #define CLSAMP_STRATUM_STEPS 4
 
 #if CLSAMP_FP64
-/* In double: the same operations as the integer form below (measured 10% faster on PoCL
- * than that form through f64bits.h's hardware branch). */
+/* In double: the same operations as the integer form below, which PoCL runs faster than
+ * that form through f64bits.h's hardware branch (docs/performance.md, "Stratified and
+ * permutations"). */
 inline ulong stratum_point(const uint k, const ulong ub, const uint count)
 {
     const double u = as_double(ub), c = (double)count, kd = (double)k;

@@ -84,7 +84,8 @@ class Output:
         if self.host is not None:
             # mapping makes the kernel's writes visible in host memory (no copy on PoCL)
             cl = discovery._cl()
-            # (a blocking map waits about 100 us longer on PoCL than map, unmap and finish;
+            # (non-blocking on PoCL, where a blocking map waits longer than map, unmap and
+            # finish: docs/performance.md, "random in vector lanes, and the zero-copy map";
             # rusticl refuses to unmap a map that has not completed)
             pocl = discovery.current_device().platform == "Portable Computing Language"
             mapped, _ = cl.enqueue_map_buffer(discovery.queue(), self.buffer, cl.map_flags.READ, 0,
