@@ -75,13 +75,33 @@ def vector_width():
 
 
 def render_samples(scene, samples, resolution, pixel0=0, backend="opencl", width=None):
-    """Render given samples: float32 pixel values for pixels [pixel0, pixel0 + len(samples)).
+    """Render given samples: the pixel values of pixels [pixel0, pixel0 + len(samples)).
 
-    ``samples`` has shape (pixels, scene.sample_dimensions, spp) in [0, 1) (as from
-    :func:`pixel_samples`); ``resolution`` is as in :func:`render`; float64 samples are
-    rounded toward zero to float32 first on both backends, float32 samples are taken as
-    they are. ``backend="numpy"`` is the NumPy reference (float64 ray math); ``width``
-    overrides the kernel's vector width (1, 4 or 8).
+    Float64 samples are rounded toward zero to float32 first on both backends; float32
+    samples are taken as they are.
+
+    Parameters
+    ----------
+    scene : Scene
+    samples : ndarray, shape (pixels, scene.sample_dimensions, spp)
+        In [0, 1), as from :func:`pixel_samples`.
+    resolution : int or (int, int)
+        As :func:`render` takes it.
+    pixel0 : int, optional
+        The number of the first pixel (``row * width + col``).
+    backend : {"opencl", "numpy"}
+        ``"numpy"``: the NumPy reference (float64 ray math).
+    width : {1, 4, 8}, optional
+        The kernel's vector width instead of :func:`vector_width`.
+
+    Returns
+    -------
+    ndarray of float32, shape (pixels,)
+
+    Raises
+    ------
+    InvalidArgumentError
+        ``samples`` of another number of dimensions than the scene's.
     """
     size = image_size(resolution)
     samples = np.asarray(samples)
@@ -229,7 +249,17 @@ def render(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=Tru
 
 
 def render_task(scene, sampler, spp, resolution, seed, sampler_params):
-    """One task of :func:`render_sweep`: the image of one (sampler, spp)."""
+    """One task of :func:`render_sweep`: the image of one (sampler, spp), without a progress bar.
+
+    Parameters
+    ----------
+    scene, sampler, spp, resolution, seed, sampler_params
+        As :func:`render` takes them.
+
+    Returns
+    -------
+    ndarray of float32, shape (height, width)
+    """
     return render(scene, sampler, spp, resolution, seed=seed, sampler_params=sampler_params,
                   progress=False)
 
@@ -297,8 +327,20 @@ def cache_folder():
 
 
 def reference_key(scene, resolution, spp, seed=REFERENCE_SEED):
-    """The cache key of a reference: SHA-256 of the scene's content, image size, spp, seed and
-    the reference's sampler and passes."""
+    """The cache key of a reference render.
+
+    Parameters
+    ----------
+    scene : Scene
+    resolution, spp, seed
+        As :func:`reference` takes them.
+
+    Returns
+    -------
+    str
+        The SHA-256 (hex) of the scene's content, image size, spp, seed, the reference's sampler
+        and passes, and the renderer's version.
+    """
     width, height = image_size(resolution)
     text = (f"render-{RENDER_VERSION}|{scene.content_hash()}|{width}x{height}|{spp}|{seed}|"
             f"{REFERENCE_SAMPLER}|{REFERENCE_PASSES}")
@@ -306,8 +348,25 @@ def reference_key(scene, resolution, spp, seed=REFERENCE_SEED):
 
 
 def reference_spp(spp, passes=None):
-    """Check a reference's total ``spp``: :data:`REFERENCE_PASSES` passes of a power of two
-    samples each (Sobol' nets); the error names the nearest valid total."""
+    """Check the total samples per pixel of a reference: :data:`REFERENCE_PASSES` passes of a
+    power of two samples each (Sobol' nets).
+
+    Parameters
+    ----------
+    spp : int
+    passes : int, optional
+        Passes instead of :data:`REFERENCE_PASSES`.
+
+    Returns
+    -------
+    int
+        ``spp``.
+
+    Raises
+    ------
+    InvalidArgumentError
+        Another ``spp``; the message names the nearest valid total.
+    """
     passes = REFERENCE_PASSES if passes is None else passes
     spp = check_positive_int(spp, "spp", maximum=2**40)
     per = spp // passes
@@ -413,8 +472,24 @@ def _render_reference(scene, size, spp, seed, progress):
 
 
 def noise_floor(stderr):
-    """The MSE a reference with per-pixel standard error ``stderr`` adds to any MSE measured
-    against it: the mean of ``stderr**2``."""
+    """The MSE a reference's own noise adds to any MSE measured against it: the mean of
+    ``stderr**2``.
+
+    Parameters
+    ----------
+    stderr : array_like
+        The reference's per-pixel standard error (``reference(..., return_noise=True)``).
+
+    Returns
+    -------
+    float
+        In squared pixel values, as an MSE.
+
+    Raises
+    ------
+    InvalidArgumentError
+        An empty ``stderr``, or one with values that are negative or not finite.
+    """
     stderr = np.asarray(stderr, dtype=np.float64)
     if stderr.size == 0 or not np.all(np.isfinite(stderr)) or np.any(stderr < 0):
         raise InvalidArgumentError("'stderr' must be a non-empty array of finite values >= 0")
@@ -440,21 +515,52 @@ def _check_pair(image, ref):
 
 
 def mse(image, ref):
-    """Mean squared error of ``image`` against ``ref`` (float64 arithmetic)."""
+    """Mean squared error of an image against a reference, in float64.
+
+    Parameters
+    ----------
+    image, ref : ndarray
+        Finite float images of one shape.
+
+    Returns
+    -------
+    float
+        The mean of (image - ref)².
+
+    Raises
+    ------
+    InvalidArgumentError
+        Images of different shapes, not float, or not finite.
+    """
     image, ref = _check_pair(image, ref)
     return float(np.mean((image - ref) ** 2))
 
 
 def compare(image, ref, stderr=None):
-    """MSE, PSNR (dB) and SSIM of ``image`` against the reference ``ref`` (scikit-image).
+    """MSE, PSNR (dB) and SSIM of an image against a reference (scikit-image).
 
-    ``data_range`` is the reference's max - min (1 when the reference is constant). SSIM
-    uses scikit-image's default 7 x 7 window, shrunk to the largest odd size the image
-    allows; it is NaN for images smaller than 3 x 3. With ``stderr``, the reference's
-    per-pixel standard error (``reference(..., return_noise=True)``), the result also holds
-    ``floor``, the MSE the reference's own noise adds (:func:`noise_floor`), and
-    ``mse_excess = mse - floor``, an unbiased estimate of the image's MSE against the true
-    image.
+    ``data_range`` is the reference's max - min (1 when the reference is constant). SSIM uses
+    scikit-image's default 7 x 7 window, shrunk to the largest odd size the image allows; it
+    is NaN for images smaller than 3 x 3.
+
+    Parameters
+    ----------
+    image, ref : ndarray
+        As :func:`mse` takes them.
+    stderr : ndarray, optional
+        The reference's per-pixel standard error (``reference(..., return_noise=True)``).
+
+    Returns
+    -------
+    dict
+        ``mse``, ``psnr`` and ``ssim``; with ``stderr`` also ``floor``, the MSE the reference's
+        own noise adds (:func:`noise_floor`), and ``mse_excess = mse - floor``, an unbiased
+        estimate of the image's MSE against the true image.
+
+    Raises
+    ------
+    InvalidArgumentError
+        Images :func:`mse` refuses, or a ``stderr`` of another shape or with invalid values.
     """
     from skimage.metrics import mean_squared_error, peak_signal_noise_ratio, structural_similarity
     image, ref = _check_pair(image, ref)
@@ -534,10 +640,28 @@ def error_spectrum(image, reference, bins=None):
 def low_frequency_power(image, reference, cutoff=0.125):
     """How much of a render's error sits at low frequencies, relative to white error.
 
-    The mean periodogram of the error image (as :func:`error_spectrum`) over the
-    frequencies with |f| < ``cutoff`` cycles per pixel, divided by its mean over all
-    frequencies (the MSE, by Parseval). White (independent per-pixel) error gives 1 up to
-    noise; blue error, below 1.
+    The mean periodogram of the error image (as :func:`error_spectrum`) over the frequencies
+    with 0 < |f| < ``cutoff`` cycles per pixel, divided by its mean over all frequencies (the
+    MSE, by Parseval).
+
+    Parameters
+    ----------
+    image, reference : ndarray (height, width)
+        The render and the reference (:func:`reference`).
+    cutoff : float, optional
+        In (0, 0.5] cycles per pixel.
+
+    Returns
+    -------
+    float
+        1 up to noise for white (independent per-pixel) error; below 1 for blue error. NaN
+        where the error is zero.
+
+    Raises
+    ------
+    InvalidArgumentError
+        Images :func:`mse` refuses, not gray or smaller than 4 x 4, or a ``cutoff`` outside
+        (0, 0.5].
     """
     image, reference = _check_pair(image, reference)
     if image.ndim != 2 or min(image.shape) < 4:
@@ -553,8 +677,8 @@ def low_frequency_power(image, reference, cutoff=0.125):
 
 
 def save(path, image, sampler, spp, seed, scene=None, preview=True):
-    """Write ``image`` as OpenEXR with sampler, spp and seed in the header, and a
-    tone-mapped PNG preview beside it.
+    """Write a render as OpenEXR with sampler, spp and seed in its header, and a tone-mapped PNG
+    preview beside it.
 
     Parameters
     ----------
@@ -562,6 +686,14 @@ def save(path, image, sampler, spp, seed, scene=None, preview=True):
         The image's name, ending in ``.exr`` or ``.png``: both files are written from its
         stem, ``<stem>.exr`` and (``preview``) ``<stem>.png``, so neither overwrites the
         other.
+    image : ndarray (height, width)
+    sampler : str or Sampler
+    spp, seed : int
+        What made the image, for the header.
+    scene : Scene, optional
+        Its name goes in the header too.
+    preview : bool
+        Write the PNG.
 
     Returns
     -------

@@ -2,24 +2,9 @@
 
 The tour runs on the current device and writes ``DIR/index.html`` with its pictures
 (relative links, readable without a server) and the raw data beside it: point sets as
-.npy, images as OpenEXR, every number as JSON (``tour.json``). Each section is
-independent: a failure in one is reported in its place on the page, and the others
-still run and keep their results.
-
-Sections
---------
-1. Samplers: a point set, its expected power spectrum, radial mean and pair correlation
-   function, per sampler; the radial means by family; CD and L2-star discrepancy against
-   N with fitted slopes beside the known ones.
-2. Convergence: MSE against N for a smooth and a discontinuous integrand, fitted rates
-   held against the published theory (Pilleboue et al. 2015); then over families of
-   random integrands, with the spread across members.
-3. Rendering: ambient occlusion at 96 rays per pixel with several samplers, MSE against
-   a reference render.
-4. What accuracy costs in time: spectrum error against seconds (fast against direct),
-   sampler MSE against seconds including generation, render MSE against seconds.
-5. Stability: the hard cases, each with the error it reached.
-6. The device, the versions and the timings of each section.
+.npy, images as OpenEXR, every number as JSON (``tour.json``). Each section (:data:`SECTIONS`,
+a ``section_*`` function) is independent: a failure in one is reported in its place on the
+page, and the others still run and keep their results.
 """
 
 import dataclasses
@@ -36,22 +21,10 @@ from .report import Report, Section, fmt, img, json_safe, table, versions, write
 
 # Samplers shown in section 1, with the parameters that make each one its textbook self.
 TOUR_SAMPLERS = (
-    ("random", {}),
-    ("regular", {}),
-    ("jittered", {}),
-    ("uncorrelated_jitter", {}),
-    ("latin_hypercube", {}),
-    ("multijittered", {}),
-    ("correlated_multijittered", {}),
-    ("halton", {}),
-    ("hammersley", {}),
-    ("sobol", {"randomize": "owen"}),
-    ("lattice", {}),
-    ("kronecker", {}),
-    ("pmj02", {}),
-    ("pmj02bn", {}),
-    ("poisson_disk", {}),
-    ("lloyd", {}),
+    ("random", {}), ("regular", {}), ("jittered", {}), ("uncorrelated_jitter", {}),
+    ("latin_hypercube", {}), ("multijittered", {}), ("correlated_multijittered", {}),
+    ("halton", {}), ("hammersley", {}), ("sobol", {"randomize": "owen"}), ("lattice", {}),
+    ("kronecker", {}), ("pmj02", {}), ("pmj02bn", {}), ("poisson_disk", {}), ("lloyd", {}),
     ("ccvt", {}),
 )
 # Section 1 shows Poisson disk as the lecture plots it: maximal sets (each of its own size)
@@ -78,16 +51,39 @@ def _picture(report, name):
 
 
 def tour_sampler_params(name, quick):
-    """Parameters the tour gives each sampler in section 1: the textbook ones, and for the
-    expensive samplers the tour's budgets (:data:`TOUR_BUDGETS`)."""
+    """A sampler's parameters in section 1: its textbook ones (:data:`TOUR_SAMPLERS`) and its
+    budget in :data:`TOUR_BUDGETS`, if any.
+
+    Parameters
+    ----------
+    name : str
+    quick : bool
+
+    Returns
+    -------
+    dict
+    """
     params = dict(dict(TOUR_SAMPLERS).get(name, {}))
     params.update(TOUR_BUDGETS.get(name, {}).get("quick" if quick else "full", {}))
     return params
 
 
 def section_samplers(report, quick):
-    """Every sampler: a point set, its expected power spectrum, radial mean and pair
-    correlation; the radial means by family; the discrepancies against N."""
+    """Section 1, samplers: each one's points, expected spectrum, radial mean and PCF; radial
+    means by family; CD and L2-star discrepancy against N, fitted slopes beside the known.
+
+    Parameters
+    ----------
+    report : clsamp.report.Report
+        Where pictures and data go.
+    quick : bool
+        ``clsamp tour --quick``: smaller sizes (here 8 sets of 256 points, not 32 of 1024).
+
+    Returns
+    -------
+    (str, dict)
+        The section's HTML, and its numbers for ``tour.json``.
+    """
     from . import metrics, spectrum
     from .samplers import make_sampler, sampler_names
     n, realizations, resolution = (256, 8, 64) if quick else (1024, 32, 128)
@@ -218,10 +214,19 @@ def _discrepancy_against_n(report, quick):
 
 # -- 2. convergence ---------------------------------------------------------------------------
 def tour_convergence_plan(quick):
-    """(samplers, integrands, sweeps) of section 2: ``sweeps[name]`` is (ns, realizations).
+    """Section 2's sweeps; the optimizers' stop earlier, with fewer realizations (their points
+    cost most).
 
-    The optimizers cost far more per point than the others, so their sweeps stop earlier
-    and use fewer realizations (the report names each sweep)."""
+    Parameters
+    ----------
+    quick : bool
+
+    Returns
+    -------
+    samplers, integrands : tuple of str
+    sweeps : dict
+        ``{sampler: (ns, realizations)}``.
+    """
     if quick:
         samplers = ("random", "jittered", "sobol:owen", "poisson_disk")
         ns, realizations = [16, 64, 256, 1024], 128
@@ -244,7 +249,18 @@ def _sampler_for_convergence(name, quick):
 
 
 def section_convergence(report, quick):
-    """MSE against N for a smooth and a discontinuous integrand, rates against theory."""
+    """Section 2, convergence: MSE against N for a smooth and a discontinuous integrand, then over
+    families of random integrands; fitted rates against theory (Pilleboue et al. 2015).
+
+    Parameters
+    ----------
+    report, quick
+        As :func:`section_samplers`; the sweeps are :func:`tour_convergence_plan`'s.
+
+    Returns
+    -------
+    (str, dict)
+    """
     from . import theory
     from .sweep import convergence
     samplers, integrands, sweeps = tour_convergence_plan(quick)
@@ -346,17 +362,24 @@ def _family_sweeps(report, quick):
 
 # -- 3. rendering ------------------------------------------------------------------------------
 TOUR_RENDER_SAMPLERS = (
-    ("random", {}),
-    ("jittered", {"strata": (12, 8)}),
-    ("poisson_disk", {}),
-    ("ccvt", {"points_per_site": 256}),
-    ("sobol:owen", {}),
-    ("pmj02", {}),
+    ("random", {}), ("jittered", {"strata": (12, 8)}), ("poisson_disk", {}),
+    ("ccvt", {"points_per_site": 256}), ("sobol:owen", {}), ("pmj02", {}),
 )
 
 
 def section_render(report, quick):
-    """AO at 96 rays per pixel with several samplers, MSE against a reference render."""
+    """Section 3, rendering: ambient occlusion at 96 rays per pixel with several samplers, MSE
+    against a reference render.
+
+    Parameters
+    ----------
+    report, quick
+        As :func:`section_samplers`; ``quick`` renders 48² pixels, not 192².
+
+    Returns
+    -------
+    (str, dict)
+    """
     from . import render as rendering
     from .scene import Scene
     resolution = 48 if quick else 192
@@ -468,7 +491,18 @@ def _spectrum_cost(report, quick):
 
 
 def section_cost(report, quick):
-    """What accuracy costs in time: spectra, sampler MSE, rendered images."""
+    """Section 4, what accuracy costs in time: spectrum error against seconds (fast against
+    direct), sampler MSE against seconds including generation, render MSE against seconds.
+
+    Parameters
+    ----------
+    report, quick
+        As :func:`section_samplers`; ``quick`` measures smaller spectra and fewer spp.
+
+    Returns
+    -------
+    (str, dict)
+    """
     data, body, failures = {}, "", []
     panels = [None, None, None]   # spectra, samplers, renders: error against time
     # spectra
@@ -650,7 +684,17 @@ def _stability_cases(quick):
 
 
 def section_stability(report, quick):
-    """The hard cases, each with the error it reached."""
+    """Section 5, stability: the hard cases, each with the error it reached and its bound.
+
+    Parameters
+    ----------
+    report, quick
+        As :func:`section_samplers`; ``quick`` makes some cases smaller.
+
+    Returns
+    -------
+    (str, dict)
+    """
     cases = _stability_cases(quick)
     rows = [(name, measure, value, bound, "ok" if passed else "FAILED")
             for name, measure, value, bound, passed in cases]
@@ -662,7 +706,19 @@ def section_stability(report, quick):
 
 
 def section_device(report, quick, timings):
-    """Section 6: the device and versions the tour ran on, and how long each section took."""
+    """Section 6: the device, the versions, every device found and what runs on it, timings.
+
+    Parameters
+    ----------
+    report, quick
+        As :func:`section_samplers` (``quick`` changes nothing here).
+    timings : dict
+        ``{section: seconds}`` of the sections before.
+
+    Returns
+    -------
+    (str, dict)
+    """
     device = runtime.current_device()
     rows = [(k, v) for k, v in dataclasses.asdict(device).items()]
     rows += [(f"version: {k}", v) for k, v in versions().items()]
@@ -693,7 +749,7 @@ SECTIONS = (
 
 
 def run_tour(out, quick=False, progress=True, client=None):
-    """Run every section into the folder ``out``; return the path of index.html.
+    """Run every section into the folder ``out``.
 
     Parameters
     ----------
@@ -705,6 +761,11 @@ def run_tour(out, quick=False, progress=True, client=None):
         Show a progress bar over the sections.
     client : dask.distributed.Client, optional
         Run section 2's sweeps there (:mod:`clsamp.parallel`: the same numbers).
+
+    Returns
+    -------
+    Path
+        The report's ``index.html``.
     """
     from tqdm import tqdm
 
