@@ -95,8 +95,21 @@ def _combine(method, d, n, single, pairs):
 
 
 def discrepancy_reference(points, method="CD"):
-    """NumPy twin of :func:`discrepancy` for one set (n, d): the same formulas, the pair
-    sum in blocks of rows, each row summed by NumPy and the rows added exactly."""
+    """NumPy twin of :func:`discrepancy` for one set: the same formulas, the pair sum in blocks
+    of rows, each row summed by NumPy and the rows added exactly.
+
+    Parameters
+    ----------
+    points : ndarray (n, d)
+        One checked set.
+    method : str
+        One of :data:`METHODS`.
+
+    Returns
+    -------
+    float
+        As :func:`discrepancy` gives it for one set.
+    """
     n, d = points.shape
     single = np.prod(_terms(method, points), axis=1)
     pairs = []
@@ -220,7 +233,22 @@ def discrepancy(points, method="CD", backend="opencl"):
 
 
 def check_method(method):
-    """``method`` if it is one of :data:`METHODS` (the message lists them)."""
+    """Check a discrepancy's name.
+
+    Parameters
+    ----------
+    method : str
+
+    Returns
+    -------
+    str
+        ``method``.
+
+    Raises
+    ------
+    InvalidArgumentError
+        A name not in :data:`METHODS` (the message lists them).
+    """
     if method not in METHODS:
         raise InvalidArgumentError(
             f"'method' must be one of {', '.join(repr(m) for m in METHODS)}; got {method!r}")
@@ -263,15 +291,28 @@ class DiscrepancySweep:
 
 
 def discrepancy_block(sampler, n, lo, hi, methods):
-    """One task of :func:`discrepancy_sweep`: (len(methods), hi - lo) discrepancies of
-    realizations lo .. hi - 1 of n points."""
+    """One task of :func:`discrepancy_sweep`: the discrepancies of some realizations of n points.
+
+    Parameters
+    ----------
+    sampler : Sampler
+    n : int
+    lo, hi : int
+        The realizations lo .. hi - 1.
+    methods : sequence of str
+        Names in :data:`METHODS`.
+
+    Returns
+    -------
+    ndarray, shape (len(methods), hi - lo)
+    """
     points = sampler.sample(n, realizations=range(lo, hi))
     return np.stack([np.atleast_1d(discrepancy(points, method)) for method in methods])
 
 
 def discrepancy_sweep(sampler, ns, realizations=8, methods=("CD", "L2-star"), client=None,
                       checkpoint=None, progress=False):
-    """Discrepancies of a sampler's sets as N grows: {method: DiscrepancySweep}.
+    """Discrepancies of a sampler's sets as N grows.
 
     Parameters
     ----------
@@ -289,6 +330,16 @@ def discrepancy_sweep(sampler, ns, realizations=8, methods=("CD", "L2-star"), cl
     checkpoint : str or Path, optional
         A folder keeping every finished block.
     progress : bool
+
+    Returns
+    -------
+    dict
+        ``{method: DiscrepancySweep}``.
+
+    Raises
+    ------
+    InvalidArgumentError
+        A method not in :data:`METHODS`.
 
     Examples
     --------

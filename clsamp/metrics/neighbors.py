@@ -27,14 +27,42 @@ NN_CELL_SPACINGS = 1.5       # nearest neighbours: cells this many mean spacings
 
 
 def mean_spacing(n, d):
-    """n^(-1/d): the side of the cube each of n points has on the unit torus."""
+    """The side of the cube each of n points has on the unit torus, n^(-1/d).
+
+    Parameters
+    ----------
+    n, d : int
+        Points and dimensions.
+
+    Returns
+    -------
+    float
+    """
     return float(n) ** (-1.0 / d)
 
 
 def sorted_by_cell(batch, cells):
-    """The points of all realizations sorted by (realization, cell) of a ``cells``^d grid:
-    (sorted points (r n, d), their flat cells (uint32), the first sorted index of each
-    (realization, cell) (r cells^d + 1, uint32), the order (sorted -> original))."""
+    """The points of all realizations sorted by (realization, cell) of a grid of cells, the
+    order the neighbour kernels walk them in.
+
+    Parameters
+    ----------
+    batch : ndarray (r, n, d)
+        Checked sets.
+    cells : int
+        Cells per axis: a ``cells``^d grid.
+
+    Returns
+    -------
+    points : ndarray (r n, d)
+        Sorted.
+    cell : ndarray of uint32, shape (r n,)
+        The flat cell of each sorted point.
+    start : ndarray of uint32, shape (r cells^d + 1,)
+        The first sorted index of each (realization, cell).
+    order : ndarray of int64, shape (r n,)
+        Sorted index -> original (flat) index.
+    """
     r, n, d = batch.shape
     index = np.minimum((batch * cells).astype(np.int64), cells - 1)
     flat = np.zeros((r, n), dtype=np.int64)
@@ -84,10 +112,27 @@ def _gauss_legendre(m=64):
 
 
 def pcf_normalisation(radii, sigma, d, cut=CUT):
-    """E[sum over ordered pairs of K(r - s_ij)] / (n (n - 1)) for uniform points on the
-    torus: the integral of the cut Gaussian K against the sphere's surface c_d s^(d-1),
-    so that dividing by it makes a Poisson (binomial) process give exactly 1 at every
-    radius (for r + cut sigma <= 1/2)."""
+    """The expected kernel sum per ordered pair of uniform points on the torus, by which the
+    pair sums are divided so that a Poisson (binomial) process gives exactly 1 at every
+    radius (for r + cut sigma <= 1/2).
+
+    It is the integral of the cut Gaussian K against the sphere's surface c_d s^(d-1),
+    by 64-point Gauss-Legendre quadrature.
+
+    Parameters
+    ----------
+    radii : ndarray
+    sigma : float
+        The Gaussian's standard deviation.
+    d : int
+    cut : float, optional
+        Where the Gaussian is cut, in sigmas.
+
+    Returns
+    -------
+    ndarray
+        One value per radius.
+    """
     surface = 2.0 * math.pi ** (d / 2) / math.gamma(d / 2)          # 2, 2 pi, 4 pi
     nodes, weights = _gauss_legendre()
     lo = np.maximum(0.0, radii - cut * sigma)
@@ -251,7 +296,18 @@ def pair_correlation(points, radii=None, sigma=None, backend="opencl"):
 
 
 def nearest_neighbor_reference(points):
-    """NumPy twin of :func:`nearest_neighbor_distances` for one set: every pair."""
+    """NumPy twin of :func:`nearest_neighbor_distances` for one set: every pair compared.
+
+    Parameters
+    ----------
+    points : ndarray (n, d)
+        One checked set.
+
+    Returns
+    -------
+    ndarray (n,)
+        Each point's distance on the torus to its nearest other point.
+    """
     n = len(points)
     best = np.empty(n)
     step = max(1, (1 << 22) // max(1, n))

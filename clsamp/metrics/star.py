@@ -30,7 +30,18 @@ def _critical_grids(points):
 
 
 def star_discrepancy_brute(points):
-    """Every critical box counted directly, O(n^(d+1)): the definition, for tests."""
+    """The star discrepancy by its definition: every critical box counted directly, O(n^(d+1)),
+    for tests.
+
+    Parameters
+    ----------
+    points : ndarray (n, d)
+        A small checked set: the work grows as n^(d+1).
+
+    Returns
+    -------
+    float
+    """
     n, d = points.shape
     best = 0.0
     for q in itertools.product(*_critical_grids(points)):
@@ -53,8 +64,19 @@ def _star_1d(x):
 
 
 def star_discrepancy_reference(points):
-    """NumPy twin of the 2-D kernel: the counts of all critical boxes at once from a 2-D
-    prefix sum, (n + 1)^2 memory; the same arithmetic as the kernel."""
+    """NumPy twin of the 2-D kernel, with the same arithmetic: the counts of all critical boxes
+    at once from a 2-D prefix sum, in (n + 1)^2 memory.
+
+    Parameters
+    ----------
+    points : ndarray (n, 2)
+        One checked set.
+
+    Returns
+    -------
+    float
+        D*.
+    """
     n, d = points.shape
     xs, ys = _critical_grids(points)[:2]
     ix = np.searchsorted(xs, points[:, 0])
@@ -111,12 +133,26 @@ class StarBounds(NamedTuple):
 
 def delta_partition(d, delta, budget=MAX_LEAVES):
     """A delta-partition of [0, 1]^d: boxes [a, b] covering the cube, each with
-    vol(b) - vol(a) <= delta, as (a, b) arrays (L, d); None if more than ``budget``.
+    vol(b) - vol(a) <= delta.
 
-    Built level by level: a box that is not yet small enough gives the corner box
-    [g, b] with g = max(a, t b), t = (1 - delta / vol(b))^(1/d) (so vol(b) - vol(g) <=
-    delta), and the d boxes of the rest, {x_j >= g_j for j < k, x_k < g_k} for k = 1..d,
-    each split again (the decomposition of Thiemard 2001).
+    Built level by level: a box that is not yet small enough gives the corner box [g, b] with
+    g = max(a, t b), t = (1 - delta / vol(b))^(1/d) (so vol(b) - vol(g) <= delta), and the d
+    boxes of the rest, {x_j >= g_j for j < k, x_k < g_k} for k = 1..d, each split again (the
+    decomposition of Thiemard 2001).
+
+    Parameters
+    ----------
+    d : int
+    delta : float
+        In (0, 1].
+    budget : int, optional
+        The most boxes.
+
+    Returns
+    -------
+    (ndarray, ndarray) or None
+        The lower and upper corners a and b, each (L, d); None where the partition needs more
+        than ``budget`` boxes.
     """
     lo, hi = np.zeros((1, d)), np.ones((1, d))
     leaves_lo, leaves_hi, total = [], [], 0
@@ -145,7 +181,17 @@ def delta_partition(d, delta, budget=MAX_LEAVES):
 
 
 def anchored_counts_reference(points, corners, strict=True):
-    """NumPy twin of the anchored_counts kernel: #{p : p < c} (or p <= c) per corner."""
+    """NumPy twin of the anchored_counts kernel (:func:`anchored_counts`).
+
+    Parameters
+    ----------
+    points, corners, strict
+        As :func:`anchored_counts` takes them.
+
+    Returns
+    -------
+    ndarray of int64, shape (m,)
+    """
     out = np.empty(len(corners), dtype=np.int64)
     step = max(1, (1 << 24) // max(1, points.size))
     for lo in range(0, len(corners), step):
@@ -156,8 +202,27 @@ def anchored_counts_reference(points, corners, strict=True):
 
 
 def anchored_counts(points, corners, strict=True, backend="opencl"):
-    """For each corner c (m, d): the number of points p (n, d) in the anchored box
-    [0, c) (``strict``) or [0, c], in OpenCL (``kernels/anchored_counts.cl``)."""
+    """For each corner c, the number of points in the anchored box [0, c) or [0, c], in OpenCL
+    (``kernels/anchored_counts.cl``).
+
+    Parameters
+    ----------
+    points : ndarray (n, d)
+    corners : ndarray (m, d)
+    strict : bool
+        Count p < c in every coordinate (the open box); else p <= c.
+    backend : {"opencl", "numpy"}
+        ``"numpy"``: :func:`anchored_counts_reference`.
+
+    Returns
+    -------
+    ndarray of int64, shape (m,)
+
+    Raises
+    ------
+    NoDeviceError
+        With ``"opencl"``, a device without double precision.
+    """
     if backend == "numpy":
         return anchored_counts_reference(points, corners, strict)
     runtime.require_fp64()
@@ -200,18 +265,36 @@ def _snapped(points, corner, excess):
 
 
 def star_bounds(points, delta=None, backend="opencl"):
-    """Certified bounds ``StarBounds(lower, upper)`` of the star discrepancy, any d.
+    """Certified bounds of the star discrepancy, any d.
 
-    A delta-partition of the cube into boxes [a, b] (:func:`delta_partition`) bounds
-    every anchored box [0, q) with a <= q <= b: its count lies between A([0, a)) and
-    A([0, b)) and its volume between vol(a) and vol(b), so D* <= the largest
-    max(A([0, b)) / n - vol(a), vol(b) - A([0, a)) / n) over the boxes, and D* >= the
-    largest local discrepancy of the real boxes at the corners; the gap is at most delta.
-    The lower bound is raised further by snapping the best corners to critical boxes.
-    ``delta`` None takes the smallest of a ladder whose partition fits the work budget
-    (corners times points); both bounds include the floating-point rounding of the
-    volumes. Certified upper bounds are hard in high d (the partition grows like
-    (d / delta)^d / d!): expect a wide gap beyond d = 6.
+    A delta-partition of the cube into boxes [a, b] (:func:`delta_partition`) bounds every
+    anchored box [0, q) with a <= q <= b: its count lies between A([0, a)) and A([0, b)) and
+    its volume between vol(a) and vol(b), so D* <= the largest
+    max(A([0, b)) / n - vol(a), vol(b) - A([0, a)) / n) over the boxes, and D* >= the largest
+    local discrepancy of the real boxes at the corners; the gap is at most delta. The lower
+    bound is raised further by snapping the best corners to critical boxes. Both bounds
+    include the floating-point rounding of the volumes. Certified upper bounds are hard in
+    high d (the partition grows like (d / delta)^d / d!): expect a wide gap beyond d = 6.
+
+    Parameters
+    ----------
+    points : ndarray (n, d)
+        One checked set.
+    delta : float, optional
+        The partition's delta; None takes the smallest of a ladder (1, 0.71, 0.5, ...) whose
+        partition fits the work budget (corners times points).
+    backend : {"opencl", "numpy"}
+        Where the corners are counted (:func:`anchored_counts`).
+
+    Returns
+    -------
+    StarBounds
+        ``lower <= D* <= upper``.
+
+    Raises
+    ------
+    InvalidArgumentError
+        A ``delta`` whose partition has too many boxes.
     """
     n, d = points.shape
     leaves = max(1, min(MAX_LEAVES, STAR_WORK // (2 * n)))

@@ -57,7 +57,25 @@ class Rate:
 
 
 def register(name, *aliases):
-    """Class decorator: make a sampler available to :func:`make_sampler` as ``name``."""
+    """Class decorator: make a sampler available to :func:`make_sampler` as ``name``.
+
+    Parameters
+    ----------
+    name : str
+        The sampler's name, set as its ``name``.
+    *aliases : str
+        Other names that make it, set as its ``aliases``.
+
+    Returns
+    -------
+    callable
+        The decorator, which returns the class itself.
+
+    Raises
+    ------
+    RuntimeError
+        A name registered twice.
+    """
     def wrap(cls):
         if name in _REGISTRY or name in _ALIASES:
             raise RuntimeError(f"sampler name {name!r} registered twice")
@@ -71,7 +89,23 @@ def register(name, *aliases):
 
 
 def sampler_names(aliases=False):
-    """The registered sampler names (sorted); with ``aliases=True`` the aliases too."""
+    """The registered sampler names, sorted.
+
+    Parameters
+    ----------
+    aliases : bool, optional
+        Include the aliases.
+
+    Returns
+    -------
+    list of str
+
+    Examples
+    --------
+    >>> from clsamp.samplers import sampler_names
+    >>> "sobol" in sampler_names()
+    True
+    """
     names = set(_REGISTRY)
     if aliases:
         names |= set(_ALIASES)
@@ -79,7 +113,18 @@ def sampler_names(aliases=False):
 
 
 def sampler_class(name):
-    """The class registered as ``name`` (or an alias; ``"sobol:owen"`` names ``sobol``).
+    """The class registered under a name.
+
+    Parameters
+    ----------
+    name : str
+        A name or an alias; a randomization after a colon is ignored (``"sobol:owen"``
+        names ``sobol``).
+
+    Returns
+    -------
+    type
+        A subclass of :class:`Sampler`.
 
     Raises
     ------
@@ -189,7 +234,18 @@ class SampleInfo:
 
     @classmethod
     def merge(cls, parts):
-        """One info for the realizations of ``parts``, in order."""
+        """One info for the realizations of ``parts``, in order, each field merged as its ``merge``
+        metadata says.
+
+        Parameters
+        ----------
+        parts : sequence of SampleInfo
+            The infos of the chunks of one call.
+
+        Returns
+        -------
+        SampleInfo
+        """
         if len(parts) == 1:
             return parts[0]
         values = {}
@@ -200,7 +256,19 @@ class SampleInfo:
 
 
 def info_field(how="concat", **kwargs):
-    """A :class:`SampleInfo` field and how its parts merge (see there)."""
+    """A :class:`SampleInfo` field that says how its parts merge.
+
+    Parameters
+    ----------
+    how : {"concat", "pad", "sum", "max", "same"}
+        How the values of a call's chunks combine (see :class:`SampleInfo`).
+    **kwargs
+        For ``dataclasses.field`` (``default``, ...).
+
+    Returns
+    -------
+    dataclasses.Field
+    """
     return dataclasses.field(metadata={"merge": how}, **kwargs)
 
 
@@ -322,7 +390,23 @@ class Sampler(abc.ABC):
         return self.rates.get(case) if self.d == 2 else None
 
     def with_seed(self, seed):
-        """A copy of this sampler with another seed (every other parameter kept)."""
+        """A copy of this sampler with another seed, every other parameter kept.
+
+        Parameters
+        ----------
+        seed : int
+            In [0, 2^64).
+
+        Returns
+        -------
+        Sampler
+            Of this sampler's class.
+
+        Raises
+        ------
+        InvalidArgumentError
+            A seed out of range or not an integer.
+        """
         other = copy.copy(self)
         other.seed = check_seed(seed)
         return other
@@ -427,6 +511,11 @@ class Sampler(abc.ABC):
     def sample_device(self, n=None, realizations=None, start=0, return_info=False):
         """Like :meth:`sample`, but the points stay on the current device.
 
+        Parameters
+        ----------
+        n, realizations, start, return_info
+            As :meth:`sample` takes them.
+
         Returns
         -------
         points : pyopencl.array.Array of float64, shape (n, d) or (r, n, d)
@@ -434,6 +523,11 @@ class Sampler(abc.ABC):
             integrands, metrics), with no copy through the host.
         info : SampleInfo
             Only with ``return_info``.
+
+        Raises
+        ------
+        InvalidArgumentError
+            As :meth:`sample` raises it, or for an output larger than the device's memory.
         """
         n, runs, single, start = self._check_call(n, realizations, start, return_info)
         self._check_size(n, runs, device=True)
@@ -578,7 +672,21 @@ class Sampler(abc.ABC):
 
     # -- what subclasses write ----------------------------------------------------------
     def valid_n(self, n):
-        """The valid point count nearest to ``n`` (n itself when valid)."""
+        """The valid point count nearest to ``n``.
+
+        A sampler that makes only some counts (k^d strata, powers of two) says here which;
+        :meth:`sample` refuses any other n, naming this one. The base accepts every n.
+
+        Parameters
+        ----------
+        n : int
+            A requested number of points.
+
+        Returns
+        -------
+        int
+            ``n`` itself where it is valid.
+        """
         return n
 
     def _check_n(self, n):
