@@ -99,7 +99,19 @@ class IntegrandErrors(_Estimator):
         return IntegrandKernel(self.target, self.homogenize, self.seed)
 
     def block(self, n, lo, hi):
-        """(hi - lo,) errors of realizations lo .. hi - 1 at n."""
+        """The errors of realizations lo .. hi - 1 at n, which do not depend on the block.
+
+        Parameters
+        ----------
+        n : int
+            Points per set.
+        lo, hi : int
+            The realizations lo .. hi - 1.
+
+        Returns
+        -------
+        ndarray, shape (hi - lo,)
+        """
         if self.backend == "opencl":
             return _errors_opencl(self.kernel, self.sampler, n, hi - lo, lo)
         return _errors_numpy(self.sampler, self.target, n, hi - lo, self.homogenize, self.seed, lo)
@@ -127,14 +139,26 @@ class FamilyErrors(_Estimator):
         return FamilyKernel(self.target, self.homogenize, self.seed)
 
     def block(self, n, lo, hi):
-        """(hi - lo, members) errors of realizations lo .. hi - 1 at n."""
+        """Every member's errors, shape (hi - lo, members); see :meth:`IntegrandErrors.block`."""
         return _family_errors(self.kernel, self.sampler, self.target, n, lo, hi, self.homogenize,
                               self.seed)
 
 
 def errors_block(estimator, n, lo, hi):
-    """One task of a sweep (:mod:`clsamp.parallel`): ``estimator.block(n, lo, hi)``, with
-    kernels of the task's own (a task may run in any thread or process)."""
+    """One task of a sweep (:mod:`clsamp.parallel`), with kernels of the task's own (a task
+    may run in any thread or process).
+
+    Parameters
+    ----------
+    estimator : IntegrandErrors or FamilyErrors
+    n, lo, hi : int
+        As :meth:`IntegrandErrors.block` takes them.
+
+    Returns
+    -------
+    ndarray
+        ``estimator.block(n, lo, hi)``.
+    """
     return copy.copy(estimator).block(n, lo, hi)
 
 

@@ -572,7 +572,25 @@ class IntegrandKernel:
                                                                           dtype=np.float64))
 
     def error_sums(self, points, n, realization0):
-        """(r, groups, 2) double-double partial sums of f - integral, on the host."""
+        """The partial sums of f - integral over each set's points, computed on the device in
+        slices of :data:`SLICE` points (a summation order that depends on n only), each in
+        double-double.
+
+        Parameters
+        ----------
+        points : pyopencl.array.Array, shape (r, n, d)
+            The sets on the current device.
+        n : int
+            Points per set.
+        realization0 : int
+            The realization of the first set, which picks its homogenizing shift.
+
+        Returns
+        -------
+        ndarray, shape (r, groups, 2)
+            On the host: per set and slice the (high, low) parts of the sum; :func:`combine_sums`
+            adds them.
+        """
         import pyopencl as cl
         import pyopencl.array as cla
         queue = runtime.queue()
@@ -598,7 +616,17 @@ def _two_sum(a, b):
 
 
 def combine_sums(parts):
-    """Double-double partial sums (..., groups, 2) added in order to one double per row."""
+    """Double-double partial sums added in order to one double per row (Knuth's two-sum).
+
+    Parameters
+    ----------
+    parts : ndarray, shape (..., groups, 2)
+        (high, low) pairs, as :meth:`IntegrandKernel.error_sums` gives them.
+
+    Returns
+    -------
+    ndarray, shape (...)
+    """
     hi = np.zeros(parts.shape[:-2])
     lo = np.zeros(parts.shape[:-2])
     for g in range(parts.shape[-2]):

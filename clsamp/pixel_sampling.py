@@ -73,14 +73,42 @@ def _words(seed, index, realization, purpose):
 
 
 def derived_seed(seed, index, realization, purpose=PURPOSE_SEED):
-    """A 64-bit seed drawn from (seed, index, realization): the seed of one sampler."""
+    """A 64-bit seed drawn from (seed, index, realization): the seed of one sampler of a render.
+
+    Parameters
+    ----------
+    seed : int
+        The render's seed.
+    index, realization : int
+        32-bit counters (a seed block and a set, for instance).
+    purpose : int, optional
+        Which draw (``PURPOSE_SEED``, ``PURPOSE_POOL``, ``PURPOSE_SHIFT``, ``PURPOSE_PASS``),
+        each from its own Philox block.
+
+    Returns
+    -------
+    int
+        In [0, 2^64).
+    """
     w = _words(seed, index, realization, purpose)
     return int(w[..., 0]) | (int(w[..., 1]) << 32)
 
 
 def block_size(spp, dimensions):
     """Pixels per seed block: a power of two up to 1024, smaller when one block's float64
-    samples would pass 64 MiB. Depends on ``spp`` and ``dimensions`` only (never the device)."""
+    samples would pass 64 MiB. It follows from ``spp`` and ``dimensions`` only, never from the
+    device, so a seed gives the same samples on every device.
+
+    Parameters
+    ----------
+    spp : int
+    dimensions : int
+        The scene's sample dimensions.
+
+    Returns
+    -------
+    int
+    """
     per_pixel = 8 * spp * max(1, dimensions)
     b = MAX_BLOCK
     while b > 1 and b * per_pixel > BLOCK_BYTES:
@@ -89,8 +117,19 @@ def block_size(spp, dimensions):
 
 
 def float32_samples(x):
-    """Samples as the kernel reads them: float64 in [0, 1) to float32 rounded toward zero
-    (round-to-nearest could give 1.0), so they stay in [0, 1)."""
+    """Samples as the kernel reads them: float64 rounded toward zero to float32, so they stay
+    in [0, 1) (round-to-nearest could give 1.0).
+
+    Parameters
+    ----------
+    x : ndarray of float64
+        In [0, 1).
+
+    Returns
+    -------
+    ndarray of float32
+        Of ``x``'s shape.
+    """
     f = x.astype(np.float32)
     up = f > x
     f[up] = np.nextafter(f[up], np.float32(0))
@@ -142,15 +181,25 @@ def _sampler_factory(sampler, sampler_params):
 
 
 def sample_plan(scene, sampler, spp, sampler_params, pad, pool):
-    """The sets one pixel sample is made of: one per group of the scene's dimensions
-    (``pad``) or one for all of them, each with its factory, dimension and whether the
-    sampler is pixel-indexed or pooled. Parameters are those of :func:`pixel_samples`.
+    """The sets one pixel sample is made of: one per group of the scene's dimensions (``pad``)
+    or one for all of them, each with its factory, dimension and whether the sampler is
+    pixel-indexed or pooled.
+
+    Parameters
+    ----------
+    scene, sampler, spp, sampler_params, pad, pool
+        As :func:`pixel_samples` takes them.
+
+    Returns
+    -------
+    list
+        The sets, in the order of the scene's dimensions.
 
     Raises
     ------
     InvalidArgumentError
         An ``spp`` the sampler cannot make in a set's dimension (naming the nearest valid
-        one).
+        one), an unknown sampler, or ``sampler_params`` with a Sampler object.
     """
     name, make, supports, expensive = _sampler_factory(sampler, sampler_params)
     sets, offset = [], 0
@@ -182,17 +231,49 @@ def sample_plan(scene, sampler, spp, sampler_params, pad, pool):
 
 
 def image_size(resolution, name="resolution"):
-    """(width, height) of an image from ``resolution`` (:func:`clsamp.validation.check_image_size`)."""
+    """The size of an image (:func:`clsamp.validation.check_image_size`).
+
+    Parameters
+    ----------
+    resolution : int or (int, int)
+        A side, or (width, height).
+    name : str, optional
+        The argument's name, for the message.
+
+    Returns
+    -------
+    (int, int)
+        (width, height).
+
+    Raises
+    ------
+    InvalidArgumentError
+        Not a positive size up to 65535 pixels a side.
+    """
     return check_image_size(resolution, name)
 
 
 def pixel_samples(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=True,
                   pixels=None, pool=DEFAULT_POOL, _sets=None, _into=None):
-    """The samples the renderer feeds the kernel: float64 array (pixels, dimensions, spp).
+    """The samples the renderer feeds the kernel, in [0, 1).
 
-    Parameters are those of :func:`render`; ``pixels`` is a range of row-major pixel
-    numbers (pixel ``row * width + col``; default: all of them), starting on a seed-block boundary
-    (:func:`block_size`) unless it is the whole image. Values are in [0, 1).
+    Parameters
+    ----------
+    scene, sampler, spp, resolution, seed, sampler_params, pad, pool
+        As :func:`clsamp.render.render` takes them.
+    pixels : range, optional
+        Row-major pixel numbers (pixel ``row * width + col``), starting on a seed-block
+        boundary (:func:`block_size`) unless it is the whole image; all pixels by default.
+
+    Returns
+    -------
+    ndarray of float64, shape (pixels, scene.sample_dimensions, spp)
+
+    Raises
+    ------
+    InvalidArgumentError
+        Arguments :func:`clsamp.render.render` refuses, or ``pixels`` not starting on a
+        seed-block boundary.
     """
     width, height = image_size(resolution)
     spp = check_positive_int(spp, "spp", maximum=2**31)

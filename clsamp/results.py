@@ -114,21 +114,39 @@ class ConvergenceResult:
         return self.seconds / self.realizations
 
     def fit_range(self, n_min=None):
-        """Indices of the sweep :meth:`rate` fits: ns >= n_min, by default the larger half
-        (from index len(ns) // 2 on: the last 4 of 7, the last 2 of 4)."""
+        """Indices of the sweep that :meth:`rate` fits.
+
+        Parameters
+        ----------
+        n_min : int, optional
+            Fit the ns >= n_min; by default the larger half of the sweep (from index
+            len(ns) // 2 on: the last 4 of 7, the last 2 of 4).
+
+        Returns
+        -------
+        ndarray of int
+        """
         if n_min is None:
             return np.arange(len(self.ns) // 2, len(self.ns))
         return np.flatnonzero(self.ns >= n_min)
 
     def rate(self, n_min=None):
-        """The convergence rate: (slope, standard error) of log MSE against log N.
+        """The convergence rate: the slope of log MSE against log N.
 
-        A weighted least-squares line over the asymptotic range (:meth:`fit_range`: the
-        larger half of the sweep unless ``n_min`` is given). Point k has weight
-        1 / s_k^2 with s_k = mse_stderr_k / mse_k, the delta-method standard deviation
-        of log mse_k. The slope's standard error is sqrt(1 / sum w (x - x_w)^2),
-        scaled up by sqrt(chi^2 / dof) when the residuals scatter more than the
-        weights say (curvature). (nan, nan) with fewer than two positive MSEs.
+        A weighted least-squares line over the asymptotic range (:meth:`fit_range`). Point k has
+        weight 1 / s_k^2 with s_k = mse_stderr_k / mse_k, the delta-method standard deviation of
+        log mse_k. The slope's standard error is sqrt(1 / sum w (x - x_w)^2), scaled up by
+        sqrt(chi^2 / dof) when the residuals scatter more than the weights say (curvature).
+
+        Parameters
+        ----------
+        n_min : int, optional
+            As :meth:`fit_range` takes it.
+
+        Returns
+        -------
+        slope, stderr : float
+            nan with fewer than two positive MSEs in the range.
         """
         idx = self.fit_range(n_min)
         idx = idx[self.mse[idx] > 0]
@@ -152,7 +170,17 @@ class ConvergenceResult:
         return slope, float(stderr)
 
     def to_dict(self, errors=False):
-        """The numbers as JSON-able Python types (``errors=True`` adds every error)."""
+        """The numbers as JSON-able Python types, with the fitted rate.
+
+        Parameters
+        ----------
+        errors : bool, optional
+            Add every error of every realization.
+
+        Returns
+        -------
+        dict
+        """
         slope, stderr = self.rate()
         out = {"sampler": self.sampler, "kind": self.kind, "integrand": self.integrand,
                "integral": self.integral, "d": self.d, "realizations": int(self.realizations),
@@ -260,13 +288,32 @@ class FamilyResult:
         return np.arange(len(self.ns) // 2, len(self.ns))
 
     def rate(self, statistic="mean", confidence=0.95, bootstrap=BOOTSTRAP, seed=0):
-        """(slope, lower, upper): the fitted exponent of ``statistic`` ~ N^slope over
+        """The fitted exponent of a summary across members, ``statistic`` ~ N^slope over
         :meth:`fit_range`, and its bootstrap confidence interval.
 
-        The interval resamples members and realizations with replacement (``bootstrap``
-        times, NumPy's PCG64 seeded by ``seed``: reproducible), recomputes the members'
-        MSEs and the statistic at every n, and refits; it is the central ``confidence``
-        range of the refitted slopes. nan where a statistic is 0 at some n.
+        The interval resamples members and realizations with replacement, recomputes the
+        members' MSEs and the statistic at every n, and refits; it is the central ``confidence``
+        range of the refitted slopes.
+
+        Parameters
+        ----------
+        statistic : {"mean", "median", "q90", "max"}
+        confidence : float, optional
+            In (0, 1).
+        bootstrap : int, optional
+            Resamples.
+        seed : int, optional
+            Seed of NumPy's PCG64 for the resamples: the interval is reproducible.
+
+        Returns
+        -------
+        slope, lower, upper : float
+            nan where the statistic is 0 at some n of the range.
+
+        Raises
+        ------
+        InvalidArgumentError
+            An unknown ``statistic`` or a ``confidence`` outside (0, 1).
         """
         if statistic not in STATISTICS:
             raise InvalidArgumentError(
@@ -300,7 +347,7 @@ class FamilyResult:
         return slope, float(lo), float(hi)
 
     def to_dict(self, errors=False):
-        """The numbers as JSON-able Python types."""
+        """The numbers with each statistic's rate; see :meth:`ConvergenceResult.to_dict`."""
         out = {"sampler": self.sampler, "kind": self.kind, "family": self.family, "d": self.d,
                "members": int(self.members), "realizations": int(self.realizations),
                "homogenize": bool(self.homogenize), "seed": int(self.seed), "backend": self.backend,
@@ -347,6 +394,12 @@ def pareto_front(results):
 def time_to_mse(result, target):
     """What reaching an MSE of ``target`` costs with this sampler.
 
+    Parameters
+    ----------
+    result : ConvergenceResult
+    target : float
+        A positive MSE.
+
     Returns
     -------
     dict or None
@@ -355,6 +408,11 @@ def time_to_mse(result, target):
         ``'seconds_interpolated'``: where the log-log line between that n and the one
         before it crosses the target (equal to the measured values at the first n).
         None when no n in the sweep reaches the target.
+
+    Raises
+    ------
+    InvalidArgumentError
+        A ``target`` that is not positive.
     """
     target = float(target)
     if not target > 0:

@@ -167,7 +167,18 @@ def _estimator(sampler, integrand, seed, backend, members, homogenize):
 
 
 def sampler_rates(sampler):
-    """The published rates of ``sampler`` by case: ``{case: (exponent, source) or None}``."""
+    """The published rates of a sampler by case, as a result records them.
+
+    Parameters
+    ----------
+    sampler : Sampler
+
+    Returns
+    -------
+    dict
+        ``{case: (exponent, source) or None}`` for each case of
+        :meth:`Sampler.convergence_rate`.
+    """
     out = {}
     for case in CASES:
         rate = sampler.convergence_rate(case)
@@ -194,8 +205,22 @@ def _check_ns(ns, sampler, label):
 
 
 def sweep_tasks(estimator, ns, r):
-    """The tasks of a sweep (one block of realizations of one n each), and per n the
-    indices of its tasks in order."""
+    """The tasks of a sweep, one block of realizations of one n each (:func:`errors_block`).
+
+    Parameters
+    ----------
+    estimator : IntegrandErrors or FamilyErrors
+    ns : sequence of int
+    r : int
+        Realizations per n.
+
+    Returns
+    -------
+    tasks : list of tuple
+        ``(estimator, n, lo, hi)``.
+    owners : list of list of int
+        Per n, the indices of its tasks, in order.
+    """
     tasks, owners = [], []
     for n in ns:
         mine = []
@@ -224,9 +249,30 @@ def _result(estimator, label, values, errors, seconds, r):
 
 # -- the command line's sample counts --------------------------------------------------
 def parse_ns(text):
-    """Sample counts from text: ``"16,64,256"``, or ``"a..b"`` for a, 4a, 16a, ... <= b
-    (powers of 4 from a: squares stay squares, as jittered needs), or ``"a..b:q"`` for
-    ratio q (``"16..4096:2"``: powers of 2)."""
+    """Sample counts from the command line's text.
+
+    Parameters
+    ----------
+    text : str
+        ``"16,64,256"``; ``"a..b"`` for a, 4a, 16a, ... <= b (powers of 4 from a: squares stay
+        squares, as jittered needs); or ``"a..b:q"`` for ratio q (``"16..4096:2"``: powers
+        of 2).
+
+    Returns
+    -------
+    list of int
+
+    Raises
+    ------
+    InvalidArgumentError
+        Text of another form, or a range with a < 1, b < a or q < 2.
+
+    Examples
+    --------
+    >>> from clsamp.sweep import parse_ns
+    >>> parse_ns("16..1024"), parse_ns("16..64:2")
+    ([16, 64, 256, 1024], [16, 32, 64])
+    """
     text = str(text).strip()
     if ".." in text:
         span, _, ratio = text.partition(":")

@@ -224,18 +224,47 @@ DISCREPANCY_RATES = {
 
 
 def family_expected(result):
-    """(exponent, source) the sampler publishes for the family's case, or (None, None)."""
+    """The rate a family result's sampler publishes for the family's case
+    (:func:`case_of` its traits).
+
+    Parameters
+    ----------
+    result : FamilyResult
+
+    Returns
+    -------
+    exponent : float or None
+    source : str or None
+        Both None where no rate is published.
+    """
     rate = result.rates.get(case_of(result.traits))
     return (None, None) if rate is None else (rate[0], rate[1])
 
 
 def compare_family(result, statistic="mean", allowance=None):
-    """The fitted rate of a family sweep's ``statistic`` held against the published one.
+    """The fitted rate of a family sweep's statistic held against the published one.
 
-    Returns a dict: ``slope``, ``ci`` (lower, upper), ``expected`` (exponent or None),
-    ``source`` and ``verdict``: "matches" when the expected exponent lies in the
-    confidence interval, "pre-asymptotic" when within ``allowance`` (default
-    ``theory.CURVATURE_ALLOWANCE``) of it, "differs" beyond, "unknown" without a rate.
+    Parameters
+    ----------
+    result : FamilyResult
+    statistic : {"mean", "median", "q90", "max"}
+        The summary across members whose rate is fitted (:meth:`FamilyResult.rate`).
+    allowance : float, optional
+        How far outside the confidence interval the exponent may lie and still count as
+        "pre-asymptotic"; :data:`CURVATURE_ALLOWANCE` by default.
+
+    Returns
+    -------
+    dict
+        ``statistic``, ``slope``, ``ci`` (lower, upper), ``expected`` (exponent or None),
+        ``source`` and ``verdict``: "matches" when the expected exponent lies in the
+        confidence interval, "pre-asymptotic" when within ``allowance`` of it, "differs"
+        beyond, "unknown" without a rate.
+
+    Raises
+    ------
+    InvalidArgumentError
+        A statistic :meth:`FamilyResult.rate` refuses.
     """
     allowance = CURVATURE_ALLOWANCE if allowance is None else allowance
     slope, lo, hi = result.rate(statistic)
