@@ -245,3 +245,71 @@ def test_every_public_function_class_and_method_has_a_docstring():
                         visit(node.body, f"{prefix}{node.name}.")
         visit(ast.parse(path.read_text()).body, "")
     assert not missing, missing
+
+
+def _has_section(doc, *names):
+    lines = [line.strip() for line in doc.splitlines()]
+    return any(a in names and len(b) >= 3 and set(b) == {"-"}
+               for a, b in zip(lines, lines[1:], strict=False))
+
+
+def _returns_a_value(func):
+    """Whether ``func``'s own body (not a nested function's) returns a value or yields."""
+    def walk(node):
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda, ast.ClassDef)):
+                continue
+            if isinstance(child, (ast.Yield, ast.YieldFrom)):
+                return True
+            if (isinstance(child, ast.Return) and child.value is not None
+                    and not (isinstance(child.value, ast.Constant) and child.value.value is None)):
+                return True
+            if walk(child):
+                return True
+        return False
+    return walk(func)
+
+
+def _public_functions(module, body, prefix="", in_class=False):
+    """(module, qualified name, node, is a method) of every public function of ``body`` and
+    every public method of its public classes, properties left out."""
+    found = []
+    for node in body:
+        if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)) \
+                or node.name.startswith("_"):
+            continue
+        if isinstance(node, ast.ClassDef):
+            found += _public_functions(module, node.body, f"{prefix}{node.name}.", True)
+            continue
+        decorators = [ast.unparse(d) for d in node.decorator_list]
+        if any(d == "property" or d.endswith((".setter", ".getter", ".deleter")) for d in decorators):
+            continue
+        found.append((module, f"{prefix}{node.name}", node, in_class and "staticmethod" not in decorators))
+    return found
+
+
+def test_public_functions_have_numpydoc_sections():
+    # an override may point to the documented method it overrides (":meth:`Sampler.valid_n`")
+    # instead of repeating that method's sections
+    functions = [f for module, path in MODULES.items()
+                 for f in _public_functions(module, ast.parse(path.read_text()).body)]
+    documented = {qual for _, qual, node, _ in functions
+                  if _has_section(ast.get_docstring(node) or "", "Parameters")}
+    wrong = []
+    for module, qual, node, method in functions:
+        args = node.args
+        named = args.posonlyargs + args.args + args.kwonlyargs
+        if method:
+            named = named[1:]
+        if not named:
+            continue
+        doc = ast.get_docstring(node) or ""
+        name = qual.rsplit(".", 1)[-1]
+        pointed = re.findall(rf":meth:`~?([\w.]*\.{name})`", doc)
+        if "." in qual and any(".".join(p.split(".")[-2:]) in documented for p in pointed):
+            continue
+        if not _has_section(doc, "Parameters"):
+            wrong.append(f"{module}:{node.lineno} {qual} (Parameters)")
+        if _returns_a_value(node) and not _has_section(doc, "Returns", "Yields"):
+            wrong.append(f"{module}:{node.lineno} {qual} (Returns)")
+    assert not wrong, f"{len(wrong)}: " + "\n".join(wrong)
