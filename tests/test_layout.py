@@ -234,16 +234,18 @@ def test_no_module_reads_a_sampler_attribute_the_base_does_not_declare():
 
 def test_every_public_function_class_and_method_has_a_docstring():
     missing = []
+
+    def visit(module, body, prefix):
+        for node in body:
+            if (isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))
+                    and not node.name.startswith("_")):
+                if not ast.get_docstring(node):
+                    missing.append(f"{module}:{node.lineno} {prefix}{node.name}")
+                if isinstance(node, ast.ClassDef):
+                    visit(module, node.body, f"{prefix}{node.name}.")
+
     for module, path in MODULES.items():
-        def visit(body, prefix):
-            for node in body:
-                if (isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))
-                        and not node.name.startswith("_")):
-                    if not ast.get_docstring(node):
-                        missing.append(f"{module}:{node.lineno} {prefix}{node.name}")
-                    if isinstance(node, ast.ClassDef):
-                        visit(node.body, f"{prefix}{node.name}.")
-        visit(ast.parse(path.read_text()).body, "")
+        visit(module, ast.parse(path.read_text()).body, "")
     assert not missing, missing
 
 
@@ -313,3 +315,17 @@ def test_public_functions_have_numpydoc_sections():
         if _returns_a_value(node) and not _has_section(doc, "Returns", "Yields"):
             wrong.append(f"{module}:{node.lineno} {qual} (Returns)")
     assert not wrong, f"{len(wrong)}: " + "\n".join(wrong)
+
+
+def test_the_layer_table_of_design_md_lists_every_module_in_its_layer():
+    # docs/design.md, "Layers": each row names its modules in backticks (`runtime`,
+    # `metrics/`, `geometry.torus`); every module of LAYERS is in its own row
+    rows = {}
+    for line in (ROOT / "docs/design.md").read_text().splitlines():
+        cells = [c.strip() for c in line.split("|")]
+        if len(cells) > 3 and cells[1] in dict(LAYERS):
+            rows[cells[1]] = {re.split(r"[./]", name)[0] for name in re.findall(r"`([\w./]+)`", cells[2])}
+    assert set(rows) == set(dict(LAYERS)), set(rows) ^ set(dict(LAYERS))
+    wrong = {layer: sorted(members - rows[layer]) for layer, members in LAYERS
+             if members - rows[layer] - {"__main__", "__init__"}}
+    assert not wrong, wrong
