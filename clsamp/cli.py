@@ -636,8 +636,17 @@ class Terminated(BaseException):
     """SIGTERM, raised where the program is so that files being written are cleaned up."""
 
 
+_signalled = []    # the signals this command received, in order
+
+
 def _on_sigterm(signum, frame):
+    _signalled.append(signum)
     raise Terminated()
+
+
+def _on_sigint(signum, frame):
+    _signalled.append(signum)
+    raise KeyboardInterrupt()
 
 
 def main(argv=None):
@@ -663,25 +672,46 @@ def main(argv=None):
         return 2
     import signal
     import threading
-    if threading.current_thread() is threading.main_thread():
+    main_thread = threading.current_thread() is threading.main_thread()
+    before = signal.getsignal(signal.SIGINT)
+    _signalled.clear()
+    if main_thread:
         # SIGTERM unwinds like Ctrl-C: every output is written whole (temporary file, then
-        # rename) or not at all, and the temporary file of one cut short is removed
+        # rename) or not at all, and the temporary file of one cut short is removed. Both
+        # are recorded, so that one whose exception a C extension turned into another
+        # (matplotlib's renderer does) still ends the command as interrupted.
         signal.signal(signal.SIGTERM, _on_sigterm)
+        if before is signal.default_int_handler:
+            signal.signal(signal.SIGINT, _on_sigint)
     try:
         if args.device is not None:
             from . import runtime
             runtime.use_device(args.device)
         return args.run(args) or 0
     except ClsampError as error:
-        print(f"clsamp {args.command}: error: {error}", file=sys.stderr)
-        return 2
+        if not _signalled:
+            print(f"clsamp {args.command}: error: {error}", file=sys.stderr)
+            return 2
+        return _stopped(args.command, _signalled[0])
     except (KeyboardInterrupt, Terminated) as stop:
-        why = "terminated" if isinstance(stop, Terminated) else "interrupted"
-        print(f"clsamp {args.command}: {why}; every file written so far is whole", file=sys.stderr)
-        return 143 if isinstance(stop, Terminated) else 130
+        return _stopped(args.command, signal.SIGTERM if isinstance(stop, Terminated) else signal.SIGINT)
+    except Exception:
+        if _signalled:
+            return _stopped(args.command, _signalled[0])
+        raise
     finally:
-        if threading.current_thread() is threading.main_thread():
+        if main_thread:
             signal.signal(signal.SIGTERM, signal.SIG_DFL)   # after the work, SIGTERM just ends it
+            signal.signal(signal.SIGINT, before)
+
+
+def _stopped(command, signum):
+    """Say that the command was stopped by ``signum``; its exit status (130 or 143)."""
+    import signal
+    terminated = signum == signal.SIGTERM
+    why = "terminated" if terminated else "interrupted"
+    print(f"clsamp {command}: {why}; every file written so far is whole", file=sys.stderr)
+    return 143 if terminated else 130
 
 
 if __name__ == "__main__":

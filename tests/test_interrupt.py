@@ -116,3 +116,26 @@ def test_long_work_stops_within_two_seconds_of_ctrl_c(work):
     finally:
         signal.signal(signal.SIGINT, previous)
     assert fired and time.perf_counter() - fired[0] < 2.0
+
+
+@pytest.mark.parametrize("sig, status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_signal_whose_exception_an_extension_replaced_still_ends_as_stopped(monkeypatch, capsys,
+                                                                              sig, status):
+    # matplotlib's renderer turns a KeyboardInterrupt raised inside a draw into a ValueError
+    # ("Invalid affine transformation matrix"): the command still ends as interrupted
+    from clsamp import cli
+
+    def run(args):
+        try:
+            os.kill(os.getpid(), sig)
+            time.sleep(5)
+        except BaseException:
+            raise ValueError("Invalid affine transformation matrix") from None
+
+    monkeypatch.setattr(cli, "_run_devices", run)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        assert cli.main(["devices"]) == status
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert "every file written so far is whole" in capsys.readouterr().err
