@@ -12,6 +12,7 @@ import numpy as np
 from . import files, theory
 from . import spectrum as spectra
 from .errors import InvalidArgumentError
+from .plot_axes import clip_far_below, legend_below, readable_log_ticks
 from .results import pareto_front
 from .validation import check_choice, check_points, check_positive_int, check_real, point_sets
 
@@ -48,11 +49,7 @@ def _scatter(ax, one, title, size=None, color="black"):
     """One checked (n, 2) set on the unit square (the body of :func:`points`)."""
     size = max(0.5, 1600.0 / len(one)) if size is None else size
     shown = ax.scatter(one[:, 0], one[:, 1], s=size, color=color, linewidths=0)
-    ax.set_xlim(0, 1)
-    ax.set_ylim(0, 1)
-    ax.set_aspect("equal")
-    ax.set_xticks([])
-    ax.set_yticks([])
+    ax.set(xlim=(0, 1), ylim=(0, 1), xticks=[], yticks=[], aspect="equal")
     if title:
         ax.set_title(title, fontsize=10)
     return shown
@@ -475,7 +472,8 @@ def discrepancy(ax, sweep, expected=None, **line_args):
     matplotlib ErrorbarContainer
     """
     slope, _ = sweep.slope()
-    label = f"{sweep.sampler}: {slope:.2f}" + (f" ({expected[1]})" if expected else "")
+    label = f"{sweep.sampler}: {slope:.2f}" if math.isfinite(slope) else f"{sweep.sampler}: too few N"
+    label += f" ({expected[1]})" if expected else ""
     line_args = {"marker": "o", "markersize": 3, "capsize": 2, **line_args}
     line = ax.errorbar(sweep.ns, sweep.values, yerr=sweep.stderr, label=label, **line_args)
     if expected:
@@ -528,7 +526,7 @@ def discrepancy_figure(path, sweeps):
         sets = sweeps[0][method].realizations
         ax.set_title(f"{method} discrepancy (RMS of D over {sets} sets; dashed: known)")
         ax.grid(True, which="both", alpha=0.2)
-        ax.legend(fontsize=7, ncol=2)
+        legend_below(ax, columns=3)
     return _save(fig, path)
 
 
@@ -540,7 +538,7 @@ def _panels(results):
         groups.setdefault(res.integrand, []).append(res)
     if not groups:
         raise InvalidArgumentError("'results' must hold at least one ConvergenceResult")
-    fig, axes = pyplot().subplots(1, len(groups), figsize=(5.5 * len(groups), 4.5), squeeze=False)
+    fig, axes = pyplot().subplots(1, len(groups), figsize=(5.5 * len(groups), 5.8), squeeze=False)
     return fig, list(zip(axes[0], groups, groups.values(), strict=True))
 
 
@@ -550,7 +548,7 @@ def _label(ax, xlabel, title):
     ax.set_ylabel("MSE")
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.2)
-    ax.legend(fontsize=7)
+    legend_below(ax, columns=1)
 
 
 def convergence(results, path):
@@ -610,8 +608,7 @@ def family_spread(ax, res, color=None, label=None):
     text = label or res.sampler
     if np.isfinite(cmp["slope"]):
         text += f": {cmp['slope']:.2f} [{cmp['ci'][0]:.2f}, {cmp['ci'][1]:.2f}]"
-        if cmp["expected"] is not None:
-            text += f" (theory {cmp['expected']:g})"
+        text += "" if cmp["expected"] is None else f" (theory {cmp['expected']:g})"
     (line,) = ax.loglog(n, res.mean, "o-", markersize=3, color=color, label=text)
     color = line.get_color()
     ax.fill_between(n, np.maximum(lo, np.finfo(float).tiny), hi, color=color, alpha=0.2, linewidth=0)
@@ -636,8 +633,9 @@ def family_convergence(results, path):
     """
     fig, panels = _panels(results)
     for ax, name, group in panels:
-        for res in group:
-            family_spread(ax, res)
+        lines = {res.sampler: family_spread(ax, res) for res in group}
+        for cut in clip_far_below(ax, {res.sampler: res.mean for res in group}):
+            lines[cut].set_label(f"{lines[cut].get_label()} (below the axis: falls to rounding)")
         _label(ax, "N (samples)", f"{name} ({group[0].members} members): MSE against N")
     return _save(fig, path)
 
@@ -695,7 +693,8 @@ def error_time(ax, curves, xlabel="seconds", ylabel="MSE", title=None, exact=Non
     ax.set_ylabel(ylabel)
     if title:
         ax.set_title(title)
-    ax.legend(fontsize=fontsize)
+    ax.legend(fontsize=fontsize, loc="best")
+    readable_log_ticks(ax, "x")
     return lines
 
 
