@@ -2,12 +2,19 @@
 
 :class:`Report` owns the output folder (``img/`` for pictures, ``data/`` for raw data, every
 file written whole through :mod:`clsamp.files`); :func:`write_html` turns its sections into
-``index.html``; :func:`json_safe` makes numbers JSON can hold (non-finite ones as strings).
+``index.html``; :func:`json_safe` makes numbers JSON can hold (non-finite ones as strings);
+:func:`slope_text`, :func:`human_bytes` and :func:`device_rows` put fits and devices in words;
+:func:`one_line_warnings` prints clsamp's warnings as one line while a report is made.
 """
 
+import contextlib
 import dataclasses
 import html
+import math
 import platform
+import sys
+import textwrap
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -76,6 +83,20 @@ class Report:
         self.sections = []
         self.results = {}   # objects a later section reuses (convergence results, renders)
         self.client = None  # a dask.distributed.Client for the sweeps, or None (in-process)
+
+    def picture(self, name):
+        """Where a picture goes, ``img/<name>.png``, and its link from ``index.html``.
+
+        Parameters
+        ----------
+        name : str
+
+        Returns
+        -------
+        (Path, str)
+        """
+        path = self.out / "img" / f"{name}.png"
+        return path, path.relative_to(self.out).as_posix()
 
     def figure(self, name, fig):
         """Save a matplotlib figure as ``img/<name>.png`` and close it.
@@ -334,7 +355,7 @@ def write_html(report, meta):
         if s.error:
             parts.append(f"<div class='error'>This section failed:\n{html.escape(s.error)}</div>")
         parts.append(s.body)
-        parts.append(f"<p class='note'>{s.seconds:.1f} s</p></section>")
+        parts.append(f"<p class='note'>Section computed in {s.seconds:.1f} s.</p></section>")
     parts.append("</body></html>")
     files.write_text(report.out / "index.html", "\n".join(parts))
 
@@ -353,3 +374,120 @@ def versions():
     from . import __version__
     versions["clsamp"] = __version__
     return versions
+
+
+def slope_text(slope, stderr, points=None):
+    """A fitted slope and its standard error in words, never ``nan``.
+
+    Parameters
+    ----------
+    slope, stderr : float
+        As a fit gives them (nan where it could not: too few points).
+    points : int, optional
+        How many N the fit used, named when there were too few for an error bar.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> slope_text(-0.51234, 0.02), slope_text(-0.7, float("nan"), 2)
+    ('-0.51 ± 0.02', '-0.70 (2 N: too few N for an error bar)')
+    >>> slope_text(float("nan"), float("nan"))
+    'too few N to fit'
+    """
+    if not math.isfinite(slope):
+        return "too few N to fit"
+    if not math.isfinite(stderr):
+        many = f"{points} N: " if points else ""
+        return f"{slope:+.2f} ({many}too few N for an error bar)"
+    return f"{slope:+.2f} ± {stderr:.2f}"
+
+
+def human_bytes(count):
+    """A byte count in binary units.
+
+    Parameters
+    ----------
+    count : int
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> human_bytes(23128711168), human_bytes(65536), human_bytes(512)
+    ('21.5 GiB', '64.0 KiB', '512 bytes')
+    """
+    value = float(count)
+    for unit in ("bytes", "KiB", "MiB", "GiB"):
+        if value < 1024 or unit == "GiB":
+            return f"{int(value)} bytes" if unit == "bytes" else f"{value:.1f} {unit}"
+        value /= 1024
+
+
+def device_rows(device, width=100):
+    """(property, value) rows of a device's record (``dataclasses.asdict`` of a
+    :class:`clsamp.runtime.Device`) for a table: bytes in binary units, the extensions
+    as a comma-separated list wrapped at ``width`` characters.
+
+    Parameters
+    ----------
+    device : dict
+    width : int
+
+    Returns
+    -------
+    list of (str, str)
+    """
+    rows = []
+    for key, value in device.items():
+        if key in ("global_memory", "max_allocation", "local_memory"):
+            value = human_bytes(value)
+        elif isinstance(value, (tuple, list)):
+            value = "\n".join(textwrap.wrap(", ".join(map(str, value)), width)) or "none"
+            key = f"{key} ({len(device[key])})"
+        rows.append((key, value))
+    return rows
+
+
+@contextlib.contextmanager
+def one_line_warnings(stream=None):
+    """Print the warnings clsamp raises inside the block as one line each,
+    ``clsamp: warning: <message>``, with no source line; other warnings as Python prints
+    them. The previous ``warnings.showwarning`` comes back on leaving.
+
+    Parameters
+    ----------
+    stream : file, optional
+        Where the lines go; ``sys.stderr`` (as it is when a warning comes) by default.
+
+    Yields
+    ------
+    None
+
+    Examples
+    --------
+    >>> import io, warnings
+    >>> out = io.StringIO()
+    >>> with one_line_warnings(out):
+    ...     warnings.warn_explicit("few points", UserWarning, __file__, 1)
+    >>> out.getvalue()
+    'clsamp: warning: few points\\n'
+    """
+    previous = warnings.showwarning
+    package = str(Path(__file__).resolve().parent)
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if str(Path(filename).resolve()).startswith(package):
+            print(f"clsamp: warning: {message}", file=stream or file or sys.stderr)
+        else:
+            previous(message, category, filename, lineno, file, line)
+
+    warnings.showwarning = show
+    try:
+        yield
+    finally:
+        warnings.showwarning = previous

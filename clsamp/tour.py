@@ -17,7 +17,20 @@ import traceback
 import numpy as np
 
 from . import files, plots, runtime
-from .report import Report, Section, fmt, img, json_safe, table, versions, write_html
+from .report import (
+    Report,
+    Section,
+    device_rows,
+    fmt,
+    img,
+    json_safe,
+    one_line_warnings,
+    slope_text,
+    table,
+    versions,
+    write_html,
+)
+from .tour_cost import section_cost
 
 # Samplers shown in section 1, with the parameters that make each one its textbook self.
 TOUR_SAMPLERS = (
@@ -42,12 +55,6 @@ TOUR_SWEEPS = {
     "poisson_disk": ([16, 64, 256, 1024, 4096], 512),
     "ccvt": ([16, 64, 256, 1024], 64),
 }
-
-
-def _picture(report, name):
-    """Where a picture goes (img/<name>.png) and its link from index.html."""
-    path = report.out / "img" / f"{name}.png"
-    return path, path.relative_to(report.out).as_posix()
 
 
 def tour_sampler_params(name, quick):
@@ -98,6 +105,7 @@ def section_samplers(report, quick):
             if name == "poisson_disk":        # maximal sets: a list of different sizes
                 params["radius"] = MAXIMAL_RHO * metrics.max_min_distance(n)
             sampler = make_sampler(name, d=2, seed=1, **params)
+            label = sampler.label
             t0 = time.perf_counter()
             if sampler.needs_n:
                 points = sampler.sample(n, realizations=realizations)
@@ -114,22 +122,22 @@ def section_samplers(report, quick):
             report.array(f"spectrum_{name}", P)
             plots.save_spectrum_exr(report.out / "data" / f"spectrum_{name}.exr", P,
                                     header={"sampler": name, "n": size, "realizations": realizations})
-            path, src = _picture(report, f"sampler_{name}")
-            plots.sampler_figure(path, points, P, (radii, pcf), n=n, label=name)
-            cells.append((name, src))
-            curves[name] = (freqs, mean)
+            path, src = report.picture(f"sampler_{name}")
+            plots.sampler_figure(path, points, P, (radii, pcf), n=n, label=label)
+            cells.append((label, src))
+            curves[label] = (freqs, mean)
             low = float(np.nanmean(mean[freqs <= 0.5 * np.sqrt(n)]))
             peak = float(radii[np.argmax(pcf)] * size ** 0.5)
-            rows.append((name, n if sampler.needs_n else f"{size:.0f} (maximal)", realizations,
+            rows.append((label, n if sampler.needs_n else f"{size:.0f} (maximal)", realizations,
                          seconds, float(rho.mean()), float(np.nanmean(aniso[len(aniso) // 4:])),
                          f"{low:.3g}", f"{float(np.max(pcf)):.3g} at {peak:.2f}"))
-            data[name] = {"n": size, "realizations": realizations, "seconds": seconds,
+            data[name] = {"label": label, "n": size, "realizations": realizations, "seconds": seconds,
                           "params": params, "rho": rho, "radial_mean": mean, "frequencies": freqs,
                           "anisotropy_db": aniso, "pcf": pcf, "pcf_radii": radii}
         except Exception as error:  # one sampler failing leaves the others in the report
             rows.append((name, n, realizations, "-", "-", "-", "-", f"failed: {error}"))
             data[name] = {"error": traceback.format_exc()}
-    path, overlay = _picture(report, "radial_means")
+    path, overlay = report.picture("radial_means")
     plots.radial_mean_families(path, curves, FAMILIES, n=n, note=f"n = {n}, {realizations} sets")
     body = (f"<p>Each sampler makes {realizations} sets of n = {n} points (seed 1); the spectrum is the mean "
             "periodogram over the sets (exact, <code>method='direct'</code>), DC at the centre; "
@@ -155,7 +163,7 @@ def section_samplers(report, quick):
 FAMILIES = (
     ("stratified", ("regular", "jittered", "uncorrelated_jitter", "latin_hypercube",
                     "multijittered", "correlated_multijittered")),
-    ("low discrepancy", ("halton", "hammersley", "sobol", "lattice", "kronecker", "pmj02",
+    ("low discrepancy", ("halton", "hammersley", "sobol:owen", "lattice", "kronecker", "pmj02",
                          "pmj02bn")),
     ("blue noise", ("poisson_disk", "lloyd", "ccvt")),
 )
@@ -191,7 +199,8 @@ def _discrepancy_against_n(report, quick):
             drawn.append(sweeps)
             slopes = {m: sweeps[m].slope() for m in methods}
             rows.append((sampler.label, f"{sweeps['CD'].ns[0]}..{sweeps['CD'].ns[-1]}",
-                         *(f"{slopes[m][0]:+.2f} ± {slopes[m][1]:.2f}" for m in methods),
+                         *(slope_text(*slopes[m], len(sweeps[m].ns) - len(sweeps[m].ns) // 2)
+                           for m in methods),
                          expected[1] if expected else "-", seconds))
             data[sampler.label] = {m: sweeps[m].to_dict() for m in methods}
         except Exception as error:  # one sampler failing leaves the others in the report
@@ -206,7 +215,7 @@ def _discrepancy_against_n(report, quick):
             "optimizers' sweeps stop earlier (their points cost most).</p>")
     body += table(("sampler", "N", "CD slope", "L2-star slope", "known", "seconds"), rows)
     if drawn:
-        path, src = _picture(report, "discrepancy_against_n")
+        path, src = report.picture("discrepancy_against_n")
         plots.discrepancy_figure(path, drawn)
         body += img(src, "discrepancy against N", 1100)
     return body, data
@@ -270,6 +279,7 @@ def section_convergence(report, quick):
             label = f"{name} / {integrand}"
             try:
                 sampler, params = _sampler_for_convergence(name, quick)
+                report.results.setdefault("convergence_samplers", {})[name] = sampler
                 sweep, realizations = sweeps[name]
                 result = convergence(sampler, integrand, sweep, realizations=realizations, seed=3,
                                      progress=False, client=report.client)
@@ -277,15 +287,15 @@ def section_convergence(report, quick):
                 results.append(result)
                 verdict = theory.compare(result)
                 rows.append((name, integrand, f"{sweep[0]}..{sweep[-1]}, {realizations}",
-                             verdict["case"], f"{verdict['slope']:.2f} "
-                             f"± {verdict['stderr']:.2f}", verdict["expected_text"] or "-",
+                             verdict["case"], slope_text(verdict["slope"], verdict["stderr"]),
+                             verdict["expected_text"] or "-",
                              verdict["verdict"], float(result.mse[-1]), float(np.sum(result.seconds))))
                 data[label] = {"params": params, "comparison": verdict, **result.to_dict()}
             except Exception as error:
                 rows.append((name, integrand, "-", "-", "-", "-", f"failed: {error}", "-", "-"))
                 data[label] = {"error": traceback.format_exc()}
     report.results["convergence"] = results
-    path, picture = _picture(report, "convergence")
+    path, picture = report.picture("convergence")
     plots.convergence(results, path)
     body = ("<p>Each point: the given number of realizations (sets), each shifted by its own "
             "random toroidal vector (homogenization: the estimator is unbiased); MSE of the "
@@ -333,10 +343,13 @@ def _family_sweeps(report, quick):
                 results.append(res)
                 cmp = theory.compare(res)
                 worst = res.rate("max")
-                rows.append((name, family, f"{cmp['slope']:.2f} [{cmp['ci'][0]:.2f}, {cmp['ci'][1]:.2f}]",
-                             "-" if cmp["expected"] is None else f"N^{cmp['expected']:g}", cmp["verdict"],
-                             f"{worst[0]:.2f}", float(res.mean[-1]), float(res.max[-1]),
-                             float(np.sum(res.seconds))))
+                fitted = (f"{cmp['slope']:.2f} [{cmp['ci'][0]:.2f}, {cmp['ci'][1]:.2f}]"
+                          if np.isfinite(cmp["ci"][0]) else "too few positive MSEs to fit")
+                rows.append((name, family, fitted,
+                             "-" if cmp["expected"] is None else f"N^{cmp['expected']:g}",
+                             f"{cmp['verdict']} ({cmp['note']})" if cmp["note"] else cmp["verdict"],
+                             f"{worst[0]:.2f}" if np.isfinite(worst[0]) else "-", float(res.mean[-1]),
+                             float(res.max[-1]), float(np.sum(res.seconds))))
                 data[f"{name} / {family}"] = {"comparison": cmp, **res.to_dict()}
             except Exception as error:
                 rows.append((name, family, f"failed: {error}", "-", "-", "-", "-", "-", "-"))
@@ -354,7 +367,7 @@ def _family_sweeps(report, quick):
     body += table(("sampler", "family", "mean MSE slope [95 % CI]", "theory", "verdict",
                    "worst member's slope", "mean MSE at largest N", "worst MSE", "seconds"), rows)
     if results:
-        path, picture = _picture(report, "families")
+        path, picture = report.picture("families")
         plots.family_convergence(results, path)
         body += img(picture, "MSE over integrand families", 1100)
     return body, data
@@ -427,7 +440,7 @@ def section_render(report, quick):
             "samplers reuse a pool of realizations with a per-pixel random toroidal shift.</p>")
     body += table(("sampler", "spp", "MSE", "MSE - floor", "PSNR dB", "SSIM", "seconds"), rows)
     if images:
-        path, side = _picture(report, "render_comparison")
+        path, side = report.picture("render_comparison")
         plots.render_comparison(path, ref, images, columns=len(images) + 1)
         body += img(side, "renders beside the reference", 1100)
     body += "<div class='grid'>" + "".join(
@@ -449,7 +462,7 @@ def _error_spectra(report, scene, ref, resolution, quick):
         error = rendering.mse(image, ref)
         rows.append((name, spp, error, low))
         data[name] = {"spp": spp, "mse": error, "low_frequency_share": low}
-    path, picture = _picture(report, "render_error_spectra")
+    path, picture = report.picture("render_error_spectra")
     plots.error_spectra(path, curves, title=f"error spectra, {scene.name}, {spp} spp")
     body = ("<h3>Error in screen space</h3><p>The power spectrum of each render's error image, "
             "radially averaged (<code>clsamp.render.error_spectrum</code>). Independent "
@@ -461,141 +474,6 @@ def _error_spectra(report, scene, ref, resolution, quick):
             "mean at all frequencies (1 for white error).</p>")
     body += table(("sampler", "spp", "MSE", "low-frequency share"), rows)
     body += img(picture, "error spectra", 700)
-    return body, data
-
-
-# -- 4. accuracy against time ------------------------------------------------------------------
-def _spectrum_cost(report, quick):
-    """Fast (NUFFT) against direct spectra: max error relative to N, and seconds."""
-    from . import spectrum
-    from .samplers import make_sampler
-    r, n, resolution = (8, 1024, 128) if quick else (64, 4096, 256)
-    points = make_sampler("random", seed=5).sample(n, realizations=r)
-    spectrum.power_spectrum(points[:1], resolution=resolution, method="direct", progress=False)
-    t0 = time.perf_counter()
-    exact = spectrum.power_spectrum(points, resolution=resolution, method="direct", progress=False)
-    direct_seconds = time.perf_counter() - t0
-    rows = [("direct", "-", direct_seconds, "exact (fp64)")]
-    curve = []
-    for tol in (1e-2, 1e-3, 1e-6, 1e-10, 1e-12):
-        spectrum.power_spectrum(points[:1], resolution=resolution, method="fast", tol=tol, progress=False)
-        t0 = time.perf_counter()
-        fast = spectrum.power_spectrum(points, resolution=resolution, method="fast", tol=tol,
-                                       progress=False)
-        seconds = time.perf_counter() - t0
-        error = float(np.max(np.abs(fast - exact)) / n)
-        rows.append(("fast", tol, seconds, error))
-        curve.append((tol, seconds, error))
-    return {"realizations": r, "n": n, "resolution": resolution, "direct_seconds": direct_seconds,
-            "fast": [{"tol": t, "seconds": s, "max_error_over_n": e} for t, s, e in curve]}, rows
-
-
-def section_cost(report, quick):
-    """Section 4, what accuracy costs in time: spectrum error against seconds (fast against
-    direct), sampler MSE against seconds including generation, render MSE against seconds.
-
-    Parameters
-    ----------
-    report, quick
-        As :func:`section_samplers`; ``quick`` measures smaller spectra and fewer spp.
-
-    Returns
-    -------
-    (str, dict)
-    """
-    data, body, failures = {}, "", []
-    panels = [None, None, None]   # spectra, samplers, renders: error against time
-    # spectra
-    try:
-        spec, rows = _spectrum_cost(report, quick)
-        data["spectrum"] = spec
-        body += (f"<h3>Spectra</h3><p>Expected spectrum of {spec['realizations']} &times; "
-                 f"{spec['n']} random points at {spec['resolution']}&sup2; frequencies: the NUFFT "
-                 "path at each tolerance against the exact sum (error = max |P<sub>fast</sub> &minus; "
-                 "P<sub>direct</sub>| / N).</p>")
-        body += table(("method", "tol", "seconds", "max error / N"), rows)
-        fast = ([c["seconds"] for c in spec["fast"]], [max(c["max_error_over_n"], 1e-17)
-                                                         for c in spec["fast"]])
-        panels[0] = {"curves": {"fast (NUFFT)": fast}, "exact": ("direct (exact)", spec["direct_seconds"]),
-                     "ylabel": "max error / N", "title": "spectrum: error against time",
-                     "markersize": None, "fontsize": None}
-    except Exception:
-        failures.append(("spectra", traceback.format_exc()))
-    # samplers
-    try:
-        from .results import pareto_front, time_to_mse
-        results = report.results.get("convergence")
-        if not results:
-            raise RuntimeError("section 2 produced no convergence results")
-        target_rows, sampler_data, curves = [], {}, {}
-        for integrand in sorted({r.integrand for r in results}):
-            group = [r for r in results if r.integrand == integrand]
-            target = float(np.median([r.mse[len(r.mse) // 2] for r in group]))
-            for r in group:
-                reach = time_to_mse(r, target)
-                target_rows.append((r.sampler, integrand, target,
-                                    "not reached" if reach is None else reach["n"],
-                                    "not reached" if reach is None else reach["seconds"]))
-                if integrand == "disk":
-                    curves[r.sampler] = (r.seconds_per_estimate, r.mse)
-            sampler_data[integrand] = {"target_mse": target, "pareto_front": pareto_front(group)}
-        panels[1] = {"curves": curves, "xlabel": "seconds per estimate (generation included)",
-                     "title": "samplers (disk integrand): MSE against time"}
-        data["samplers"] = sampler_data
-        body += ("<h3>Samplers</h3><p>From section 2: the seconds one estimate takes, point "
-                 "generation included, to reach a target MSE (the median MSE at the middle of the "
-                 "sweep), and the N that reaches it. A sampler that converges faster per point can "
-                 "still lose on time when its points are expensive.</p>")
-        body += table(("sampler", "integrand", "target MSE", "N needed", "seconds per estimate"),
-                       target_rows)
-        front = sampler_data.get("disk", {}).get("pareto_front", [])
-        front_text = ", ".join(f"{p['sampler']} N={p['n']} ({fmt(p['seconds'])} s, MSE {fmt(p['mse'])})"
-                               for p in front)
-        body += f"<p>Pareto front (disk): {front_text}</p>"
-    except Exception:
-        failures.append(("samplers", traceback.format_exc()))
-    # renders
-    try:
-        from . import render as rendering
-        state = report.results.get("render")
-        if not state:
-            raise RuntimeError("section 3 produced no renders")
-        scene, resolution, ref = state["scene"], state["resolution"], state["reference"]
-        spps = (4, 16, 64) if quick else (4, 16, 64, 256)
-        render_rows, render_data, curves = [], {}, {}
-        for name, params in (("random", {}), ("jittered", None), ("sobol:owen", {})):
-            seconds, errors = [], []
-            for spp in spps:
-                extra = params
-                if params is None:
-                    k = int(round(np.sqrt(spp)))
-                    extra = {"strata": (k, k)}
-                rendering.render(scene, name, spp=spp, resolution=8, seed=6, sampler_params=extra or None,
-                                 progress=False)  # builds the kernels before timing
-                t0 = time.perf_counter()
-                image = rendering.render(scene, name, spp=spp, resolution=resolution, seed=6,
-                                         sampler_params=extra or None, progress=False)
-                seconds.append(time.perf_counter() - t0)
-                errors.append(rendering.mse(image, ref))
-                render_rows.append((name, spp, seconds[-1], errors[-1]))
-            curves[name] = (seconds, errors)
-            render_data[name] = {"spp": list(spps), "seconds": seconds, "mse": errors}
-        panels[2] = {"curves": curves, "xlabel": "seconds per image", "ylabel": "MSE against reference",
-                     "title": f"AO renders {resolution}² : MSE against time"}
-        data["render"] = render_data
-        body += ("<h3>Rendered images</h3><p>The AO scene rendered at increasing samples per pixel: "
-                 "MSE against seconds, sampling and rendering included.</p>")
-        body += table(("sampler", "spp", "seconds", "MSE"), render_rows)
-    except Exception:
-        failures.append(("renders", traceback.format_exc()))
-    path, src = _picture(report, "accuracy_time")
-    plots.error_time_figure(path, panels)
-    body = img(src, "accuracy against time", 1100) + body
-    for part, trace in failures:
-        body += f"<div class='error'>The {part} part failed:\n{html.escape(trace)}</div>"
-        data[f"{part}_error"] = trace
-    if failures and len(failures) == 3:
-        raise RuntimeError("every part of the accuracy-against-time section failed")
     return body, data
 
 
@@ -720,7 +598,7 @@ def section_device(report, quick, timings):
     (str, dict)
     """
     device = runtime.current_device()
-    rows = [(k, v) for k, v in dataclasses.asdict(device).items()]
+    rows = device_rows(dataclasses.asdict(device))
     rows += [(f"version: {k}", v) for k, v in versions().items()]
     rows.append(("platform", platform.platform()))
     timing_rows = [(k, f"{v:.2f}") for k, v in timings.items()]
@@ -775,24 +653,28 @@ def run_tour(out, quick=False, progress=True, client=None):
     meta = {"device": str(runtime.current_device()), "quick": bool(quick),
             "date": time.strftime("%Y-%m-%d %H:%M:%S %Z")}
     results = {}
-    bar = tqdm(SECTIONS, desc="clsamp tour", disable=not progress, unit="section")
-    for key, title, fn in bar:
-        bar.set_postfix_str(key)
-        section = Section(key, title)
-        t0 = time.perf_counter()
-        try:
-            if key == "device":
-                section.body, section.data = fn(report, quick, timings)
-            else:
-                section.body, section.data = fn(report, quick)
-        except Exception:  # a failed section is reported in the page; the rest go on
-            section.error = traceback.format_exc()
-        section.seconds = time.perf_counter() - t0
-        timings[key] = section.seconds
-        report.sections.append(section)
-        results[key] = {"title": title, "seconds": section.seconds, "error": section.error,
-                        "data": section.data}
-        files.write_text(report.out / "tour.json",
-                      json.dumps(json_safe({"meta": meta, "sections": results}), indent=1))
-        write_html(report, meta)
+    with one_line_warnings():
+        for key, title, fn in tqdm(SECTIONS, desc="clsamp tour", disable=not progress, unit="section"):
+            _run_section(report, quick, key, title, fn, timings, results, meta)
     return report.out / "index.html"
+
+
+def _run_section(report, quick, key, title, fn, timings, results, meta):
+    """Run one section into the report, its failure reported in its place; rewrite the page."""
+    section = Section(key, title)
+    t0 = time.perf_counter()
+    try:
+        if key == "device":
+            section.body, section.data = fn(report, quick, timings)
+        else:
+            section.body, section.data = fn(report, quick)
+    except Exception:  # a failed section is reported in the page; the rest go on
+        section.error = traceback.format_exc()
+    section.seconds = time.perf_counter() - t0
+    timings[key] = section.seconds
+    report.sections.append(section)
+    results[key] = {"title": title, "seconds": section.seconds, "error": section.error,
+                    "data": section.data}
+    document = {"meta": meta, "sections": results}
+    files.write_text(report.out / "tour.json", json.dumps(json_safe(document), indent=1))
+    write_html(report, meta)

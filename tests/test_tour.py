@@ -18,6 +18,7 @@ def tour(tmp_path_factory):
     done = subprocess.run([sys.executable, "-m", "clsamp", "tour", "--quick", "--no-progress",
                            "--out", str(out)], capture_output=True, text=True, env=env, timeout=600)
     assert done.returncode == 0, done.stderr
+    (out.parent / "stderr.txt").write_text(done.stderr)
     return out
 
 
@@ -66,3 +67,49 @@ def test_every_stability_case_holds_and_every_sampler_is_shown(tour):
     assert set(families) == {f"{s} / {f}" for f in TOUR_FAMILIES for s in TOUR_FAMILY_SAMPLERS}
     assert all(c["comparison"]["verdict"] in ("matches", "pre-asymptotic", "differs", "unknown")
                for c in families.values())
+
+
+# -- issue 40: a page without glitches ------------------------------------------------------
+def test_the_page_has_no_nan(tour):
+    page = (tour / "index.html").read_text()
+    found = [m.start() for m in re.finditer(r"\bnan\b", page, re.IGNORECASE)]
+    assert not found, [page[i - 200:i + 20] for i in found[:3]]
+    assert "too few N" in page      # the quick sweeps' slopes over two N say so in words
+
+
+def test_section_timings_are_labelled(tour):
+    page = (tour / "index.html").read_text()
+    assert not re.search(r"<p class='note'>[0-9.]+ s</p>", page)
+    from clsamp.tour import SECTIONS
+    assert len(re.findall(r"Section computed in [0-9.]+ s\.", page)) == len(SECTIONS)
+
+
+def test_the_device_table_is_in_human_units(tour):
+    device = (tour / "index.html").read_text().split("id='device'")[1]
+    assert not re.search(r"<td>[0-9]{7,}</td>", device), "raw bytes"
+    assert "('cl_" not in device and "GiB" in device
+
+
+def test_one_name_per_sampler(tour):
+    page = (tour / "index.html").read_text()
+    samplers = page.split("id='samplers'")[1].split("id='convergence'")[0]
+    assert "<td>sobol:owen</td>" in samplers and "<td>sobol</td>" not in samplers
+    data = json.loads((tour / "tour.json").read_text())["sections"]["samplers"]["data"]
+    assert data["sobol"]["label"] == "sobol:owen"
+
+
+def test_warnings_print_as_one_line(tour):
+    err = (tour.parent / "stderr.txt").read_text()
+    assert "UserWarning" not in err and "warnings.warn" not in err, err
+    assert all(line.startswith("clsamp: warning: ") for line in err.splitlines()
+               if "warning" in line.lower()), err
+
+
+def test_accuracy_against_time_is_timed_as_medians(tour):
+    cost = json.loads((tour / "tour.json").read_text())["sections"]["cost"]["data"]
+    from clsamp.tour_cost import REPEATS
+    assert REPEATS >= 3
+    per_estimate = cost["samplers"]["disk"]["seconds_per_estimate"]
+    assert set(per_estimate) >= {"random", "sobol:owen"}
+    assert all(len(v) == 4 and min(v) > 0 for v in per_estimate.values())
+    assert f"median of {REPEATS}" in (tour / "index.html").read_text()
