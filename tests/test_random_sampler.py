@@ -97,7 +97,7 @@ def test_unknown_sampler_lists_known_names():
     with pytest.raises(InvalidArgumentError) as info:
         clsamp.make_sampler("randon")
     message = str(info.value)
-    assert "'randon'" in message and "Did you mean 'random'" in message
+    assert "'randon'" in message and "did you mean 'random'?" in message
     for name in clsamp.sampler_names():
         assert name in message
 

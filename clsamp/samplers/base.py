@@ -118,8 +118,8 @@ def sampler_class(name):
     Parameters
     ----------
     name : str
-        A name or an alias; a randomization after a colon is ignored (``"sobol:owen"``
-        names ``sobol``).
+        A name or an alias, with a randomization after a colon if the sampler takes one
+        (``"sobol:owen"`` names ``sobol``; the randomization is checked, not applied).
 
     Returns
     -------
@@ -129,19 +129,47 @@ def sampler_class(name):
     Raises
     ------
     InvalidArgumentError
-        For an unknown name, with the nearest known one and the list of all.
+        For an unknown name or randomization, with the nearest known one and the list of
+        all.
+
+    Examples
+    --------
+    >>> from clsamp.samplers import sampler_class
+    >>> sampler_class("sobol:owen").name
+    'sobol'
+    >>> sampler_class("sobol:owne")     # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    clsamp.errors.InvalidArgumentError: unknown randomization 'owne' of sampler 'sobol'; did you mean ...
     """
     if not isinstance(name, str):
         raise InvalidArgumentError(f"'name' must be a sampler name (str), got {name!r}")
-    base = name.partition(":")[0]
+    base, colon, variant = name.partition(":")
     cls = _REGISTRY.get(_ALIASES.get(base, base))
     if cls is None:
         close = difflib.get_close_matches(base, sampler_names(aliases=True), n=1)
-        hint = f" Did you mean {close[0]!r}?" if close else ""
+        hint = f"; did you mean {close[0] + colon + variant!r}?" if close else "."
         raise InvalidArgumentError(
-            f"unknown sampler 'name'={base!r}.{hint} Known samplers: "
-            + ", ".join(sampler_names(aliases=True)))
+            f"unknown sampler {base!r}{hint} Known samplers: " + ", ".join(sampler_names(aliases=True)))
+    if colon:
+        _check_randomization(cls, base, variant)
     return cls
+
+
+def _check_randomization(cls, base, variant):
+    """``variant`` (after the colon of ``base:variant``) must be one of ``cls``'s
+    randomizations; the message suggests the nearest full name."""
+    known = [r for r in cls.randomizations if r is not None]
+    if variant in known:
+        return
+    if not known:
+        raise InvalidArgumentError(
+            f"sampler {base!r} takes no randomization, so {base + ':' + variant!r} names none")
+    close = difflib.get_close_matches(variant, known, n=1)
+    hint = f"; did you mean {base + ':' + close[0]!r}?" if close else "."
+    raise InvalidArgumentError(
+        f"unknown randomization {variant!r} of sampler {base!r}{hint} Its randomizations: "
+        + ", ".join(f"{base}:{r}" for r in known))
 
 
 def make_sampler(name, d=2, seed=0, **params):
@@ -178,7 +206,7 @@ def make_sampler(name, d=2, seed=0, **params):
     ((1000, 3), dtype('float64'))
     """
     cls = sampler_class(name)
-    variant = name.partition(":")[2]
+    base, _, variant = name.partition(":")
     if variant:
         if "randomize" in params:
             raise InvalidArgumentError(
