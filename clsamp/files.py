@@ -8,7 +8,9 @@ for looking at).
 Every writer writes to a temporary file in the target's folder and renames it into
 place (``os.replace``), so a crash leaves either the old file or the whole new one,
 never half a file. The file gets the mode ``open`` would give it: the existing file's,
-or 0666 less the umask.
+or 0666 less the umask. Missing folders on the way are created. A write that fails
+raises :class:`WriteError` naming the file and the reason; :func:`check_output` asks
+before any work whether a path can be written at all.
 """
 
 import contextlib
@@ -21,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InvalidArgumentError
+from .errors import ClsampError, InvalidArgumentError
 from .validation import check_points
 
 _UMASK_LOCK = threading.Lock()
@@ -48,6 +50,73 @@ def _mode_for(path):
         return 0o666 & ~umask()
 
 
+class WriteError(ClsampError, OSError):
+    """A file could not be written (no space left, no permission, a file where a folder
+    should be); the message names the file and the reason, and nothing is left behind."""
+
+
+def _reason(error):
+    return error.strerror or str(error) if isinstance(error, OSError) else str(error)
+
+
+def check_output(path, name="'path'"):
+    """Refuse, before any work, a path that cannot be written: a folder already there, a
+    file where one of its folders should be, or a folder (or the nearest existing one
+    above a missing folder) in which no file can be made.
+
+    Missing folders are not an error: the writers create them. Whether a file can be made
+    is asked by making (and removing) an empty temporary file there, which also answers
+    for read-only file systems, ``/proc`` and the superuser.
+
+    Parameters
+    ----------
+    path : str or Path
+    name : str, optional
+        The argument that named it, for the message (``'-o'``).
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    InvalidArgumentError
+        The path cannot be written, with the reason.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from clsamp.files import check_output
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> check_output(folder / "new" / "p.npy").name
+    'p.npy'
+    >>> (folder / "afile").write_text("")
+    0
+    >>> check_output(folder / "afile" / "p.npy")     # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    clsamp.errors.InvalidArgumentError: 'path' '.../afile/p.npy': '.../afile' is a file, not a folder
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise InvalidArgumentError(f"{name} {str(path)!r} is a folder, not a file")
+    folder = path.parent
+    while not folder.exists():
+        if folder.is_symlink():
+            raise InvalidArgumentError(f"{name} {str(path)!r}: {str(folder)!r} is a broken link")
+        folder = folder.parent
+    if not folder.is_dir():
+        raise InvalidArgumentError(f"{name} {str(path)!r}: {str(folder)!r} is a file, not a folder")
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".clsamp-probe.", suffix=".tmp", dir=folder)
+    except OSError as error:
+        raise InvalidArgumentError(
+            f"{name} {str(path)!r}: no file can be written in {str(folder)!r}: {_reason(error)}") from None
+    os.close(fd)
+    os.unlink(probe)
+    return path
+
+
 @contextlib.contextmanager
 def atomic_path(path):
     """A temporary path beside ``path``, renamed to ``path`` when the block succeeds.
@@ -64,20 +133,58 @@ def atomic_path(path):
     ------
     Path
         Where to write.
+
+    Raises
+    ------
+    WriteError
+        The folder cannot be made, or the file cannot be written or renamed (an
+        ``OSError`` in the block), naming ``path`` and the reason.
     """
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
-    folder.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp" + path.suffix, dir=folder)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp" + path.suffix, dir=folder)
+    except OSError as error:
+        raise WriteError(f"cannot write {str(path)!r}: {_reason(error)}") from error
     os.close(fd)
     try:
         yield Path(tmp)
         os.chmod(tmp, _mode_for(path))
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as error:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
+        if isinstance(error, OSError) and not isinstance(error, ClsampError):
+            raise WriteError(f"cannot write {str(path)!r}: {_reason(error)}") from error
         raise
+
+
+@contextlib.contextmanager
+def atomic_paths(*paths):
+    """Temporary paths beside each of ``paths``, all renamed into place when the block
+    succeeds, none when it fails: outputs that belong together (an image and its
+    preview) land as a pair or not at all.
+
+    The renames run one after the other, so only a failure between two of them (a
+    signal, a full folder table) could leave the first without the second.
+
+    Parameters
+    ----------
+    *paths : str or Path
+
+    Yields
+    ------
+    list of Path
+        Where to write each, in order.
+
+    Raises
+    ------
+    WriteError
+        As :func:`atomic_path`.
+    """
+    with contextlib.ExitStack() as stack:
+        yield [stack.enter_context(atomic_path(p)) for p in paths]
 
 
 def write_bytes(path, data):
