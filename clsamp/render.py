@@ -18,6 +18,7 @@ stay below 1); the pixel mean is accumulated in double.
 import hashlib
 import math
 import os
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -421,6 +422,11 @@ def reference(scene, resolution, spp=None, progress=True, seed=REFERENCE_SEED, c
     stderr : ndarray of float32, shape (height, width)
         Only with ``return_noise``.
 
+    Warns
+    -----
+    UserWarning
+        The cache cannot be written (the result is returned all the same).
+
     Examples
     --------
     >>> from clsamp import render as rendering
@@ -447,11 +453,15 @@ def reference(scene, resolution, spp=None, progress=True, seed=REFERENCE_SEED, c
             pass
     if result is None:
         result = _render_reference(scene, (width, height), spp, seed, progress)
-        if cache:
-            files.write_exr(path, result.transpose(1, 2, 0), channel_names=("Y", "stderr"),
-                         header={"key": key, "scene": scene.name, "spp": spp, "seed": seed,
-                                 "sampler": f"{REFERENCE_SAMPLER} (reference, {REFERENCE_PASSES} passes)",
-                                 "resolution": f"{width}x{height}"})
+        try:        # a cache that cannot be written costs the next run time, not this result
+            if cache:
+                files.write_exr(path, result.transpose(1, 2, 0), channel_names=("Y", "stderr"),
+                                header={"key": key, "scene": scene.name, "spp": spp, "seed": seed,
+                                        "sampler": f"{REFERENCE_SAMPLER} (reference, "
+                                                   f"{REFERENCE_PASSES} passes)",
+                                        "resolution": f"{width}x{height}"})
+        except files.WriteError as error:
+            warnings.warn(f"the reference render is not cached: {error}", UserWarning, stacklevel=2)
     return (result[0], result[1]) if return_noise else result[0]
 
 
@@ -698,7 +708,8 @@ def save(path, image, sampler, spp, seed, scene=None, preview=True):
     Returns
     -------
     list of Path
-        The files written, the EXR first.
+        The files written, the EXR first; both are renamed into place only once both are
+        whole (:func:`clsamp.files.atomic_paths`).
 
     Raises
     ------
@@ -714,7 +725,10 @@ def save(path, image, sampler, spp, seed, scene=None, preview=True):
               "seed": seed}
     if scene is not None:
         header["scene"] = scene.name
-    written = [files.write_exr(path.with_suffix(".exr"), image, header)]
-    if preview:
-        written.append(files.write_png(path.with_suffix(".png"), image))
-    return [Path(p) for p in written]
+    written = [path.with_suffix(".exr")] + ([path.with_suffix(".png")] if preview else [])
+    # the pair lands together: an interruption while the preview is drawn leaves neither
+    with files.atomic_paths(*written) as temporary:
+        files.write_exr(temporary[0], image, header)
+        if preview:
+            files.write_png(temporary[1], image)
+    return written
