@@ -2,7 +2,8 @@
 
 Each subcommand is a pair of functions, ``_add_<name>(subparsers)`` that declares
 its arguments and ``_run_<name>(args)`` that does the work; ``_COMMANDS`` lists them
-in the order ``clsamp --help`` shows them.
+in the order ``clsamp --help`` shows them. A ``_run_`` checks every name and output path
+it was given before any work, so that a typo costs a line, not a finished sweep.
 """
 
 import argparse
@@ -13,28 +14,67 @@ from .errors import ClsampError, InvalidArgumentError
 
 TEXT_POINTS = (".txt", ".dat", ".pts")      # one point a line, as UTK and PSA read them
 FIGURES = (".png", ".pdf", ".svg")
+PLOTTED_SETS = 8                            # sample --plot draws the first realizations
+FOLDERS = "missing folders are created"    # the outputs' rule, said in --help and the README
 
 
 def _output(value, accepted, command, option="-o"):
-    """The output path ``value`` if its suffix is one ``command`` writes; refused (before
-    any work) otherwise, naming the accepted ones."""
+    """The output path ``value`` if its suffix is one ``command`` writes and it can be
+    written (:func:`clsamp.files.check_output`); refused, before any work, otherwise."""
+    from .files import check_output
     path = Path(value)
     if path.suffix.lower() not in accepted:
         got = repr(path.suffix) if path.suffix else "no suffix"
         raise InvalidArgumentError(
             f"'{option}' {value!r}: clsamp {command} writes {', '.join(accepted)}; got {got}")
-    return path
+    return check_output(path, f"'{option}'")
 
 
 def _distinct(paths):
-    """Refuse outputs that would overwrite each other."""
+    """Refuse outputs that would overwrite each other, or that cannot be written."""
+    from .files import check_output
     seen = {}
     for option, path in paths:
+        check_output(path, f"'{option}'")
         key = Path(path).resolve()
         if key in seen:
             raise InvalidArgumentError(
                 f"'{option}' {str(path)!r} would overwrite the output of '{seen[key]}'")
         seen[key] = option
+
+
+def _nearest(names, known):
+    """"; did you mean 'x'?" for the first of ``names`` close to one of ``known``, or ""."""
+    import difflib
+    close = [c for name in names for c in difflib.get_close_matches(name, list(known), n=1)]
+    return f"; did you mean {close[0]!r}?" if close else ""
+
+
+def _integrands(names, option):
+    """'family' or 'integrand': what every name of ``--integrand`` or ``--family`` (``option``)
+    is, resolved before any work; an unknown name is refused with the nearest known one."""
+    from .families import family_names, is_family, make_family
+    from .integrands import integrand_names
+    for name in names:
+        if option == "--family" and name.strip().lower() in integrand_names():
+            raise InvalidArgumentError(f"'--family' {name!r} is an integrand; give it to '--integrand'")
+        if option == "--family" or is_family(name):
+            make_family(name, members=1)                # refused with the nearest family
+        elif name.strip().lower() not in integrand_names():
+            hint = _nearest([name.strip().lower()], integrand_names() + family_names()) or "."
+            raise InvalidArgumentError(
+                f"unknown integrand or family {name!r}{hint} Integrands: "
+                f"{', '.join(integrand_names())}; families: {', '.join(family_names())}")
+    if len({is_family(name) for name in names}) > 1:
+        raise InvalidArgumentError(
+            "'--integrand' mixes integrand families and single integrands; run them apart")
+    return "family" if names and is_family(names[0]) else "integrand"
+
+
+def _samplers(names):
+    """The sampler names, each resolved (:func:`clsamp.samplers.sampler_class`) before any work."""
+    from .samplers import sampler_class
+    return [name for name in names if sampler_class(name)]
 
 
 def _wrote(paths, what=""):
@@ -96,7 +136,9 @@ def _add_sample(sub):
     p.add_argument("--backend", default="opencl", choices=("opencl", "numpy"))
     p.add_argument("--list", action="store_true", help="list the sampler names and exit")
     p.add_argument("-o", "--output", help="output file: .npy, or text (one point a line) as "
-                   f"{', '.join(TEXT_POINTS)}; default: text to standard output")
+                   f"{', '.join(TEXT_POINTS)}; default: text to standard output ({FOLDERS})")
+    p.add_argument("--plot", metavar="FIGURE", help=f"also draw the set (the first {PLOTTED_SETS} "
+                   f"realizations; for d > 2 x1 and x2) as a figure: {', '.join(FIGURES)}")
     p.set_defaults(run=_run_sample)
 
 
@@ -106,22 +148,32 @@ def _run_sample(args):
     if args.list or not args.name:
         print("\n".join(sampler_names(aliases=True)))
         return 0
-    output = _output(args.output, (".npy",) + TEXT_POINTS, "sample") if args.output else None
+    outputs = [("-o", _output(args.output, (".npy",) + TEXT_POINTS, "sample"))] if args.output else []
+    if args.plot:
+        outputs.append(("--plot", _output(args.plot, FIGURES, "sample", "--plot")))
+    if args.plot and args.d < 2:
+        raise InvalidArgumentError(f"'--plot' draws points in 2-D; got '-d' {args.d}")
     sampler = make_sampler(args.name, d=args.d, seed=args.seed, backend=args.backend,
                            **_parse_params(args.param))
     points = sampler.sample(args.n, realizations=args.realizations, start=args.start)
-    if output:
-        files.save_points(output, points)
-        _wrote([output], f"{'x'.join(str(s) for s in points.shape)} points of {args.name}")
+    shape = "x".join(str(s) for s in points.shape)
+    if args.output:
+        files.save_points(outputs[0][1], points)
     else:
         sys.stdout.write(files.format_points(points))
+    if args.plot:
+        from . import plots
+        plots.points_figure(outputs[-1][1], (points[:PLOTTED_SETS] if points.ndim == 3 else points)[..., :2],
+                            title=f"{sampler.label}, {shape} points" + (", x1 and x2" if args.d > 2 else ""))
+    if outputs:
+        _wrote([path for _, path in outputs], f"{shape} points of {args.name}")
     return 0
 
 
 # -- tour ----------------------------------------------------------------------
 def _add_tour(sub):
     p = sub.add_parser("tour", help="the whole story in one report: DIR/index.html")
-    p.add_argument("--out", default="tour", help="output folder (default: tour)")
+    p.add_argument("--out", default="tour", help=f"output folder (default: tour; {FOLDERS})")
     p.add_argument("--quick", action="store_true", help="smaller sizes (CI; under two minutes)")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     _add_scheduler(p)
@@ -142,16 +194,24 @@ def _client(args):
     return connect(args.scheduler)
 
 
+def _close(client):
+    """Close ``client`` and its local cluster now, not at exit: Ctrl-C then stops at once."""
+    if client is not None:
+        cluster = client.cluster              # the LocalCluster of local:N; None for a remote one
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
 def _run_tour(args):
+    from .files import check_output
     from .tour import run_tour
-    if Path(args.out).exists() and not Path(args.out).is_dir():
-        raise InvalidArgumentError(f"'--out' {args.out!r} is a file, not a folder")
+    check_output(Path(args.out) / "index.html", "'--out'")
     client = _client(args)
     try:
         index = run_tour(args.out, quick=args.quick, progress=not args.no_progress, client=client)
     finally:
-        if client is not None:
-            client.close()
+        _close(client)
     print(f"wrote {index}")
     return 0
 
@@ -283,7 +343,8 @@ def _run_metrics(args):
     unknown = [m for m in wanted if m not in METRICS]
     if unknown or not wanted:
         raise InvalidArgumentError(f"'--metric' must name some of {', '.join(METRICS)}; got "
-                                   f"{', '.join(map(repr, unknown)) or 'none'}")
+                                   f"{', '.join(map(repr, unknown)) or 'none'}"
+                                   + _nearest(unknown[:1], METRICS))
     outputs = [("-o", output)]
     if "pcf" in wanted:
         outputs.append(("-o (pcf figure)", output.with_name(output.stem + "_pcf.png")))
@@ -376,12 +437,28 @@ def _add_convergence(sub):
 
 
 def _run_convergence(args):
+    from .files import check_output
+    from .sweep import parse_ns
+    output = _output(args.output, FIGURES, "convergence")
+    samplers = _samplers([s.strip() for s in args.samplers.split(",") if s.strip()])
+    option = "--integrand" if args.family is None else "--family"
+    names = [s.strip() for s in (args.family or args.integrand).split(",") if s.strip()]
+    if not samplers or not names:
+        raise InvalidArgumentError(f"'--samplers' and '{option}' must each name at least one")
+    family = _integrands(names, option) == "family"          # families work in --integrand too
+    paths = [("-o", output), ("-o (JSON)", output.with_suffix(".json"))]
+    paths += [] if family else [("-o (time plot)", output.with_name(f"{output.stem}_time{output.suffix}"))]
+    _distinct(paths)
+    if args.checkpoint is not None:
+        check_output(Path(args.checkpoint) / "checkpoint", "'--checkpoint'")
+    parse_ns(args.ns)
     client = _client(args)
     try:
-        return _convergence_runs(args, client)
+        if family:
+            return _run_family_convergence(args, samplers, names, paths, client)
+        return _convergence_runs(args, samplers, names, paths, client)
     finally:
-        if client is not None:
-            client.close()
+        _close(client)
 
 
 def _checkpoint(args, *labels):
@@ -391,28 +468,13 @@ def _checkpoint(args, *labels):
     return Path(args.checkpoint) / "-".join(label.replace(":", "_").replace("/", "_") for label in labels)
 
 
-def _convergence_runs(args, client):
+def _convergence_runs(args, samplers, integrands, paths, client):
     import json
 
     from . import files, plots, theory
     from .results import pareto_front
     from .sweep import convergence, parse_ns
-    output = _output(args.output, FIGURES, "convergence")
-    time_path = output.with_name(output.stem + "_time" + output.suffix)
-    json_path = output.with_suffix(".json")
-    samplers = [s.strip() for s in args.samplers.split(",") if s.strip()]
-    if args.family is not None:
-        return _run_family_convergence(args, samplers, output, json_path, client)
-    integrands = [s.strip() for s in args.integrand.split(",") if s.strip()]
-    from .families import is_family
-    if integrands and all(is_family(name) for name in integrands):
-        args.family = ",".join(integrands)            # family names work in --integrand too
-        return _run_family_convergence(args, samplers, output, json_path, client)
-    if any(is_family(name) for name in integrands):
-        raise InvalidArgumentError(
-            "'--integrand' mixes integrand families and single integrands; run them apart")
-    if not samplers or not integrands:
-        raise InvalidArgumentError("'--samplers' and '--integrand' must each name at least one")
+    (_, output), (_, json_path), (_, time_path) = paths
     ns = parse_ns(args.ns)
     realizations = 1000 if args.realizations is None else args.realizations
     results, records = [], []
@@ -438,15 +500,13 @@ def _convergence_runs(args, client):
     _wrote([output, time_path, json_path])
 
 
-def _run_family_convergence(args, samplers, output, json_path, client):
+def _run_family_convergence(args, samplers, names, paths, client):
     import json
 
     from . import families, files, plots, theory
     from .sweep import convergence, parse_ns
-    names = [f.strip() for f in args.family.split(",") if f.strip()]
-    if not samplers or not names:
-        raise InvalidArgumentError("'--samplers' and '--family' must each name at least one")
-    names = [families.make_family(name, members=1).name for name in names]   # unknown: fails now
+    (_, output), (_, json_path) = paths
+    names = [families.make_family(name, members=1).name for name in names]
     ns = parse_ns(args.ns)
     realizations = 64 if args.realizations is None else args.realizations
     results, records = [], []
@@ -517,6 +577,7 @@ def _run_integrate(args):
     from . import files
     from .integration import integrate
     output = _output(args.output, (".json",), "integrate") if args.output else None
+    _samplers([args.sampler])
     f = _load_function(args.function)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -577,7 +638,9 @@ def _run_render(args):
 
     from . import render as rendering
     from .scene import Scene
-    _output(args.output, (".exr", ".png"), "render")
+    output = _output(args.output, (".exr", ".png"), "render")
+    _distinct([("-o", output.with_suffix(".exr")), ("-o (preview)", output.with_suffix(".png"))])
+    _samplers([args.sampler])
     scene = Scene.from_file(args.scene)
     spp = scene.default_spp if args.spp is None else args.spp
     params = _parse_params(args.param)
@@ -672,7 +735,10 @@ def main(argv=None):
         return 2
     import signal
     import threading
+    import warnings
     main_thread = threading.current_thread() is threading.main_thread()
+    shown = warnings.showwarning
+    warnings.showwarning = _one_line_warning(shown)
     before = signal.getsignal(signal.SIGINT)
     _signalled.clear()
     if main_thread:
@@ -700,9 +766,23 @@ def main(argv=None):
             return _stopped(args.command, _signalled[0])
         raise
     finally:
+        warnings.showwarning = shown
         if main_thread:
             signal.signal(signal.SIGTERM, signal.SIG_DFL)   # after the work, SIGTERM just ends it
             signal.signal(signal.SIGINT, before)
+
+
+def _one_line_warning(shown):
+    """A ``warnings.showwarning`` that prints clsamp's own warnings as one line,
+    ``clsamp: warning: ...``, without the source line, and hands others to ``shown``."""
+    package = str(Path(__file__).resolve().parent)
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, UserWarning) and str(Path(filename).resolve()).startswith(package):
+            print("clsamp: warning: " + " ".join(str(message).split()), file=file or sys.stderr)
+        else:
+            shown(message, category, filename, lineno, file, line)
+    return show
 
 
 def _stopped(command, signum):

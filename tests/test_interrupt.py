@@ -139,3 +139,39 @@ def test_a_signal_whose_exception_an_extension_replaced_still_ends_as_stopped(mo
     finally:
         signal.signal(signal.SIGINT, previous)
     assert "every file written so far is whole" in capsys.readouterr().err
+
+
+def test_an_image_and_its_preview_land_together_or_not_at_all(tmp_path, monkeypatch, capsys):
+    # Ctrl-C while the PNG preview is drawn: before, the EXR stayed without its PNG
+    from clsamp import cli
+
+    def interrupted(path, image, **kwargs):
+        raise KeyboardInterrupt()
+    monkeypatch.setattr(files, "write_png", interrupted)
+    code = cli.main(["render", "ao", "--sampler", "jittered", "--spp", "4", "--resolution", "8",
+                     "--no-progress", "-o", str(tmp_path / "comb.exr")])
+    assert code == 130 and "every file written so far is whole" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+    monkeypatch.undo()
+    code = cli.main(["render", "ao", "--sampler", "jittered", "--spp", "4", "--resolution", "8",
+                     "--no-progress", "-o", str(tmp_path / "comb.exr")])
+    assert code == 0 and sorted(p.name for p in tmp_path.iterdir()) == ["comb.exr", "comb.png"]
+
+
+def test_a_sweep_on_a_local_cluster_stops_within_two_seconds_of_ctrl_c(tmp_path):
+    # the local cluster of --scheduler local:N is closed at once, not at the interpreter's exit
+    pytest.importorskip("distributed")
+    env = dict(os.environ, PYTHONPATH=ROOT + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    proc = subprocess.Popen([sys.executable, "-m", "clsamp", "convergence", "--samplers", "jittered",
+                             "--integrand", "disk", "--realizations", "100000", "--no-progress",
+                             "--scheduler", "local:2", "-o", "c.png"], cwd=tmp_path, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    time.sleep(4.0)
+    assert proc.poll() is None, "the sweep ended before the signal: the case needs more work"
+    sent = time.perf_counter()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    stopped = time.perf_counter() - sent
+    assert proc.returncode == 130, err[-2000:]
+    assert stopped < 2.0, stopped

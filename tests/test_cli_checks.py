@@ -1,0 +1,219 @@
+"""What the command line checks before it works: every output path (a writable folder, no
+file in the way, a suffix it writes) and every name (samplers, randomizations, integrands,
+families, metrics), each refused in one line with exit status 2; a write that still fails
+is one line and leaves nothing behind; clsamp's warnings are one line; `sample --plot`
+draws the points. In-process, through ``main``."""
+
+import errno
+import os
+import sys
+import warnings
+from pathlib import Path
+
+import pytest
+
+import clsamp
+from clsamp import files
+from clsamp.cli import FOLDERS, main
+
+
+def run(capsys, *argv):
+    code = main([str(a) for a in argv])
+    captured = capsys.readouterr()
+    return code, captured.out + captured.err
+
+
+def listing(folder):
+    return sorted(str(p.relative_to(folder)) for p in Path(folder).rglob("*"))
+
+
+@pytest.fixture
+def no_work(monkeypatch):
+    """Every entry to the work of a command fails the test: the checks must come first."""
+    def forbidden(*args, **kwargs):
+        raise AssertionError("the work started before the arguments were checked")
+    from clsamp import integration, render, spectrum, sweep, tour
+    from clsamp.samplers.base import Sampler
+    monkeypatch.setattr(Sampler, "sample", forbidden)
+    monkeypatch.setattr(spectrum, "power_spectrum", forbidden)
+    monkeypatch.setattr(sweep, "convergence", forbidden)
+    monkeypatch.setattr(integration, "integrate", forbidden)
+    monkeypatch.setattr(render, "render", forbidden)
+    monkeypatch.setattr(tour, "run_tour", forbidden)
+
+
+# -- sample --plot ------------------------------------------------------------------------
+def test_sample_plot_draws_the_points(tmp_path, capsys):
+    code, text = run(capsys, "sample", "jittered", "-n", "64", "--realizations", "12",
+                     "-o", tmp_path / "p.npy", "--plot", tmp_path / "p.png")
+    assert code == 0, text
+    assert listing(tmp_path) == ["p.npy", "p.png"]
+    assert "p.npy" in text and "p.png" in text
+    assert (tmp_path / "p.png").read_bytes()[:4] == b"\x89PNG"
+    code, text = run(capsys, "sample", "sobol:owen", "-n", "64", "-d", "3",
+                     "--plot", tmp_path / "q.pdf")             # d > 2: two coordinates; no -o
+    assert code == 0, text
+    assert (tmp_path / "q.pdf").read_bytes()[:4] == b"%PDF"
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    assert any(line.startswith("clsamp sample ") and " --plot " in line for line in readme.splitlines())
+
+
+@pytest.mark.parametrize("argv, expected", [
+    (("--plot", "{}/p.jpg"), "'--plot'"),
+    (("--plot", "{}/p.png", "-d", "1"), "'-d' 1"),
+    (("-o", "{}/p.npy", "--plot", "{}/p"), "no suffix"),
+])
+def test_sample_plot_is_checked_first(tmp_path, capsys, no_work, argv, expected):
+    code, text = run(capsys, "sample", "random", "-n", "8", *(a.format(tmp_path) for a in argv))
+    assert code == 2 and expected in text and "Traceback" not in text
+    assert listing(tmp_path) == []
+
+
+# -- output paths -------------------------------------------------------------------------
+COMMANDS = [
+    ("sample", "random", "-n", "8", "-o", "{}.npy"),
+    ("sample", "random", "-n", "8", "--plot", "{}.png"),
+    ("spectrum", "random", "-n", "64", "-o", "{}.png"),
+    ("spectrum", "random", "-n", "64", "-o", "{ok}/s.png", "--plots", "{}.pdf"),
+    ("metrics", "random", "-n", "64", "-o", "{}.json"),
+    ("convergence", "--samplers", "random", "--ns", "16,64", "--realizations", "4", "-o", "{}.png"),
+    ("integrate", "gaussian", "-o", "{}.json"),
+    ("render", "ao", "--spp", "4", "--resolution", "4", "-o", "{}.exr"),
+    ("tour", "--quick", "--out", "{}"),
+]
+
+
+@pytest.mark.parametrize("argv", COMMANDS, ids=lambda a: " ".join(a[:2]))
+def test_a_file_in_the_way_is_refused_before_any_work(tmp_path, capsys, no_work, argv):
+    (tmp_path / "afile").write_text("")
+    target = str(tmp_path / "afile" / "out")
+    code, text = run(capsys, *(a.format(target, ok=tmp_path) for a in argv))
+    assert code == 2, text
+    assert "is a file, not a folder" in text and "Traceback" not in text
+    assert len(text.strip().splitlines()) == 1
+    assert listing(tmp_path) == ["afile"]
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs Linux's /proc")
+@pytest.mark.parametrize("argv", COMMANDS[:1] + COMMANDS[2:3] + COMMANDS[7:8],
+                         ids=lambda a: a[0])
+def test_a_folder_that_takes_no_file_is_refused_before_any_work(capsys, no_work, argv):
+    code, text = run(capsys, *(a.format("/proc/clsamp-out") for a in argv))
+    assert code == 2 and "no file can be written in '/proc'" in text and "Traceback" not in text
+
+
+def test_a_folder_where_the_file_should_be_is_refused(tmp_path, capsys, no_work):
+    (tmp_path / "p.npy").mkdir()
+    code, text = run(capsys, "sample", "random", "-n", "8", "-o", tmp_path / "p.npy")
+    assert code == 2 and "is a folder, not a file" in text
+    (tmp_path / "c.json").mkdir()                             # a companion in the way
+    code, text = run(capsys, "convergence", "--samplers", "random", "--ns", "16,64",
+                     "-o", tmp_path / "c.png")
+    assert code == 2 and "c.json" in text and "is a folder, not a file" in text
+
+
+def test_missing_folders_are_created_as_help_and_readme_say(tmp_path, capsys):
+    code, text = run(capsys, "sample", "random", "-n", "8", "-o", tmp_path / "new" / "sub" / "p.txt")
+    assert code == 0 and (tmp_path / "new" / "sub" / "p.txt").is_file()
+    with pytest.raises(SystemExit):
+        main(["sample", "--help"])
+    assert FOLDERS in " ".join(capsys.readouterr().out.split())
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    assert FOLDERS in " ".join(readme.split())
+
+
+def test_a_write_that_fails_is_one_line_and_leaves_nothing(tmp_path, capsys, monkeypatch):
+    def full(fd):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+    monkeypatch.setattr(files.os, "fsync", full)
+    code, text = run(capsys, "sample", "random", "-n", "8", "-o", tmp_path / "p.npy")
+    assert code != 0 and "Traceback" not in text
+    assert f"clsamp sample: error: cannot write {str(tmp_path / 'p.npy')!r}: No space left on device" in text
+    assert listing(tmp_path) == []
+    with pytest.raises(files.WriteError, match="cannot write") as info:
+        files.write_text(tmp_path / "t.txt", "x")
+    assert isinstance(info.value, OSError) and listing(tmp_path) == []
+
+
+def test_a_file_where_a_folder_should_be_is_a_write_error(tmp_path):
+    (tmp_path / "afile").write_text("")
+    with pytest.raises(files.WriteError, match="cannot write"):
+        files.write_text(tmp_path / "afile" / "x.txt", "x")
+
+
+def test_a_reference_cache_that_cannot_be_written_warns_and_keeps_the_result(tmp_path, monkeypatch):
+    from clsamp import render
+    (tmp_path / "afile").write_text("")
+    monkeypatch.setenv("CLSAMP_CACHE", str(tmp_path / "afile" / "cache"))
+    with pytest.warns(UserWarning, match="the reference render is not cached: cannot write"):
+        ref = render.reference("ao", 4, spp=64, progress=False)
+    assert ref.shape == (4, 4) and listing(tmp_path) == ["afile"]
+
+
+# -- names ---------------------------------------------------------------------------------
+@pytest.mark.parametrize("argv, expected", [
+    (("convergence", "--samplers", "random,jitterd"),
+     "unknown sampler 'jitterd'; did you mean 'jittered'?"),
+    (("convergence", "--samplers", "random,sobol:owne"),
+     "unknown randomization 'owne' of sampler 'sobol'; did you mean 'sobol:owen'?"),
+    (("convergence", "--samplers", "random", "--integrand", "gaussian,gausian"),
+     "unknown integrand or family 'gausian'; did you mean 'gaussian'?"),
+    (("convergence", "--samplers", "random", "--family", "heavisdes"),
+     "Did you mean 'heavisides'?"),
+    (("convergence", "--samplers", "random", "--family", "disk"), "is an integrand; give it to '--integrand'"),
+    (("convergence", "--samplers", "random", "--integrand", "disk,heavisides"), "mixes"),
+    (("metrics", "random", "-n", "16", "--metric", "cd,l2star", "-o", "{}/m.json"),
+     "did you mean 'l2-star'?"),
+    (("render", "ao", "--sampler", "sobl:owen", "-o", "{}/r.exr"),
+     "unknown sampler 'sobl'; did you mean 'sobol:owen'?"),
+    (("integrate", "gaussian", "--sampler", "sobol:owne"), "did you mean 'sobol:owen'?"),
+    (("sample", "jitered", "-n", "4"), "unknown sampler 'jitered'; did you mean 'jittered'?"),
+    (("spectrum", "random:owen", "-n", "4", "-o", "{}/s.png"), "takes no randomization"),
+])
+def test_every_name_is_resolved_before_any_work(tmp_path, capsys, no_work, argv, expected):
+    argv = [a.format(tmp_path) for a in argv]
+    if argv[0] == "convergence":
+        argv += ["--ns", "16,64", "--realizations", "4", "-o", str(tmp_path / "c.png")]
+    code, text = run(capsys, *argv)
+    assert code == 2 and expected in text and "Traceback" not in text, text
+    assert listing(tmp_path) == []
+
+
+def test_unknown_sampler_message_reads_plainly():
+    with pytest.raises(clsamp.InvalidArgumentError) as info:
+        clsamp.make_sampler("jitered")
+    message = str(info.value)
+    assert message.startswith("unknown sampler 'jitered'; did you mean 'jittered'? Known samplers: ")
+    assert "'name'=" not in message
+    with pytest.raises(clsamp.InvalidArgumentError, match="'sobol:owen'") as info:
+        clsamp.make_sampler("sobol:owne")
+    assert "'randomize'" not in str(info.value)
+
+
+# -- warnings ------------------------------------------------------------------------------
+def test_clsamp_warnings_are_one_line_and_showwarning_is_restored(capsys):
+    before = warnings.showwarning
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        code, text = run(capsys, "sample", "sobol:owen", "-n", "5")
+    assert code == 0 and warnings.showwarning is before
+    lines = [line for line in text.splitlines() if "warning" in line.lower()]
+    assert lines and all(line.startswith("clsamp: warning: the balance properties") for line in lines)
+    assert "UserWarning" not in text and "warnings.warn" not in text
+
+
+def test_other_warnings_keep_their_usual_form(capsys, monkeypatch):
+    from clsamp import cli
+
+    def run_devices(args):
+        warnings.warn_explicit("not ours", UserWarning, "elsewhere.py", 3)
+        return 0
+    monkeypatch.setattr(cli, "_run_devices", run_devices)
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        shown = []
+        warnings.showwarning = lambda *a, **k: shown.append(a[0])
+        assert main(["devices"]) == 0
+    assert [str(m) for m in shown] == ["not ours"]
+    assert "clsamp: warning" not in capsys.readouterr().err
+    assert sys.modules["clsamp.cli"] is cli
