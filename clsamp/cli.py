@@ -142,11 +142,18 @@ def _add_sample(sub):
     p.set_defaults(run=_run_sample)
 
 
+def _listing(name):
+    """A line of ``sample --list``: the name and the names of its randomizations."""
+    from .samplers import sampler_class
+    variants = [f"{name}:{r}" for r in sampler_class(name).randomizations if r is not None]
+    return f"{name} ({', '.join(variants)})" if variants else name
+
+
 def _run_sample(args):
     from . import files
     from .samplers import make_sampler, sampler_names
     if args.list or not args.name:
-        print("\n".join(sampler_names(aliases=True)))
+        print("\n".join(_listing(name) for name in sampler_names(aliases=True)))
         return 0
     outputs = [("-o", _output(args.output, (".npy",) + TEXT_POINTS, "sample"))] if args.output else []
     if args.plot:
@@ -172,9 +179,13 @@ def _run_sample(args):
 
 # -- tour ----------------------------------------------------------------------
 def _add_tour(sub):
-    p = sub.add_parser("tour", help="the whole story in one report: DIR/index.html")
+    p = sub.add_parser("tour", help="the whole story in one report: DIR/index.html",
+                       description="Every sampler's points, spectra and pair correlation; "
+                       "discrepancy and MSE against N with the published rates; AO renders "
+                       "against a reference; what accuracy costs in time; the device. Writes "
+                       "DIR/index.html with its pictures and the raw numbers (tour.json).")
     p.add_argument("--out", default="tour", help=f"output folder (default: tour; {FOLDERS})")
-    p.add_argument("--quick", action="store_true", help="smaller sizes (CI; under two minutes)")
+    p.add_argument("--quick", action="store_true", help="smaller sizes (CI-sized)")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     _add_scheduler(p)
     p.set_defaults(run=_run_tour)

@@ -221,7 +221,8 @@ def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**2
         half = t_value * spread / math.sqrt(r)
         tolerance = max(abs_tol, rel_tol * abs(mean))
         history.append((n, mean, half))
-        bar.set_postfix_str(f"n={n}, {mean:.8g} +- {half:.2g} (target {tolerance:.2g})")
+        # refresh=False: the bar shows only after its delay, as every clsamp bar does
+        bar.set_postfix_str(f"n={n}, {mean:.8g} +- {half:.2g} (target {tolerance:.2g})", refresh=False)
         bar.update(1)
         if half <= tolerance:
             converged = True

@@ -21,8 +21,9 @@ the renderer simulates (docs/design.md, "Rendering")::
       "ambient": 1.0, "background": 1.0, "epsilon": 1e-4
     }
 
-Coordinates are right-handed with y up by default; ``fov`` is the full vertical (and,
-images being square, horizontal) field of view in degrees.
+Coordinates are right-handed with y up by default; ``fov`` is the full field of view in
+degrees across the image's shorter side (as pbrt's film): vertical for a wide image,
+horizontal for a tall one, both for a square one.
 
 Shading (one channel): a surface point seen by the camera has radiance
 ``albedo * (ambient * A + E / pi)``, where ``A`` is its ambient occlusion (the

@@ -160,7 +160,8 @@ def test_a_reference_cache_that_cannot_be_written_warns_and_keeps_the_result(tmp
      "unknown integrand or family 'gausian'; did you mean 'gaussian'?"),
     (("convergence", "--samplers", "random", "--family", "heavisdes"),
      "Did you mean 'heavisides'?"),
-    (("convergence", "--samplers", "random", "--family", "disk"), "is an integrand; give it to '--integrand'"),
+    (("convergence", "--samplers", "random", "--family", "disk"),
+     "is an integrand; give it to '--integrand'"),
     (("convergence", "--samplers", "random", "--integrand", "disk,heavisides"), "mixes"),
     (("metrics", "random", "-n", "16", "--metric", "cd,l2star", "-o", "{}/m.json"),
      "did you mean 'l2-star'?"),
@@ -217,3 +218,26 @@ def test_other_warnings_keep_their_usual_form(capsys, monkeypatch):
     assert [str(m) for m in shown] == ["not ours"]
     assert "clsamp: warning" not in capsys.readouterr().err
     assert sys.modules["clsamp.cli"] is cli
+
+
+def test_sample_list_names_the_randomizations(capsys):
+    from clsamp import cli
+    assert cli.main(["sample", "--list"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert "sobol (sobol:shift, sobol:xor, sobol:owen)" in lines and "jittered" in lines
+
+
+def test_tour_help_describes_the_report(capsys):
+    from clsamp import cli
+    with pytest.raises(SystemExit):
+        cli.main(["tour", "--help"])
+    out = capsys.readouterr().out
+    assert "index.html" in out and "two minutes" not in out
+
+
+def test_a_fast_integrate_shows_no_progress_bar(capsys):
+    import numpy as np
+
+    import clsamp
+    clsamp.integrate(lambda x: np.exp(-np.sum(x * x, axis=1)), 2, abs_tol=1e-4)
+    assert "integrate" not in capsys.readouterr().err
