@@ -470,8 +470,9 @@ def _render_reference(scene, size, spp, seed, progress):
     per = spp // REFERENCE_PASSES
     total = np.zeros((size[1], size[0]), dtype=np.float64)
     square = np.zeros_like(total)
-    for k in tqdm(range(REFERENCE_PASSES), desc=f"reference {scene.name}", unit="pass",
-                  disable=not progress):
+    what = (f"reference {scene.name} {size[0]}x{size[1]}, {spp} spp (once; then read from "
+            f"{cache_folder()})")
+    for k in tqdm(range(REFERENCE_PASSES), desc=what, unit="pass", disable=not progress):
         image = render(scene, REFERENCE_SAMPLER, per, size, seed=derived_seed(seed, k, 0, PURPOSE_PASS),
                        progress=False).astype(np.float64)
         total += image
