@@ -525,3 +525,17 @@ def test_ccvt_tail_in_chunks_gives_the_same_bits(monkeypatch):
         assert np.array_equal(pts, again)
         assert np.array_equal(info.iterations, info2.iterations)
         assert max(info.iterations) > 3
+
+
+def test_an_info_prints_in_a_line_and_an_early_stop_ends_its_bar_at_100(capsys):
+    s = clsamp.make_sampler("ccvt", seed=2, points_per_site=64)
+    _, info = s.sample(256, realizations=2, return_info=True)
+    text = repr(info)
+    assert len(text) < 400 and "capacities=<int64 (2, 256), 64..64>" in text
+    from tqdm import tqdm
+
+    from clsamp.samplers.ccvt.device import _finish
+    bar = tqdm(total=100, delay=0, desc="early")
+    bar.update(32)
+    _finish(bar)
+    assert "100%" in capsys.readouterr().err.replace(" ", "")

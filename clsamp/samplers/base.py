@@ -246,7 +246,16 @@ def _merge_field(values, how):
     return np.concatenate(values)
 
 
-@dataclasses.dataclass(frozen=True)
+def _summary(value):
+    """A field of an info as a line shows it: small arrays whole, others by shape and range."""
+    if isinstance(value, np.ndarray) and value.size > 8:
+        if value.size and np.issubdtype(value.dtype, np.number):
+            return f"<{value.dtype} {value.shape}, {value.min():.6g}..{value.max():.6g}>"
+        return f"<{value.dtype} {value.shape}>"
+    return repr(value.tolist() if isinstance(value, np.ndarray) else value)
+
+
+@dataclasses.dataclass(frozen=True, repr=False)
 class SampleInfo:
     """What one call of a sampler that iterates or rejects did, realization by realization.
 
@@ -259,6 +268,16 @@ class SampleInfo:
     """
 
     realizations: np.ndarray
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if "__repr__" not in cls.__dict__:      # before the dataclass decorator writes one
+            cls.__repr__ = SampleInfo.__repr__
+
+    def __repr__(self):
+        fields = ", ".join(f"{f.name}={_summary(getattr(self, f.name))}"
+                           for f in dataclasses.fields(self))
+        return f"{type(self).__name__}({fields})"
 
     @classmethod
     def merge(cls, parts):

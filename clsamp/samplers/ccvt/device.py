@@ -124,7 +124,7 @@ def ccvt_device(sites, points, members, iterations, callback=None, fused=None, t
     bar = tqdm(total=iterations, desc=f"ccvt {r} x {n} sites", unit="it", disable=not progress, delay=2)
     if fused:
         converged = solve_device(b, n, p, iterations, active, np.arange(r), 0, energies, bar)
-        bar.close()
+        _finish(bar)
         return b["sites"].get(), energies, b["ids"].get(), converged
     slots = (b["ids"].data, b["xy"].data, b["tids"].data, b["txy"].data)
     swaps = cla.zeros(q, (r,), np.uint32)
@@ -182,11 +182,20 @@ def ccvt_device(sites, points, members, iterations, callback=None, fused=None, t
                                           np.flatnonzero(active_host), 1, energies, bar)
             converged |= tail_converged & (active_host == 1)
             break
-    bar.close()
+    _finish(bar)
     return b["sites"].get(), energies, b["ids"].get(), converged
 
 
 SOLVE_CHUNK = 64       # iterations of ccvt_solve per launch: Python (and Ctrl-C) runs between
+
+
+def _finish(bar):
+    """Close a progress bar at 100 % (a run that converged early has done its work); a bar
+    still within its delay stays hidden."""
+    if not bar.disable and bar.format_dict["elapsed"] >= bar.delay:
+        bar.total = bar.n
+        bar.refresh()
+    bar.close()
 
 
 def solve_device(b, n, p, iterations, active, running, resume, energies, bar=None):
