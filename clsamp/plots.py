@@ -392,7 +392,7 @@ def radial_mean_families(path, curves, families, n=None, reference="random", not
     ...     [("stratified", ["jittered"]), ("low discrepancy", ["halton"])], n=256)
     """
     families = list(families)
-    fig, axes = pyplot().subplots(1, len(families), figsize=(5.2 * len(families), 3.8), sharey=True,
+    fig, axes = pyplot().subplots(1, len(families), figsize=(5.2 * len(families), 5.0), sharey=True,
                                   squeeze=False)
     for ax, (family, members) in zip(axes[0], families, strict=True):
         if reference in curves:
@@ -401,7 +401,7 @@ def radial_mean_families(path, curves, families, n=None, reference="random", not
             radial_mean(ax, *curves[name], n=n, color=f"C{k}", label=name)
         ax.set_ylim(0, 2.5)
         ax.set_title(f"{family} ({note})" if note else family, fontsize=10)
-        ax.legend(fontsize=8)
+        legend_below(ax, fontsize=8, columns=2)
     return _save(fig, path)
 
 

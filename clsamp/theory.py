@@ -54,9 +54,7 @@ a, at the distance s - a, in slope units and in standard errors:
 
 * **matches** when |s - a| <= 3 sigma: the gap is within the fit's own noise;
 * **pre-asymptotic** when 3 sigma < |s - a| <= 3 sigma + 0.15: beyond the noise, but within
-  the curvature that the finite N of a sweep leaves (and the (log N)^(d-1) factor of
-  scrambled nets, whose local slope over N = 2^10..2^16 is about 0.1 shallower than -3);
-  a longer sweep should close it;
+  the curvature that the finite N of a sweep leaves; a longer sweep should close it;
 * **differs** beyond that.
 
 The verdict's text says which, how far (for example "0.15 steeper than N^-1, 3.8

@@ -17,6 +17,8 @@ from .report import fmt, img, table
 
 # Each time in this section is the median of this many runs (after one that builds kernels).
 REPEATS = 3
+# The realizations per N at most when an expensive sampler's sweeps are timed again.
+EXPENSIVE_REALIZATIONS = 64
 
 
 def median_seconds(fn, repeats=REPEATS):
@@ -46,12 +48,16 @@ def median_seconds(fn, repeats=REPEATS):
 
 
 def _retimed(result, sampler, client):
-    """A section-2 result with each N's seconds the median of :data:`REPEATS` more runs of
-    the same sweep (section 2's run built the kernels)."""
+    """A section-2 result whose seconds per N are the median of its own run and
+    :data:`REPEATS` - 1 more of the same sweep; an expensive sampler's runs use at most
+    :data:`EXPENSIVE_REALIZATIONS` realizations (the time per estimate is what counts)."""
     from .sweep import convergence
-    runs = [convergence(sampler, result.integrand, list(result.ns), realizations=result.realizations,
-                        seed=3, progress=False, client=client).seconds for _ in range(REPEATS)]
-    return dataclasses.replace(result, seconds=np.median(np.asarray(runs, dtype=np.float64), axis=0))
+    r = min(result.realizations, EXPENSIVE_REALIZATIONS) if sampler.expensive else result.realizations
+    runs = [result.seconds_per_estimate] + [
+        convergence(sampler, result.integrand, list(result.ns), realizations=r, seed=3,
+                    progress=False, client=client).seconds_per_estimate for _ in range(REPEATS - 1)]
+    per_estimate = np.median(np.asarray(runs, dtype=np.float64), axis=0)
+    return dataclasses.replace(result, seconds=per_estimate * result.realizations)
 
 
 def _spectrum_cost(report, quick):
@@ -134,9 +140,11 @@ def section_cost(report, quick):
         data["samplers"] = sampler_data
         body += ("<h3>Samplers</h3><p>From section 2: the seconds one estimate takes, point "
                  "generation included, to reach a target MSE (the median MSE at the middle of the "
-                 "sweep), and the N that reaches it. Section 2's MSEs, with each N timed again: "
-                 f"the median of {REPEATS} more runs of the same sweep. A sampler that converges "
-                 "faster per point can still lose on time when its points are expensive.</p>")
+                 "sweep), and the N that reaches it. Section 2's MSEs; each N's time per estimate "
+                 f"is the median of section 2's run and {REPEATS - 1} more of the same sweep "
+                 f"(expensive samplers: at most {EXPENSIVE_REALIZATIONS} realizations). A sampler "
+                 "that converges faster per point can still lose on time when its points are "
+                 "expensive.</p>")
         body += table(("sampler", "integrand", "target MSE", "N needed", "seconds per estimate"),
                        target_rows)
         front = sampler_data.get("disk", {}).get("pareto_front", [])
