@@ -634,7 +634,7 @@ def run_tour(out, quick=False, progress=True, client=None):
     out : str or Path
         Output folder (created).
     quick : bool
-        Smaller sizes, for CI (under two minutes on 2 cores).
+        Smaller sizes, for CI (about 30 s on 2 cores).
     progress : bool
         Show a progress bar over the sections.
     client : dask.distributed.Client, optional

@@ -17,8 +17,10 @@ from .report import fmt, img, table
 
 # Each time in this section is the median of this many runs (after one that builds kernels).
 REPEATS = 3
-# The realizations per N at most when an expensive sampler's sweeps are timed again.
-EXPENSIVE_REALIZATIONS = 64
+# A sweep timed again runs as many realizations as fit in this many seconds, at least
+# MIN_REALIZATIONS (fewer make the time per estimate mostly the launch's).
+TIMING_SECONDS = 2.0
+MIN_REALIZATIONS = 16
 
 
 def median_seconds(fn, repeats=REPEATS):
@@ -49,10 +51,11 @@ def median_seconds(fn, repeats=REPEATS):
 
 def _retimed(result, sampler, client):
     """A section-2 result whose seconds per N are the median of its own run and
-    :data:`REPEATS` - 1 more of the same sweep; an expensive sampler's runs use at most
-    :data:`EXPENSIVE_REALIZATIONS` realizations (the time per estimate is what counts)."""
+    :data:`REPEATS` - 1 more of the same sweep, each with as many of its realizations as
+    fit in :data:`TIMING_SECONDS` by section 2's times (at least :data:`MIN_REALIZATIONS`)."""
     from .sweep import convergence
-    r = min(result.realizations, EXPENSIVE_REALIZATIONS) if sampler.expensive else result.realizations
+    fit = int(TIMING_SECONDS / max(float(np.sum(result.seconds_per_estimate)), 1e-12))
+    r = int(np.clip(fit, MIN_REALIZATIONS, result.realizations))
     runs = [result.seconds_per_estimate] + [
         convergence(sampler, result.integrand, list(result.ns), realizations=r, seed=3,
                     progress=False, client=client).seconds_per_estimate for _ in range(REPEATS - 1)]
@@ -142,7 +145,7 @@ def section_cost(report, quick):
                  "generation included, to reach a target MSE (the median MSE at the middle of the "
                  "sweep), and the N that reaches it. Section 2's MSEs; each N's time per estimate "
                  f"is the median of section 2's run and {REPEATS - 1} more of the same sweep "
-                 f"(expensive samplers: at most {EXPENSIVE_REALIZATIONS} realizations). A sampler "
+                 f"(with the realizations that fit in {TIMING_SECONDS:g} s). A sampler "
                  "that converges faster per point can still lose on time when its points are "
                  "expensive.</p>")
         body += table(("sampler", "integrand", "target MSE", "N needed", "seconds per estimate"),
