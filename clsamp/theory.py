@@ -325,7 +325,7 @@ def compare_family(result, statistic="mean", allowance=None):
         confidence interval, "pre-asymptotic" when within ``allowance`` of it (or the
         exponent plus its log factor's bend is, :func:`log_factor_slope`), "differs"
         beyond, "unknown" without a rate; ``log_factor`` (k), ``log_slope`` (the bend) and
-        ``note`` (what a verdict rests on beyond the interval, or "").
+        ``note`` (the log factor's part in a verdict, or "").
 
     Raises
     ------
@@ -349,6 +349,7 @@ def compare_family(result, statistic="mean", allowance=None):
         verdict = "pre-asymptotic"
     else:
         verdict = "differs"
+        note = f"beyond the (log N)^{k} factor's {bend:+.2f} over the fitted N" if k else ""
     return {"statistic": statistic, "slope": slope, "ci": (lo, hi), "expected": exponent,
             "source": source, "verdict": verdict, "log_factor": k, "log_slope": bend,
             "note": note}
