@@ -37,6 +37,7 @@ class Row:
     extra: dict = dataclasses.field(default_factory=dict)
     output_bytes: int | None = None     # bytes one timed call returns (a generator's output)
     copy_gbs: float | None = None       # copy_bandwidth(output_bytes), measured in the same run
+    capability: str = ""       # the bench_<capability>.py module that measured it
 
     @property
     def ratio(self):
@@ -312,7 +313,8 @@ def print_profile(rows, file=sys.stdout):
 
 
 def markdown_table(rows):
-    """The README's benchmark table from one run: machine, versions, date, then the rows."""
+    """The full benchmark table from one run (docs/benchmarks.md): machine, versions, date,
+    then the rows."""
     m = machine()
     cpu = m["processor"]
     try:
@@ -328,10 +330,7 @@ def markdown_table(rows):
         except Exception:
             continue
     command = " ".join(["python", "benchmarks/" + os.path.basename(sys.argv[0]), *sys.argv[1:]])
-    lines = [f"Measured {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} in one run of "
-             f"`{command}` on {cpu} ({m['cpus']} CPUs); {versions}"
-             + (f"; peers {', '.join(peers)}" if peers else "") + "; devices: "
-             + "; ".join(m["devices"]) + ".", ""]
+    lines = [measured_line(command, cpu, m, versions, peers), ""]
     bandwidth = any(r.gbs is not None for r in rows)
     headers = ("case", "size", "device", "clsamp s", "peer", "peer s", "ratio",
                *(BANDWIDTH_HEADERS if bandwidth else ()), "quality")
@@ -342,6 +341,40 @@ def markdown_table(rows):
                  "-" if r.ratio is None else f"{r.ratio:.2f}×",
                  *(_bandwidth_cells(r) if bandwidth else ()), r.quality)
         lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def measured_line(command, cpu, m, versions, peers):
+    """The first line of both tables: when, by which command, on what."""
+    return (f"Measured {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} in one run of "
+            f"`{command}` on {cpu} ({m['cpus']} CPUs); {versions}"
+            + (f"; peers {', '.join(peers)}" if peers else "") + "; devices: "
+            + "; ".join(m["devices"]) + ".")
+
+
+# Comparisons inside clsamp (its NumPy twins, another of its samplers or settings, a
+# published figure): the full table has them, the summary keeps the outside peers.
+INTERNAL_PEERS = ("numpy reference", "numpy, same algorithm", "combined", "random",
+                  "sobol:owen render", "balzer")
+
+
+def summary_table(rows, measured):
+    """The README's summary of one run: one line per capability and outside peer, with how
+    many cases and the range of the ratios (peer seconds / clsamp seconds), under the
+    ``measured`` line of the full table (docs/benchmarks.md)."""
+    groups = {}
+    for r in rows:
+        if r.ratio is None or r.peer in ("", "-") or r.peer.lower().startswith(INTERNAL_PEERS):
+            continue
+        groups.setdefault((r.capability or "-", r.peer), []).append(r.ratio)
+    lines = [measured, "", "| capability | peer | cases | ratio, peer s / clsamp s (> 1: clsamp faster) |",
+             "|---|---|---|---|"]
+    for (capability, peer), ratios in groups.items():
+        low, high = min(ratios), max(ratios)
+        span = f"{low:.3g}×" if len(ratios) == 1 else f"{low:.3g}× – {high:.3g}×"
+        lines.append(f"| {capability} | {peer.replace('|', chr(92) + '|')} | {len(ratios)} | {span} |")
+    lines += ["", "Every row of the run, with sizes, devices, times and quality figures: "
+              "[docs/benchmarks.md](docs/benchmarks.md)."]
     return "\n".join(lines) + "\n"
 
 
@@ -370,8 +403,9 @@ def parser(description):
     p.add_argument("--profile", action="store_true",
                    help="also print where each row's time goes (launch, kernel, transfer, host)")
     p.add_argument("--markdown", default=None, metavar="FILE",
-                   help="write the README's table from this run (markdown) to FILE; in a "
-                        "file with the table markers (README.md) only between them")
+                   help="write this run's tables (markdown): into a file with the table "
+                        "markers (README.md) the summary between them and the full table to "
+                        "docs/benchmarks.md beside it; into any other FILE the full table")
     return p
 
 
@@ -393,9 +427,28 @@ def finish(args, rows):
     if args.out:
         write_json(args.out, rows)
     if args.markdown:
-        from clsamp.files import write_text
-        write_text(args.markdown, with_table(args.markdown, markdown_table(rows)))
-        print(f"wrote {args.markdown}", file=sys.stderr)
+        write_markdown(args.markdown, rows)
+
+
+FULL_TABLE = "docs/benchmarks.md"     # beside a README with the markers
+
+
+def write_markdown(path, rows):
+    """Write the run's tables: into a file with the table markers (README.md) the summary,
+    and the full table to docs/benchmarks.md beside it; into any other file the full table."""
+    from clsamp.files import write_text
+    full = markdown_table(rows)
+    text = with_table(path, None)
+    if text is None:
+        write_text(path, full)
+        print(f"wrote {path}", file=sys.stderr)
+        return
+    beside = os.path.join(os.path.dirname(os.path.abspath(path)), *FULL_TABLE.split("/"))
+    write_text(beside, "# clsamp's benchmarks: every row of one run\n\n"
+               "Written by `python benchmarks/run.py --markdown README.md`, which puts the "
+               "summary in the README. Ratio = peer seconds / clsamp seconds.\n\n" + full)
+    write_text(path, with_table(path, summary_table(rows, full.splitlines()[0])))
+    print(f"wrote {path} and {beside}", file=sys.stderr)
 
 
 TABLE_BEGIN = "<!-- benchmarks/run.py --markdown: begin -->"
@@ -404,7 +457,8 @@ TABLE_END = "<!-- benchmarks/run.py --markdown: end -->"
 
 def with_table(path, table):
     """The text to write to ``path``: the table alone, or, where ``path`` is a file holding
-    the two markers (README.md), that file with the table between them, the rest kept."""
+    the two markers (README.md), that file with the table between them, the rest kept.
+    With ``table`` None: None unless ``path`` holds the markers."""
     try:
         with open(path) as f:
             text = f.read()
@@ -412,6 +466,8 @@ def with_table(path, table):
         return table
     if TABLE_BEGIN not in text or TABLE_END not in text:
         return table
+    if table is None:
+        return text
     head, rest = text.split(TABLE_BEGIN, 1)
     _, tail = rest.split(TABLE_END, 1)
     return f"{head}{TABLE_BEGIN}\n{table}{TABLE_END}{tail}"

@@ -4,8 +4,10 @@
                              [--markdown FILE]
 
 ``--profile`` adds a table of where each row's time goes (one more call, profiled:
-launch, kernel, transfer, host); ``--markdown`` writes the README's table from this run
-(machine, versions, date and every row).
+launch, kernel, transfer, host); ``--markdown README.md`` writes the README's summary from
+this run (one line per capability and outside peer) and the full table (machine, versions,
+date and every row) to docs/benchmarks.md; ``--markdown FILE`` for another file writes the
+full table there.
 
 Each ``bench_<concern>.py`` listed in ``MODULES`` defines ``run(devices, quick)``.
 A module that fails is reported and the others still run; the exit status is
@@ -53,13 +55,17 @@ def main():
         t0 = time.perf_counter()
         try:
             module = importlib.import_module(name)
+            mine = []
             if full:
-                rows.extend(module.run(full, args.quick))
+                mine.extend(module.run(full, args.quick))
             for device in partial:      # without fp64 a module may refuse, by name
                 try:
-                    rows.extend(module.run([device], args.quick))
+                    mine.extend(module.run([device], args.quick))
                 except NoDeviceError as error:
                     refused.append(f"{name} on [{device.index}] {device.name}: {str(error)[:160]}")
+            for row in mine:
+                row.capability = name.removeprefix("bench_")
+            rows.extend(mine)
             print(f"[{name}: {time.perf_counter() - t0:.1f} s]", file=sys.stderr)
         except Exception:
             failed.append(name)

@@ -95,9 +95,31 @@ def test_markdown_goes_between_the_readme_markers(tmp_path):
     assert common.with_table(str(plain), "| new |\n") == "| new |\n"
 
 
-def test_the_readme_table_is_one_run():
+def test_the_readme_summary_and_the_full_table_are_one_run():
     text = (ROOT / "README.md").read_text()
     assert text.count(common.TABLE_BEGIN) == 1 and text.count(common.TABLE_END) == 1
-    table = text.split(common.TABLE_BEGIN)[1].split(common.TABLE_END)[0]
-    assert len(re.findall(r"Measured \d{4}-\d\d-\d\d \d\d:\d\d UTC in one run of", table)) == 1
-    assert table.count("| case | size | device |") == 1
+    summary = text.split(common.TABLE_BEGIN)[1].split(common.TABLE_END)[0]
+    full = (ROOT / common.FULL_TABLE).read_text()
+    when = r"Measured \d{4}-\d\d-\d\d \d\d:\d\d UTC in one run of"
+    assert len(re.findall(when, summary)) == 1 and len(re.findall(when, full)) == 1
+    assert re.search(when + ".*", summary).group(0) == re.search(when + ".*", full).group(0)
+    assert summary.count("| capability | peer | cases |") == 1 and full.count("| case | size | device |") == 1
+    assert len(summary.splitlines()) < 40
+
+
+def test_markdown_writes_the_summary_and_the_full_table_beside(tmp_path):
+    readme = tmp_path / "README.md"
+    readme.write_text(f"# title\n{common.TABLE_BEGIN}\nold\n{common.TABLE_END}\nafter\n")
+    def row(case, seconds, peer, peer_seconds):
+        return common.Row(case, "64x2D", "[0] cpu", seconds, peer, peer_seconds,
+                          capability="lowdiscrepancy")
+    rows = [row("sobol", 0.001, "scipy Sobol unscrambled", 0.01),
+            row("sobol", 0.001, "numpy reference", 0.05),
+            row("halton", 0.002, "scipy Sobol unscrambled", 0.01)]
+    common.write_markdown(str(readme), rows)
+    text = readme.read_text()
+    assert text.startswith("# title\n") and text.endswith("after\n") and "old" not in text
+    assert "| lowdiscrepancy | scipy Sobol unscrambled | 2 | 5× – 10× |" in text
+    assert "numpy reference" not in text                  # the NumPy twin is not an outside peer
+    full = (tmp_path / common.FULL_TABLE).read_text()
+    assert full.count("| sobol |") == 2 and "| halton |" in full
