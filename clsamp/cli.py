@@ -731,10 +731,9 @@ def main(argv=None):
         return 2
     import signal
     import threading
-    import warnings
+
+    from .report import one_line_warnings
     main_thread = threading.current_thread() is threading.main_thread()
-    shown = warnings.showwarning
-    warnings.showwarning = _one_line_warning(shown)
     before = signal.getsignal(signal.SIGINT)
     _signalled.clear()
     if main_thread:
@@ -749,7 +748,8 @@ def main(argv=None):
         if args.device is not None:
             from . import runtime
             runtime.use_device(args.device)
-        return args.run(args) or 0
+        with one_line_warnings():
+            return args.run(args) or 0
     except ClsampError as error:
         if not _signalled:
             print(f"clsamp {args.command}: error: {error}", file=sys.stderr)
@@ -762,23 +762,9 @@ def main(argv=None):
             return _stopped(args.command, _signalled[0])
         raise
     finally:
-        warnings.showwarning = shown
         if main_thread:
             signal.signal(signal.SIGTERM, signal.SIG_DFL)   # after the work, SIGTERM just ends it
             signal.signal(signal.SIGINT, before)
-
-
-def _one_line_warning(shown):
-    """A ``warnings.showwarning`` that prints clsamp's own warnings as one line,
-    ``clsamp: warning: ...``, without the source line, and hands others to ``shown``."""
-    package = str(Path(__file__).resolve().parent)
-
-    def show(message, category, filename, lineno, file=None, line=None):
-        if issubclass(category, UserWarning) and str(Path(filename).resolve()).startswith(package):
-            print("clsamp: warning: " + " ".join(str(message).split()), file=file or sys.stderr)
-        else:
-            shown(message, category, filename, lineno, file, line)
-    return show
 
 
 def _stopped(command, signum):

@@ -455,9 +455,10 @@ def device_rows(device, width=100):
 
 @contextlib.contextmanager
 def one_line_warnings(stream=None):
-    """Print the warnings clsamp raises inside the block as one line each,
-    ``clsamp: warning: <message>``, with no source line; other warnings as Python prints
-    them. The previous ``warnings.showwarning`` comes back on leaving.
+    """Print the warnings clsamp raises inside the block (UserWarnings from its modules) as
+    one line each, ``clsamp: warning: <message>``, with no source line; other warnings go
+    to the ``warnings.showwarning`` that was there, which comes back on leaving. The tour
+    and the command line both use it.
 
     Parameters
     ----------
@@ -481,8 +482,8 @@ def one_line_warnings(stream=None):
     package = str(Path(__file__).resolve().parent)
 
     def show(message, category, filename, lineno, file=None, line=None):
-        if str(Path(filename).resolve()).startswith(package):
-            print(f"clsamp: warning: {message}", file=stream or file or sys.stderr)
+        if issubclass(category, UserWarning) and str(Path(filename).resolve()).startswith(package):
+            print("clsamp: warning: " + " ".join(str(message).split()), file=stream or file or sys.stderr)
         else:
             previous(message, category, filename, lineno, file, line)
 
