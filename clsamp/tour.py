@@ -375,13 +375,13 @@ def _family_sweeps(report, quick):
 
 # -- 3. rendering ------------------------------------------------------------------------------
 TOUR_RENDER_SAMPLERS = (
-    ("random", {}), ("jittered", {"strata": (12, 8)}), ("poisson_disk", {}),
+    ("random", {}), ("jittered", {"strata": (16, 8)}), ("poisson_disk", {}),
     ("ccvt", {"points_per_site": 256}), ("sobol:owen", {}), ("pmj02", {}),
 )
 
 
 def section_render(report, quick):
-    """Section 3, rendering: ambient occlusion at 96 rays per pixel with several samplers, MSE
+    """Section 3, rendering: ambient occlusion at 128 rays per pixel with several samplers, MSE
     against a reference render.
 
     Parameters
@@ -619,7 +619,7 @@ SECTIONS = (
     ("samplers", "1. Samplers: spectra, radial means, pair correlation, discrepancy",
      section_samplers),
     ("convergence", "2. Convergence against theory", section_convergence),
-    ("render", "3. Ambient occlusion at 96 rays: samplers in images", section_render),
+    ("render", "3. Ambient occlusion at 128 rays: samplers in images", section_render),
     ("cost", "4. What accuracy costs in time", section_cost),
     ("stability", "5. Stability: the hard cases", section_stability),
     ("device", "6. Device, versions and timings", section_device),
