@@ -350,7 +350,7 @@ def approaching(ns, values, exponent, allowance=CURVATURE_ALLOWANCE):
     gaps = [abs(v - exponent) for v in local]
     past = [(v - exponent) * (local[0] - exponent) < 0 and abs(v - exponent) > allowance
             for v in local]
-    if any(past) or any(b >= a for a, b in zip(gaps, gaps[1:])):
+    if any(past) or any(b >= a for a, b in zip(gaps[:-1], gaps[1:], strict=True)):
         return ()
     return local
 
