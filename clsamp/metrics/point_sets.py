@@ -44,7 +44,7 @@ def _min_distance2_brute(batch):
 
 def _min_distance2_grid(batch, cells):
     """Smallest squared distance per realization among pairs in the same or adjacent
-    cells of a ``cells``^d grid (cells >= 3, so the 3^d neighbours are distinct)."""
+    cells of a grid of ``cells ** d`` (cells >= 3, so the 3^d neighbours are distinct)."""
     r, n, d = batch.shape
     pts, flat, start, _ = sorted_by_cell(batch, cells)
     starts = start[:-1].astype(np.int64)
