@@ -137,7 +137,7 @@ def dither_mask(size, d=2, seed=0, temporal=None, sigma=SIGMA):
     ----------
     .. [1] R. Ulichney, "The void-and-cluster method for dither array generation", Proc.
        SPIE 1913, Human Vision, Visual Processing, and Digital Display IV, 1993.
-    .. [2] A. Wolfe, N. Morrical, T. Akenine-Möller, R. Ramamoorthi, "Spatiotemporal blue
+    .. [2] A. Wolfe, N. Morrical, R. Ramamoorthi, "Spatiotemporal blue
        noise masks", Eurographics Symposium on Rendering, 2022.
 
     Examples
