@@ -27,7 +27,7 @@ import numpy as np
 from . import runtime
 from .families import FamilyKernel, errors_numpy
 from .geometry import torus
-from .integrands import IntegrandKernel, combine_sums
+from .integrand_kernel import IntegrandKernel, combine_sums
 
 HOST_CHUNK = 2**22      # doubles per chunk of the NumPy path (32 MB)
 # Doubles of points generated per launch: on a CPU 16 MB, so the points the sampler just

@@ -34,13 +34,15 @@ from fractions import Fraction
 
 import numpy as np
 
-from . import philox, runtime
+from . import philox
 from .errors import InvalidArgumentError
 from .geometry.torus import ball_volume
-from .validation import check_real, plain
+from .validation import check_choice, check_positive_int, check_real, check_seed, plain
 
 # Kernel codes (INTEGRAND in kernels/integrands.cl).
 GAUSSIAN, DISK, HEAVISIDE, PMJ_DISK, PMJ_GAUSSIAN, PMJ_BILINEAR, PMJ_STEP, PMJ_TRIANGLE = range(8)
+# the Genz families: GENZ + their index in GENZ_KINDS
+GENZ = 8
 
 
 
@@ -467,6 +469,191 @@ class PMJTriangle(_PMJ):
         return (x[..., 1] > x[..., 0]).astype(np.float64)
 
 
+# -- Genz's test families -----------------------------------------------------------------
+GENZ_KINDS = ("oscillatory", "product_peak", "corner_peak", "gaussian", "continuous",
+              "discontinuous")
+# ||a||_1 of each family in d dimensions: Genz's difficulty (1984), as the Virtual Library
+# of Simulation Experiments (Surjanovic and Bingham) lists it
+GENZ_DIFFICULTY = {"oscillatory": lambda d: 110.0 / d**1.5, "product_peak": lambda d: 600.0 / d**2,
+                   "corner_peak": lambda d: 600.0 / d**2, "gaussian": lambda d: 100.0 / d,
+                   "continuous": lambda d: 150.0 / d**2, "discontinuous": lambda d: 100.0 / d**2}
+MAX_GENZ_D = 16
+
+
+class Genz(Integrand):
+    """One of Genz's six test families on the unit cube, with its exact integral.
+
+    ==============  ===============================================  ====================
+    kind            f(x)                                             character
+    ==============  ===============================================  ====================
+    oscillatory     cos(2 pi u_1 + sum a_j x_j)                      smooth
+    product_peak    prod (a_j^-2 + (x_j - u_j)^2)^-1                 smooth, a peak at u
+    corner_peak     (1 + sum a_j x_j)^-(d + 1)                       smooth, a corner peak
+    gaussian        exp(-sum a_j^2 (x_j - u_j)^2)                    smooth
+    continuous      exp(-sum a_j |x_j - u_j|)                        kinks along x_j = u_j
+    discontinuous   0 if x_1 > u_1 or x_2 > u_2, else exp(sum a_j x_j)  steps along axes
+    ==============  ===============================================  ====================
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`GENZ_KINDS`.
+    a : sequence of float
+        The difficulty parameters (positive); their length sets d.
+    u : sequence of float
+        The shift parameters in [0, 1], as long as ``a``.
+
+    Notes
+    -----
+    The integrals are products of one-dimensional ones (the oscillatory family's as the
+    real part of a complex product, e^(2 pi i u_1) prod (e^(i a_j) - 1) / (i a_j)), except
+    the corner peak's, which is the sum over the cube's 2^d vertices v of
+    (-1)^|v| / (d! prod a_j (1 + a.v)), added here in exact rational arithmetic. On the
+    device the functions are evaluated in the operation order of the NumPy reference
+    (``cos`` and ``exp`` are the device's: within a few ulps of NumPy's).
+
+    References
+    ----------
+    .. [1] A. Genz, "Testing multidimensional integration routines", in Tools, Methods and
+       Languages for Scientific and Engineering Computation, North-Holland (1984), 81-94.
+    .. [2] S. Surjanovic, D. Bingham, "Virtual Library of Simulation Experiments: test
+       functions and datasets", Simon Fraser University (2013).
+    """
+
+    name = "genz"
+    periodic = False
+
+    def __init__(self, kind, a, u):
+        self.kind = check_choice(kind, "kind", GENZ_KINDS)
+        a, u = _vector(a, "a"), _vector(u, "u", len(np.atleast_1d(a)))
+        if np.any(a <= 0):
+            raise InvalidArgumentError(f"'a' must be positive, got {plain(a.tolist())}")
+        if np.any(u < 0) or np.any(u > 1):
+            raise InvalidArgumentError(f"'u' must lie in [0, 1], got {plain(u.tolist())}")
+        super().__init__(a.size)
+        if self.kind == "discontinuous" and self.d > MAX_GENZ_D:
+            raise InvalidArgumentError(f"'a' may have at most {MAX_GENZ_D} entries")
+        self.a, self.u = a, u
+        self.name = f"genz_{self.kind}"
+        self.kernel_code = GENZ + GENZ_KINDS.index(self.kind)
+        self.smooth = self.kind not in ("continuous", "discontinuous")
+        self.edges = "axis" if self.kind == "discontinuous" else "none"
+        self.integral = self._integral()
+
+    def _describe(self):
+        return f"kind={self.kind!r}, a={self.a.tolist()}, u={self.u.tolist()}"
+
+    def _integral(self):
+        a, u, d = self.a, self.u, self.d
+        if self.kind == "oscillatory":
+            z = complex(math.cos(2 * math.pi * u[0]), math.sin(2 * math.pi * u[0]))
+            for aj in a:            # (e^(i a) - 1) / (i a) = sin(a) / a + i 2 sin^2(a / 2) / a
+                z *= complex(math.sin(aj) / aj, 2 * math.sin(aj / 2) ** 2 / aj)
+            return z.real
+        if self.kind == "product_peak":
+            return math.prod(aj * (math.atan(aj * (1 - uj)) + math.atan(aj * uj))
+                             for aj, uj in zip(a, u, strict=True))
+        if self.kind == "corner_peak":
+            fa = [Fraction(float(aj)) for aj in a]
+            total = Fraction(0)
+            for v in itertools.product((0, 1), repeat=d):
+                total += (-1) ** sum(v) / (1 + sum(f for f, b in zip(fa, v, strict=True) if b))
+            return float(total / (math.factorial(d) * math.prod(fa)))
+        if self.kind == "gaussian":
+            return math.prod(math.sqrt(math.pi) / (2 * aj) * (math.erf(aj * (1 - uj)) + math.erf(aj * uj))
+                             for aj, uj in zip(a, u, strict=True))
+        if self.kind == "continuous":
+            return math.prod((-math.expm1(-aj * uj) - math.expm1(-aj * (1 - uj))) / aj
+                             for aj, uj in zip(a, u, strict=True))
+        return math.prod(math.expm1(aj * (uj if j < 2 else 1.0)) / aj
+                         for j, (aj, uj) in enumerate(zip(a, u, strict=True)))
+
+    def kernel_params(self):
+        """The kernel's parameters: a, then u, then 2 pi u_1 (the oscillatory phase).
+
+        Returns
+        -------
+        ndarray
+            float64 of length 2 d + 1.
+        """
+        return np.concatenate([self.a, self.u, [2 * math.pi * self.u[0]]])
+
+    def _evaluate(self, x):
+        # the kernel's formulas, operation for operation
+        a, u, d = self.a, self.u, self.d
+        if self.kind == "oscillatory":
+            s = np.full(x.shape[:-1], 2 * math.pi * u[0])
+            for j in range(d):
+                s = s + a[j] * x[..., j]
+            return np.cos(s)
+        if self.kind == "product_peak":
+            f = np.ones(x.shape[:-1])
+            for j in range(d):
+                w = x[..., j] - u[j]
+                f = f / (1.0 / (a[j] * a[j]) + w * w)
+            return f
+        if self.kind == "corner_peak":
+            t = np.ones(x.shape[:-1])
+            for j in range(d):
+                t = t + a[j] * x[..., j]
+            q = t
+            for _ in range(d):
+                q = q * t
+            return 1.0 / q
+        s = np.zeros(x.shape[:-1])
+        for j in range(d):
+            w = x[..., j] - u[j]
+            if self.kind == "gaussian":
+                w = a[j] * w
+                s = s + w * w
+            elif self.kind == "continuous":
+                s = s + a[j] * np.abs(w)
+            else:
+                s = s + a[j] * x[..., j]
+        if self.kind == "discontinuous":
+            inside = x[..., 0] <= u[0]
+            if d > 1:
+                inside = inside & (x[..., 1] <= u[1])
+            return np.where(inside, np.exp(s), 0.0)
+        return np.exp(-s)
+
+
+def genz(kind, d, seed=0):
+    """A random member of one of Genz's test families: a and u drawn from the seed, a scaled
+    to the family's difficulty ||a||_1 (Genz 1984).
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`GENZ_KINDS`.
+    d : int
+        Dimensions, 1 to 16.
+    seed : int
+        a'_j and u_j are ``philox.uniform(seed, Stream.FAMILY, k, j, 0 | 1)`` with k the
+        family's index; a = a' ||a||_1 / sum a'.
+
+    Returns
+    -------
+    Genz
+
+    Examples
+    --------
+    >>> from clsamp.integrands import genz
+    >>> f = genz("gaussian", 3, seed=1)
+    >>> round(float(sum(f.a)), 12), f.d
+    (33.333333333333, 3)
+    """
+    kind = check_choice(kind, "kind", GENZ_KINDS)
+    d = check_positive_int(d, "d", maximum=MAX_GENZ_D)
+    seed = check_seed(seed)
+    j = np.arange(d, dtype=np.uint32)
+    k = GENZ_KINDS.index(kind)
+    raw = philox.uniform(seed, philox.Stream.FAMILY, k, j, 0)
+    u = philox.uniform(seed, philox.Stream.FAMILY, k, j, 1)
+    a = raw * (GENZ_DIFFICULTY[kind](d) / raw.sum())
+    return Genz(kind, a, u)
+
+
 _FACTORIES = {
     "gaussian": Gaussian,
     "disk": Disk,
@@ -479,6 +666,9 @@ _FACTORIES = {
 }
 
 
+GENZ_NAMES = {f"genz_{kind}": kind for kind in GENZ_KINDS}
+
+
 def integrand_names():
     """The names :func:`make_integrand` knows.
 
@@ -486,7 +676,7 @@ def integrand_names():
     -------
     list of str
     """
-    return list(_FACTORIES)
+    return list(_FACTORIES) + list(GENZ_NAMES)
 
 
 def pmj_set():
@@ -509,7 +699,8 @@ def make_integrand(spec, d=None):
         One of :func:`integrand_names`.
     d : int, optional
         For ``"gaussian"``, ``"disk"`` and ``"heaviside"`` by name: the dimension (the
-        default centre or normal is repeated/cut to d; 2 when None).
+        default centre or normal is repeated/cut to d; 2 when None); for the Genz
+        families (``"genz_oscillatory"``, ...): :func:`genz` of seed 0 in d dimensions.
 
     Returns
     -------
@@ -534,12 +725,15 @@ def make_integrand(spec, d=None):
     if not isinstance(spec, str):
         raise InvalidArgumentError(
             f"'integrand' must be an Integrand or one of {', '.join(_FACTORIES)}; got {spec!r}")
-    factory = _FACTORIES.get(spec.strip().lower())
+    key = spec.strip().lower()
+    if key in GENZ_NAMES:
+        return genz(GENZ_NAMES[key], 2 if d is None else d)
+    factory = _FACTORIES.get(key)
     if factory is None:
-        close = difflib.get_close_matches(spec, list(_FACTORIES), n=1)
+        close = difflib.get_close_matches(spec, integrand_names(), n=1)
         hint = f" Did you mean {close[0]!r}?" if close else ""
         raise InvalidArgumentError(
-            f"unknown 'integrand' {spec!r}.{hint} Known integrands: {', '.join(_FACTORIES)}")
+            f"unknown 'integrand' {spec!r}.{hint} Known integrands: {', '.join(integrand_names())}")
     if d is None or d == 2 or issubclass(factory, _PMJ):
         made = factory()
         if d is not None and made.d != d:
@@ -550,86 +744,3 @@ def make_integrand(spec, d=None):
     first = "center" if factory is not Heaviside else "normal"
     values = [default[j % 2] * (1 + 0.01 * (j // 2)) for j in range(d)]
     return factory(**{first: values})
-
-
-# -- on the device ---------------------------------------------------------------------
-SLICE = 4096            # points one work-group sums (fixed: the summation order depends on n only)
-
-
-class IntegrandKernel:
-    """The integrand's program and parameters on the current device, built once
-    (``kernels/integrands.cl``; ``homogenize`` shifts realization k by its own vector)."""
-
-    def __init__(self, f, homogenize, seed):
-        import pyopencl.array as cla
-        runtime.require_fp64()
-        self.f = f
-        self.seed = seed
-        self.kernel = runtime.kernel("integrands.cl", "integrand_error_sums",
-                                     defines={"DIM": f.d, "INTEGRAND": f.kernel_code,
-                                              "HOMOGENIZE": int(bool(homogenize))})
-        self.params = cla.to_device(runtime.queue(), np.ascontiguousarray(f.kernel_params(),
-                                                                          dtype=np.float64))
-
-    def error_sums(self, points, n, realization0):
-        """The partial sums of f - integral over each set's points, computed on the device in
-        slices of :data:`SLICE` points (a summation order that depends on n only), each in
-        double-double.
-
-        Parameters
-        ----------
-        points : pyopencl.array.Array, shape (r, n, d)
-            The sets on the current device.
-        n : int
-            Points per set.
-        realization0 : int
-            The realization of the first set, which picks its homogenizing shift.
-
-        Returns
-        -------
-        ndarray, shape (r, groups, 2)
-            On the host: per set and slice the (high, low) parts of the sum; :func:`combine_sums`
-            adds them.
-        """
-        import pyopencl as cl
-        import pyopencl.array as cla
-        queue = runtime.queue()
-        r = points.shape[0]
-        if points.shape != (r, n, self.f.d) or not points.flags.c_contiguous:
-            points = cla.to_device(queue, np.ascontiguousarray(points.get()).reshape(r, n, self.f.d))
-        groups = -(-n // SLICE)
-        # a quad of points per work-item step: no more work-items than quads in a slice
-        quads = -(-min(n, SLICE) // 4)
-        local = min(runtime.local_size(64), 1 << max(0, (quads - 1).bit_length()))
-        out = cla.empty(queue, (r, groups, 2), np.float64)
-        self.kernel(queue, (groups * local, r), (local, 1), points.data, np.uint32(n),
-                    np.uint32(SLICE), np.uint32(realization0), *philox.seed_key(self.seed),
-                    np.uint32(philox.Stream.EXPERIMENT), self.params.data,
-                    np.float64(self.f.integral), out.data, cl.LocalMemory(16 * local))
-        return out.get()
-
-
-def _two_sum(a, b):
-    s = a + b
-    bb = s - a
-    return s, (a - (s - bb)) + (b - bb)
-
-
-def combine_sums(parts):
-    """Double-double partial sums added in order to one double per row (Knuth's two-sum).
-
-    Parameters
-    ----------
-    parts : ndarray, shape (..., groups, 2)
-        (high, low) pairs, as :meth:`IntegrandKernel.error_sums` gives them.
-
-    Returns
-    -------
-    ndarray, shape (...)
-    """
-    hi = np.zeros(parts.shape[:-2])
-    lo = np.zeros(parts.shape[:-2])
-    for g in range(parts.shape[-2]):
-        hi, e = _two_sum(hi, parts[..., g, 0])
-        lo = lo + e + parts[..., g, 1]
-    return hi + lo

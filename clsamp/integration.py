@@ -25,7 +25,8 @@ import numpy as np
 
 from . import runtime
 from .errors import InvalidArgumentError
-from .integrands import Integrand, IntegrandKernel, combine_sums, make_integrand
+from .integrand_kernel import IntegrandKernel, combine_sums
+from .integrands import Integrand, make_integrand
 from .samplers import Sampler, make_sampler
 from .validation import check_int, check_real, check_seed
 

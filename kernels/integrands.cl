@@ -37,6 +37,12 @@
 #define PMJ_BILINEAR 5
 #define PMJ_STEP 6
 #define PMJ_TRIANGLE 7
+#define GENZ_OSCILLATORY 8      /* Genz's six families (clsamp.integrands.Genz): */
+#define GENZ_PRODUCT_PEAK 9     /* p = (a_0 .. a_{D-1}, u_0 .. u_{D-1}, 2 pi u_0) */
+#define GENZ_CORNER_PEAK 10
+#define GENZ_GAUSSIAN 11
+#define GENZ_CONTINUOUS 12
+#define GENZ_DISCONTINUOUS 13
 
 #define M_1_PI_D 0.318309886183790671537767526745028724   /* rounds to the float 1/pi */
 #define M_2_PI_D 0.636619772367581343075535053490057448   /* rounds to the float 2/pi */
@@ -81,6 +87,47 @@ inline vec integrand(const vec *x, __global const double *p)
     return clsamp_indicator4(x[0] < M_1_PI_D);
 #elif INTEGRAND == PMJ_TRIANGLE
     return clsamp_indicator4(x[1] > x[0]);
+#elif INTEGRAND == GENZ_OSCILLATORY
+    vec s = (vec)(p[2 * DIM]);
+    for (int j = 0; j < DIM; ++j)
+        s = s + p[j] * x[j];
+    return cos(s);
+#elif INTEGRAND == GENZ_PRODUCT_PEAK
+    vec f = (vec)(1.0);
+    for (int j = 0; j < DIM; ++j) {
+        const vec w = x[j] - p[DIM + j];
+        f = f / (1.0 / (p[j] * p[j]) + w * w);
+    }
+    return f;
+#elif INTEGRAND == GENZ_CORNER_PEAK
+    vec t = (vec)(1.0);
+    for (int j = 0; j < DIM; ++j)
+        t = t + p[j] * x[j];
+    vec q = t;
+    for (int j = 0; j < DIM; ++j)
+        q = q * t;
+    return 1.0 / q;
+#elif INTEGRAND == GENZ_GAUSSIAN || INTEGRAND == GENZ_CONTINUOUS
+    vec s = (vec)(0.0);
+    for (int j = 0; j < DIM; ++j) {
+#if INTEGRAND == GENZ_GAUSSIAN
+        const vec w = p[j] * (x[j] - p[DIM + j]);
+        s = s + w * w;
+#else
+        s = s + p[j] * fabs(x[j] - p[DIM + j]);
+#endif
+    }
+    return exp(-s);
+#elif INTEGRAND == GENZ_DISCONTINUOUS
+    vec s = (vec)(0.0);
+    for (int j = 0; j < DIM; ++j)
+        s = s + p[j] * x[j];
+#if DIM > 1
+    const long4 inside = (x[0] <= p[DIM]) & (x[1] <= p[DIM + 1]);
+#else
+    const long4 inside = x[0] <= p[DIM];
+#endif
+    return select((vec)(0.0), exp(s), inside);
 #else
 #error "unknown INTEGRAND"
 #endif

@@ -143,3 +143,65 @@ def test_bad_parameters_name_the_argument():
     with pytest.raises(InvalidArgumentError, match="2-dimensional"):
         I.make_integrand("pmj_step", d=3)
     assert I.make_integrand("disk", d=3).d == 3
+
+
+# -- Genz's six families (issue 38) ----------------------------------------------------
+@pytest.mark.filterwarnings("ignore:The occurrence of roundoff error")   # quad at its limit
+@pytest.mark.parametrize("kind", I.GENZ_KINDS)
+def test_genz_integrals_are_exact(kind):
+    from scipy import integrate
+    for d, seed in ((1, 3), (1, 8), (2, 5)):
+        f = I.genz(kind, d, seed=seed)
+        if d == 1:
+            want = integrate.quad(lambda t, f=f: f(np.array([[t]]))[0], 0, 1, points=[f.u[0]],
+                                  epsabs=0, epsrel=1e-13, limit=500)[0]
+            assert f.integral == pytest.approx(want, rel=1e-11), (kind, seed)
+        else:   # split at the kinks and steps along x_j = u_j
+            total = 0.0
+            for x0, x1 in ((0, f.u[0]), (f.u[0], 1)):
+                for y0, y1 in ((0, f.u[1]), (f.u[1], 1)):
+                    total += integrate.dblquad(lambda y, x, f=f: f(np.array([[x, y]]))[0], x0, x1, y0, y1,
+                                               epsabs=0, epsrel=1e-12)[0]
+            assert f.integral == pytest.approx(total, rel=1e-9), kind
+    # in 4-D: an Owen-scrambled Sobol' estimate of 2^18 points lands on it
+    f = I.genz(kind, 4, seed=1)
+    est = f(clsamp.make_sampler("sobol:owen", d=4, seed=2).sample(2**18)).mean()
+    # (the corner peak, 1.2e-5 of its peak value, and the steps converge slowest)
+    assert est == pytest.approx(f.integral, rel=2e-2 if kind in ("corner_peak", "discontinuous") else 2e-4)
+
+
+def test_genz_draws_are_seeded_and_scaled_to_the_difficulty():
+    for kind in I.GENZ_KINDS:
+        for d in (1, 3, 8):
+            f = I.genz(kind, d, seed=7)
+            assert f.d == d and f.name == f"genz_{kind}"
+            assert math.fsum(f.a) == pytest.approx(I.GENZ_DIFFICULTY[kind](d), rel=1e-12)
+            assert np.all((f.u >= 0) & (f.u < 1))
+            assert np.array_equal(f.a, I.genz(kind, d, seed=7).a)
+            assert not np.array_equal(f.u, I.genz(kind, d, seed=8).u)
+    assert I.make_integrand("genz_corner_peak", d=3).d == 3
+    assert I.genz("oscillatory", 2).smooth and not I.genz("continuous", 2).smooth
+    assert I.genz("discontinuous", 2).edges_when_shifted() == "axis"
+
+
+def test_genz_kernel_equals_numpy_in_higher_dimensions():
+    from clsamp.estimates import IntegrandErrors
+    sampler = clsamp.make_sampler("sobol", d=6, randomize="owen", seed=4)
+    for kind in I.GENZ_KINDS:
+        f = I.genz(kind, 6, seed=3)
+        res = clsamp.convergence(sampler, f, [4096 + 5], realizations=3, seed=9, progress=False)
+        want = IntegrandErrors(sampler, f, True, 9, "numpy").block(4101, 0, 3)
+        np.testing.assert_allclose(res.errors[0], want, rtol=1e-12, atol=1e-15 * abs(f.integral))
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: I.genz("gausian", 2), "'kind'"),
+    (lambda: I.genz("gaussian", 0), "'d'"),
+    (lambda: I.genz("gaussian", 17), "'d'"),
+    (lambda: I.Genz("gaussian", [1.0, -1.0], [0.5, 0.5]), "'a' must be positive"),
+    (lambda: I.Genz("gaussian", [1.0, 1.0], [0.5, 1.5]), "'u' must lie"),
+    (lambda: I.Genz("gaussian", [1.0, 1.0], [0.5]), "'u'"),
+])
+def test_genz_bad_arguments(call, match):
+    with pytest.raises(InvalidArgumentError, match=match):
+        call()
