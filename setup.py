@@ -7,9 +7,9 @@ setup(
     long_description=open("README.md", encoding="utf-8").read(),
     long_description_content_type="text/markdown",
     python_requires=">=3.10",
-    packages=["clsamp", "clsamp.geometry", "clsamp.runtime", "clsamp.metrics", "clsamp.samplers",
-              "clsamp.samplers.ccvt", "clsamp.samplers.poisson_disk", "clsamp.kernels", "clsamp.data",
-              "clsamp.scenes"],
+    packages=["clsamp", "clsamp.geometry", "clsamp.integrands", "clsamp.runtime", "clsamp.metrics",
+              "clsamp.samplers", "clsamp.samplers.ccvt", "clsamp.samplers.poisson_disk", "clsamp.kernels",
+              "clsamp.data", "clsamp.scenes"],
     # The OpenCL sources live in kernels/ at the top level and ship inside the package.
     package_dir={"clsamp.kernels": "kernels", "clsamp.scenes": "scenes"},
     package_data={"clsamp.kernels": ["*.cl", "*.h"], "clsamp.data": ["*"], "clsamp.scenes": ["*.json"]},

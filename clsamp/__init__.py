@@ -12,7 +12,7 @@ See README.md for a tour and ``clsamp --help`` for the command line.
 # function (its module is clsamp.sweep).
 import sys as _sys
 
-from . import families, files, integrands, metrics, parallel, plots, render, results, theory
+from . import families, files, integrands, metrics, parallel, plots, render, results, theory, transforms
 from .errors import (
                      BuildError,
                      ClsampError,
@@ -44,5 +44,5 @@ __all__ = [
     "integrate", "make_family",
     "make_sampler", "metrics", "nearest_neighbor_distances", "pair_correlation", "parallel", "plots",
     "power_spectrum", "radial_mean", "render", "sampler_names", "star_discrepancy", "theory",
-    "use_device", "results",
+    "use_device", "results", "transforms",
 ]
