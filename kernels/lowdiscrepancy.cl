@@ -9,8 +9,10 @@
  *               makes the kernels fast; any value gives the same bits
  *   HAMMERSLEY  (radical_points) dimension 0 is i / n instead of a radical inverse
  *   DIMS_PER_ITEM  dimensions per work-item, grid axis 2 (dims.h; all when undefined)
+ *   LD_LMS      (sobol_points) one table per realization, made by lms_matrices
  *
- * Kernels: sobol_points, radical_points, and (RANDOMIZE == LD_OWEN) owen_tables, which
+ * Kernels: sobol_points (any base-2 digital net in Gray-code order), lms_matrices,
+ * radical_points, and (RANDOMIZE == LD_OWEN) owen_tables, which
  * radical_points' Owen scrambling in base >= 3 reads: the permutations of the nodes near
  * the roots of the digit trees, made once per launch instead of once per point.
  *
@@ -30,6 +32,9 @@
 #endif
 #ifndef LD_BLOCK
 #define LD_BLOCK 32
+#endif
+#ifndef LD_LMS
+#define LD_LMS 0
 #endif
 
 /* Vector types of width LD_WIDTH (2 or 4): Sobol works on LD_WIDTH dimensions at once,
@@ -129,7 +134,11 @@ __kernel void sobol_points(__global ulong *out, __global const uint *matrices,
     const uint realization = realization0 + r;
     __global ulong *row = out + ((size_t)r * n + i0) * d;
     for (uint j = CLSAMP_DIM0; j < CLSAMP_DIM_END(d); j += LD_WIDTH) {
+#if LD_LMS
+        __global const uint *v = matrices + (size_t)r * 32 * stride + j;   /* realization r's */
+#else
         __global const uint *v = matrices + j;
+#endif
         uint gray = first ^ (first >> 1);
         uintW x = (uintW)(0u);
         while (gray) {
@@ -174,6 +183,35 @@ __kernel void sobol_points(__global ulong *out, __global const uint *matrices,
             }
         }
     }
+}
+
+/* Linear matrix scrambling (Matoušek 1998): out[r] = L_(r,j) V_j, for sobol_points with
+ * LD_LMS, whose realization r reads matrices + r 32 stride. matrices is sobol_points' (32,
+ * stride) table; row k of L_(r,j) is word 4 + k of Philox (scramble_stream, counter (j,
+ * realization0 + r, block 1 + k / 4)), block 0 staying the seeds of the digital shift.
+ * Grid: (stride, realizations); columns j >= d are zero. */
+__kernel void lms_matrices(__global uint *out, __global const uint *matrices, const uint d,
+                           const uint stride, const uint realization0, const uint key_lo,
+                           const uint key_hi, const uint scramble_stream)
+{
+    const uint j = get_global_id(0);
+    const uint r = get_global_id(1);
+    if (j >= stride)
+        return;
+    __global uint *o = out + (size_t)r * 32 * stride + j;
+    uint rows[32];
+    if (j < d) {
+        const uint2 key = (uint2)(key_lo, key_hi);
+        for (uint b = 0; b < 8; ++b) {
+            const uint4 w = clsamp_block(key, scramble_stream, realization0 + r, j, 1 + b);
+            rows[4 * b] = lms_row(w.x, 4 * b);
+            rows[4 * b + 1] = lms_row(w.y, 4 * b + 1);
+            rows[4 * b + 2] = lms_row(w.z, 4 * b + 2);
+            rows[4 * b + 3] = lms_row(w.w, 4 * b + 3);
+        }
+    }
+    for (uint c = 0; c < 32; ++c)
+        o[(size_t)c * stride] = j < d ? lms_apply(rows, matrices[(size_t)c * stride + j]) : 0u;
 }
 
 /* The value of digit a at position k under the digit-wise randomizations. */

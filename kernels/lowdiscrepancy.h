@@ -56,6 +56,23 @@ inline uint owen_scramble_base2(uint x, uint seed)
     return reverse_bits32(lk_hash(reverse_bits32(x), seed));
 }
 
+/* Matoušek's linear matrix scrambling (generating_matrices.lms_row_masks, lms_apply): row k
+ * of a random non-singular lower-triangular L from a Philox word (the diagonal bit 31 - k
+ * set, the bits left of it random), and L v over GF(2) for a column word v. */
+inline uint lms_row(uint word, uint k)
+{
+    const uint diagonal = 1u << (31u - k);
+    return (word & ~(diagonal - 1u)) | diagonal;
+}
+
+inline uint lms_apply(const uint *rows, uint v)
+{
+    uint y = 0;
+    for (uint k = 0; k < 32; ++k)
+        y |= (popcount(rows[k] & v) & 1u) << (31u - k);
+    return y;
+}
+
 /* mix64 of one word, and mix64_4 of four words in lanes */
 #define CLSAMP_MIX64(name, T)             \
     CLSAMP_ALWAYS_INLINE T name(T v)      \
