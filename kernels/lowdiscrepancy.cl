@@ -112,6 +112,20 @@ inline ulongW shift32W_bits(uintW x, ulongW u)
 CLSAMP_REVERSE_BITS32(reverse_bits32W, uintW)
 CLSAMP_LK_HASH(lk_hashW, uintW)
 
+/* A work-item's block: points i0 .. i0 + count - 1 of the launch (index first = start + i0)
+ * of realization r, and where they go; items past the last block return. */
+#define LD_ITEM_BLOCK                                                        \
+    const uint g = get_global_id(0);                                        \
+    const uint r = get_global_id(1);                                        \
+    if (g >= (n + LD_BLOCK - 1) / LD_BLOCK)                                 \
+        return;                                                             \
+    const uint i0 = g * LD_BLOCK;                                           \
+    const uint count = min((uint)LD_BLOCK, n - i0);                         \
+    const uint first = start + i0;                                          \
+    const uint2 key = (uint2)(key_lo, key_hi);                              \
+    const uint realization = realization0 + r;                              \
+    __global ulong *row = out + ((size_t)r * n + i0) * d
+
 /* Sobol points in Gray-code order (as scipy): x_i = xor of V[c] over the set bits c of
  * i ^ (i >> 1), and x_(i+1) = x_i ^ V[ctz(i + 1)]. matrices is (32, padded d): row c holds
  * V[c] of every dimension, zero past d. For Owen scrambling V arrives bit-reversed, so the
@@ -121,18 +135,8 @@ __kernel void sobol_points(__global ulong *out, __global const uint *matrices,
                            const uint key_lo, const uint key_hi, const uint scramble_stream,
                            const uint shift_stream)
 {
-    const uint g = get_global_id(0);
-    const uint r = get_global_id(1);
-    const uint blocks = (n + LD_BLOCK - 1) / LD_BLOCK;
-    if (g >= blocks)
-        return;
-    const uint i0 = g * LD_BLOCK;
-    const uint count = min((uint)LD_BLOCK, n - i0);
-    const uint first = start + i0;
+    LD_ITEM_BLOCK;
     const uint stride = (d + LD_WIDTH - 1) / LD_WIDTH * LD_WIDTH;
-    const uint2 key = (uint2)(key_lo, key_hi);
-    const uint realization = realization0 + r;
-    __global ulong *row = out + ((size_t)r * n + i0) * d;
     for (uint j = CLSAMP_DIM0; j < CLSAMP_DIM_END(d); j += LD_WIDTH) {
 #if LD_LMS
         __global const uint *v = matrices + (size_t)r * 32 * stride + j;   /* realization r's */
@@ -250,17 +254,7 @@ __kernel void radical_points(__global ulong *out, __global const uint *bases,
 #endif
                              )
 {
-    const uint g = get_global_id(0);
-    const uint r = get_global_id(1);
-    const uint blocks = (n + LD_BLOCK - 1) / LD_BLOCK;
-    if (g >= blocks)
-        return;
-    const uint i0 = g * LD_BLOCK;
-    const uint count = min((uint)LD_BLOCK, n - i0);
-    const uint first = start + i0;
-    const uint2 key = (uint2)(key_lo, key_hi);
-    const uint realization = realization0 + r;
-    __global ulong *row = out + ((size_t)r * n + i0) * d;
+    LD_ITEM_BLOCK;
     for (uint j = CLSAMP_DIM0; j < CLSAMP_DIM_END(d); ++j) {
         __global ulong *p = row + j;
 #if RANDOMIZE == LD_SHIFT
@@ -525,6 +519,87 @@ __kernel void owen_tables(__global uint *owen_table, __global const uint *owen_l
             const uint held = a[i];
             a[i] = a[other];
             a[other] = held;
+        }
+    }
+}
+#endif
+
+/* Digital nets in base b >= 3 from generating matrices, in natural order (NumPy twin:
+ * generating_matrices.digital_net_digits and the sampler's reference): point i, dimension j
+ * has the digits y = C_j a mod b (a the DN_COLS digits of i, least significant first; y the
+ * DN_ROWS digits of the coordinate, most significant first) and the value v / b^DN_ROWS,
+ * v = Σ_r y_r b^(DN_ROWS-1-r) < 2^53, one correctly rounded division. matrices and sums are
+ * (d, DN_COLS, DN_ROWS): column k of C_j, and its running sum D_k = C_0 + ... + C_k mod b.
+ * The first point of a work-item costs a matrix-vector product; the next ones an addition:
+ * when i + 1 turns c trailing digits b - 1 of i into 0 and adds one to digit c,
+ * y += D_c (mod b). LD_XOR adds to digit r the random digit digit_shift(digit_hash(seed64,
+ * r), b) (a digital shift, as radical_points' xor), LD_SHIFT is the Cranley-Patterson
+ * rotation. Grid and arguments as sobol_points. */
+#ifdef DN_ROWS
+__kernel void digital_points(__global ulong *out, __global const uint *matrices,
+                             const uint n, const uint d, const uint start, const uint realization0,
+                             const uint key_lo, const uint key_hi, const uint scramble_stream,
+                             const uint shift_stream, __global const uint *sums, const uint base,
+                             const ulong denominator)
+{
+    LD_ITEM_BLOCK;
+    for (uint j = CLSAMP_DIM0; j < CLSAMP_DIM_END(d); ++j) {
+        __global const uint *c = matrices + (size_t)j * DN_COLS * DN_ROWS;
+        __global const uint *s = sums + (size_t)j * DN_COLS * DN_ROWS;
+        __global ulong *p = row + j;
+        uint a[DN_COLS], y[DN_ROWS];
+        {
+            uint i = first;
+            for (uint k = 0; k < DN_COLS; ++k) {
+                a[k] = i % base;
+                i /= base;
+            }
+        }
+        for (uint q = 0; q < DN_ROWS; ++q) {
+            ulong acc = 0;                      /* < DN_COLS b^2 <= 2^64 for b <= 2^20 */
+            for (uint k = 0; k < DN_COLS; ++k)
+                acc += (ulong)c[k * DN_ROWS + q] * a[k];
+            y[q] = (uint)(acc % base);
+        }
+#if RANDOMIZE == LD_SHIFT
+        const ulong u = clsamp_uniform_bits(key, shift_stream, realization, 0, j);
+#elif RANDOMIZE == LD_XOR
+        uint shift[DN_ROWS];
+        {
+            const uint4 words = clsamp_block(key, scramble_stream, realization, j, 0);
+            const ulong seed64 = (ulong)words.x | ((ulong)words.y << 32);
+            for (uint q = 0; q < DN_ROWS; ++q)
+                shift[q] = digit_shift(digit_hash(seed64, q), base);
+        }
+#endif
+        for (uint t = 0; t < count; ++t) {
+            ulong v = 0;
+            for (uint q = 0; q < DN_ROWS; ++q) {
+#if RANDOMIZE == LD_XOR
+                const uint e = y[q] + shift[q];
+                v = v * base + (e >= base ? e - base : e);
+#else
+                v = v * base + y[q];
+#endif
+            }
+#if RANDOMIZE == LD_SHIFT
+            p[(size_t)t * d] = f64_shift_mod1(f64_div(v, denominator, 0), u);
+#else
+            p[(size_t)t * d] = f64_div(v, denominator, 0);
+#endif
+            if (t + 1 < count) {
+                uint k = 0;
+                while (k < DN_COLS && a[k] == base - 1)
+                    a[k++] = 0;
+                if (k < DN_COLS) {
+                    ++a[k];
+                    __global const uint *dk = s + k * DN_ROWS;
+                    for (uint q = 0; q < DN_ROWS; ++q) {
+                        const uint e = y[q] + dk[q];
+                        y[q] = e >= base ? e - base : e;
+                    }
+                }
+            }
         }
     }
 }

@@ -71,3 +71,122 @@ def test_lms_names_and_did_you_mean():
         clsamp.make_sampler("sobol:lsm")
     with pytest.raises(InvalidArgumentError, match="randomize"):
         clsamp.make_sampler("sobol", randomize="lms+xor")
+
+
+# -- Faure, Niederreiter, user matrices -------------------------------------------------
+def test_faure_matches_published_points_and_qmcpy():
+    # Faure 1982; qmcpy's Faure docstring lists the first 25 points in d = 4 (base 5)
+    pts = clsamp.make_sampler("faure", d=4).sample(25)
+    np.testing.assert_allclose(pts[5], [0.04, 0.24, 0.44, 0.64], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(pts[24], [0.96, 0.76, 0.56, 0.36], rtol=0, atol=1e-15)
+    qmcpy = pytest.importorskip("qmcpy")
+    for d in (3, 4, 6):
+        ours = clsamp.make_sampler("faure", d=d).sample(gm.faure_base(d) ** 3)
+        theirs = qmcpy.Faure(d, randomize="FALSE")(len(ours), warn=False)
+        np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-12)
+
+
+def test_faure_dimension_zero_is_van_der_corput():
+    for d in (3, 5, 11):
+        b = gm.faure_base(d)
+        ours = clsamp.make_sampler("faure", d=d).sample(1000, start=123456)[:, 0]
+        vdc = clsamp.make_sampler("van_der_corput", d=1, base=b).sample(1000, start=123456)[:, 0]
+        np.testing.assert_array_equal(ours, vdc)
+
+
+def test_niederreiter_matches_gsl():
+    # GSL's qrng/test.c (gsl_qrng_niederreiter_2, Bratley-Fox-Niederreiter 1992): the 3rd,
+    # 4th and 7th points in 2 and 3 dimensions
+    for d, expected in [(2, [[0.75, 0.25], [0.25, 0.75], [0.625, 0.125]]),
+                        (3, [[0.75, 0.25, 0.3125], [0.25, 0.75, 0.5625], [0.625, 0.125, 0.6875]])]:
+        pts = clsamp.make_sampler("niederreiter", d=d).sample(8)
+        assert pts[[2, 3, 6]].tolist() == expected
+    # GSL's 12 polynomials: x, 1+x, 1+x+x^2, 1+x+x^3, 1+x^2+x^3, 1+x+x^4, 1+x^3+x^4, ...
+    assert gm.irreducible_polynomials_gf2(12) == [2, 3, 7, 11, 13, 19, 25, 31, 37, 41, 47, 55]
+
+
+@pytest.mark.parametrize("randomize", BASE2)
+def test_niederreiter_keeps_its_net_property(randomize):
+    for d in (3, 4, 5):
+        t = gm.niederreiter_t(d)
+        p = clsamp.make_sampler("niederreiter", d=d, seed=2, randomize=randomize).sample(2**9)
+        for m in range(1, 10):
+            assert is_tms_net(p[:2**m], min(t, m), m), (d, randomize, m)
+    assert gm.niederreiter_t(4) == 3 and not is_tms_net(
+        clsamp.make_sampler("niederreiter", d=4).sample(2**9), 2, 9)   # t is sharp here
+
+
+@pytest.mark.parametrize("randomize", [None, "xor"])
+def test_faure_is_a_zero_m_s_net_in_its_base(randomize):
+    for d, m_max in ((3, 6), (5, 4)):
+        b = gm.faure_base(d)
+        p = clsamp.make_sampler("faure", d=d, seed=4, randomize=randomize).sample(b**m_max,
+                                                                                   realizations=2)
+        for k in range(2):
+            for m in range(1, m_max + 1):
+                assert is_tms_net(p[k, :b**m], 0, m, base=b), (d, randomize, m)
+
+
+def test_faure_shift_breaks_the_net():
+    p = clsamp.make_sampler("faure", d=3, seed=4, randomize="shift").sample(3**4)
+    assert not is_tms_net(p, 0, 4, base=3)
+
+
+@pytest.mark.parametrize("name,d,randomize", [("faure", 20, "xor"), ("faure", 40, "shift"),
+                                              ("niederreiter", 40, "lms+shift"),
+                                              ("niederreiter", 9, "owen")])
+def test_kernels_equal_twins_far_into_the_sequence(name, d, randomize):
+    kw = dict(d=d, seed=8, randomize=randomize)
+    a = clsamp.make_sampler(name, **kw).sample(300, realizations=range(2, 4), start=10**6 + 3)
+    b = clsamp.make_sampler(name, backend="numpy", **kw).sample(300, realizations=range(2, 4),
+                                                                 start=10**6 + 3)
+    np.testing.assert_array_equal(a, b)
+
+
+def test_digital_net_is_its_definition():
+    rng = np.random.default_rng(3)
+    for base, shape in ((2, (3, 32, 32)), (2, (2, 20, 12)), (3, (3, 20, 9)), (7, (2, 10, 5))):
+        matrices = rng.integers(0, base, shape)
+        n = min(base ** shape[2], 500)
+        for backend in ("opencl", "numpy"):
+            pts = clsamp.make_sampler("digital_net", d=shape[0], matrices=matrices, base=base,
+                                      backend=backend).sample(n)
+            digits = gm.digital_net_digits(np.arange(n), matrices, base)[..., :shape[1]]
+            rows = min(shape[1], 32 if base == 2 else 33)
+            exact = (digits[..., :rows] * float(base) ** -np.arange(1, rows + 1)).sum(-1)
+            np.testing.assert_allclose(pts, exact, rtol=0, atol=1e-15)
+
+
+def test_digital_net_default_and_faure_matrices():
+    sobol = clsamp.make_sampler("sobol", d=5).sample(256)
+    net = clsamp.make_sampler("digital_net", d=5).sample(256)           # natural order
+    assert not np.array_equal(net, sobol)
+    np.testing.assert_array_equal(np.unique(net, axis=0), np.unique(sobol, axis=0))
+    for randomize in (None, "xor"):
+        m = nt.digit_count(5)
+        user = clsamp.make_sampler("digital_net", d=4, base=5, seed=1, randomize=randomize,
+                                   matrices=gm.faure_matrices(4, 5, m)).sample(625, start=9)
+        faure = clsamp.make_sampler("faure", d=4, seed=1, randomize=randomize).sample(625, start=9)
+        np.testing.assert_array_equal(user, faure)
+    lms = clsamp.make_sampler("digital_net", d=4, randomize="lms", seed=2).sample(2**8)
+    assert is_tms_net(lms, sobol_t(4), 8)
+
+
+def test_digital_net_bad_input():
+    eye = np.eye(4, dtype=int)[None].repeat(2, 0)
+    cases = [(dict(matrices=eye, base=4), "'base' must be a prime"),
+             (dict(matrices=eye, base=3, randomize="lms"), "'randomize'"),
+             (dict(base=3), "'matrices' must be given"),
+             (dict(matrices=eye[0], base=3), "'matrices' must be an integer array"),
+             (dict(matrices=eye * 3, base=3), r"digits in \[0, 3\)"),
+             (dict(matrices=eye, base=3, d=3), "'d' must be in"),
+             (dict(d=4, base=2, matrices=np.ones((4, 8, 8), dtype=float)), "integer array")]
+    for kw, message in cases:
+        with pytest.raises(InvalidArgumentError, match=message):
+            clsamp.make_sampler("digital_net", **kw)
+    small = clsamp.make_sampler("digital_net", d=2, matrices=eye, base=3)
+    assert small.sample(81).shape == (81, 2)
+    with pytest.raises(InvalidArgumentError, match="'start' \\+ 'n' must stay within the 81"):
+        small.sample(4, start=80)
+    with pytest.raises(InvalidArgumentError, match="'randomize'"):
+        clsamp.make_sampler("faure", d=3, randomize="owen")

@@ -231,6 +231,7 @@ class DigitalNetB2(LowDiscrepancySampler):
 
     randomizations = (None, "shift", "xor", "owen", "lms", "lms+shift")
     net_name = "digital net"
+    base = 2
 
     def gray_columns(self):
         """The column words the Gray-code kernel xors.
@@ -246,9 +247,12 @@ class DigitalNetB2(LowDiscrepancySampler):
         return (type(self).__name__, self.d)
 
     def _warn_weaker(self, n, start):
-        total = start + (n or 0)
-        if total & (total - 1):
-            warnings.warn(f"the balance properties of {self.net_name} points need a power of two "
+        total = power = start + (n or 0)
+        while power > 1 and power % self.base == 0:
+            power //= self.base
+        if power != 1:
+            what = "two" if self.base == 2 else f"{self.base}"
+            warnings.warn(f"the balance properties of {self.net_name} points need a power of {what} "
                           f"points: {self.label!r} asked for start + n = {total}, which is not, so "
                           "the set is not a net", UserWarning, stacklevel=3)
 
