@@ -190,3 +190,16 @@ def test_digital_net_bad_input():
         small.sample(4, start=80)
     with pytest.raises(InvalidArgumentError, match="'randomize'"):
         clsamp.make_sampler("faure", d=3, randomize="owen")
+
+
+def test_base2_nets_equal_qmcpy_digital_net_b2():
+    # qmcpy's DigitalNetB2 given the same column words (most significant digit first)
+    qmcpy = pytest.importorskip("qmcpy")
+    rng = np.random.default_rng(0)
+    user = rng.integers(0, 2, (5, 32, 32))
+    for name, params, columns, order in [
+            ("digital_net", {"matrices": user}, gm.columns_base2(user), "RADICAL INVERSE"),
+            ("niederreiter", {}, gm.columns_base2(gm.niederreiter_matrices(5)), "GRAY")]:
+        theirs = qmcpy.DigitalNetB2(5, randomize="FALSE", generating_matrices=columns.astype(np.uint64),
+                                    msb=True, t=32, order=order)(2**12, warn=False)
+        np.testing.assert_array_equal(clsamp.make_sampler(name, d=5, **params).sample(2**12), theirs)
