@@ -11,7 +11,8 @@
  *   DIMS_PER_ITEM  dimensions per work-item, grid axis 2 (dims.h; all when undefined)
  *   LD_LMS      (sobol_points) one table per realization, made by lms_matrices
  *
- * Kernels: sobol_points (any base-2 digital net in Gray-code order), lms_matrices,
+ * Kernels: sobol_points (any base-2 digital net in Gray-code order), sobol_points64,
+ * lms_matrices, digital_points (base b >= 3),
  * radical_points, and (RANDOMIZE == LD_OWEN) owen_tables, which
  * radical_points' Owen scrambling in base >= 3 reads: the permutations of the nodes near
  * the roots of the digit trees, made once per launch instead of once per point.
@@ -112,16 +113,17 @@ inline ulongW shift32W_bits(uintW x, ulongW u)
 CLSAMP_REVERSE_BITS32(reverse_bits32W, uintW)
 CLSAMP_LK_HASH(lk_hashW, uintW)
 
-/* A work-item's block: points i0 .. i0 + count - 1 of the launch (index first = start + i0)
+/* A work-item's block: points i0 .. i0 + count - 1 of the launch (index first = start + i0,
+ * of type T)
  * of realization r, and where they go; items past the last block return. */
-#define LD_ITEM_BLOCK                                                        \
+#define LD_ITEM_BLOCK(T)                                                     \
     const uint g = get_global_id(0);                                        \
     const uint r = get_global_id(1);                                        \
     if (g >= (n + LD_BLOCK - 1) / LD_BLOCK)                                 \
         return;                                                             \
     const uint i0 = g * LD_BLOCK;                                           \
     const uint count = min((uint)LD_BLOCK, n - i0);                         \
-    const uint first = start + i0;                                          \
+    const T first = start + i0;                                             \
     const uint2 key = (uint2)(key_lo, key_hi);                              \
     const uint realization = realization0 + r;                              \
     __global ulong *row = out + ((size_t)r * n + i0) * d
@@ -135,7 +137,7 @@ __kernel void sobol_points(__global ulong *out, __global const uint *matrices,
                            const uint key_lo, const uint key_hi, const uint scramble_stream,
                            const uint shift_stream)
 {
-    LD_ITEM_BLOCK;
+    LD_ITEM_BLOCK(uint);
     const uint stride = (d + LD_WIDTH - 1) / LD_WIDTH * LD_WIDTH;
     for (uint j = CLSAMP_DIM0; j < CLSAMP_DIM_END(d); j += LD_WIDTH) {
 #if LD_LMS
@@ -184,6 +186,49 @@ __kernel void sobol_points(__global ulong *out, __global const uint *matrices,
             if (t + 1 < count) {
                 ++index;
                 x ^= LD_LOADW(v + (size_t)ld_ctz(index) * stride);
+            }
+        }
+    }
+}
+
+/* Sobol points with 64-bit indices (bits=64): the same Gray-code walk over 64 columns of 64
+ * bits (matrices is (64, d): row c holds V_c = m_c 2^(63-c) of every dimension), one
+ * dimension at a time. The value is the top 53 bits, (x >> 11) 2^-53, exact and below 1;
+ * below index 2^32 the low 32 bits of x are 0, so the points are sobol_points' bits. The
+ * digital shift xors (words.x << 32 | words.y): its top half is sobol_points' seed. */
+__kernel void sobol_points64(__global ulong *out, __global const ulong *matrices,
+                             const uint n, const uint d, const ulong start, const uint realization0,
+                             const uint key_lo, const uint key_hi, const uint scramble_stream,
+                             const uint shift_stream)
+{
+    LD_ITEM_BLOCK(ulong);
+    for (uint j = CLSAMP_DIM0; j < CLSAMP_DIM_END(d); ++j) {
+        __global const ulong *v = matrices + j;
+        ulong gray = first ^ (first >> 1);
+        ulong x = 0;
+        while (gray) {
+            x ^= v[(size_t)ld_ctz64(gray) * d];
+            gray &= gray - 1UL;
+        }
+#if RANDOMIZE == LD_SHIFT
+        const ulong u = clsamp_uniform_bits(key, shift_stream, realization, 0, j);
+#elif RANDOMIZE == LD_XOR
+        const uint4 words = clsamp_block(key, scramble_stream, realization, j, 0);
+        const ulong seed = ((ulong)words.x << 32) | words.y;
+#endif
+        __global ulong *p = row + j;
+        ulong index = first;
+        for (uint t = 0; t < count; ++t) {
+#if RANDOMIZE == LD_SHIFT
+            p[(size_t)t * d] = f64_shift_mod1(f64_scaled(x >> 11, -53), u);
+#elif RANDOMIZE == LD_XOR
+            p[(size_t)t * d] = f64_scaled((x ^ seed) >> 11, -53);
+#else
+            p[(size_t)t * d] = f64_scaled(x >> 11, -53);
+#endif
+            if (t + 1 < count) {
+                ++index;
+                x ^= v[(size_t)ld_ctz64(index) * d];
             }
         }
     }
@@ -254,7 +299,7 @@ __kernel void radical_points(__global ulong *out, __global const uint *bases,
 #endif
                              )
 {
-    LD_ITEM_BLOCK;
+    LD_ITEM_BLOCK(uint);
     for (uint j = CLSAMP_DIM0; j < CLSAMP_DIM_END(d); ++j) {
         __global ulong *p = row + j;
 #if RANDOMIZE == LD_SHIFT
@@ -542,7 +587,7 @@ __kernel void digital_points(__global ulong *out, __global const uint *matrices,
                              const uint shift_stream, __global const uint *sums, const uint base,
                              const ulong denominator)
 {
-    LD_ITEM_BLOCK;
+    LD_ITEM_BLOCK(uint);
     for (uint j = CLSAMP_DIM0; j < CLSAMP_DIM_END(d); ++j) {
         __global const uint *c = matrices + (size_t)j * DN_COLS * DN_ROWS;
         __global const uint *s = sums + (size_t)j * DN_COLS * DN_ROWS;

@@ -24,6 +24,11 @@ inline uint ld_ctz(uint x)
     return 31u - clz(x & (0u - x));
 }
 
+inline uint ld_ctz64(ulong x)
+{
+    return 63u - (uint)clz(x & (0UL - x));
+}
+
 /* The 32 bits of x in reverse order, and Vegdahl's LK hash on reversed bits (a nested
  * scramble of the binary digits; Burley 2020 after Laine and Karras 2011), for uint or a
  * uint vector T: the twins of clsamp.number_theory.reverse_bits32 and lk_hash. */

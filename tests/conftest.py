@@ -39,12 +39,15 @@ def is_net(points, m):
 
 
 def net_cells(x, base, k):
-    """floor(x b^k) of coordinates in [0, 1), a value within 1e-9 below an integer taken as it
-    (in base b != 2 a point on a cell's edge, j / b^k, is a double just below or above it)."""
+    """floor(x b^k) of coordinates in [0, 1): exact in base 2; in base b != 2 a point on a
+    cell's edge, j / b^k, is a double just below or above it, so a value within 1e-12 below
+    an integer is taken as it."""
     import numpy as np
     c = x * float(base) ** k
     cell = np.floor(c)
-    return (cell + (c - cell > 1 - 1e-9)).astype(np.int64)
+    if base != 2:
+        cell += c - cell > 1 - 1e-12
+    return cell.astype(np.int64)
 
 
 def is_tms_net(points, t, m, base=2):

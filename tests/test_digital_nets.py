@@ -203,3 +203,54 @@ def test_base2_nets_equal_qmcpy_digital_net_b2():
         theirs = qmcpy.DigitalNetB2(5, randomize="FALSE", generating_matrices=columns.astype(np.uint64),
                                     msb=True, t=32, order=order)(2**12, warn=False)
         np.testing.assert_array_equal(clsamp.make_sampler(name, d=5, **params).sample(2**12), theirs)
+
+
+# -- Sobol' with 64-bit indices -------------------------------------------------------
+@pytest.mark.parametrize("randomize", [None, "shift", "xor"])
+def test_sobol64_equals_sobol32_then_continues(randomize):
+    kw = dict(d=7, seed=5, randomize=randomize)
+    wide = clsamp.make_sampler("sobol", bits=64, **kw)
+    pts = wide.sample(16, realizations=2, start=2**32 - 8)
+    np.testing.assert_array_equal(
+        pts, clsamp.make_sampler("sobol", bits=64, backend="numpy", **kw).sample(
+            16, realizations=2, start=2**32 - 8))
+    if randomize != "xor":      # xor's 64-bit digit vector only begins with the 32-bit one
+        narrow = clsamp.make_sampler("sobol", **kw).sample(8, realizations=2, start=2**32 - 8)
+        np.testing.assert_array_equal(pts[:, :8], narrow)
+    assert len(np.unique(pts[0], axis=0)) == 16        # no wrap to point 0 past 2^32
+    if randomize is None:
+        i = np.arange(2**32 - 8, 2**32 + 8, dtype=np.uint64)
+        g = i ^ (i >> np.uint64(1))
+        reversed64 = np.array([int(f"{int(v):064b}"[::-1], 2) for v in g], dtype=np.uint64)
+        np.testing.assert_array_equal(pts[0, :, 0], (reversed64 >> np.uint64(11)) * 2.0**-53)
+
+
+def test_sobol64_blocks_past_2_to_32_are_nets():
+    # indices [k 2^m, (k + 1) 2^m) of a digital sequence form a (digitally shifted) net
+    wide = clsamp.make_sampler("sobol", d=4, bits=64)
+    for start in (2**32, 2**40 + 2**20, 2**63):
+        assert is_tms_net(wide.sample(2**9, start=start), sobol_t(4), 9), start
+    with pytest.raises(InvalidArgumentError, match="'start'"):
+        wide.sample(8, start=2**64 - 4)
+    assert wide.sample(4, start=2**64 - 4).shape == (4, 4)
+
+
+def test_sobol64_direction_numbers_and_points_equal_scipy():
+    from scipy.stats import qmc
+    engine = qmc.Sobol(40, scramble=False, bits=64)
+    wide = clsamp.make_sampler("sobol", d=40, bits=64)
+    np.testing.assert_array_equal(wide.sample(1024), engine.random(1024))
+    if hasattr(engine, "_sv"):       # scipy's 64-bit direction numbers (fast_forward refuses 64)
+        m = clsamp.make_sampler("sobol", d=40, bits=64, backend="numpy")
+        top = m.sample(1, start=2**63)[0]          # index 2^63: Gray code 2^63 + 2^62
+        expected = (engine._sv[:, 63] ^ engine._sv[:, 62]) >> np.uint64(11)
+        np.testing.assert_array_equal(top, expected * 2.0**-53)
+
+
+def test_sobol64_bad_input():
+    with pytest.raises(InvalidArgumentError, match="'bits'"):
+        clsamp.make_sampler("sobol", bits=48)
+    with pytest.raises(InvalidArgumentError, match="'randomize'.*bits=64"):
+        clsamp.make_sampler("sobol", bits=64, randomize="owen")
+    with pytest.raises(InvalidArgumentError, match="'start'"):
+        clsamp.make_sampler("sobol").sample(16, start=2**32 - 8)

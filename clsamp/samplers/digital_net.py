@@ -49,15 +49,8 @@ class _DigitalNet(DigitalNetB2):
         self._points = base ** self.matrices.shape[2]        # b^m: the points the columns index
         self._digest = hashlib.sha1(self.matrices.tobytes()).hexdigest()
 
-    def _check_call(self, n, realizations, start, return_info=False):
-        checked = super()._check_call(n, realizations, start, return_info)
-        n, start = checked[0], checked[3]
-        if n is not None and start + n > self._points:
-            raise InvalidArgumentError(
-                f"'start' + 'n' must stay within the {self._points} points of {self.label!r} "
-                f"(b^m, m = {self.matrices.shape[2]} columns in base {self.base}), got "
-                f"start={start}, n={n}")
-        return checked
+    def _last_index(self):
+        return min(self.max_n, self._points - 1)
 
     def _table_key(self):
         return (type(self).__name__, self.base, self.matrices.shape, self._digest)

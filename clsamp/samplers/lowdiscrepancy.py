@@ -25,7 +25,7 @@ import numpy as np
 from .. import generating_matrices as gm
 from .. import number_theory as nt
 from .. import philox, runtime
-from ..errors import NoDeviceError
+from ..errors import InvalidArgumentError, NoDeviceError
 from ..geometry import torus
 from ..validation import check_choice, check_int
 from .base import Rate, Sampler, register
@@ -202,7 +202,9 @@ class LowDiscrepancySampler(Sampler):
                                 defines={"RANDOMIZE": _CODES[self.randomize], "LD_BLOCK": block,
                                          **defines, **split})
         kernel(queue, grid, group, target.buffer, table.data,
-               np.uint32(n), np.uint32(self.d), np.uint32(start), np.uint32(realizations.start),
+               np.uint32(n), np.uint32(self.d),
+               start if isinstance(start, np.uint64) else np.uint32(start),   # sobol_points64's
+               np.uint32(realizations.start),
                *philox.seed_key(self.seed), np.uint32(philox.Stream.SCRAMBLE),
                np.uint32(philox.Stream.SHIFT), *extra)
         return target.finish()
@@ -349,10 +351,17 @@ class SobolSampler(DigitalNetB2):
         (keeps the nets); ``"lms+shift"``: then xor a random digit vector, as
         ``scipy.stats.qmc.Sobol(scramble=True)`` and qmcpy's default do.
     backend : {"opencl", "numpy"}
+    bits : {32, 64}
+        Index bits. With 64, 64 direction numbers of 64 bits (the same recurrence), so
+        ``start + n`` may reach 2^64; the points are the top 53 bits of the 64-bit
+        state, ``(x >> 11) 2^-53``, which below index 2^32 are exactly the 32-bit
+        points. ``randomize`` then one of None, ``"shift"`` and ``"xor"`` (whose
+        64-bit digit vector begins with the 32-bit one).
 
     Notes
     -----
-    Points are integers times 2^-32 (32 bits of resolution after scrambling too).
+    Points are integers times 2^-32 (32 bits of resolution after scrambling too; with
+    ``bits=64`` past index 2^32, times 2^-53).
     ``sample(n, start=k)`` continues ``sample(k)``. As scipy does, asking for a prefix
     whose length (start + n) is not a power of two warns (``UserWarning``): such a prefix
     is not a net, and the balance properties are lost.
@@ -377,11 +386,58 @@ class SobolSampler(DigitalNetB2):
     (8, 256, 3)
     >>> clsamp.make_sampler("sobol", d=16, randomize="lms+shift").sample(1024).shape
     (1024, 16)
+    >>> clsamp.make_sampler("sobol", d=2, bits=64).sample(2, start=2**32).tolist()
+    [[3.4924596548080444e-10, 0.4999999998835847], [0.500000000349246, 0.9999999998835847]]
     """
 
     max_d = nt.sobol_max_dimension()
     max_d_source = "the Joe-Kuo direction-number table"
     net_name = "Sobol'"
+
+    def __init__(self, d=2, seed=0, backend="opencl", randomize=None, bits=32):
+        self.bits = check_choice(bits, "bits", (32, 64))
+        super().__init__(d=d, seed=seed, backend=backend, randomize=randomize)
+        if self.bits == 64 and self.randomize not in (None, "shift", "xor"):
+            raise InvalidArgumentError(
+                f"'randomize' must be None, 'shift' or 'xor' with bits=64, got {self.randomize!r}")
+
+    def __repr__(self):
+        wide = ", bits=64" if self.bits == 64 else ""
+        return super().__repr__()[:-1] + wide + ")"
+
+    def _last_index(self):
+        return 2**64 - 1 if self.bits == 64 else self.max_n
+
+    def _table_key(self):
+        return (type(self).__name__, self.d, self.bits)
+
+    def _matrices64(self):
+        """(d, 64) uint64: V_jc = m_jc 2^(63-c), whose top halves are the 32-bit V_jc for c < 32."""
+        v = nt.sobol_direction_integers(64)[:self.d]
+        return v << (np.uint64(63) - np.arange(64, dtype=np.uint64))[None, :]
+
+    def _reference(self, n, realizations, start):
+        if self.bits == 32:
+            return super()._reference(n, realizations, start)
+        rs = np.arange(realizations.start, realizations.stop)
+        x = nt.sobol_integers(np.uint64(start) + np.arange(n, dtype=np.uint64), self._matrices64())
+        out = np.empty((len(rs), n, self.d))
+        if self.randomize == "xor":
+            words = scramble_words(self.seed, rs, self.d).astype(np.uint64)
+            seeds = (words[..., 0] << np.uint64(32)) | words[..., 1]
+            for k in range(len(rs)):
+                out[k] = ((x ^ seeds[k][None, :]) >> np.uint64(11)).astype(np.float64) * 2.0**-53
+            return out
+        out[:] = (x >> np.uint64(11)).astype(np.float64) * 2.0**-53
+        if self.randomize == "shift":
+            out = torus.shift(out, shift_vectors(self.seed, rs, self.d)[:, None, :])
+        return out
+
+    def _device(self, n, realizations, start, out=None):
+        if self.bits == 32:
+            return super()._device(n, realizations, start, out)
+        table = runtime.table(self._table_key(), lambda: self._matrices64().T.copy(), dtype=np.uint64)
+        return self._launch("sobol_points64", table, n, realizations, np.uint64(start), {}, out)
 
     def gray_columns(self):
         """The Joe-Kuo direction numbers (:func:`clsamp.number_theory.sobol_matrices`).
