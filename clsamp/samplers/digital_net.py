@@ -17,10 +17,9 @@ from .. import generating_matrices as gm
 from .. import number_theory as nt
 from .. import runtime
 from ..errors import InvalidArgumentError
-from ..geometry import torus
 from ..validation import check_int
 from .base import register
-from .lowdiscrepancy import DigitalNetB2, shift_vectors
+from .lowdiscrepancy import DigitalNetB2
 
 BASE_B_RANDOMIZATIONS = (None, "shift", "xor")
 
@@ -82,9 +81,7 @@ class _DigitalNet(DigitalNetB2):
                 out[k] = gm.digital_net_numerators((digits + shift[None]) % b, b) / denominator
             return out
         out[:] = gm.digital_net_numerators(digits, b).astype(np.float64) / denominator
-        if self.randomize == "shift":
-            out = torus.shift(out, shift_vectors(self.seed, rs, self.d)[:, None, :])
-        return out
+        return self._rotated(out, rs)
 
     def _device(self, n, realizations, start, out=None):
         if self.base == 2:

@@ -171,6 +171,13 @@ class LowDiscrepancySampler(Sampler):
         return (f"{type(self).__name__}(name={self.name!r}, d={self.d}, seed={self.seed}, "
                 f"randomize={self.randomize!r})")
 
+    def _rotated(self, points, realizations):
+        """``points`` (r, n, d), Cranley-Patterson rotated by each realization's shift vector
+        where ``randomize`` is ``"shift"``; else themselves."""
+        if self.randomize != "shift":
+            return points
+        return torus.shift(points, shift_vectors(self.seed, realizations, self.d)[:, None, :])
+
     def _seed64(self, realizations):
         words = scramble_words(self.seed, np.arange(realizations.start, realizations.stop), self.d)
         return words[..., 0].astype(np.uint64) | (words[..., 1].astype(np.uint64) << np.uint64(32))
@@ -429,9 +436,7 @@ class SobolSampler(DigitalNetB2):
                 out[k] = ((x ^ seeds[k][None, :]) >> np.uint64(11)).astype(np.float64) * 2.0**-53
             return out
         out[:] = (x >> np.uint64(11)).astype(np.float64) * 2.0**-53
-        if self.randomize == "shift":
-            out = torus.shift(out, shift_vectors(self.seed, rs, self.d)[:, None, :])
-        return out
+        return self._rotated(out, rs)
 
     def _device(self, n, realizations, start, out=None):
         if self.bits == 32:
