@@ -109,11 +109,11 @@ def columns_base2(matrices):
     ndarray of uint32
         (d, 32), columns past m zero.
     """
-    matrices = np.asarray(matrices, dtype=_U64)
+    matrices = np.asarray(matrices)
     d, rows, m = matrices.shape
-    weights = _U64(1) << (_U64(BITS - 1) - np.arange(rows, dtype=_U64))
     out = np.zeros((d, BITS), dtype=_U32)
-    out[:, :m] = (matrices * weights[None, :, None]).sum(axis=1).astype(_U32)
+    for r in range(min(rows, BITS)):
+        out[:, :m] |= matrices[:, r, :].astype(_U32) << _U32(BITS - 1 - r)
     return out
 
 

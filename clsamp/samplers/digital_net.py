@@ -44,7 +44,8 @@ class _DigitalNet(DigitalNetB2):
             while base ** (rows + 1) <= 2**53:
                 rows += 1
             cols = nt.digit_count(base)
-        self.matrices = np.ascontiguousarray(matrices[:self.d, :rows, :cols], dtype=np.int64)
+        self.matrices = np.ascontiguousarray(matrices[:self.d, :rows, :cols],
+                                             dtype=np.uint8 if base < 256 else np.uint32)
         self._points = base ** self.matrices.shape[2]        # b^m: the points the columns index
         self._digest = hashlib.sha1(self.matrices.tobytes()).hexdigest()
 
@@ -267,7 +268,8 @@ def _niederreiter_columns(d):
 
 def _sobol_digits(d):
     columns = nt.sobol_matrices(d)
-    return ((columns[:, None, :] >> (31 - np.arange(32, dtype=np.uint32))[None, :, None]) & 1)
+    shifts = (31 - np.arange(32, dtype=np.uint32))[None, :, None]
+    return ((columns[:, None, :] >> shifts) & 1).astype(np.uint8)
 
 
 def _base_b_choice(randomize, base):
@@ -291,4 +293,4 @@ def _check_matrices(matrices, base):
         raise InvalidArgumentError(
             f"'matrices' must hold digits in [0, {base}) for base {base}, got values in "
             f"[{array.min()}, {array.max()}]")
-    return array.astype(np.int64)
+    return array
