@@ -95,6 +95,43 @@ def lms_apply(rows, columns):
     return out
 
 
+def lms_digits(seed, realizations, matrices, base):
+    """Matoušek's scrambling in base b: L C_j mod b per realization and dimension.
+
+    L is lower triangular: entry (q, l), l <= q, is word 4 + q R + l (R the rows) of
+    Philox (``Stream.SCRAMBLE``, counter (j, realization, ...)) made a digit, uniform in
+    [1, b) on the diagonal (so L is non-singular) and in [0, b) below it
+    (:func:`clsamp.number_theory.digit_shift`, bias below b / 2^32).
+
+    Parameters
+    ----------
+    seed : int
+        Philox's key.
+    realizations : array_like of int
+        One L per realization (and dimension).
+    matrices : ndarray
+        (d, R, m) digits.
+    base : int
+
+    Returns
+    -------
+    ndarray of int64
+        (len(realizations), d, R, m).
+    """
+    matrices = np.asarray(matrices, dtype=np.int64)
+    d, rows, _ = matrices.shape
+    q = np.arange(rows)[:, None]
+    col = np.arange(rows)[None, :]
+    r = np.asarray(realizations, dtype=_U32)[:, None, None, None]
+    j = np.arange(d, dtype=_U32)[None, :, None, None]
+    words = philox.random_words(seed, philox.Stream.SCRAMBLE, r, j,
+                                (LMS_WORD0 + q * rows + col).astype(_U32)[None, None])
+    below = nt.digit_shift(words, base).astype(np.int64)
+    diagonal = 1 + nt.digit_shift(words, base - 1).astype(np.int64)
+    lower = np.where(q == col, diagonal, np.where(col < q, below, 0))
+    return np.einsum("rjql,jlk->rjqk", lower, matrices) % base
+
+
 # -- Base-2 matrices from digit arrays -------------------------------------------------
 def columns_base2(matrices):
     """Digit matrices (d, rows, m) of zeros and ones as column words (d, 32).

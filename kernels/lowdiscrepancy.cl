@@ -579,7 +579,8 @@ __kernel void owen_tables(__global uint *owen_table, __global const uint *owen_l
  * when i + 1 turns c trailing digits b - 1 of i into 0 and adds one to digit c,
  * y += D_c (mod b). LD_XOR adds to digit r the random digit digit_shift(digit_hash(seed64,
  * r), b) (a digital shift, as radical_points' xor), LD_SHIFT is the Cranley-Patterson
- * rotation. Grid and arguments as sobol_points. */
+ * rotation. With LD_LMS, matrices and sums hold one table per realization (lms_digits).
+ * Grid and arguments as sobol_points. */
 #ifdef DN_ROWS
 __kernel void digital_points(__global ulong *out, __global const uint *matrices,
                              const uint n, const uint d, const uint start, const uint realization0,
@@ -589,8 +590,13 @@ __kernel void digital_points(__global ulong *out, __global const uint *matrices,
 {
     LD_ITEM_BLOCK(uint);
     for (uint j = CLSAMP_DIM0; j < CLSAMP_DIM_END(d); ++j) {
-        __global const uint *c = matrices + (size_t)j * DN_COLS * DN_ROWS;
-        __global const uint *s = sums + (size_t)j * DN_COLS * DN_ROWS;
+#if LD_LMS
+        const size_t table = ((size_t)r * d + j) * DN_COLS * DN_ROWS;   /* realization r's */
+#else
+        const size_t table = (size_t)j * DN_COLS * DN_ROWS;
+#endif
+        __global const uint *c = matrices + table;
+        __global const uint *s = sums + table;
         __global ulong *p = row + j;
         uint a[DN_COLS], y[DN_ROWS];
         {
@@ -647,5 +653,43 @@ __kernel void digital_points(__global ulong *out, __global const uint *matrices,
             }
         }
     }
+}
+
+/* Linear matrix scrambling in base b (Matoušek 1998; generating_matrices.lms_digits): the
+ * digits of realization r, dimension j are L C_j mod b, L lower triangular with entry (q, l)
+ * the digit lms_digit(word 4 + q DN_ROWS + l of Philox (scramble_stream, counter (j,
+ * realization0 + r, ...)), q == l): uniform in [1, b) on the diagonal, in [0, b) below it.
+ * Writes digital_points' matrices and running sums. Grid: (d padded, realizations). */
+__kernel void lms_digits(__global uint *out_c, __global uint *out_s, __global const uint *matrices,
+                         const uint d, const uint base, const uint realization0, const uint key_lo,
+                         const uint key_hi, const uint scramble_stream)
+{
+    const uint j = get_global_id(0), r = get_global_id(1);
+    if (j >= d)
+        return;
+    const uint2 key = (uint2)(key_lo, key_hi);
+    __global const uint *c = matrices + (size_t)j * DN_COLS * DN_ROWS;
+    const size_t table = ((size_t)r * d + j) * DN_COLS * DN_ROWS;
+    uint sum[DN_ROWS];
+    for (uint q = 0; q < DN_ROWS; ++q)
+        sum[q] = 0;
+    for (uint q = 0; q < DN_ROWS; ++q) {
+        uint l_row[DN_ROWS];
+        for (uint l = 0; l <= q; ++l)
+            l_row[l] = lms_digit(clsamp_bits(key, scramble_stream, realization0 + r, j,
+                                             4 + q * DN_ROWS + l), base, l == q);
+        for (uint k = 0; k < DN_COLS; ++k) {
+            ulong acc = 0;                      /* < DN_ROWS b^2 <= 2^64 for b <= 2^20 */
+            for (uint l = 0; l <= q; ++l)
+                acc += (ulong)l_row[l] * c[k * DN_ROWS + l];
+            out_c[table + k * DN_ROWS + q] = (uint)(acc % base);
+        }
+    }
+    for (uint k = 0; k < DN_COLS; ++k)
+        for (uint q = 0; q < DN_ROWS; ++q) {
+            const uint e = sum[q] + out_c[table + k * DN_ROWS + q];
+            sum[q] = e >= base ? e - base : e;
+            out_s[table + k * DN_ROWS + q] = sum[q];
+        }
 }
 #endif

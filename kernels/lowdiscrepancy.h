@@ -102,6 +102,13 @@ inline uint digit_shift(uint h, uint base)
     return (uint)(((ulong)h * base) >> 32);
 }
 
+/* An entry of Matoušek's L in base b (generating_matrices.lms_digits): uniform in [1, b) on
+ * the diagonal, else in [0, b), drawn as digit_shift draws (bias below b / 2^32). */
+inline uint lms_digit(uint word, uint base, int diagonal)
+{
+    return diagonal ? 1u + digit_shift(word, base - 1u) : digit_shift(word, base);
+}
+
 /* Kensler's permutation element: i-th element of the permutation of [0, l) chosen by p
  * (number_theory.permutation_element). */
 inline uint permutation_element(uint i, uint l, uint p)

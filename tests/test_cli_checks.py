@@ -225,7 +225,7 @@ def test_sample_list_names_the_randomizations(capsys):
     assert cli.main(["sample", "--list"]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert "sobol sobol:shift sobol:xor sobol:owen sobol:lms sobol:lms+shift" in lines
-    assert "faure faure:shift faure:xor" in lines and "jittered" in lines
+    assert "faure faure:shift faure:xor faure:lms faure:lms+shift" in lines and "jittered" in lines
 
 
 def test_tour_help_describes_the_report(capsys):

@@ -116,7 +116,7 @@ def test_niederreiter_keeps_its_net_property(randomize):
         clsamp.make_sampler("niederreiter", d=4).sample(2**9), 2, 9)   # t is sharp here
 
 
-@pytest.mark.parametrize("randomize", [None, "xor"])
+@pytest.mark.parametrize("randomize", [None, "xor", "lms", "lms+shift"])
 def test_faure_is_a_zero_m_s_net_in_its_base(randomize):
     for d, m_max in ((3, 6), (5, 4)):
         b = gm.faure_base(d)
@@ -127,12 +127,25 @@ def test_faure_is_a_zero_m_s_net_in_its_base(randomize):
                 assert is_tms_net(p[k, :b**m], 0, m, base=b), (d, randomize, m)
 
 
+def test_base_b_lms_is_lower_triangular_and_scrambles():
+    eye = np.eye(6, dtype=np.int64)[None].repeat(3, 0)
+    lower = gm.lms_digits(4, np.arange(5), eye, 7)           # L C with C = I: L itself
+    q, k = np.indices((6, 6))
+    assert np.all(lower[..., q < k] == 0) and np.all(lower[..., q == k] > 0)
+    assert np.all(lower < 7) and len(np.unique(lower[..., q > k])) == 7
+    plain = clsamp.make_sampler("faure", d=5).sample(125)
+    lms = clsamp.make_sampler("faure", d=5, randomize="lms", seed=1).sample(125, realizations=2)
+    assert np.all(lms[:, 0] == 0) and not np.array_equal(lms[0], plain)
+    assert not np.array_equal(lms[0], lms[1])
+
+
 def test_faure_shift_breaks_the_net():
     p = clsamp.make_sampler("faure", d=3, seed=4, randomize="shift").sample(3**4)
     assert not is_tms_net(p, 0, 4, base=3)
 
 
 @pytest.mark.parametrize("name,d,randomize", [("faure", 20, "xor"), ("faure", 40, "shift"),
+                                              ("faure", 12, "lms+shift"), ("faure", 30, "lms"),
                                               ("niederreiter", 40, "lms+shift"),
                                               ("niederreiter", 9, "owen")])
 def test_kernels_equal_twins_far_into_the_sequence(name, d, randomize):
@@ -175,7 +188,7 @@ def test_digital_net_default_and_faure_matrices():
 def test_digital_net_bad_input():
     eye = np.eye(4, dtype=int)[None].repeat(2, 0)
     cases = [(dict(matrices=eye, base=4), "'base' must be a prime"),
-             (dict(matrices=eye, base=3, randomize="lms"), "'randomize'"),
+             (dict(matrices=eye, base=3, randomize="owen"), "'randomize'"),
              (dict(base=3), "'matrices' must be given"),
              (dict(matrices=eye[0], base=3), "'matrices' must be an integer array"),
              (dict(matrices=eye * 3, base=3), r"digits in \[0, 3\)"),

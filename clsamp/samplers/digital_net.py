@@ -3,8 +3,10 @@
 
 A base-2 net runs on Sobol's kernel (``sobol_points``, :class:`DigitalNetB2`) with every
 base-2 randomization; a net in base b >= 3 on ``digital_points`` (``kernels/lowdiscrepancy.cl``),
-unrandomized, with a Cranley-Patterson ``"shift"`` or with a digital shift ``"xor"``
-(a random digit added mod b to each output digit, the same for every point). The
+unrandomized, with a Cranley-Patterson ``"shift"``, a digital shift ``"xor"`` (a random
+digit added mod b to each output digit, the same for every point), or Matoušek's linear
+matrix scrambling in GF(b) (``"lms"``, ``"lms+shift"``: L C_j mod b, L random non-singular
+lower triangular, made per realization by the kernel ``lms_digits``). The
 matrices come from :mod:`clsamp.generating_matrices`, which also holds the NumPy twins.
 """
 
@@ -15,13 +17,13 @@ import numpy as np
 
 from .. import generating_matrices as gm
 from .. import number_theory as nt
-from .. import runtime
+from .. import philox, runtime
 from ..errors import InvalidArgumentError
 from ..validation import check_int
 from .base import register
-from .lowdiscrepancy import DigitalNetB2
+from .lowdiscrepancy import LMS, DigitalNetB2
 
-BASE_B_RANDOMIZATIONS = (None, "shift", "xor")
+BASE_B_RANDOMIZATIONS = (None, "shift", "xor", "lms", "lms+shift")
 
 
 class _DigitalNet(DigitalNetB2):
@@ -70,18 +72,21 @@ class _DigitalNet(DigitalNetB2):
             return super()._reference(n, realizations, start)
         b = self.base
         rs = np.arange(realizations.start, realizations.stop)
-        digits = gm.digital_net_digits(np.uint64(start) + np.arange(n, dtype=np.uint64),
-                                       self.matrices, b)                       # (n, d, rows)
-        denominator = float(b ** digits.shape[-1])
+        index = np.uint64(start) + np.arange(n, dtype=np.uint64)
+        lms = self.randomize in LMS
+        tables = gm.lms_digits(self.seed, rs, self.matrices, b) if lms else [self.matrices]
+        rows = np.arange(self.matrices.shape[1], dtype=np.uint64)
+        denominator = float(b ** len(rows))
+        seed64 = self._seed64(realizations)
         out = np.empty((len(rs), n, self.d))
-        if self.randomize == "xor":
-            seed64 = self._seed64(realizations)
-            rows = np.arange(digits.shape[-1], dtype=np.uint64)
-            for k in range(len(rs)):
-                shift = nt.digit_shift(nt.digit_hash(seed64[k][:, None], rows[None, :]), b)
-                out[k] = gm.digital_net_numerators((digits + shift[None]) % b, b) / denominator
-            return out
-        out[:] = gm.digital_net_numerators(digits, b).astype(np.float64) / denominator
+        digits = None
+        for k in range(len(rs)):
+            if digits is None or lms:
+                digits = gm.digital_net_digits(index, tables[k if lms else 0], b)   # (n, d, rows)
+            y = digits
+            if self.randomize in ("xor", "lms+shift"):
+                y = (y + nt.digit_shift(nt.digit_hash(seed64[k][:, None], rows[None, :]), b)) % b
+            out[k] = gm.digital_net_numerators(y, b) / denominator
         return self._rotated(out, rs)
 
     def _device(self, n, realizations, start, out=None):
@@ -93,9 +98,27 @@ class _DigitalNet(DigitalNetB2):
         columns = runtime.table((key, "columns"), lambda: self.matrices.transpose(0, 2, 1).ravel())
         sums = runtime.table((key, "sums"),
                              lambda: gm.running_sums(self.matrices, b).transpose(0, 2, 1).ravel())
+        defines = {"DN_ROWS": rows, "DN_COLS": cols}
+        lms = self.randomize in LMS
+        if lms:
+            columns, sums = self._lms_digit_tables(columns, defines, realizations)
         return self._launch("digital_points", columns, n, realizations, start,
-                            {"DN_ROWS": rows, "DN_COLS": cols}, out,
+                            {**defines, "LD_LMS": int(lms)}, out,
                             (sums.data, np.uint32(b), np.uint64(b**rows)))
+
+    def _lms_digit_tables(self, columns, defines, realizations):
+        """Each realization's scrambled matrices and running sums (kernel ``lms_digits``)."""
+        import pyopencl.array as cla
+        queue = runtime.queue()
+        size = len(realizations) * self.matrices.size
+        tables = cla.empty(queue, (size,), np.uint32), cla.empty(queue, (size,), np.uint32)
+        kernel = runtime.kernel("lowdiscrepancy.cl", "lms_digits", defines=defines)
+        local = runtime.local_size()
+        kernel(queue, (-(-self.d // local) * local, len(realizations)), (local, 1), tables[0].data,
+               tables[1].data, columns.data, np.uint32(self.d), np.uint32(self.base),
+               np.uint32(realizations.start), *philox.seed_key(self.seed),
+               np.uint32(philox.Stream.SCRAMBLE))
+        return tables
 
 
 @register("digital_net")
@@ -114,8 +137,10 @@ class DigitalNetSampler(_DigitalNet):
     seed : int
     randomize : {None, "shift", "xor", "owen", "lms", "lms+shift"}
         In base 2 every randomization of :class:`clsamp.samplers.lowdiscrepancy.SobolSampler`;
-        in base b >= 3 ``"shift"`` (Cranley-Patterson) and ``"xor"`` (a digital shift:
-        output digit r plus a random digit mod b, which keeps the nets).
+        in base b >= 3 ``"shift"`` (Cranley-Patterson), ``"xor"`` (a digital shift:
+        output digit r plus a random digit mod b), ``"lms"`` (L C_j mod b with L a random
+        lower-triangular matrix over GF(b), non-zero on its diagonal; Matoušek 1998) and
+        ``"lms+shift"`` (both, qmcpy's "LMS DS"). All but ``"shift"`` keep the nets.
     matrices : array_like of int, optional
         (d, rows, m): entry (j, r, k) in [0, b) is output digit r of index digit k of
         dimension j. Base 2 uses the first 32 rows and columns (32-bit points and
@@ -176,9 +201,11 @@ class FaureSampler(_DigitalNet):
     d : int
         Dimension, 1 to 21201 (base up to 21211).
     seed : int
-    randomize : {None, "shift", "xor"}
-        ``"shift"``: Cranley-Patterson; ``"xor"``: a digital shift in base b (keeps the
-        nets).
+    randomize : {None, "shift", "xor", "lms", "lms+shift"}
+        ``"shift"``: Cranley-Patterson; ``"xor"``: a digital shift in base b; ``"lms"``,
+        ``"lms+shift"``: Matoušek's linear matrix scrambling in base b, without and with
+        the digital shift (see :class:`DigitalNetSampler`). All but ``"shift"`` keep the
+        nets.
     backend : {"opencl", "numpy"}
 
     Notes
@@ -275,8 +302,8 @@ def _sobol_digits(d):
 def _base_b_choice(randomize, base):
     if base != 2 and randomize not in BASE_B_RANDOMIZATIONS:
         raise InvalidArgumentError(
-            f"'randomize' must be one of {BASE_B_RANDOMIZATIONS} in base {base} (LMS and Owen "
-            f"scrambling run in base 2), got {randomize!r}")
+            f"'randomize' must be one of {BASE_B_RANDOMIZATIONS} in base {base} (Owen "
+            f"scrambling runs in base 2), got {randomize!r}")
     return randomize
 
 
