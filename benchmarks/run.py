@@ -32,6 +32,7 @@ MODULES = (
     "bench_random",
     "bench_stratified",
     "bench_lowdiscrepancy",
+    "bench_digital_nets",
     "bench_pmj",
     "bench_spectrum",
     "bench_metrics",

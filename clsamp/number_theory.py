@@ -687,19 +687,29 @@ def sobol_max_dimension():
     return len(sobol_table()[0])
 
 
-@functools.lru_cache(maxsize=1)
-def _all_sobol_matrices():
+@functools.lru_cache(maxsize=2)
+def sobol_direction_integers(columns=SOBOL_BITS):
+    """The Joe-Kuo direction integers m_(j,c) of every shipped dimension, c < ``columns``.
+
+    Parameters
+    ----------
+    columns : int
+        32 or 64 (the index bits).
+
+    Returns
+    -------
+    ndarray of uint64
+        (dimensions, columns): m_(j,c) < 2^(c+1), odd.
+    """
     poly, vinit, _ = sobol_table()
-    dims = len(poly)
     degree = np.array([int(p).bit_length() - 1 for p in poly])
-    v = np.zeros((dims, SOBOL_BITS), dtype=np.int64)
+    v = np.zeros((dims := len(poly), columns), dtype=_U64)
     v[0, :] = 1
     for j in range(1, dims):
         v[j, :degree[j]] = vinit[j, :degree[j]]
     rows_all = np.arange(1, dims)
-    # Bratley-Fox / Joe-Kuo recurrence, vectorized over dimensions:
-    # m_c = 2 a_1 m_(c-1) ^ 4 a_2 m_(c-2) ^ ... ^ 2^s m_(c-s) ^ m_(c-s)
-    for col in range(SOBOL_BITS):
+    # Bratley-Fox / Joe-Kuo, over all dimensions: m_c = 2 a_1 m_(c-1) ^ ... ^ 2^s m_(c-s) ^ m_(c-s)
+    for col in range(columns):
         rows = rows_all[degree[1:] <= col]
         if rows.size == 0:
             continue
@@ -710,11 +720,10 @@ def _all_sobol_matrices():
             active = k < s
             bit = (p >> np.where(active, s - 1 - k, 0)) & 1
             use = active & (bit == 1)
-            term = v[rows, np.maximum(col - k - 1, 0)] << (k + 1)
-            new = new ^ np.where(use, term, 0)
+            term = v[rows, np.maximum(col - k - 1, 0)] << _U64(k + 1)
+            new = new ^ np.where(use, term, _U64(0))
         v[rows, col] = new
-    matrices = v << (SOBOL_BITS - 1 - np.arange(SOBOL_BITS))[None, :]
-    return matrices.astype(_U32)
+    return v
 
 
 def sobol_matrices(d):
@@ -742,7 +751,8 @@ def sobol_matrices(d):
     if not 1 <= d <= sobol_max_dimension():
         raise InvalidArgumentError(
             f"'d' must be in [1, {sobol_max_dimension()}] for Sobol (Joe-Kuo table), got {d}")
-    return _all_sobol_matrices()[:d].copy()
+    v = sobol_direction_integers()[:d]
+    return (v << (_U64(SOBOL_BITS - 1) - np.arange(SOBOL_BITS, dtype=_U64))[None, :]).astype(_U32)
 
 
 def gray_code(index):
@@ -766,23 +776,25 @@ def sobol_integers(index, matrices):
     Parameters
     ----------
     index : array_like of int
-        32-bit point indices (flattened).
-    matrices : ndarray of uint32
-        (d, 32), from :func:`sobol_matrices`.
+        Point indices (flattened), 32-bit (64-bit with 64 columns).
+    matrices : ndarray of uint32 or uint64
+        (d, 32) from :func:`sobol_matrices`, or (d, 64) of uint64 (64-bit indices).
 
     Returns
     -------
-    ndarray of uint32
-        (len(index), d).
+    ndarray of uint32 or uint64
+        (len(index), d), the dtype of ``matrices``.
 
     Examples
     --------
     >>> (sobol_integers([0, 1, 2, 3], sobol_matrices(2)) / 2**32).tolist()
     [[0.0, 0.0], [0.5, 0.5], [0.75, 0.25], [0.25, 0.75]]
     """
-    g = gray_code(np.asarray(index, dtype=_U32).ravel())
-    out = np.zeros((g.size, matrices.shape[0]), dtype=_U32)
-    for c in range(SOBOL_BITS):
-        bit = ((g >> _U32(c)) & _U32(1)).astype(bool)
+    t = matrices.dtype.type                      # uint32, or uint64 for 64-bit indices
+    g = np.asarray(index, dtype=t).ravel()
+    g = g ^ (g >> t(1))                          # the Gray code
+    out = np.zeros((g.size, matrices.shape[0]), dtype=t)
+    for c in range(matrices.shape[1]):
+        bit = ((g >> t(c)) & t(1)).astype(bool)
         out[bit] ^= matrices[:, c][None, :]
     return out

@@ -9,8 +9,11 @@
  *               makes the kernels fast; any value gives the same bits
  *   HAMMERSLEY  (radical_points) dimension 0 is i / n instead of a radical inverse
  *   DIMS_PER_ITEM  dimensions per work-item, grid axis 2 (dims.h; all when undefined)
+ *   LD_LMS      (sobol_points) one table per realization, made by lms_matrices
  *
- * Kernels: sobol_points, radical_points, and (RANDOMIZE == LD_OWEN) owen_tables, which
+ * Kernels: sobol_points (any base-2 digital net in Gray-code order), sobol_points64,
+ * lms_matrices, digital_points (base b >= 3),
+ * radical_points, and (RANDOMIZE == LD_OWEN) owen_tables, which
  * radical_points' Owen scrambling in base >= 3 reads: the permutations of the nodes near
  * the roots of the digit trees, made once per launch instead of once per point.
  *
@@ -30,6 +33,9 @@
 #endif
 #ifndef LD_BLOCK
 #define LD_BLOCK 32
+#endif
+#ifndef LD_LMS
+#define LD_LMS 0
 #endif
 
 /* Vector types of width LD_WIDTH (2 or 4): Sobol works on LD_WIDTH dimensions at once,
@@ -107,6 +113,21 @@ inline ulongW shift32W_bits(uintW x, ulongW u)
 CLSAMP_REVERSE_BITS32(reverse_bits32W, uintW)
 CLSAMP_LK_HASH(lk_hashW, uintW)
 
+/* A work-item's block: points i0 .. i0 + count - 1 of the launch (index first = start + i0,
+ * of type T)
+ * of realization r, and where they go; items past the last block return. */
+#define LD_ITEM_BLOCK(T)                                                     \
+    const uint g = get_global_id(0);                                        \
+    const uint r = get_global_id(1);                                        \
+    if (g >= (n + LD_BLOCK - 1) / LD_BLOCK)                                 \
+        return;                                                             \
+    const uint i0 = g * LD_BLOCK;                                           \
+    const uint count = min((uint)LD_BLOCK, n - i0);                         \
+    const T first = start + i0;                                             \
+    const uint2 key = (uint2)(key_lo, key_hi);                              \
+    const uint realization = realization0 + r;                              \
+    __global ulong *row = out + ((size_t)r * n + i0) * d
+
 /* Sobol points in Gray-code order (as scipy): x_i = xor of V[c] over the set bits c of
  * i ^ (i >> 1), and x_(i+1) = x_i ^ V[ctz(i + 1)]. matrices is (32, padded d): row c holds
  * V[c] of every dimension, zero past d. For Owen scrambling V arrives bit-reversed, so the
@@ -116,20 +137,14 @@ __kernel void sobol_points(__global ulong *out, __global const uint *matrices,
                            const uint key_lo, const uint key_hi, const uint scramble_stream,
                            const uint shift_stream)
 {
-    const uint g = get_global_id(0);
-    const uint r = get_global_id(1);
-    const uint blocks = (n + LD_BLOCK - 1) / LD_BLOCK;
-    if (g >= blocks)
-        return;
-    const uint i0 = g * LD_BLOCK;
-    const uint count = min((uint)LD_BLOCK, n - i0);
-    const uint first = start + i0;
+    LD_ITEM_BLOCK(uint);
     const uint stride = (d + LD_WIDTH - 1) / LD_WIDTH * LD_WIDTH;
-    const uint2 key = (uint2)(key_lo, key_hi);
-    const uint realization = realization0 + r;
-    __global ulong *row = out + ((size_t)r * n + i0) * d;
     for (uint j = CLSAMP_DIM0; j < CLSAMP_DIM_END(d); j += LD_WIDTH) {
+#if LD_LMS
+        __global const uint *v = matrices + (size_t)r * 32 * stride + j;   /* realization r's */
+#else
         __global const uint *v = matrices + j;
+#endif
         uint gray = first ^ (first >> 1);
         uintW x = (uintW)(0u);
         while (gray) {
@@ -176,6 +191,78 @@ __kernel void sobol_points(__global ulong *out, __global const uint *matrices,
     }
 }
 
+/* Sobol points with 64-bit indices (bits=64): the same Gray-code walk over 64 columns of 64
+ * bits (matrices is (64, d): row c holds V_c = m_c 2^(63-c) of every dimension), one
+ * dimension at a time. The value is the top 53 bits, (x >> 11) 2^-53, exact and below 1;
+ * below index 2^32 the low 32 bits of x are 0, so the points are sobol_points' bits. The
+ * digital shift xors (words.x << 32 | words.y): its top half is sobol_points' seed. */
+__kernel void sobol_points64(__global ulong *out, __global const ulong *matrices,
+                             const uint n, const uint d, const ulong start, const uint realization0,
+                             const uint key_lo, const uint key_hi, const uint scramble_stream,
+                             const uint shift_stream)
+{
+    LD_ITEM_BLOCK(ulong);
+    for (uint j = CLSAMP_DIM0; j < CLSAMP_DIM_END(d); ++j) {
+        __global const ulong *v = matrices + j;
+        ulong gray = first ^ (first >> 1);
+        ulong x = 0;
+        while (gray) {
+            x ^= v[(size_t)ld_ctz64(gray) * d];
+            gray &= gray - 1UL;
+        }
+#if RANDOMIZE == LD_SHIFT
+        const ulong u = clsamp_uniform_bits(key, shift_stream, realization, 0, j);
+#elif RANDOMIZE == LD_XOR
+        const uint4 words = clsamp_block(key, scramble_stream, realization, j, 0);
+        const ulong seed = ((ulong)words.x << 32) | words.y;
+#endif
+        __global ulong *p = row + j;
+        ulong index = first;
+        for (uint t = 0; t < count; ++t) {
+#if RANDOMIZE == LD_SHIFT
+            p[(size_t)t * d] = f64_shift_mod1(f64_scaled(x >> 11, -53), u);
+#elif RANDOMIZE == LD_XOR
+            p[(size_t)t * d] = f64_scaled((x ^ seed) >> 11, -53);
+#else
+            p[(size_t)t * d] = f64_scaled(x >> 11, -53);
+#endif
+            if (t + 1 < count) {
+                ++index;
+                x ^= v[(size_t)ld_ctz64(index) * d];
+            }
+        }
+    }
+}
+
+/* Linear matrix scrambling (Matoušek 1998): out[r] = L_(r,j) V_j, for sobol_points with
+ * LD_LMS, whose realization r reads matrices + r 32 stride. matrices is sobol_points' (32,
+ * stride) table; row k of L_(r,j) is word 4 + k of Philox (scramble_stream, counter (j,
+ * realization0 + r, block 1 + k / 4)), block 0 staying the seeds of the digital shift.
+ * Grid: (stride, realizations); columns j >= d are zero. */
+__kernel void lms_matrices(__global uint *out, __global const uint *matrices, const uint d,
+                           const uint stride, const uint realization0, const uint key_lo,
+                           const uint key_hi, const uint scramble_stream)
+{
+    const uint j = get_global_id(0);
+    const uint r = get_global_id(1);
+    if (j >= stride)
+        return;
+    __global uint *o = out + (size_t)r * 32 * stride + j;
+    uint rows[32];
+    if (j < d) {
+        const uint2 key = (uint2)(key_lo, key_hi);
+        for (uint b = 0; b < 8; ++b) {
+            const uint4 w = clsamp_block(key, scramble_stream, realization0 + r, j, 1 + b);
+            rows[4 * b] = lms_row(w.x, 4 * b);
+            rows[4 * b + 1] = lms_row(w.y, 4 * b + 1);
+            rows[4 * b + 2] = lms_row(w.z, 4 * b + 2);
+            rows[4 * b + 3] = lms_row(w.w, 4 * b + 3);
+        }
+    }
+    for (uint c = 0; c < 32; ++c)
+        o[(size_t)c * stride] = j < d ? lms_apply(rows, matrices[(size_t)c * stride + j]) : 0u;
+}
+
 /* The value of digit a at position k under the digit-wise randomizations. */
 #if RANDOMIZE == LD_XOR
 #define LD_DIGIT(a, k) ((a) + shift[k] >= base ? (a) + shift[k] - base : (a) + shift[k])
@@ -212,17 +299,7 @@ __kernel void radical_points(__global ulong *out, __global const uint *bases,
 #endif
                              )
 {
-    const uint g = get_global_id(0);
-    const uint r = get_global_id(1);
-    const uint blocks = (n + LD_BLOCK - 1) / LD_BLOCK;
-    if (g >= blocks)
-        return;
-    const uint i0 = g * LD_BLOCK;
-    const uint count = min((uint)LD_BLOCK, n - i0);
-    const uint first = start + i0;
-    const uint2 key = (uint2)(key_lo, key_hi);
-    const uint realization = realization0 + r;
-    __global ulong *row = out + ((size_t)r * n + i0) * d;
+    LD_ITEM_BLOCK(uint);
     for (uint j = CLSAMP_DIM0; j < CLSAMP_DIM_END(d); ++j) {
         __global ulong *p = row + j;
 #if RANDOMIZE == LD_SHIFT
@@ -489,5 +566,130 @@ __kernel void owen_tables(__global uint *owen_table, __global const uint *owen_l
             a[other] = held;
         }
     }
+}
+#endif
+
+/* Digital nets in base b >= 3 from generating matrices, in natural order (NumPy twin:
+ * generating_matrices.digital_net_digits and the sampler's reference): point i, dimension j
+ * has the digits y = C_j a mod b (a the DN_COLS digits of i, least significant first; y the
+ * DN_ROWS digits of the coordinate, most significant first) and the value v / b^DN_ROWS,
+ * v = Σ_r y_r b^(DN_ROWS-1-r) < 2^53, one correctly rounded division. matrices and sums are
+ * (d, DN_COLS, DN_ROWS): column k of C_j, and its running sum D_k = C_0 + ... + C_k mod b.
+ * The first point of a work-item costs a matrix-vector product; the next ones an addition:
+ * when i + 1 turns c trailing digits b - 1 of i into 0 and adds one to digit c,
+ * y += D_c (mod b). LD_XOR adds to digit r the random digit digit_shift(digit_hash(seed64,
+ * r), b) (a digital shift, as radical_points' xor), LD_SHIFT is the Cranley-Patterson
+ * rotation. With LD_LMS, matrices and sums hold one table per realization (lms_digits).
+ * Grid and arguments as sobol_points. */
+#ifdef DN_ROWS
+__kernel void digital_points(__global ulong *out, __global const uint *matrices,
+                             const uint n, const uint d, const uint start, const uint realization0,
+                             const uint key_lo, const uint key_hi, const uint scramble_stream,
+                             const uint shift_stream, __global const uint *sums, const uint base,
+                             const ulong denominator)
+{
+    LD_ITEM_BLOCK(uint);
+    for (uint j = CLSAMP_DIM0; j < CLSAMP_DIM_END(d); ++j) {
+#if LD_LMS
+        const size_t table = ((size_t)r * d + j) * DN_COLS * DN_ROWS;   /* realization r's */
+#else
+        const size_t table = (size_t)j * DN_COLS * DN_ROWS;
+#endif
+        __global const uint *c = matrices + table;
+        __global const uint *s = sums + table;
+        __global ulong *p = row + j;
+        uint a[DN_COLS], y[DN_ROWS];
+        {
+            uint i = first;
+            for (uint k = 0; k < DN_COLS; ++k) {
+                a[k] = i % base;
+                i /= base;
+            }
+        }
+        for (uint q = 0; q < DN_ROWS; ++q) {
+            ulong acc = 0;                      /* < DN_COLS b^2 <= 2^64 for b <= 2^20 */
+            for (uint k = 0; k < DN_COLS; ++k)
+                acc += (ulong)c[k * DN_ROWS + q] * a[k];
+            y[q] = (uint)(acc % base);
+        }
+#if RANDOMIZE == LD_SHIFT
+        const ulong u = clsamp_uniform_bits(key, shift_stream, realization, 0, j);
+#elif RANDOMIZE == LD_XOR
+        uint shift[DN_ROWS];
+        {
+            const uint4 words = clsamp_block(key, scramble_stream, realization, j, 0);
+            const ulong seed64 = (ulong)words.x | ((ulong)words.y << 32);
+            for (uint q = 0; q < DN_ROWS; ++q)
+                shift[q] = digit_shift(digit_hash(seed64, q), base);
+        }
+#endif
+        for (uint t = 0; t < count; ++t) {
+            ulong v = 0;
+            for (uint q = 0; q < DN_ROWS; ++q) {
+#if RANDOMIZE == LD_XOR
+                const uint e = y[q] + shift[q];
+                v = v * base + (e >= base ? e - base : e);
+#else
+                v = v * base + y[q];
+#endif
+            }
+#if RANDOMIZE == LD_SHIFT
+            p[(size_t)t * d] = f64_shift_mod1(f64_div(v, denominator, 0), u);
+#else
+            p[(size_t)t * d] = f64_div(v, denominator, 0);
+#endif
+            if (t + 1 < count) {
+                uint k = 0;
+                while (k < DN_COLS && a[k] == base - 1)
+                    a[k++] = 0;
+                if (k < DN_COLS) {
+                    ++a[k];
+                    __global const uint *dk = s + k * DN_ROWS;
+                    for (uint q = 0; q < DN_ROWS; ++q) {
+                        const uint e = y[q] + dk[q];
+                        y[q] = e >= base ? e - base : e;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/* Linear matrix scrambling in base b (Matoušek 1998; generating_matrices.lms_digits): the
+ * digits of realization r, dimension j are L C_j mod b, L lower triangular with entry (q, l)
+ * the digit lms_digit(word 4 + q DN_ROWS + l of Philox (scramble_stream, counter (j,
+ * realization0 + r, ...)), q == l): uniform in [1, b) on the diagonal, in [0, b) below it.
+ * Writes digital_points' matrices and running sums. Grid: (d padded, realizations). */
+__kernel void lms_digits(__global uint *out_c, __global uint *out_s, __global const uint *matrices,
+                         const uint d, const uint base, const uint realization0, const uint key_lo,
+                         const uint key_hi, const uint scramble_stream)
+{
+    const uint j = get_global_id(0), r = get_global_id(1);
+    if (j >= d)
+        return;
+    const uint2 key = (uint2)(key_lo, key_hi);
+    __global const uint *c = matrices + (size_t)j * DN_COLS * DN_ROWS;
+    const size_t table = ((size_t)r * d + j) * DN_COLS * DN_ROWS;
+    uint sum[DN_ROWS];
+    for (uint q = 0; q < DN_ROWS; ++q)
+        sum[q] = 0;
+    for (uint q = 0; q < DN_ROWS; ++q) {
+        uint l_row[DN_ROWS];
+        for (uint l = 0; l <= q; ++l)
+            l_row[l] = lms_digit(clsamp_bits(key, scramble_stream, realization0 + r, j,
+                                             4 + q * DN_ROWS + l), base, l == q);
+        for (uint k = 0; k < DN_COLS; ++k) {
+            ulong acc = 0;                      /* < DN_ROWS b^2 <= 2^64 for b <= 2^20 */
+            for (uint l = 0; l <= q; ++l)
+                acc += (ulong)l_row[l] * c[k * DN_ROWS + l];
+            out_c[table + k * DN_ROWS + q] = (uint)(acc % base);
+        }
+    }
+    for (uint k = 0; k < DN_COLS; ++k)
+        for (uint q = 0; q < DN_ROWS; ++q) {
+            const uint e = sum[q] + out_c[table + k * DN_ROWS + q];
+            sum[q] = e >= base ? e - base : e;
+            out_s[table + k * DN_ROWS + q] = sum[q];
+        }
 }
 #endif

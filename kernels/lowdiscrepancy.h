@@ -24,6 +24,11 @@ inline uint ld_ctz(uint x)
     return 31u - clz(x & (0u - x));
 }
 
+inline uint ld_ctz64(ulong x)
+{
+    return 63u - (uint)clz(x & (0UL - x));
+}
+
 /* The 32 bits of x in reverse order, and Vegdahl's LK hash on reversed bits (a nested
  * scramble of the binary digits; Burley 2020 after Laine and Karras 2011), for uint or a
  * uint vector T: the twins of clsamp.number_theory.reverse_bits32 and lk_hash. */
@@ -56,6 +61,23 @@ inline uint owen_scramble_base2(uint x, uint seed)
     return reverse_bits32(lk_hash(reverse_bits32(x), seed));
 }
 
+/* Matoušek's linear matrix scrambling (generating_matrices.lms_row_masks, lms_apply): row k
+ * of a random non-singular lower-triangular L from a Philox word (the diagonal bit 31 - k
+ * set, the bits left of it random), and L v over GF(2) for a column word v. */
+inline uint lms_row(uint word, uint k)
+{
+    const uint diagonal = 1u << (31u - k);
+    return (word & ~(diagonal - 1u)) | diagonal;
+}
+
+inline uint lms_apply(const uint *rows, uint v)
+{
+    uint y = 0;
+    for (uint k = 0; k < 32; ++k)
+        y |= (popcount(rows[k] & v) & 1u) << (31u - k);
+    return y;
+}
+
 /* mix64 of one word, and mix64_4 of four words in lanes */
 #define CLSAMP_MIX64(name, T)             \
     CLSAMP_ALWAYS_INLINE T name(T v)      \
@@ -78,6 +100,13 @@ inline uint digit_hash(ulong seed64, ulong key)
 inline uint digit_shift(uint h, uint base)
 {
     return (uint)(((ulong)h * base) >> 32);
+}
+
+/* An entry of Matoušek's L in base b (generating_matrices.lms_digits): uniform in [1, b) on
+ * the diagonal, else in [0, b), drawn as digit_shift draws (bias below b / 2^32). */
+inline uint lms_digit(uint word, uint base, int diagonal)
+{
+    return diagonal ? 1u + digit_shift(word, base - 1u) : digit_shift(word, base);
 }
 
 /* Kensler's permutation element: i-th element of the permutation of [0, l) chosen by p

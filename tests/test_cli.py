@@ -41,6 +41,7 @@ def test_sample_to_stdout_and_list():
     assert out.returncode == 0 and len(out.stdout.splitlines()) == 3
     listed = clsamp_cli("sample", "--list")
     assert "random" in listed.stdout.split()
+    assert {"sobol:lms", "sobol:lms+shift"} <= set(listed.stdout.split())
 
 
 def test_bad_input_is_a_clear_error_not_a_traceback():

@@ -228,7 +228,8 @@ def test_sample_list_names_the_randomizations(capsys):
     from clsamp import cli
     assert cli.main(["sample", "--list"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert "sobol sobol:shift sobol:xor sobol:owen" in lines and "jittered" in lines
+    assert "sobol sobol:shift sobol:xor sobol:owen sobol:lms sobol:lms+shift" in lines
+    assert "faure faure:shift faure:xor faure:lms faure:lms+shift" in lines and "jittered" in lines
 
 
 def test_tour_help_describes_the_report(capsys):

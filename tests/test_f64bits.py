@@ -137,8 +137,18 @@ def test_every_sampler_gives_the_same_bits_without_fp64(name, d, randomize):
     assert np.array_equal(here.view(np.uint64), there.view(np.uint64))
 
 
+@pytest.mark.parametrize("randomize", [None, "shift", "xor"])
+def test_sobol64_gives_the_same_bits_without_fp64(randomize):
+    s = clsamp.make_sampler("sobol", d=5, seed=9, randomize=randomize, bits=64)
+    here = s.sample(64, realizations=range(2, 4), start=2**40 + 3)
+    with runtime.without_fp64():
+        there = s.sample(64, realizations=range(2, 4), start=2**40 + 3)
+    assert np.array_equal(here.view(np.uint64), there.view(np.uint64))
+
+
 @pytest.mark.parametrize("name, d, params", [
     ("random", 7, {}), ("sobol", 9, {"randomize": "shift"}), ("sobol", 6, {"randomize": "owen"}),
+    ("sobol", 6, {"bits": 64, "randomize": "xor"}), ("faure", 9, {"randomize": "xor"}),
     ("halton", 7, {"randomize": "owen"}), ("hammersley", 5, {"randomize": "xor"}),
     ("latin_hypercube", 7, {}), ("uncorrelated_jitter", 7, {"groups": (2, 3, 2)}),
     ("jittered", 4, {}), ("latin_hypercube", 2, {"n": 5000}), ("multijittered", 2, {"n": 4900})])

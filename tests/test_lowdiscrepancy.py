@@ -14,7 +14,7 @@ from clsamp.errors import InvalidArgumentError
 qmc = pytest.importorskip("scipy.stats.qmc")
 
 SAMPLERS = {
-    "sobol": (None, "shift", "xor", "owen"),
+    "sobol": (None, "shift", "xor", "owen", "lms", "lms+shift"),
     "halton": (None, "shift", "xor", "owen", "permute"),
     "hammersley": (None, "shift", "xor", "owen"),
     "van_der_corput": (None, "shift", "xor", "owen", "permute"),

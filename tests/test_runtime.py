@@ -155,7 +155,8 @@ def test_a_program_from_the_binary_cache_has_its_kernels(tmp_path):
     for _ in range(2):
         out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                              check=True, cwd=root)
-        assert out.stdout.split() == ["sobol_points;radical_points", "render_pixels",
+        assert out.stdout.split() == ["sobol_points;sobol_points64;lms_matrices;radical_points",
+                                      "render_pixels",
                                       "spectrum_spread;spectrum_sum_copies"]
 
 

@@ -711,11 +711,16 @@ class Sampler(abc.ABC):
             raise InvalidArgumentError(
                 f"'start' must be 0 for {self.name!r} (its points are a set, not a sequence), "
                 f"got {start}")
-        if n is not None and start + n - 1 > self.max_n:
+        if n is not None and start + n - 1 > self._last_index():
             raise InvalidArgumentError(
-                f"'start' + 'n' must stay within the {self.max_n + 1} point indices of "
-                f"{self.name!r}, got start={start}, n={n}")
+                f"'start' + 'n' must stay within the {self._last_index() + 1} point indices of "
+                f"{self.label!r}, got start={start}, n={n}")
         return n, runs, single, start
+
+    def _last_index(self):
+        """The largest index a point may have (``start + n - 1``): ``max_n`` unless the
+        sampler's parameters say otherwise (a net's b^m points, 64-bit indices)."""
+        return self.max_n
 
     # -- what subclasses write ----------------------------------------------------------
     def valid_n(self, n):

@@ -3,9 +3,11 @@
 Each takes ``randomize=`` one of ``None`` (the textbook points; the first point of each
 sequence is the origin, as in scipy.stats.qmc), ``"shift"`` (Cranley-Patterson
 rotation), ``"xor"`` (random digit scramble: an xor in base 2, a random digit shift
-mod b in base b), ``"owen"`` (nested uniform scrambling), and for ``van_der_corput`` and
+mod b in base b), ``"owen"`` (nested uniform scrambling), for ``van_der_corput`` and
 ``halton`` also ``"permute"`` (random digit permutations, pbrt's PermuteDigits; not
-offered by ``hammersley`` and ``sobol``).
+offered by ``hammersley`` and ``sobol``), and for ``sobol`` (every base-2 digital net,
+:class:`DigitalNetB2`) also ``"lms"`` and ``"lms+shift"`` (Matoušek's linear matrix
+scrambling, without and with the digital shift of ``"xor"``).
 
 Realization k's randomization (shift vector, scramble seeds) is drawn from Philox with
 counter realization k: for dimension j the words of
@@ -20,14 +22,17 @@ import warnings
 
 import numpy as np
 
+from .. import generating_matrices as gm
 from .. import number_theory as nt
 from .. import philox, runtime
-from ..errors import NoDeviceError
+from ..errors import InvalidArgumentError, NoDeviceError
 from ..geometry import torus
 from ..validation import check_choice, check_int
 from .base import Rate, Sampler, register
 
-_CODES = {None: 0, "shift": 1, "xor": 2, "owen": 3, "permute": 4}   # RANDOMIZE in the kernel
+# RANDOMIZE in the kernel: LMS scrambles the matrices (lms_matrices), then plain or xor points
+_CODES = {None: 0, "shift": 1, "xor": 2, "owen": 3, "permute": 4, "lms": 0, "lms+shift": 2}
+LMS = ("lms", "lms+shift")
 _SCALE32 = 2.0**-32
 MAX_HALTON_DIMENSION = 21201
 
@@ -166,6 +171,13 @@ class LowDiscrepancySampler(Sampler):
         return (f"{type(self).__name__}(name={self.name!r}, d={self.d}, seed={self.seed}, "
                 f"randomize={self.randomize!r})")
 
+    def _rotated(self, points, realizations):
+        """``points`` (r, n, d), Cranley-Patterson rotated by each realization's shift vector
+        where ``randomize`` is ``"shift"``; else themselves."""
+        if self.randomize != "shift":
+            return points
+        return torus.shift(points, shift_vectors(self.seed, realizations, self.d)[:, None, :])
+
     def _seed64(self, realizations):
         words = scramble_words(self.seed, np.arange(realizations.start, realizations.stop), self.d)
         return words[..., 0].astype(np.uint64) | (words[..., 1].astype(np.uint64) << np.uint64(32))
@@ -197,14 +209,127 @@ class LowDiscrepancySampler(Sampler):
                                 defines={"RANDOMIZE": _CODES[self.randomize], "LD_BLOCK": block,
                                          **defines, **split})
         kernel(queue, grid, group, target.buffer, table.data,
-               np.uint32(n), np.uint32(self.d), np.uint32(start), np.uint32(realizations.start),
+               np.uint32(n), np.uint32(self.d),
+               start if isinstance(start, np.uint64) else np.uint32(start),   # sobol_points64's
+               np.uint32(realizations.start),
                *philox.seed_key(self.seed), np.uint32(philox.Stream.SCRAMBLE),
                np.uint32(philox.Stream.SHIFT), *extra)
         return target.finish()
 
 
+class DigitalNetB2(LowDiscrepancySampler):
+    """A digital net in base 2 from its generating matrices, in Gray-code order: what
+    ``sobol``, ``niederreiter`` and base-2 ``digital_net`` share (one kernel,
+    ``sobol_points``, and its NumPy twin).
+
+    Point i, dimension j is 2^-32 ⊕_c g_c(i) V_jc, g(i) = i ⊕ (i >> 1), V_jc the column
+    words of :meth:`gray_columns`. Randomizations: ``"shift"``, ``"xor"``, ``"owen"`` as
+    for Sobol'; ``"lms"`` replaces every matrix by L V with L a random non-singular
+    lower-triangular binary matrix (Matoušek 1998), one per realization and dimension,
+    made on the device (kernel ``lms_matrices``; :func:`clsamp.generating_matrices.lms_row_masks`);
+    ``"lms+shift"`` then xors ``"xor"``'s digit vector. Every randomization but
+    ``"shift"`` keeps each prefix of 2^m points a (t, m, d)-net.
+
+    Parameters
+    ----------
+    d : int
+    seed : int
+    backend : {"opencl", "numpy"}
+    randomize : {None, "shift", "xor", "owen", "lms", "lms+shift"}
+    """
+
+    randomizations = (None, "shift", "xor", "owen", "lms", "lms+shift")
+    net_name = "digital net"
+    base = 2
+
+    def gray_columns(self):
+        """The column words the Gray-code kernel xors.
+
+        Returns
+        -------
+        ndarray of uint32
+            (d, 32).
+        """
+        raise NotImplementedError
+
+    def _table_key(self):
+        return (type(self).__name__, self.d)
+
+    def _warn_weaker(self, n, start):
+        total = power = start + (n or 0)
+        while power > 1 and power % self.base == 0:
+            power //= self.base
+        if power != 1:
+            what = "two" if self.base == 2 else f"{self.base}"
+            warnings.warn(f"the balance properties of {self.net_name} points need a power of {what} "
+                          f"points: {self.label!r} asked for start + n = {total}, which is not, so "
+                          "the set is not a net", UserWarning, stacklevel=3)
+
+    def _reference(self, n, realizations, start):
+        index = (np.uint64(start) + np.arange(n, dtype=np.uint64)).astype(np.uint32)
+        rs = np.arange(realizations.start, realizations.stop)
+        columns = self.gray_columns()
+        out = np.empty((len(realizations), n, self.d))
+        if self.randomize in LMS:
+            scrambled = gm.lms_apply(gm.lms_row_masks(self.seed, rs, self.d), columns[None])
+            seeds = scramble_words(self.seed, rs, self.d)[..., 0]
+            for k in range(len(rs)):
+                x = nt.sobol_integers(index, scrambled[k])
+                out[k] = (x ^ seeds[k][None, :] if self.randomize == "lms+shift" else x) * _SCALE32
+            return out
+        x = nt.sobol_integers(index, columns)         # (n, d) uint32
+        if self.randomize is None:
+            out[:] = x * _SCALE32
+        elif self.randomize == "shift":
+            out[:] = torus.shift(x[None] * _SCALE32, shift_vectors(self.seed, rs, self.d)[:, None, :])
+        else:
+            seeds = scramble_words(self.seed, rs, self.d)[..., 0]
+            for k in range(len(rs)):
+                if self.randomize == "xor":
+                    out[k] = (x ^ seeds[k][None, :]) * _SCALE32
+                else:
+                    out[k] = nt.owen_scramble_base2(x, seeds[k][None, :]) * _SCALE32
+        return out
+
+    def _width(self):
+        """Dimensions the kernel makes at once (its SIMD width): 2 or 4."""
+        return 2 if self.d <= 2 else 4
+
+    def _kernel_matrices(self):
+        # (32, d padded to the width): row c holds direction number c of every dimension,
+        # so the kernel loads a vector of dimensions at once; bit-reversed for Owen.
+        width = self._width()
+        table = np.zeros((nt.SOBOL_BITS, -(-self.d // width) * width), dtype=np.uint32)
+        matrices = self.gray_columns()
+        if self.randomize == "owen":
+            matrices = nt.reverse_bits32(matrices)
+        table[:, :self.d] = matrices.T
+        return table
+
+    def _device(self, n, realizations, start, out=None):
+        table = runtime.table((self._table_key(), self.randomize == "owen"), self._kernel_matrices)
+        lms = self.randomize in LMS
+        if lms:
+            table = self._lms_tables(table, realizations)
+        return self._launch("sobol_points", table, n, realizations, start,
+                            {"LD_WIDTH": self._width(), "LD_LMS": int(lms)}, out)
+
+    def _lms_tables(self, table, realizations):
+        """Each realization's scrambled table (kernel ``lms_matrices``), one after another."""
+        import pyopencl.array as cla
+        queue = runtime.queue()
+        stride = -(-self.d // self._width()) * self._width()
+        tables = cla.empty(queue, (len(realizations) * nt.SOBOL_BITS * stride,), np.uint32)
+        kernel = runtime.kernel("lowdiscrepancy.cl", "lms_matrices", defines={"LD_LMS": 1})
+        local = runtime.local_size()
+        kernel(queue, (-(-stride // local) * local, len(realizations)), (local, 1), tables.data,
+               table.data, np.uint32(self.d), np.uint32(stride), np.uint32(realizations.start),
+               *philox.seed_key(self.seed), np.uint32(philox.Stream.SCRAMBLE))
+        return tables
+
+
 @register("sobol")
-class SobolSampler(LowDiscrepancySampler):
+class SobolSampler(DigitalNetB2):
     """Sobol' sequence with Joe-Kuo direction numbers, 32-bit, up to 21201 dimensions.
 
     Point i, dimension j is x_ij = 2^-32 ⊕_c g_c(i) V_jc, where g(i) = i ⊕ (i >> 1) is
@@ -221,18 +346,29 @@ class SobolSampler(LowDiscrepancySampler):
         Dimension, 1 to 21201.
     seed : int
         Seed of the randomization.
-    randomize : {None, "shift", "xor", "owen"}
+    randomize : {None, "shift", "xor", "owen", "lms", "lms+shift"}
         ``"shift"``: x + u mod 1 with u uniform per realization and dimension
         (Cranley-Patterson); breaks the net property. ``"xor"``: x ⊕ s (random
         binary digit scramble, keeps the nets). ``"owen"``: nested uniform scrambling,
         each binary digit flipped by a hash of the digits above it and a per-dimension
         seed (Laine-Karras with Vegdahl's hash, as Burley 2020); keeps the nets, and
-        each point is uniform over realizations.
+        each point is uniform over realizations. ``"lms"``: linear matrix scrambling
+        [5]_, each generating matrix C_j replaced by L C_j with L a uniformly random
+        non-singular lower-triangular binary matrix per realization and dimension
+        (keeps the nets); ``"lms+shift"``: then xor a random digit vector, as
+        ``scipy.stats.qmc.Sobol(scramble=True)`` and qmcpy's default do.
     backend : {"opencl", "numpy"}
+    bits : {32, 64}
+        Index bits. With 64, 64 direction numbers of 64 bits (the same recurrence), so
+        ``start + n`` may reach 2^64; the points are the top 53 bits of the 64-bit
+        state, ``(x >> 11) 2^-53``, which below index 2^32 are exactly the 32-bit
+        points. ``randomize`` then one of None, ``"shift"`` and ``"xor"`` (whose
+        64-bit digit vector begins with the 32-bit one).
 
     Notes
     -----
-    Points are integers times 2^-32 (32 bits of resolution after scrambling too).
+    Points are integers times 2^-32 (32 bits of resolution after scrambling too; with
+    ``bits=64`` past index 2^32, times 2^-53).
     ``sample(n, start=k)`` continues ``sample(k)``. As scipy does, asking for a prefix
     whose length (start + n) is not a power of two warns (``UserWarning``): such a prefix
     is not a net, and the balance properties are lost.
@@ -245,6 +381,8 @@ class SobolSampler(LowDiscrepancySampler):
        projections", SIAM J. Sci. Comput. 30 (2008).
     .. [3] B. Burley, "Practical hash-based Owen scrambling", JCGT 9(4) (2020).
     .. [4] A. B. Owen, "Randomly permuted (t,m,s)-nets and (t,s)-sequences" (1995).
+    .. [5] J. Matoušek, "On the L2-discrepancy for anchored boxes", J. Complexity 14
+       (1998).
 
     Examples
     --------
@@ -253,17 +391,68 @@ class SobolSampler(LowDiscrepancySampler):
     [[0.0, 0.0], [0.5, 0.5], [0.75, 0.25], [0.25, 0.75]]
     >>> clsamp.make_sampler("sobol:owen", d=3, seed=1).sample(256, realizations=8).shape
     (8, 256, 3)
+    >>> clsamp.make_sampler("sobol", d=16, randomize="lms+shift").sample(1024).shape
+    (1024, 16)
+    >>> clsamp.make_sampler("sobol", d=2, bits=64).sample(2, start=2**32).tolist()
+    [[3.4924596548080444e-10, 0.4999999998835847], [0.500000000349246, 0.9999999998835847]]
     """
 
     max_d = nt.sobol_max_dimension()
     max_d_source = "the Joe-Kuo direction-number table"
+    net_name = "Sobol'"
 
-    def _warn_weaker(self, n, start):
-        total = start + (n or 0)
-        if total & (total - 1):
-            warnings.warn(f"the balance properties of Sobol' points need a power of two points: "
-                          f"{self.label!r} asked for start + n = {total}, which is not, so the "
-                          "set is not a net", UserWarning, stacklevel=3)
+    def __init__(self, d=2, seed=0, backend="opencl", randomize=None, bits=32):
+        self.bits = check_choice(bits, "bits", (32, 64))
+        super().__init__(d=d, seed=seed, backend=backend, randomize=randomize)
+        if self.bits == 64 and self.randomize not in (None, "shift", "xor"):
+            raise InvalidArgumentError(
+                f"'randomize' must be None, 'shift' or 'xor' with bits=64, got {self.randomize!r}")
+
+    def __repr__(self):
+        wide = ", bits=64" if self.bits == 64 else ""
+        return super().__repr__()[:-1] + wide + ")"
+
+    def _last_index(self):
+        return 2**64 - 1 if self.bits == 64 else self.max_n
+
+    def _table_key(self):
+        return (type(self).__name__, self.d, self.bits)
+
+    def _matrices64(self):
+        """(d, 64) uint64: V_jc = m_jc 2^(63-c), whose top halves are the 32-bit V_jc for c < 32."""
+        v = nt.sobol_direction_integers(64)[:self.d]
+        return v << (np.uint64(63) - np.arange(64, dtype=np.uint64))[None, :]
+
+    def _reference(self, n, realizations, start):
+        if self.bits == 32:
+            return super()._reference(n, realizations, start)
+        rs = np.arange(realizations.start, realizations.stop)
+        x = nt.sobol_integers(np.uint64(start) + np.arange(n, dtype=np.uint64), self._matrices64())
+        out = np.empty((len(rs), n, self.d))
+        if self.randomize == "xor":
+            words = scramble_words(self.seed, rs, self.d).astype(np.uint64)
+            seeds = (words[..., 0] << np.uint64(32)) | words[..., 1]
+            for k in range(len(rs)):
+                out[k] = ((x ^ seeds[k][None, :]) >> np.uint64(11)).astype(np.float64) * 2.0**-53
+            return out
+        out[:] = (x >> np.uint64(11)).astype(np.float64) * 2.0**-53
+        return self._rotated(out, rs)
+
+    def _device(self, n, realizations, start, out=None):
+        if self.bits == 32:
+            return super()._device(n, realizations, start, out)
+        table = runtime.table(self._table_key(), lambda: self._matrices64().T.copy(), dtype=np.uint64)
+        return self._launch("sobol_points64", table, n, realizations, np.uint64(start), {}, out)
+
+    def gray_columns(self):
+        """The Joe-Kuo direction numbers (:func:`clsamp.number_theory.sobol_matrices`).
+
+        Returns
+        -------
+        ndarray of uint32
+            (d, 32).
+        """
+        return nt.sobol_matrices(self.d)
 
     def convergence_rate(self, case):
         """The published rate of the MSE for ``case`` (:meth:`Sampler.convergence_rate`).
@@ -285,45 +474,6 @@ class SobolSampler(LowDiscrepancySampler):
         if self.randomize != "owen" or self.d != 2:
             return None
         return {"best": Rate(-3.0, "Owen 1997"), "worst": Rate(-1.5, "He and Wang 2015")}.get(case)
-
-    def _reference(self, n, realizations, start):
-        index = (np.uint64(start) + np.arange(n, dtype=np.uint64)).astype(np.uint32)
-        x = nt.sobol_integers(index, nt.sobol_matrices(self.d))         # (n, d) uint32
-        out = np.empty((len(realizations), n, self.d))
-        if self.randomize is None:
-            out[:] = x * _SCALE32
-        elif self.randomize == "shift":
-            u = shift_vectors(self.seed, np.arange(realizations.start, realizations.stop), self.d)
-            out[:] = torus.shift(x[None] * _SCALE32, u[:, None, :])
-        else:
-            seeds = scramble_words(self.seed, np.arange(realizations.start, realizations.stop),
-                                   self.d)[..., 0]
-            for k in range(len(realizations)):
-                if self.randomize == "xor":
-                    out[k] = (x ^ seeds[k][None, :]) * _SCALE32
-                else:
-                    out[k] = nt.owen_scramble_base2(x, seeds[k][None, :]) * _SCALE32
-        return out
-
-    def _width(self):
-        """Dimensions the kernel makes at once (its SIMD width): 2 or 4."""
-        return 2 if self.d <= 2 else 4
-
-    def _kernel_matrices(self):
-        # (32, d padded to the width): row c holds direction number c of every dimension,
-        # so the kernel loads a vector of dimensions at once; bit-reversed for Owen.
-        width = self._width()
-        table = np.zeros((nt.SOBOL_BITS, -(-self.d // width) * width), dtype=np.uint32)
-        matrices = nt.sobol_matrices(self.d)
-        if self.randomize == "owen":
-            matrices = nt.reverse_bits32(matrices)
-        table[:, :self.d] = matrices.T
-        return table
-
-    def _device(self, n, realizations, start, out=None):
-        table = runtime.table(("sobol", self.d, self.randomize == "owen"), self._kernel_matrices)
-        return self._launch("sobol_points", table, n, realizations, start, {"LD_WIDTH": self._width()},
-                            out)
 
 
 class _RadicalInverse(LowDiscrepancySampler):
