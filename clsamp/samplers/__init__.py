@@ -3,6 +3,7 @@
 # Importing a module registers its samplers.
 from . import (  # noqa: F401
     ccvt,  # ccvt
+    gbn,  # gbn (Gaussian blue noise)
     lattice,  # lattice (rank-1: Kuo's extensible sequence, Fibonacci), kronecker (R_d)
     lloyd,  # lloyd
     lowdiscrepancy,  # van_der_corput, halton, hammersley, sobol
