@@ -5,14 +5,15 @@
  * exponential gbn_exp_neg below (range reduction and a Horner polynomial) instead of the
  * device's exp, whose last bits differ between devices.
  *
- * The points of the sets being optimized come sorted by (set, cell) in pts (total, D);
- * cell[i] is the flat cell of sorted point i in a G^D grid and start (sets G^D + 1) the
- * first sorted index of each (set, cell); G >= 3 (the 3^D cells around a cell distinct,
+ * The points of the sets being optimized come sorted by (set, cell) of a G^D grid in pts
+ * (total, D) (each point's cell found again here from its coordinates), and start
+ * (sets G^D + 1) holds the first sorted index of each (set, cell); G >= 3 (the 3^D cells around a cell distinct,
  * each at least the cutoff wide) or G == 1 (every pair). For every sorted point i the
  * partners j != i in its 3^D neighbouring cells, in stencil order then sorted order, with
  * squared distance r2 < R2 (wrapped on the torus when PERIODIC) add
- *     e = exp(-r2 inv2s2),  energy[i] += e - gR,  force[i][k] += (x_i - x_j)[k] e,
- * gR = exp(-R2 inv2s2), so that the kernel cut at the cutoff stays continuous.
+ *     e = exp(-r2 inv2s2),  energy += e - gR,  force[k] += (x_i - x_j)[k] e,
+ * gR = exp(-R2 inv2s2), so that the kernel cut at the cutoff stays continuous; row i of
+ * out (total, D + 1) is (energy, force).
  *
  * Build options: D (dimensions), PERIODIC (1: the unit torus, differences wrapped into
  * [-1/2, 1/2]; 0: the unit cube), GBN_INV_LN2, GBN_LN2_HI, GBN_LN2_LO and GBN_C0 ..
@@ -51,10 +52,9 @@ inline double gbn_exp_neg(const double t)
     return p * as_double((ulong)(1023 - k) << 52);
 }
 
-__kernel void gbn_pairs(__global const double *pts, __global const uint *cell,
-                        __global const uint *start, const uint n, const uint total,
-                        const int G, const uint noff, const double R2, const double inv2s2,
-                        const double gR, __global double *energy, __global double *force)
+__kernel void gbn_pairs(__global const double *pts, __global const uint *start, const uint n,
+                        const uint total, const int G, const uint noff, const double R2,
+                        const double inv2s2, const double gR, __global double *out)
 {
     const uint gi = get_global_id(0);
     if (gi >= total)
@@ -69,8 +69,11 @@ __kernel void gbn_pairs(__global const double *pts, __global const uint *cell,
         f[k] = 0.0;
     }
     double e_sum = 0.0;
-    int c[D];
-    cell_coordinates(cell[gi], G, c);
+    int c[D];                   /* the cell, as clsamp.geometry.cells.sorted_by_cell finds it */
+    for (int k = 0; k < D; ++k) {
+        const int v = (int)(x[k] * (double)G);
+        c[k] = v < G - 1 ? v : G - 1;
+    }
     for (uint o = 0; o < noff; ++o) {
         const size_t slot = (size_t)r * total_cells + neighbour(c, o, G);
         const uint s1 = start[slot + 1];
@@ -96,7 +99,8 @@ __kernel void gbn_pairs(__global const double *pts, __global const uint *cell,
                 f[k] = f[k] + w[k] * e;
         }
     }
-    energy[gi] = e_sum;
+    __global double *row = out + (size_t)gi * (D + 1);
+    row[0] = e_sum;
     for (int k = 0; k < D; ++k)
-        force[(size_t)gi * D + k] = f[k];
+        row[1 + k] = f[k];
 }

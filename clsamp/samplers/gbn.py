@@ -219,15 +219,14 @@ def pair_pass_device(pts, cell, start, n, kernel):
     total, d = pts.shape
     defines = {"D": d, "PERIODIC": int(kernel.periodic), **EXP_DEFINES}
     pairs = runtime.kernel("gbn.cl", "gbn_pairs", defines)
-    energy = runtime.Output((total,), np.float64, host=np.empty(total))
-    force = runtime.Output((total, d), np.float64, host=np.empty((total, d)))
+    out = runtime.Output((total, d + 1), np.float64, host=np.empty((total, d + 1)))
     local = runtime.local_size(64)
-    pairs(runtime.queue(), (-(-total // local) * local,), (local,),
-          *(runtime.to_device(np.ascontiguousarray(a)).data for a in (pts, cell, start)),
-          np.uint32(n), np.uint32(total), np.int32(kernel.cells), np.uint32(kernel.stencil),
-          np.float64(kernel.R2), np.float64(kernel.inv2s2), np.float64(kernel.gR),
-          energy.buffer, force.buffer)
-    return energy.finish(), force.finish()
+    pairs(runtime.queue(), (-(-total // local) * local,), (local,), runtime.to_device(pts).data,
+          runtime.to_device(start).data, np.uint32(n), np.uint32(total), np.int32(kernel.cells),
+          np.uint32(kernel.stencil), np.float64(kernel.R2), np.float64(kernel.inv2s2),
+          np.float64(kernel.gR), out.buffer)
+    result = out.finish()
+    return result[:, 0].copy(), result[:, 1:]
 
 
 def _attraction(x, kernel):
@@ -245,6 +244,41 @@ def _attraction(x, kernel):
         others = np.prod(np.delete(a, k, axis=-1), axis=-1) if x.shape[-1] > 1 else 1.0
         grad[..., k] = da[..., k] * others
     return total, grad
+
+
+def gbn_energy(points, kernel, backend="opencl"):
+    """The energy and the descent direction of sets, as the optimizer sees them.
+
+    Parameters
+    ----------
+    points : ndarray (r, n, d)
+        In [0, 1)^d.
+    kernel : Kernel
+    backend : {"opencl", "numpy"}
+        Where the pair pass runs (the same bits either way).
+
+    Returns
+    -------
+    energy : ndarray (r,)
+        Per point: (sum over ordered pairs within the cutoff of g(r) - g(R), less
+        2 n sum_i A(x_i) in the cube) / n.
+    force : ndarray (r, n, d)
+        F_i = sum_j (x_i - x_j) g(r_ij) (+ n s^2 grad A(x_i) in the cube), which is
+        -(s^2 / 2) times the gradient of n times the energy.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clsamp.samplers.gbn import Kernel, gbn_energy
+    >>> pts = np.random.default_rng(0).random((1, 64, 2))
+    >>> energy, force = gbn_energy(pts, Kernel(n=64, d=2, sigma=0.5, periodic=True))
+    >>> energy.shape, force.shape
+    ((1,), (1, 64, 2))
+    """
+    if backend != "numpy":
+        runtime.require_fp64()
+    return _evaluate(np.asarray(points, dtype=np.float64), kernel,
+                     pair_pass_reference if backend == "numpy" else pair_pass_device)
 
 
 def _evaluate(x, kernel, pair_pass):
