@@ -40,6 +40,7 @@ MODULES = (
     "bench_poisson_disk",
     "bench_render",
     "bench_voronoi",
+    "bench_gbn",
 )
 
 
