@@ -118,8 +118,10 @@ class Kernel:
 
     @property
     def cells(self):
-        """Cells per axis of the neighbour grid (:func:`clsamp.geometry.cells.cells_for`)."""
-        return cells_for(self.reach)
+        """Cells per axis of the neighbour grid (:func:`clsamp.geometry.cells.cells_for`), at
+        most about 4 cells a point (wider cells find the same pairs)."""
+        cells = min(cells_for(self.reach), int((4.0 * self.n) ** (1.0 / self.d)))
+        return cells if cells >= 3 else 1
 
     @property
     def stencil(self):
