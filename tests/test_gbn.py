@@ -34,7 +34,8 @@ def test_exp_is_close_to_numpy_exp():
     assert np.max(np.abs(exp_neg(t) / np.exp(-t) - 1.0)) < 3e-16
 
 
-@pytest.mark.parametrize("d, periodic", [(1, True), (2, True), (2, False), (3, True), (4, False)])
+@pytest.mark.parametrize("d, periodic", [(1, True), (2, True), (2, False), (3, True), (4, False),
+                                         (8, True)])
 def test_the_kernel_gives_the_twins_bits(d, periodic):
     n = 300
     pts = clsamp.make_sampler("random", d=d, seed=d).sample(n, realizations=2)
@@ -136,6 +137,15 @@ def test_4d_sets_spread_far_better_than_random():
     mean_white = nearest_neighbor_distances(white).mean() / dmax
     assert mean_gbn > 0.8 and mean_gbn > 1.5 * mean_white
     assert relative_radius(pts) > 0.6 > 3 * relative_radius(white)
+
+
+@pytest.mark.parametrize("d", [1, 3, 8])
+def test_other_dimensions_spread_better_than_random(d):
+    n = 512
+    pts = clsamp.make_sampler("gbn", d=d, seed=6).sample(n)
+    white = clsamp.make_sampler("random", d=d, seed=6).sample(n)
+    assert relative_radius(pts) > 0.6 > 2 * relative_radius(white)
+    assert nearest_neighbor_distances(pts).mean() > 1.3 * nearest_neighbor_distances(white).mean()
 
 
 def test_the_cube_variant_stays_inside_and_spreads_to_the_faces():

@@ -426,7 +426,8 @@ class GBNSampler(Sampler):
         rho near 0.78; 0 runs every iteration).
     periodic : bool
         True (default): the unit torus, distances wrapped. False: the unit cube, with the
-        paper's boundary treatment (the domain attracts the points; see Notes).
+        boundary treatment of the authors' bounded-domain code (the domain, a uniform
+        density, attracts the points; see Notes).
     init : str
         The sampler the starting points come from (default ``"random"``; ``"jittered"``
         and any other registered sampler that makes n points in d dimensions).
@@ -453,10 +454,12 @@ class GBNSampler(Sampler):
     so that the energy stays continuous and F is its exact gradient; pairs are found
     through a grid of cells at least R wide, so a step costs O(n). On the torus the
     differences wrap and R is at most 1/2. In the cube (``periodic=False``) the energy
-    also holds the domain's attraction, as the paper's bounded domain: the cross term
+    also holds the domain's attraction, as the authors' bounded-domain code has it: the
+    cross term
     -2 n sum_i A(x_i) with A(x) the Gaussian's integral over the cube (a product of
-    erf terms), so points near a face feel the pull of the missing density beyond it
-    instead of bunching there; a step that leaves the cube is projected back.
+    erf terms): near a face nothing beyond it pushes back on the points, and the
+    domain's pull, which there points inward, takes its place, so the points do not
+    bunch on the faces; a step that leaves the cube is projected back.
 
     A step that would raise the energy is rejected and the step halved, so the energy
     never rises (``energy_history``); a run stops when an accepted step lowers it by at
