@@ -28,6 +28,7 @@ setup(
         "test": ["pytest>=7", "hypothesis>=6", "scipy>=1.10", "dask[distributed]>=2024.1"],
         "dask": ["dask[distributed]>=2024.1"],
         "bench": ["scipy>=1.10", "finufft>=2.2", "bridson>=0.1", "qmcpy>=2.0"],
+        "docs": ["sphinx>=7", "numpydoc>=1.6", "myst-parser>=2"],
     },
     entry_points={"console_scripts": ["clsamp=clsamp.cli:main"]},
 )

@@ -25,7 +25,7 @@ from .families import family_names, make_family
 from .integration import IntegrationResult, integrate
 from .metrics import StarBounds, discrepancy, nearest_neighbor_distances, pair_correlation, star_discrepancy
 from .runtime import current_device, devices, use_device
-from .samplers import Rate, SampleInfo, Sampler, as_qmc_engine, make_sampler, sampler_names
+from .samplers import Rate, SampleInfo, Sampler, as_qmc_engine, dither_mask, make_sampler, sampler_names
 from .spectrum import anisotropy, expected_spectrum, power_spectrum, radial_mean
 from .sweep import convergence
 
@@ -40,7 +40,7 @@ __all__ = [
     "BuildError", "ClsampError", "DeviceMemoryError", "IntegrationResult",
     "InvalidArgumentError", "NoDeviceError", "Rate", "SampleInfo", "Sampler", "SamplingError",
     "StarBounds", "anisotropy", "as_qmc_engine", "convergence", "current_device", "devices",
-    "discrepancy", "expected_spectrum", "families", "family_names", "files", "integrands",
+    "discrepancy", "dither_mask", "expected_spectrum", "families", "family_names", "files", "integrands",
     "integrate", "make_family",
     "make_sampler", "metrics", "nearest_neighbor_distances", "pair_correlation", "parallel", "plots",
     "power_spectrum", "radial_mean", "render", "sampler_names", "star_discrepancy", "theory",

@@ -139,6 +139,9 @@ def _add_sample(sub):
                    f"{', '.join(TEXT_POINTS)}; default: text to standard output ({FOLDERS})")
     p.add_argument("--plot", metavar="FIGURE", help=f"also draw the set (the first {PLOTTED_SETS} "
                    f"realizations; for d > 2 x1 and x2) as a figure: {', '.join(FIGURES)}")
+    p.add_argument("--tiled", action="store_true", help="--plot the torus tiled 2x2 (clumps across "
+                   "the border show whole)")
+    p.add_argument("--projections", action="store_true", help="--plot the 1-D projections beside")
     p.set_defaults(run=_run_sample)
 
 
@@ -154,6 +157,8 @@ def _run_sample(args):
         outputs.append(("--plot", _output(args.plot, FIGURES, "sample", "--plot")))
         if args.d < 2:
             raise InvalidArgumentError(f"'--plot' draws points in 2-D; got '-d' {args.d}")
+    elif args.tiled or args.projections:
+        raise InvalidArgumentError("'--tiled' and '--projections' shape the '--plot' figure; give '--plot'")
     sampler = make_sampler(args.name, d=args.d, seed=args.seed, backend=args.backend,
                            **_parse_params(args.param))
     points = sampler.sample(args.n, realizations=args.realizations, start=args.start)
@@ -165,7 +170,8 @@ def _run_sample(args):
     if args.plot:
         from . import plots
         plots.points_figure(outputs[-1][1], (points[:PLOTTED_SETS] if points.ndim == 3 else points)[..., :2],
-                            title=f"{sampler.label}, {shape} points" + (", x1 and x2" if args.d > 2 else ""))
+                            title=f"{sampler.label}, {shape} points" + (", x1 and x2" if args.d > 2 else ""),
+                            tiled=args.tiled, projections=args.projections)
     if outputs:
         _wrote([path for _, path in outputs], f"{shape} points of {args.name}")
     return 0

@@ -202,7 +202,7 @@ def _retry(seed, stream, realization, step, perm, rng, m):
 
 
 def bounded_integers(seed, stream, realization, step, perm, range_):
-    """Uniform integers in [0, range_) from the Philox words of (realization, step, perm).
+    """Uniform integers in ``[0, range_)`` from the Philox words of (realization, step, perm).
 
     The NumPy twin of ``clsamp_bounded`` in ``kernels/permutation.h`` (arguments
     broadcast; ``1 <= range_ < 2^32``): Lemire's multiply-and-reject, so each value is

@@ -10,7 +10,7 @@ split into two 32-bit words (low, high); the counter is ``(index, realization, b
 stream)`` where ``block`` numbers the groups of four 32-bit words (two doubles) drawn for
 one point. So point ``index`` of realization ``r`` gets the same numbers however
 many points or realizations were asked for, and different purposes inside one
-sampler (point coordinates, permutations, shifts) use different ``stream``s.
+sampler (point coordinates, permutations, shifts) use different values of ``stream``.
 """
 
 import numpy as np

@@ -13,8 +13,9 @@ from . import files, theory
 from . import spectrum as spectra
 from .errors import InvalidArgumentError
 from .plot_axes import clip_far_below, legend_below, readable_log_ticks
+from .plot_points import point_sets_2d, points, points_figure, pyplot, scatter  # noqa: F401 (public here)
 from .results import pareto_front
-from .validation import check_choice, check_points, check_positive_int, check_real, point_sets
+from .validation import check_choice, check_real
 
 __all__ = ["points", "points_figure", "spectrum", "radial_mean", "anisotropy", "spectrum_figure",
            "sampler_figure", "radial_mean_families", "pair_correlation", "pcf_figure",
@@ -24,99 +25,10 @@ __all__ = ["points", "points_figure", "spectrum", "radial_mean", "anisotropy", "
            "save_spectrum_exr", "pyplot"]
 
 
-def pyplot():
-    """matplotlib.pyplot on the Agg backend (files, no screen)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    return plt
-
-
 def _save(fig, path):
     """Lay ``fig`` out and save it whole (:func:`clsamp.files.save_figure`)."""
     fig.tight_layout()
     return files.save_figure(path, fig)
-
-
-# -- point sets -----------------------------------------------------------------------------
-def _point_sets(points, name="points"):
-    """The (n, 2) sets of one set, a batch (r, n, 2) or a list of sets of different sizes."""
-    sets = point_sets(points, name, d=2)
-    return sets if sets is not None else list(check_points(points, name, d=2)[0])
-
-
-def _scatter(ax, one, title, size=None, color="black"):
-    """One checked (n, 2) set on the unit square (the body of :func:`points`)."""
-    size = max(0.5, 1600.0 / len(one)) if size is None else size
-    shown = ax.scatter(one[:, 0], one[:, 1], s=size, color=color, linewidths=0)
-    ax.set(xlim=(0, 1), ylim=(0, 1), xticks=[], yticks=[], aspect="equal")
-    if title:
-        ax.set_title(title, fontsize=10)
-    return shown
-
-
-def points(ax, points, title=None, size=None, color="black"):
-    """Draw a 2-D point set on a matplotlib Axes: the unit square, square aspect, no ticks.
-
-    Parameters
-    ----------
-    ax : matplotlib Axes
-    points : ndarray (n, 2) or (r, n, 2), or list of (n_k, 2) arrays
-        One set, or sets (``sample``, ``sample_sets``) of which the first is drawn.
-    title : str, optional
-    size : float, optional
-        Marker area in points^2; by default 1600 / n, at least 0.5.
-    color : matplotlib colour
-
-    Returns
-    -------
-    matplotlib PathCollection
-
-    Examples
-    --------
-    >>> import clsamp
-    >>> ax = clsamp.plots.pyplot().gca()
-    >>> dots = clsamp.plots.points(ax, clsamp.make_sampler("jittered", seed=1).sample(256), "jittered")
-    """
-    if size is not None:
-        size = check_real(size, "size", minimum=0.0, open_minimum=True)
-    return _scatter(ax, _point_sets(points)[0], title, size, color)
-
-
-def points_figure(path, points, title=None, columns=4):
-    """Point sets saved as a figure, one panel a set, titled with its n.
-
-    Parameters
-    ----------
-    path : str or Path
-    points : ndarray (n, 2) or (r, n, 2), or list of (n_k, 2) arrays
-    title : str, optional
-    columns : int
-        Panels per row.
-
-    Returns
-    -------
-    Path
-
-    Examples
-    --------
-    >>> import clsamp, tempfile, pathlib
-    >>> from clsamp import plots
-    >>> sets = clsamp.make_sampler("poisson_disk", rho=0.75, seed=2).sample(256, realizations=2)
-    >>> plots.points_figure(pathlib.Path(tempfile.mkdtemp()) / "pd.png", sets).suffix
-    '.png'
-    """
-    sets = _point_sets(points)
-    columns = min(check_positive_int(columns, "columns"), len(sets))
-    rows = -(-len(sets) // columns)
-    fig, axes = pyplot().subplots(rows, columns, figsize=(3.0 * columns, 3.2 * rows), squeeze=False)
-    for ax in axes.ravel()[len(sets):]:
-        ax.axis("off")
-    for k, (ax, one) in enumerate(zip(axes.ravel(), sets, strict=False)):
-        _scatter(ax, one, f"set {k}, n = {len(one)}" if len(sets) > 1 else f"n = {len(one)}")
-    if title:
-        fig.suptitle(title)
-    return _save(fig, path)
 
 
 # -- spectra --------------------------------------------------------------------------------
@@ -292,7 +204,7 @@ def spectrum_figure(path, P, n=None, realizations=None, label=None, bin_width=1.
     path : str or Path
     P : ndarray (R,) or (R, R)
     n, realizations, label, convention
-        As :func:`anisotropy` takes them (``label`` is the title).
+        As :func:`anisotropy` takes them; the title is ``label``, n and the number of sets.
     bin_width, scale
         As :func:`clsamp.radial_mean` and :func:`spectrum_image` take them.
 
@@ -302,6 +214,8 @@ def spectrum_figure(path, P, n=None, realizations=None, label=None, bin_width=1.
     """
     plt = pyplot()
     P = spectra.check_spectrum(P)
+    sets = realizations and f"{realizations} set{'s' if realizations > 1 else ''}"
+    label = ", ".join(str(part) for part in (label, n and f"n = {n}", sets) if part) or None
     panels = 3 if P.ndim == 2 else 1
     figure, axes = plt.subplots(1, panels, figsize=(4.2 * panels, 3.8), squeeze=False)
     axes = axes[0]
@@ -346,14 +260,14 @@ def sampler_figure(path, points, P, pcf, n=None, label=None):
     >>> out = plots.sampler_figure(pathlib.Path(tempfile.mkdtemp()) / "j.png", sets, P,
     ...                            clsamp.pair_correlation(sets), label="jittered")
     """
-    sets = _point_sets(points)
+    sets = point_sets_2d(points)
     size = float(np.mean([len(s) for s in sets]))
     P = spectra.check_spectrum(P)
     radii, g = pcf
     several = f", {len(sets)} sets" if len(sets) > 1 else ""
     fig, axes = pyplot().subplots(1, 4, figsize=(14, 3.3))
     first = f"n = {len(sets[0])}"
-    _scatter(axes[0], sets[0], f"{label}, {first}" if label else first)
+    scatter(axes[0], sets[0], f"{label}, {first}" if label else first)
     spectrum(axes[1], P, title=f"expected spectrum{several}" if several else "spectrum")
     radial_mean(axes[2], *spectra.radial_mean(P), n=round(size) if n is None else n)
     axes[2].set_ylim(0, 2.5)
@@ -634,6 +548,9 @@ def family_convergence(results, path):
     fig, panels = _panels(results)
     for ax, name, group in panels:
         lines = {res.sampler: family_spread(ax, res) for res in group}
+        ax.fill_between([], [], color="0.5", alpha=0.3, label="shaded: 10-90 % of the members")
+        ax.plot([], [], ":", color="0.3", label="dotted: the worst member")
+        ax.plot([], [], "--", color="0.3", label="dashed: the published rate")
         for cut in clip_far_below(ax, {res.sampler: res.mean for res in group}):
             lines[cut].set_label(f"{lines[cut].get_label()} (below the axis: falls to rounding)")
         _label(ax, "N (samples)", f"{name} ({group[0].members} members): MSE against N")

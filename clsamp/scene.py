@@ -6,7 +6,7 @@ the renderer simulates (docs/design.md, "Rendering")::
     {
       "name": "ao",
       "description": "spheres on a plane, ambient occlusion",
-      "default_spp": 96,
+      "default_spp": 128,
       "camera": {"eye": [0, 2, 6], "look_at": [0, 0.5, 0], "up": [0, 1, 0], "fov": 40,
                  "lens": {"aperture": 0.2, "focus_distance": 6},      (depth_of_field)
                  "shutter": [0, 1]},                                   (motion_blur)
@@ -164,7 +164,7 @@ class Scene:
     >>> from clsamp.scene import Scene
     >>> s = Scene.from_file("ao")
     >>> s.effects, s.sample_dimensions, s.default_spp
-    (('ambient_occlusion',), 2, 96)
+    (('ambient_occlusion',), 2, 128)
     """
 
     def __init__(self, data):

@@ -68,6 +68,11 @@ over 1024..16384 in 2-D). A slope that misses a but lies, by the rules above, at
 that bend is **pre-asymptotic** and the verdict names the factor ("pre-asymptotic
 (log N)^1 factor"); a slope that matches a itself still matches.
 
+A family's statistic can also be **pre-asymptotic** when the sweep has not reached the
+rate's regime at all: Owen's N^-3 shows for a Gaussian of width sigma only once N is well
+above 1/sigma^d. Where the local slopes between consecutive N (at least three) each lie
+nearer a than the one before (:func:`approaching`), the verdict says so and lists them.
+
 References
 ----------
 .. [1] A. Pilleboue, G. Singh, D. Coeurjolly, M. Kazhdan, V. Ostromoukhov, "Variance
@@ -305,6 +310,51 @@ def family_expected(result):
     return (None, None) if rate is None else (rate[0], rate[1])
 
 
+def approaching(ns, values, exponent, allowance=CURVATURE_ALLOWANCE):
+    """The local slopes of ``values`` against ``ns`` where they move toward ``exponent``.
+
+    A sweep that has not reached its asymptotic regime (a narrow Gaussian needs N well
+    above 1/sigma^d before a scrambled net's N^-3 shows) has local slopes, between
+    consecutive N, that bend toward the published exponent as N grows. This names that
+    case: at least three local slopes, each strictly nearer ``exponent`` than the one
+    before, none past it by more than ``allowance``.
+
+    Parameters
+    ----------
+    ns : sequence of int
+        The sweep's N, increasing.
+    values : sequence of float
+        The statistic at each N (positive).
+    exponent : float
+        The published exponent.
+    allowance : float, optional
+        How far past ``exponent`` a local slope may lie.
+
+    Returns
+    -------
+    tuple of float
+        The local slopes, or () where they do not approach ``exponent`` so.
+
+    Examples
+    --------
+    >>> [round(v, 2) for v in approaching([16, 64, 256, 1024], [1e-3, 1e-4, 3e-6, 5e-8], -3)]
+    [-1.66, -2.53, -2.95]
+    >>> approaching([16, 64, 256, 1024], [1e-3, 1e-4, 1e-5, 1e-6], -3)
+    ()
+    """
+    x = [math.log(n) for n in ns]
+    y = [math.log(v) if v > 0 else math.nan for v in values]
+    local = tuple((y[i + 1] - y[i]) / (x[i + 1] - x[i]) for i in range(len(x) - 1))
+    if len(local) < 3 or not all(math.isfinite(v) for v in local):
+        return ()
+    gaps = [abs(v - exponent) for v in local]
+    past = [(v - exponent) * (local[0] - exponent) < 0 and abs(v - exponent) > allowance
+            for v in local]
+    if any(past) or any(b >= a for a, b in zip(gaps[:-1], gaps[1:], strict=True)):
+        return ()
+    return local
+
+
 def compare_family(result, statistic="mean", allowance=None):
     """The fitted rate of a family sweep's statistic held against the published one.
 
@@ -323,9 +373,10 @@ def compare_family(result, statistic="mean", allowance=None):
         ``statistic``, ``slope``, ``ci`` (lower, upper), ``expected`` (exponent or None),
         ``source`` and ``verdict``: "matches" when the expected exponent lies in the
         confidence interval, "pre-asymptotic" when within ``allowance`` of it (or the
-        exponent plus its log factor's bend is, :func:`log_factor_slope`), "differs"
-        beyond, "unknown" without a rate; ``log_factor`` (k), ``log_slope`` (the bend) and
-        ``note`` (the log factor's part in a verdict, or "").
+        exponent plus its log factor's bend is, :func:`log_factor_slope`, or the local
+        slopes approach it, :func:`approaching`), "differs" beyond, "unknown" without a
+        rate; ``log_factor`` (k), ``log_slope`` (the bend) and ``note`` (what explains a
+        pre-asymptotic verdict or a missed log factor, or "").
 
     Raises
     ------
@@ -347,6 +398,10 @@ def compare_family(result, statistic="mean", allowance=None):
         note = f"(log N)^{k} factor: {bend:+.2f} over the fitted N"
     elif lo - allowance <= exponent <= hi + allowance:
         verdict = "pre-asymptotic"
+    elif (local := approaching(result.ns, getattr(result, statistic), exponent, allowance)):
+        verdict = "pre-asymptotic"
+        note = (f"local slopes {', '.join(f'{v:+.2f}' for v in local)} approach "
+                f"{_text(exponent)} as N grows")
     else:
         verdict = "differs"
         note = f"beyond the (log N)^{k} factor's {bend:+.2f} over the fitted N" if k else ""

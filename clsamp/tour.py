@@ -9,6 +9,7 @@ page, and the others still run and keep their results.
 
 import dataclasses
 import html
+import inspect
 import json
 import platform
 import time
@@ -75,6 +76,25 @@ def tour_sampler_params(name, quick):
     return params
 
 
+def quiet_sampler(name, seed, params):
+    """``make_sampler(name, d=2, seed=seed, **params)`` with the sampler's own progress bar
+    off where it has one (the tour shows its own, or none with ``--no-progress``).
+
+    Parameters
+    ----------
+    name : str
+    seed : int
+    params : dict
+
+    Returns
+    -------
+    Sampler
+    """
+    from .samplers import make_sampler, sampler_class
+    takes = "progress" in inspect.signature(sampler_class(name)).parameters
+    return make_sampler(name, d=2, seed=seed, **params, **({"progress": False} if takes else {}))
+
+
 def section_samplers(report, quick):
     """Section 1, samplers: each one's points, expected spectrum, radial mean and PCF; radial
     means by family; CD and L2-star discrepancy against N, fitted slopes beside the known.
@@ -92,7 +112,7 @@ def section_samplers(report, quick):
         The section's HTML, and its numbers for ``tour.json``.
     """
     from . import metrics, spectrum
-    from .samplers import make_sampler, sampler_names
+    from .samplers import sampler_names
     n, realizations, resolution = (256, 8, 64) if quick else (1024, 32, 128)
     known = set(sampler_names())
     rows, data, cells, curves = [], {}, [], {}
@@ -104,7 +124,7 @@ def section_samplers(report, quick):
             params = tour_sampler_params(name, quick)
             if name == "poisson_disk":        # maximal sets: a list of different sizes
                 params["radius"] = MAXIMAL_RHO * metrics.max_min_distance(n)
-            sampler = make_sampler(name, d=2, seed=1, **params)
+            sampler = quiet_sampler(name, 1, params)
             label = sampler.label
             t0 = time.perf_counter()
             if sampler.needs_n:
@@ -178,7 +198,7 @@ def _discrepancy_against_n(report, quick):
     known rates (theory.DISCREPANCY_RATES)."""
     from . import theory
     from .metrics import discrepancy_sweep
-    from .samplers import make_sampler, sampler_names
+    from .samplers import sampler_names
     ns_all = DISCREPANCY_NS[1 if quick else 0]
     realizations = DISCREPANCY_REALIZATIONS[1 if quick else 0]
     methods = ("CD", "L2-star")
@@ -191,7 +211,7 @@ def _discrepancy_against_n(report, quick):
             params = tour_sampler_params(name, quick)
             cap = DISCREPANCY_CAPS.get(name, (None, None))[1 if quick else 0]
             ns = [m for m in ns_all if cap is None or m <= cap]
-            sampler = make_sampler(name, d=2, seed=3, **params)
+            sampler = quiet_sampler(name, 3, params)
             t0 = time.perf_counter()
             sweeps = discrepancy_sweep(sampler, ns, realizations=realizations, methods=methods)
             seconds = time.perf_counter() - t0
@@ -250,11 +270,10 @@ def tour_convergence_plan(quick):
 
 def _sampler_for_convergence(name, quick):
     """The sampler of a sweep; expensive ones at the tour's budget (named in the report)."""
-    from .samplers import make_sampler
     base, _, variant = name.partition(":")
     params = {"randomize": variant} if variant else {}
     params.update(TOUR_BUDGETS.get(base, {}).get("convergence", {}))
-    return make_sampler(base, d=2, seed=2, **params), params
+    return quiet_sampler(base, 2, params), params
 
 
 def section_convergence(report, quick):
@@ -375,13 +394,13 @@ def _family_sweeps(report, quick):
 
 # -- 3. rendering ------------------------------------------------------------------------------
 TOUR_RENDER_SAMPLERS = (
-    ("random", {}), ("jittered", {"strata": (12, 8)}), ("poisson_disk", {}),
+    ("random", {}), ("jittered", {"strata": (16, 8)}), ("poisson_disk", {}),
     ("ccvt", {"points_per_site": 256}), ("sobol:owen", {}), ("pmj02", {}),
 )
 
 
 def section_render(report, quick):
-    """Section 3, rendering: ambient occlusion at 96 rays per pixel with several samplers, MSE
+    """Section 3, rendering: ambient occlusion at 128 rays per pixel with several samplers, MSE
     against a reference render.
 
     Parameters
@@ -619,7 +638,7 @@ SECTIONS = (
     ("samplers", "1. Samplers: spectra, radial means, pair correlation, discrepancy",
      section_samplers),
     ("convergence", "2. Convergence against theory", section_convergence),
-    ("render", "3. Ambient occlusion at 96 rays: samplers in images", section_render),
+    ("render", "3. Ambient occlusion at 128 rays: samplers in images", section_render),
     ("cost", "4. What accuracy costs in time", section_cost),
     ("stability", "5. Stability: the hard cases", section_stability),
     ("device", "6. Device, versions and timings", section_device),

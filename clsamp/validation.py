@@ -220,6 +220,28 @@ def check_choice(value, name, choices):
     return value
 
 
+def check_bool(value, name):
+    """``value`` must be True or False (a NumPy bool too).
+
+    Parameters
+    ----------
+    value : object
+    name : str
+        The argument's name, for the message.
+
+    Returns
+    -------
+    bool
+
+    Raises
+    ------
+    InvalidArgumentError
+    """
+    if not isinstance(value, (bool, np.bool_)):
+        raise InvalidArgumentError(f"'{name}' must be True or False, got {value!r}")
+    return bool(value)
+
+
 def point_sets(points, name="points", d=None):
     """The sets of a list of point arrays of different sizes, or None for anything else.
 

@@ -21,7 +21,12 @@ inline ulong shifted(ulong x, __global const ulong *shifts, uint r, uint d, uint
 #endif
 }
 
-/* Extensible lattice in base 2: ((reverse32(i) z_j) mod 2^32) 2^-32. */
+#ifndef GRAY
+#define GRAY 0
+#endif
+
+/* Extensible lattice in base 2: ((reverse32(i) z_j) mod 2^32) 2^-32; GRAY: index i's Gray
+ * code i ^ (i >> 1) in place of i. */
 __kernel void lattice_points(__global ulong *out, __global const uint *z,
                              __global const ulong *shifts, const uint n, const uint d,
                              const uint start)
@@ -29,25 +34,26 @@ __kernel void lattice_points(__global ulong *out, __global const uint *z,
     const uint i = get_global_id(0), r = get_global_id(1);
     if (i >= n)
         return;
-    const uint radical = reverse_bits32(start + i);
+    const uint k = start + i;
+    const uint radical = reverse_bits32(GRAY ? k ^ (k >> 1) : k);
     __global ulong *row = out + ((size_t)r * n + i) * d;
     for (uint j = 0; j < d; ++j)
         row[j] = shifted(f64_scaled(radical * z[j], -32), shifts, r, d, j);
 }
 
-/* Fibonacci lattice of size points: (i / size, (i step mod size) / size). */
-__kernel void fibonacci_points(__global ulong *out, __global const uint *unused,
-                               __global const ulong *shifts, const uint n, const uint d,
-                               const uint start, const uint size, const uint step)
+/* The rank-1 lattice rule of n points in natural order: (i z_j mod n) / n, one correctly
+ * rounded division (the Fibonacci lattice: z = (1, F_(m-1)), n = F_m). */
+__kernel void natural_points(__global ulong *out, __global const uint *z,
+                             __global const ulong *shifts, const uint n, const uint d,
+                             const uint start)
 {
-    (void)unused;
     const uint i = get_global_id(0), r = get_global_id(1);
     if (i >= n)
         return;
-    const uint k = start + i;
+    const ulong k = (ulong)(start + i);
     __global ulong *row = out + ((size_t)r * n + i) * d;
-    row[0] = shifted(f64_div(k, size, 0), shifts, r, d, 0);
-    row[1] = shifted(f64_div(((ulong)k * step) % size, size, 0), shifts, r, d, 1);
+    for (uint j = 0; j < d; ++j)
+        row[j] = shifted(f64_div((k * z[j]) % n, n, 0), shifts, r, d, j);
 }
 
 /* Kronecker: the top 53 bits of (i A_j) mod 2^64, times 2^-53. */

@@ -11,13 +11,26 @@
  * Distances: exactly rounded double operations, no contraction, in the order of
  * clsamp.geometry.torus.distance2 (kernels/torus.h, as the Poisson-disk kernels): the nearest-neighbour
  * distances agree with the NumPy twin bit for bit. The smoothing sums use exp: their
- * bits depend on the device's exp (within a few ulps). Build options: D; NR (radii) for
- * pcf_sums, UNIFORM (radii r0 + k step) and PPI (points a work-item takes).
+ * bits depend on the device's exp (within a few ulps). Build options: D, PERIODIC; NR
+ * (radii) for pcf_sums, UNIFORM (radii r0 + k step) and PPI (points a work-item takes).
+ * In the unit cube (PERIODIC 0) the stencil still wraps: a wrapped neighbour cell holds
+ * points at least a cell width away in the cube, which the reach test drops.
  */
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #pragma OPENCL FP_CONTRACT OFF
 #include "torus.h"
 #include "cells.h"
+
+/* PERIODIC 1: distances on the torus; 0: in the unit cube, each pair of the PCF weighted
+ * by the translation edge correction 1 / prod_k (1 - |x_k - y_k|) (Ohser 1983) */
+#ifndef PERIODIC
+#define PERIODIC 1
+#endif
+#if PERIODIC
+#define pair_distance2 torus_distance2
+#else
+#define pair_distance2 cube_distance2
+#endif
 
 #ifdef NR
 #if UNIFORM
@@ -35,11 +48,15 @@ inline void add_gaussian(double *hist, double e, double a, const double b, const
 /* The pairs waiting in (tb, kb0, kb1): their two exp as one double4 exp each (PoCL's
  * vector exp costs about what one scalar exp does), then the recurrence per pair. A lane
  * with kb0 > kb1 adds nothing. */
-inline void flush_pairs(double *hist, const double *tb, const int *kb0, const int *kb1,
-                        const double step, const double inv2s2, const double b)
+inline void flush_pairs(double *hist, const double *tb, const double *wb, const int *kb0,
+                        const int *kb1, const double step, const double inv2s2, const double b)
 {
     const double4 t = (double4)(tb[0], tb[1], tb[2], tb[3]);
+#if PERIODIC
     const double4 e = exp(-(t * t) * inv2s2);
+#else
+    const double4 e = exp(-(t * t) * inv2s2) * (double4)(wb[0], wb[1], wb[2], wb[3]);
+#endif
     const double4 a = exp(-(2.0 * t * step + step * step) * inv2s2);
     add_gaussian(hist, e.s0, a.s0, b, kb0[0], kb1[0]);
     add_gaussian(hist, e.s1, a.s1, b, kb0[1], kb1[1]);
@@ -71,7 +88,7 @@ __kernel void pcf_sums(__global const double *pts, __global const uint *cell,
     for (int k = 0; k < NR; ++k)
         hist[k] = 0.0;
 #if UNIFORM
-    double tb[4] = {0.0, 0.0, 0.0, 0.0};
+    double tb[4] = {0.0, 0.0, 0.0, 0.0}, wb[4] = {1.0, 1.0, 1.0, 1.0};
     int kb0[4] = {0, 0, 0, 0}, kb1[4] = {-1, -1, -1, -1};
     int waiting = 0;
 #endif
@@ -93,10 +110,18 @@ __kernel void pcf_sums(__global const double *pts, __global const uint *cell,
             const size_t slot = (size_t)r * total_cells + neighbour(c, o, G);
             const uint s1 = start[slot + 1];
             for (uint j = o == centre ? (uint)gi + 1 : start[slot]; j < s1; ++j) {
-                const double d2 = torus_distance2(x, pts + (size_t)j * D, D);
+                const double d2 = pair_distance2(x, pts + (size_t)j * D, D);
                 if (d2 >= reach2)
                     continue;
                 const double s = sqrt(d2);
+#if PERIODIC
+                const double weight = 1.0;
+#else
+                double cover = 1.0;     /* the volume of the cube and its translate's overlap */
+                for (int k = 0; k < D; ++k)
+                    cover *= 1.0 - cube_delta(x[k], pts[(size_t)j * D + k]);
+                const double weight = 1.0 / cover;
+#endif
 #if UNIFORM
                 /* k0 = max(0, ceil(lo)), k1 = min(NR - 1, floor(hi)) by conversions:
                  * PoCL calls ceil and floor out of line */
@@ -112,17 +137,18 @@ __kernel void pcf_sums(__global const double *pts, __global const uint *cell,
                 if (k0 > k1)
                     continue;
                 tb[waiting] = (r0 + (double)k0 * step) - s;
+                wb[waiting] = weight;
                 kb0[waiting] = k0;
                 kb1[waiting] = k1;
                 if (++waiting == 4) {
-                    flush_pairs(hist, tb, kb0, kb1, step, inv2s2, b);
+                    flush_pairs(hist, tb, wb, kb0, kb1, step, inv2s2, b);
                     waiting = 0;
                 }
 #else
                 for (int k = 0; k < NR; ++k) {
                     const double t = radii[k] - s;
                     if (t <= cut && t >= -cut)
-                        hist[k] += exp(-(t * t) * inv2s2);
+                        hist[k] += weight * exp(-(t * t) * inv2s2);
                 }
 #endif
             }
@@ -133,7 +159,7 @@ __kernel void pcf_sums(__global const double *pts, __global const uint *cell,
         kb0[l] = 0;
         kb1[l] = -1;
     }
-    flush_pairs(hist, tb, kb0, kb1, step, inv2s2, b);
+    flush_pairs(hist, tb, wb, kb0, kb1, step, inv2s2, b);
 #endif
     __global double *row = out + ((size_t)r * items + w) * NR;
     for (int k = 0; k < NR; ++k)
@@ -168,7 +194,7 @@ __kernel void nearest_neighbor(__global const double *pts, __global const uint *
         for (uint j = start[slot]; j < s1; ++j) {
             if (j == gi)
                 continue;
-            const double v = torus_distance2(x, pts + (size_t)j * D, D);
+            const double v = pair_distance2(x, pts + (size_t)j * D, D);
             best = v < best ? v : best;
         }
     }

@@ -5,7 +5,8 @@
  *
  * torus_delta, torus_distance2: the wrapped difference min(|a - b|, 1 - |a - b|) and the
  * squared distance summed from the first coordinate to the last (the Poisson-disk
- * acceptance test, the nearest-neighbour distances).
+ * acceptance test, the nearest-neighbour distances); cube_delta, cube_distance2 the same
+ * in the unit cube without wrapping (the pair statistics' periodic=False).
  * torus_shift (double, double4) and torus_wrapped4, each from one definition over its
  * type: (x + u) mod 1 with one rounding (the Cranley-Patterson shift) and a difference
  * wrapped into [-1/2, 1/2].
@@ -26,17 +27,29 @@ inline double torus_delta(const double a, const double b)
     return t < u ? t : u;
 }
 
-/* Squared distance of the private point a and the global point b, `dims` coordinates. */
-inline double torus_distance2(const double *a, __global const double *b, const int dims)
+/* |a - b|: the coordinate distance in the unit cube, without wrapping */
+inline double cube_delta(const double a, const double b)
 {
-    double t = torus_delta(a[0], b[0]);
-    double total = t * t;
-    for (int k = 1; k < dims; ++k) {
-        t = torus_delta(a[k], b[k]);
-        total = total + t * t;
-    }
-    return total;
+    const double d = a - b;
+    return d < 0.0 ? -d : d;
 }
+
+/* Squared distance of the private point a and the global point b, `dims` coordinates,
+ * summed from the first to the last: on the torus (torus_distance2) and in the unit cube
+ * (cube_distance2), clsamp.geometry.torus.distance2(a, b, periodic) */
+#define CLSAMP_DISTANCE2(name, DELTA)                                           \
+    inline double name(const double *a, __global const double *b, const int dims) \
+    {                                                                           \
+        double t = DELTA(a[0], b[0]);                                           \
+        double total = t * t;                                                   \
+        for (int k = 1; k < dims; ++k) {                                        \
+            t = DELTA(a[k], b[k]);                                              \
+            total = total + t * t;                                              \
+        }                                                                       \
+        return total;                                                           \
+    }
+CLSAMP_DISTANCE2(torus_distance2, torus_delta)
+CLSAMP_DISTANCE2(cube_distance2, cube_delta)
 
 /* (x + u) mod 1 for x, u in [0, 1): x + u less 1 where it reaches 1, one rounding */
 #define CLSAMP_TORUS_SHIFT(name, T)                             \

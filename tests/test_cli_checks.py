@@ -54,6 +54,9 @@ def test_sample_plot_draws_the_points(tmp_path, capsys):
                      "--plot", tmp_path / "q.pdf")             # d > 2: two coordinates; no -o
     assert code == 0, text
     assert (tmp_path / "q.pdf").read_bytes()[:4] == b"%PDF"
+    code, text = run(capsys, "sample", "pmj02", "-n", "64", "--plot", tmp_path / "t.png", "--tiled",
+                     "--projections")
+    assert code == 0 and (tmp_path / "t.png").read_bytes()[:4] == b"\x89PNG", text
     readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
     assert any(line.startswith("clsamp sample ") and " --plot " in line for line in readme.splitlines())
 
@@ -62,6 +65,7 @@ def test_sample_plot_draws_the_points(tmp_path, capsys):
     (("--plot", "{}/p.jpg"), "'--plot'"),
     (("--plot", "{}/p.png", "-d", "1"), "'-d' 1"),
     (("-o", "{}/p.npy", "--plot", "{}/p"), "no suffix"),
+    (("-o", "{}/p.npy", "--tiled"), "give '--plot'"),
 ])
 def test_sample_plot_is_checked_first(tmp_path, capsys, no_work, argv, expected):
     code, text = run(capsys, "sample", "random", "-n", "8", *(a.format(tmp_path) for a in argv))

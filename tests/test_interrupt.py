@@ -86,7 +86,7 @@ def test_an_interrupted_tour_links_only_pictures_that_exist(tmp_path, after):
         json.loads((folder / "tour.json").read_text())
 
 
-@pytest.mark.parametrize("work", ["spectrum", "ccvt"])
+@pytest.mark.parametrize("work", ["spectrum", "ccvt", "ccvt_batch"])
 def test_long_work_stops_within_two_seconds_of_ctrl_c(work):
     import threading
 
@@ -96,9 +96,12 @@ def test_long_work_stops_within_two_seconds_of_ctrl_c(work):
 
         def call():
             clsamp.power_spectrum(pts, resolution=1024, method="direct", progress=False)
-    else:
+    elif work == "ccvt":
         def call():
             clsamp.make_sampler("ccvt", points_per_site=16, seed=1, progress=False).sample(131072)
+    else:       # a convergence sweep's CCVT batch: long power passes and solve chunks
+        def call():
+            clsamp.make_sampler("ccvt", seed=1, progress=False).sample(4096, realizations=64)
     fired = []
 
     def ctrl_c():

@@ -2,13 +2,14 @@
 uniform shifts, and (where qmcpy is installed) qmcpy's points."""
 
 from decimal import Decimal, getcontext
+from fractions import Fraction
 
 import numpy as np
 import pytest
 
 import clsamp
 from clsamp.errors import InvalidArgumentError
-from clsamp.samplers.lattice import fibonacci, kuo_vector
+from clsamp.samplers.lattice import fibonacci, korobov, kuo_vector
 
 
 @pytest.mark.parametrize("n", [13, 89, 987, 46368])
@@ -90,3 +91,79 @@ def test_bad_parameters_are_named():
         clsamp.make_sampler("lattice", generator="fibonacci").sample(90)
     with pytest.raises(InvalidArgumentError, match="'start'"):
         clsamp.make_sampler("lattice", generator="fibonacci").sample(89, start=1)
+
+
+# -- issue 38: a generating vector of one's own, Korobov's, three orders ------------------
+def _rows(a):
+    return {tuple(r) for r in np.asarray(a).tolist()}
+
+
+@pytest.mark.parametrize("params", [
+    {"order": "gray"}, {"order": "natural"}, {"order": "gray", "randomize": "shift", "seed": 4},
+    {"generating_vector": [1, 182667, 469891, 498753], "d": 4, "order": "radical_inverse"},
+    {"generating_vector": [1, 182667, 469891, 498753], "d": 3, "order": "natural", "randomize": "shift"},
+])
+def test_every_order_and_vector_equals_its_twin_bit_for_bit(params):
+    for n, start in ((1000, 0), (256, 0), (100, 37)):
+        if params.get("order") == "natural" and start:
+            continue
+        s = clsamp.make_sampler("lattice", **params)
+        got = s.sample(n, realizations=3, start=start)
+        ref = clsamp.make_sampler("lattice", backend="numpy", **params).sample(n, realizations=3, start=start)
+        assert np.array_equal(got.view(np.uint64), ref.view(np.uint64))
+
+
+def test_the_orders_hold_the_same_lattice_at_powers_of_two():
+    z = korobov(76393, 5)
+    ri = clsamp.make_sampler("lattice", d=5, generating_vector=z).sample(1024)
+    gray = clsamp.make_sampler("lattice", d=5, generating_vector=z, order="gray").sample(1024)
+    natural = clsamp.make_sampler("lattice", d=5, generating_vector=z, order="natural").sample(1024)
+    assert _rows(ri) == _rows(gray) == _rows(natural) and len(_rows(ri)) == 1024
+    # Gray order: consecutive indices differ in one bit, so each step adds +-z / 2^k mod 1
+    assert not np.array_equal(ri, gray)
+    # every 2^m prefix of the Gray order is the lattice of 2^m points
+    for m in range(1, 10):
+        assert _rows(gray[:2**m]) == _rows(natural[::1024 // 2**m])
+
+
+def test_natural_order_is_the_lattice_rule_of_any_n():
+    n, z = 1009, [1, 76, 503]
+    pts = clsamp.make_sampler("lattice", d=3, generating_vector=z, order="natural").sample(n)
+    exact = np.array([[float(Fraction(i * zj % n, n)) for zj in z] for i in range(n)])
+    assert np.array_equal(pts, exact)                 # one correctly rounded division
+    np.testing.assert_allclose(pts[22], (pts[5] + pts[17]) % 1, rtol=0, atol=1e-15)  # a lattice
+    with pytest.raises(InvalidArgumentError, match="'start'"):
+        clsamp.make_sampler("lattice", d=3, generating_vector=z, order="natural").sample(n, start=1)
+
+
+def test_korobov_vectors_and_the_fibonacci_lattice_as_a_natural_order():
+    assert korobov(3, 5, 2**32).tolist() == [1, 3, 9, 27, 81]
+    assert korobov(5, 3, 7).tolist() == [1, 5, 4]
+    fib = clsamp.make_sampler("lattice", d=2, generator="fibonacci").sample(233)
+    same = clsamp.make_sampler("lattice", generating_vector=[1, 144], order="natural").sample(233)
+    assert np.array_equal(fib, same)
+
+
+def test_matches_qmcpy_in_gray_and_linear_order():
+    qmcpy = pytest.importorskip("qmcpy")
+    z = np.array([1, 433461, 315689, 441789], dtype=np.uint64)
+    for ours, theirs in (("gray", "GRAY"), ("natural", "LINEAR")):
+        q = qmcpy.Lattice(4, randomize="FALSE", order=theirs, generating_vector=z, m_max=20)
+        mine = clsamp.make_sampler("lattice", d=4, generating_vector=z, order=ours).sample(1024)
+        assert np.allclose(mine, q.gen_samples(1024, warn=False), rtol=0, atol=1e-15), ours
+
+
+@pytest.mark.parametrize("params, match", [
+    ({"generating_vector": [1, 0]}, "entries must be in"),
+    ({"generating_vector": [1]}, r"'d' must be in \[1, 1\]"),
+    ({"generating_vector": [1, 2**32]}, "entries must be in"),
+    ({"generating_vector": [[1, 3]]}, "1-D array"),
+    ({"generating_vector": [1.5, 3]}, "1-D array"),
+    ({"generating_vector": [1, 3], "d": 3}, r"'d' must be in \[1, 2\]"),
+    ({"generating_vector": [1, 3], "generator": "fibonacci"}, "Fibonacci"),
+    ({"order": "linear"}, "'order'"),
+    ({"order": "gray", "generator": "fibonacci"}, "one order"),
+])
+def test_bad_vectors_and_orders_are_named(params, match):
+    with pytest.raises(InvalidArgumentError, match=match):
+        clsamp.make_sampler("lattice", **params)

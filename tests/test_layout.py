@@ -22,7 +22,8 @@ LAYERS = [
     ("analysis", {"nufft", "spectrum", "metrics"}),
     ("experiments", {"integrands", "families", "estimates", "sweep", "results", "theory", "integration"}),
     ("render", {"scene", "pixel_sampling", "render_numpy", "render"}),
-    ("report", {"plot_axes", "plots", "report", "tour", "tour_cost", "cli", "__main__", "__init__"}),
+    ("report", {"plot_axes", "plot_points", "plots", "report", "tour", "tour_cost", "cli", "__main__",
+                "__init__"}),
 ]
 
 

@@ -290,8 +290,10 @@ def test_pcf_bad_input():
     x = np.random.default_rng(0).random((100, 2))
     with pytest.raises(InvalidArgumentError, match="at least 2"):
         clsamp.pair_correlation(x[:1])
-    with pytest.raises(InvalidArgumentError, match="dimensions"):
-        clsamp.pair_correlation(np.random.default_rng(0).random((100, 4)))
+    with pytest.raises(InvalidArgumentError, match="'periodic' must be True or False"):
+        clsamp.pair_correlation(x, periodic="no")
+    with pytest.raises(InvalidArgumentError, match="'periodic' must be True or False"):
+        clsamp.nearest_neighbor_distances(x, periodic=None)
     with pytest.raises(InvalidArgumentError, match="half the torus"):
         clsamp.pair_correlation(x, radii=[0.1, 0.49])
     with pytest.raises(InvalidArgumentError, match="increasing"):
@@ -300,6 +302,65 @@ def test_pcf_bad_input():
         clsamp.pair_correlation(x, sigma=-1.0)
     with pytest.raises(InvalidArgumentError, match="points"):
         clsamp.pair_correlation(np.full((10, 2), 1.5))
+
+
+@pytest.mark.parametrize("d", [4, 6])
+def test_pcf_of_random_points_is_one_in_higher_dimensions(d):
+    # issue 37: any d; the expected PCF of white noise is 1 within its Poisson noise
+    n, r = 2048, 4
+    pts = clsamp.make_sampler("random", d=d, seed=d).sample(n, realizations=r)
+    radii, g = clsamp.pair_correlation(pts, radii=np.linspace(0.2, 0.4, 9), sigma=0.01)
+    surface = 2 * math.pi ** (d / 2) / math.gamma(d / 2) * radii ** (d - 1)
+    pairs = r * n * n * surface * 2.5 * 0.01
+    assert np.all(np.abs(g - 1) <= 5 / np.sqrt(pairs)), np.abs(g - 1) * np.sqrt(pairs)
+
+
+@pytest.mark.parametrize("d,n,radii", [(1, 300, None), (2, 700, None), (3, 1500, None),
+                                        (4, 256, np.linspace(0.05, 0.3, 6))])
+def test_pcf_in_the_cube_equals_its_twin(d, n, radii):
+    pts = clsamp.make_sampler("random", d=d, seed=7).sample(n, realizations=2)
+    _, g1 = clsamp.pair_correlation(pts, radii=radii, periodic=False)
+    _, g2 = clsamp.pair_correlation(pts, radii=radii, periodic=False, backend="numpy")
+    np.testing.assert_allclose(g1, g2, rtol=1e-12, atol=1e-12)
+
+
+def test_pcf_in_the_cube_is_one_for_white_noise_by_its_edge_correction():
+    # the translation correction keeps white noise at 1 in the cube; without it (the
+    # pairs counted as they come) the pairs across the border are missing: 1 - 8r/(3 pi)
+    # + r^2/(2 pi) of them at r in the unit square
+    many = clsamp.make_sampler("random", d=2, seed=8).sample(2048, realizations=16)
+    radii = np.linspace(0.05, 0.3, 11)
+    _, corrected = clsamp.pair_correlation(many, radii=radii, sigma=0.005, periodic=False)
+    assert np.all(np.abs(corrected - 1) < 0.03), corrected
+    s = np.sqrt(neighbors.distance2(many[0][:, None, :], many[0][None, :, :], periodic=False))
+    within = np.mean(s[np.triu_indices(2048, 1)] < 0.3)
+    assert within == pytest.approx(math.pi * 0.09 - 8 * 0.3**3 / 3 + 0.3**4 / 2, rel=0.03)
+
+
+def test_min_distance_in_the_cube_and_in_any_dimension():
+    pts = np.array([[0.02, 0.5], [0.97, 0.5], [0.5, 0.9]])
+    assert min_distance(pts) == pytest.approx(0.05)
+    assert min_distance(pts, periodic=False) == pytest.approx(np.hypot(0.47, 0.4))
+    assert min_distance(pts[:1], periodic=False) == np.inf and min_distance(pts[:1]) == 1.0
+    for d, periodic in ((4, True), (4, False), (6, False)):
+        x = clsamp.make_sampler("random", d=d, seed=d).sample(2000, realizations=2)
+        nn = clsamp.nearest_neighbor_distances(x, periodic=periodic)
+        np.testing.assert_array_equal(min_distance(x, periodic=periodic), nn.min(axis=1))
+    with pytest.raises(InvalidArgumentError, match="'periodic'"):
+        min_distance(pts, periodic=1)
+
+
+def test_nearest_neighbors_in_the_cube_do_not_wrap():
+    pts = np.array([[0.02, 0.5], [0.97, 0.5], [0.5, 0.5]])
+    np.testing.assert_allclose(clsamp.nearest_neighbor_distances(pts), [0.05, 0.05, 0.47])
+    np.testing.assert_allclose(clsamp.nearest_neighbor_distances(pts, periodic=False), [0.48, 0.47, 0.47])
+    for d in (1, 2, 3, 5):
+        x = clsamp.make_sampler("random", d=d, seed=d).sample(1500, realizations=2)
+        assert np.array_equal(clsamp.nearest_neighbor_distances(x, periodic=False),
+                              np.stack([neighbors.nearest_neighbor_reference(s, periodic=False)
+                                        for s in x]))
+        assert np.all(clsamp.nearest_neighbor_distances(x, periodic=False)
+                      >= clsamp.nearest_neighbor_distances(x))
 
 
 # -- nearest neighbours -------------------------------------------------------------------

@@ -32,12 +32,29 @@ def test_points_draws_the_first_set_on_the_unit_square(sets):
     plots.pyplot().close(fig)
 
 
+def test_points_tiled_shows_the_torus_2x2_and_projections_the_coordinates(sets):
+    fig, ax = plots.pyplot().subplots()
+    dots = plots.points(ax, sets, tiled=True, projections=True)
+    shown = dots.get_offsets()
+    assert len(shown) == 4 * len(sets[0]) and ax.get_xlim() == (0, 2) and ax.get_ylim() == (0, 2)
+    for shift in ((0, 0), (0, 1), (1, 0), (1, 1)):      # every copy of the set, shifted whole
+        assert any(np.array_equal(shown[k * 64:(k + 1) * 64], sets[0] + shift) for k in range(4))
+    strips = ax.child_axes                               # the x ticks below, the y ticks left
+    assert len(strips) == 2
+    xs = np.sort([seg[0][0] for seg in strips[0].collections[0].get_segments()])
+    ys = np.sort([seg[0][1] for seg in strips[1].collections[0].get_segments()])
+    np.testing.assert_allclose(xs, np.sort(sets[0][:, 0]))
+    np.testing.assert_allclose(ys, np.sort(sets[0][:, 1]))
+    plots.pyplot().close(fig)
+
+
 @pytest.mark.parametrize("shape", ["one", "batch", "list"])
 def test_points_figure_writes_a_png(tmp_path, sets, shape):
     points = {"one": sets[0], "batch": sets, "list": [sets[0][:40], sets[1], sets[2][:10]]}[shape]
     out = plots.points_figure(tmp_path / f"{shape}.png", points, title=shape, columns=2)
     assert out == tmp_path / f"{shape}.png"
     assert _is_png(out)
+    assert _is_png(plots.points_figure(tmp_path / "t.png", points, tiled=True, projections=True))
 
 
 @pytest.mark.parametrize("bad, match", [
@@ -84,3 +101,26 @@ def test_the_tour_figures_refuse_nothing_to_draw(tmp_path):
         plots.discrepancy_figure(tmp_path / "d.png", [])
     with pytest.raises(ValueError, match="'panels'"):
         plots.error_time_figure(tmp_path / "t.png", [])
+
+
+def test_spectrum_titles_say_n_and_sets_and_family_legends_say_what_band_and_lines_are(tmp_path,
+                                                                                     monkeypatch):
+    # issue 40 (8): titles without n and the number of sets; a legend that did not explain the
+    # shaded band, the dotted and the dashed lines
+    titles, legends = [], []
+    save = plots._save
+
+    def keep(fig, path):
+        titles.extend(ax.get_title() for ax in fig.axes)
+        legends.extend(t.get_text() for ax in fig.axes if ax.get_legend()
+                       for t in ax.get_legend().get_texts())
+        return save(fig, path)
+    monkeypatch.setattr(plots, "_save", keep)
+    P = np.ones((16, 16))
+    plots.spectrum_figure(tmp_path / "s.png", P, n=256, realizations=8, label="jittered")
+    assert "jittered, n = 256, 8 sets" in titles
+    fam = clsamp.convergence("jittered", "random_gaussians", [16, 64], realizations=4, members=4,
+                             seed=1, progress=False)
+    plots.family_convergence([fam], tmp_path / "f.png")
+    assert {"shaded: 10-90 % of the members", "dotted: the worst member",
+            "dashed: the published rate"} <= set(legends), legends

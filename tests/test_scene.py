@@ -2,11 +2,13 @@
 
 import copy
 import json
+import warnings
 
 import pytest
 
 from clsamp.errors import InvalidArgumentError
 from clsamp.scene import EFFECTS, Scene, shipped_scenes
+from clsamp.tour import TOUR_RENDER_SAMPLERS
 
 BASE = {
     "name": "t",
@@ -32,7 +34,7 @@ def with_(effects=None, **changes):
 def test_shipped_scenes_load_and_ao_is_the_tour_scene():
     assert {"ao", "dof", "motion_blur", "soft_shadows", "combined"} <= set(shipped_scenes())
     ao = Scene.from_file("ao")
-    assert ao.name == "ao" and ao.description and ao.default_spp == 96
+    assert ao.name == "ao" and ao.description and ao.default_spp == 128
     assert ao.effects == ("ambient_occlusion",) and ao.ao_rays == 1 and ao.sample_dimensions == 2
     combined = Scene.from_file("combined")
     assert combined.effects == EFFECTS and combined.sample_dimensions == 2 + 2 + 1 + 2 + 2
@@ -111,3 +113,17 @@ def test_bad_files_say_where(tmp_path):
         Scene.from_file("no_such_scene")
     with pytest.raises(ValueError):          # InvalidArgumentError is a ValueError too
         Scene.from_dict([1, 2])
+
+
+@pytest.mark.parametrize("name, params", TOUR_RENDER_SAMPLERS)
+def test_the_tour_scene_at_its_default_spp_warns_for_no_sampler_it_is_shown_with(name, params):
+    # issue 40: 96 spp made Owen-Sobol warn about its balance in the tour; 128 = 2^7 = 16 x 8
+    from clsamp.render import render
+    scene = Scene.from_file("ao")
+    if "points_per_site" in params:
+        params = {**params, "points_per_site": 64}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        image = render(scene, name, spp=scene.default_spp, resolution=8, seed=4,
+                       sampler_params=params or None, progress=False)
+    assert image.shape == (8, 8) and 0 < image.mean() <= 1

@@ -100,6 +100,7 @@ def test_one_name_per_sampler(tour):
 
 def test_warnings_print_as_one_line(tour):
     err = (tour.parent / "stderr.txt").read_text()
+    assert "it/s]" not in err and "s/it]" not in err, err     # --no-progress: no sampler's bar
     assert "UserWarning" not in err and "warnings.warn" not in err, err
     assert all(line.startswith("clsamp: warning: ") for line in err.splitlines()
                if "warning" in line.lower()), err

@@ -98,6 +98,7 @@ class _Owen:
         self._fit, self._ci = (slope, stderr), ci
         if ci is not None:
             self.members = 32
+            self.mean = np.asarray(ns, dtype=float) ** slope
 
     def fit_range(self):
         return np.arange(len(self.ns))
@@ -128,3 +129,19 @@ def test_a_rate_with_a_log_factor_reads_pre_asymptotic_not_differs():
     assert fam["verdict"] == "pre-asymptotic" and "(log N)^1 factor" in fam["note"]
     far = theory.compare(_Owen(ns, -2.4, ci=(-2.45, -2.35)))
     assert far["verdict"] == "differs" and far["note"].startswith("beyond the (log N)^1 factor's +0.16")
+
+
+def test_local_slopes_that_approach_the_rate_read_pre_asymptotic():
+    # issue 40: Owen-Sobol on random Gaussians (sigma 0.025..0.055) steepens toward N^-3 as N
+    # passes 1/sigma^2; the family verdict said "differs"
+    from clsamp import convergence
+    res = convergence("sobol:owen", "random_gaussians", [16, 64, 256, 1024], realizations=32,
+                      members=32, seed=3, progress=False)
+    cmp = theory.compare(res)
+    assert cmp["verdict"] == "pre-asymptotic" and "approach N^-3" in cmp["note"], cmp
+    local = theory.approaching(res.ns, res.mean, -3)
+    assert len(local) == 3 and local[0] > local[1] > local[2] > -3
+    # a slope steady away from the rate, or one that overshoots it, is no approach
+    assert theory.approaching([16, 64, 256, 1024], [1e-2, 1e-3, 1e-4, 1e-5], -3) == ()
+    assert theory.approaching([16, 64, 256, 1024], [1, 4.0**-2, 4.0**-4.5, 4.0**-8], -3) == ()
+    assert theory.approaching([16, 64, 256], [1, 4.0**-2, 4.0**-4.5], -3) == ()

@@ -19,7 +19,7 @@ def sorted_by_cell(batch, cells):
     batch : ndarray (r, n, d)
         Checked sets.
     cells : int
-        Cells per axis: a ``cells``^d grid.
+        Cells per axis: a grid of ``cells ** d`` cells.
 
     Returns
     -------

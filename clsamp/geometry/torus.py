@@ -101,16 +101,18 @@ def wrapped_delta(a, b):
     return np.minimum(t, 1.0 - t)
 
 
-def distance2(a, b):
+def distance2(a, b, periodic=True):
     """Squared toroidal distances between points ``a`` and ``b`` (broadcast, last axis d).
 
-    The operations and their order are those of ``kernels/dart_throwing.cl``, so the
-    results agree with the kernels bit for bit.
+    The operations and their order are those of ``kernels/torus.h`` (``torus_distance2``,
+    ``cube_distance2``), so the results agree with the kernels bit for bit.
 
     Parameters
     ----------
     a, b : ndarray
         Points in [0, 1)^d, (..., d), broadcast against each other.
+    periodic : bool
+        False: the plain Euclidean distance in the unit cube, no wrapping.
 
     Returns
     -------
@@ -124,7 +126,7 @@ def distance2(a, b):
     >>> round(float(distance2(np.array([0.05, 0.5]), np.array([0.95, 0.5]))), 12)
     0.01
     """
-    delta = wrapped_delta(a, b)
+    delta = wrapped_delta(a, b) if periodic else np.abs(a - b)
     total = delta[..., 0] * delta[..., 0]
     for k in range(1, delta.shape[-1]):
         total = total + delta[..., k] * delta[..., k]

@@ -1,10 +1,12 @@
-"""Pair statistics on the unit torus: the pair correlation function and the distances
-to the nearest neighbour, in O(n) work per set through a grid of cells.
+"""Pair statistics on the unit torus or in the unit cube, in any dimension: the pair
+correlation function and the distances to the nearest neighbour, in O(n) work per set
+through a grid of cells.
 
-Distances wrap (:mod:`clsamp.geometry.torus`): coordinate differences
+Distances wrap by default (:mod:`clsamp.geometry.torus`): coordinate differences
 ``min(|a - b|, 1 - |a - b|)``, squares summed from the first coordinate to the last, the
 operations of the Poisson-disk kernels, so the nearest-neighbour distances of a set that
-promises "min distance >= r" check out bit for bit.
+promises "min distance >= r" check out bit for bit. ``periodic=False`` measures in the
+unit cube instead (no wrapping; the PCF with the translation edge correction).
 """
 
 import math
@@ -15,10 +17,9 @@ from .. import runtime
 from ..errors import InvalidArgumentError
 from ..geometry.cells import cells_for, sorted_by_cell
 from ..geometry.torus import distance2
-from ..validation import check_choice, check_points, point_sets
+from ..validation import check_bool, check_choice, check_points, point_sets
 
 BACKENDS = ("opencl", "numpy")
-PCF_DIMENSIONS = (1, 2, 3)
 RADII = 100                  # default radii: 100, up to RADII_SPAN mean spacings
 RADII_SPAN = 3.0
 SIGMA_SPACING = 0.05         # default sigma: this many mean spacings
@@ -42,18 +43,13 @@ def mean_spacing(n, d):
     return float(n) ** (-1.0 / d)
 
 
-def _check_sets(points, name="points", dimensions=None):
+def _check_sets(points, name="points"):
     """(a list of (n_k, d) arrays, single) with n_k >= 2: the sets a pair statistic needs."""
     sets = point_sets(points, name)
     single = False
     if sets is None:
         batch, single = check_points(points, name)
         sets = list(batch)
-    d = sets[0].shape[1]
-    if dimensions is not None and d not in dimensions:
-        raise InvalidArgumentError(
-            f"'{name}' must have {', '.join(map(str, dimensions))} dimensions for the pair "
-            f"correlation function, got {d}")
     small = [len(s) for s in sets if len(s) < 2]
     if small:
         raise InvalidArgumentError(
@@ -101,25 +97,28 @@ def pcf_normalisation(radii, sigma, d, cut=CUT):
     return surface * np.sum(weights[None, :] * kernel * s ** (d - 1), axis=1) * half
 
 
-def _pcf_sums_reference(points, radii, sigma, cut):
+def _pcf_sums_reference(points, radii, sigma, cut, periodic=True):
     """NumPy twin of pcf_sums for one set: every unordered pair within reach, each
-    radius' Gaussian evaluated directly."""
+    radius' Gaussian evaluated directly (weighted by the translation edge correction in
+    the cube)."""
     n = len(points)
     reach2 = (radii[-1] + cut * sigma) ** 2
     out = np.zeros(len(radii))
     step = max(1, (1 << 22) // max(1, n))
     for lo in range(0, n - 1, step):
         rows = np.arange(lo, min(n - 1, lo + step))
-        d2 = distance2(points[rows, None, :], points[None, :, :])
+        d2 = distance2(points[rows, None, :], points[None, :, :], periodic)
         i, j = np.nonzero((np.arange(n)[None, :] > rows[:, None]) & (d2 < reach2))
         s = np.sqrt(d2[i, j])
         t = radii[None, :] - s[:, None]
         w = np.where(np.abs(t) <= cut * sigma, np.exp(-(t * t) / (2.0 * sigma * sigma)), 0.0)
+        if not periodic:
+            w = w / np.prod(1.0 - np.abs(points[rows[i]] - points[j]), axis=1)[:, None]
         out += w.sum(axis=0)
     return out
 
 
-def _pcf_sums_device(sets, radii, sigma, cut, uniform):
+def _pcf_sums_device(sets, radii, sigma, cut, uniform, periodic=True):
     """pcf_sums for sets of one size: (r, NR) sums over each set's unordered pairs."""
     r, (n, d) = len(sets), sets[0].shape
     batch = np.stack(sets)
@@ -127,7 +126,8 @@ def _pcf_sums_device(sets, radii, sigma, cut, uniform):
     cells = cells_for(reach)
     pts, cell, start, _ = sorted_by_cell(batch, cells)
     items = -(-n // POINTS_PER_ITEM)
-    defines = {"D": d, "NR": len(radii), "UNIFORM": int(uniform), "PPI": POINTS_PER_ITEM}
+    defines = {"D": d, "NR": len(radii), "UNIFORM": int(uniform), "PPI": POINTS_PER_ITEM,
+               "PERIODIC": int(periodic)}
     kernel = runtime.kernel("neighbors.cl", "pcf_sums", defines)
     q = runtime.queue()
     step = float(radii[1] - radii[0]) if len(radii) > 1 else 1.0
@@ -170,13 +170,13 @@ def _check_radii(radii, sigma, spacing, cut):
     return radii, sigma
 
 
-def pair_correlation(points, radii=None, sigma=None, backend="opencl"):
+def pair_correlation(points, radii=None, sigma=None, backend="opencl", periodic=True):
     """The pair correlation function g(r) of a point set, or its expectation over sets.
 
     Parameters
     ----------
     points : ndarray (n, d) or (r, n, d), or a list of (n_k, d) arrays
-        Points in [0, 1)^d, d = 1, 2 or 3, n >= 2 per set. A batch or list gives the
+        Points in [0, 1)^d, any d >= 1, n >= 2 per set. A batch or list gives the
         expected PCF: the mean of the sets' PCFs.
     radii : array_like, optional
         Increasing positive radii (distances on the unit torus). Default: 100 radii up to
@@ -185,6 +185,11 @@ def pair_correlation(points, radii=None, sigma=None, backend="opencl"):
         The standard deviation of the Gaussian smoothing kernel; default 0.05 mean
         spacings. The kernel is cut at 5 sigma; radii + 5 sigma must stay below 1/2.
     backend : {"opencl", "numpy"}
+    periodic : bool
+        True: distances on the torus (a sampler's periodic set). False: in the unit cube,
+        for sets that are not periodic, each pair weighted by the translation edge
+        correction 1 / prod_k (1 - |x_k - y_k|) (Ohser 1983), the inverse of the volume
+        of the cube and its translate's overlap, so that a Poisson process still gives 1.
 
     Returns
     -------
@@ -214,6 +219,8 @@ def pair_correlation(points, radii=None, sigma=None, backend="opencl"):
        based on pair correlation", ACM TOG 31(6), 2012.
     .. [2] D. Heck, T. Schlomer, O. Deussen, "Blue noise sampling with controlled
        aliasing", ACM TOG 32(3), 2013.
+    .. [3] J. Ohser, "On estimators for the reduced second moment measure of point
+       processes", Math. Operationsforsch. Statist., Ser. Statistics 14(1), 1983.
 
     Examples
     --------
@@ -224,7 +231,8 @@ def pair_correlation(points, radii=None, sigma=None, backend="opencl"):
     True
     """
     check_choice(backend, "backend", BACKENDS)
-    sets, _ = _check_sets(points, "points", PCF_DIMENSIONS)
+    periodic = check_bool(periodic, "periodic")
+    sets, _ = _check_sets(points, "points")
     d = sets[0].shape[1]
     spacing = mean_spacing(min(len(s) for s in sets), d)
     radii, sigma = _check_radii(radii, sigma, spacing, CUT)
@@ -233,7 +241,7 @@ def pair_correlation(points, radii=None, sigma=None, backend="opencl"):
     sums = np.zeros((len(sets), len(radii)))
     if backend == "numpy":
         for k, s in enumerate(sets):
-            sums[k] = _pcf_sums_reference(s, radii, sigma, CUT)
+            sums[k] = _pcf_sums_reference(s, radii, sigma, CUT, periodic)
     else:
         runtime.require_fp64()
         sizes = sorted({len(s) for s in sets})
@@ -242,7 +250,8 @@ def pair_correlation(points, radii=None, sigma=None, backend="opencl"):
             per_set = 8 * size * d + 8 * size + 8 * len(radii) * (-(-size // POINTS_PER_ITEM))
             for lo, hi in runtime.chunk_ranges(len(idx), per_set):
                 part = idx[lo:hi]
-                sums[part] = _pcf_sums_device([sets[k] for k in part], radii, sigma, CUT, uniform)
+                sums[part] = _pcf_sums_device([sets[k] for k in part], radii, sigma, CUT, uniform,
+                                              periodic)
     norm = pcf_normalisation(radii, sigma, d)
     kernel_scale = 1.0 / (math.sqrt(2.0 * math.pi) * sigma)
     counts = np.array([len(s) * (len(s) - 1) for s in sets], dtype=np.float64)
@@ -253,37 +262,39 @@ def pair_correlation(points, radii=None, sigma=None, backend="opencl"):
 # ------------------------------------------------------------------ nearest neighbours
 
 
-def nearest_neighbor_reference(points):
+def nearest_neighbor_reference(points, periodic=True):
     """NumPy twin of :func:`nearest_neighbor_distances` for one set: every pair compared.
 
     Parameters
     ----------
     points : ndarray (n, d)
         One checked set.
+    periodic : bool
+        As :func:`nearest_neighbor_distances` takes it.
 
     Returns
     -------
     ndarray (n,)
-        Each point's distance on the torus to its nearest other point.
+        Each point's distance on the torus (or in the cube) to its nearest other point.
     """
     n = len(points)
     best = np.empty(n)
     step = max(1, (1 << 22) // max(1, n))
     for lo in range(0, n, step):
-        d2 = distance2(points[lo:lo + step, None, :], points[None, :, :])
+        d2 = distance2(points[lo:lo + step, None, :], points[None, :, :], periodic)
         d2[np.arange(len(d2)), np.arange(lo, lo + len(d2))] = np.inf
         best[lo:lo + step] = d2.min(axis=1)
     return np.sqrt(best)
 
 
-def _nearest_device(batch):
+def _nearest_device(batch, periodic=True):
     """Squared nearest-neighbour distances (r, n) of sets of one size, in their order."""
     r, n, d = batch.shape
     cells = int(math.floor(1.0 / (NN_CELL_SPACINGS * mean_spacing(n, d))))
     cells = cells if cells >= 3 and cells ** d * r < 2**31 else 1
     pts, cell, start, order = sorted_by_cell(batch, cells)
     total = r * n
-    kernel = runtime.kernel("neighbors.cl", "nearest_neighbor", {"D": d})
+    kernel = runtime.kernel("neighbors.cl", "nearest_neighbor", {"D": d, "PERIODIC": int(periodic)})
     out = runtime.Output((total,), np.float64, host=np.empty(total))
     local = runtime.local_size(64)
     kernel(runtime.queue(), (-(-total // local) * local,), (local,),
@@ -298,20 +309,22 @@ def _nearest_device(batch):
     if cells > 1:
         far = np.argwhere(d2 > (1.0 / cells) ** 2)
         for k, i in far:
-            others = distance2(batch[k, i][None, :], batch[k])
+            others = distance2(batch[k, i][None, :], batch[k], periodic)
             others[i] = np.inf
             d2[k, i] = others.min()
     return d2
 
 
-def nearest_neighbor_distances(points, backend="opencl"):
-    """The distance from each point to its nearest neighbour on the torus.
+def nearest_neighbor_distances(points, backend="opencl", periodic=True):
+    """The distance from each point to its nearest neighbour on the torus (or in the cube).
 
     Parameters
     ----------
     points : ndarray (n, d) or (r, n, d), or a list of (n_k, d) arrays
-        Points in [0, 1)^d, n >= 2 per set.
+        Points in [0, 1)^d, any d >= 1, n >= 2 per set.
     backend : {"opencl", "numpy"}
+    periodic : bool
+        True: distances on the torus; False: in the unit cube (no wrapping).
 
     Returns
     -------
@@ -336,10 +349,11 @@ def nearest_neighbor_distances(points, backend="opencl"):
     {0.125}
     """
     check_choice(backend, "backend", BACKENDS)
+    periodic = check_bool(periodic, "periodic")
     listed = point_sets(points) is not None
     sets, single = _check_sets(points, "points")
     if backend == "numpy":
-        out = [nearest_neighbor_reference(s) for s in sets]
+        out = [nearest_neighbor_reference(s, periodic) for s in sets]
     else:
         runtime.require_fp64()
         out = [None] * len(sets)
@@ -347,7 +361,7 @@ def nearest_neighbor_distances(points, backend="opencl"):
             idx = [k for k, s in enumerate(sets) if len(s) == size]
             for lo, hi in runtime.chunk_ranges(len(idx), 8 * size * (sets[0].shape[1] + 3)):
                 part = idx[lo:hi]
-                d2 = _nearest_device(np.stack([sets[k] for k in part]))
+                d2 = _nearest_device(np.stack([sets[k] for k in part]), periodic)
                 for row, k in enumerate(part):
                     out[k] = np.sqrt(d2[row])
     if listed:

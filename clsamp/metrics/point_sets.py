@@ -24,7 +24,7 @@ from ..geometry import integer_torus, voronoi
 from ..geometry.cells import sorted_by_cell
 from ..geometry.torus import PACKING_DENSITY, max_min_distance
 from ..geometry.torus import distance2 as toroidal_distance2
-from ..validation import check_points, check_positive_int, point_sets
+from ..validation import check_bool, check_points, check_positive_int, point_sets
 
 __all__ = ["min_distance", "relative_radius", "max_min_distance", "normalized_energy",
            "HEXAGONAL_NE", "WHITE_NOISE_NE"]
@@ -33,18 +33,19 @@ HEXAGONAL_NE = 5.0 / (18.0 * np.sqrt(3.0))   # N*E of the hexagonal lattice, 0.1
 WHITE_NOISE_NE = 1.0 / np.pi                 # expected N*E of independent uniform points
 
 
-def _min_distance2_brute(batch):
+def _min_distance2_brute(batch, periodic=True):
     r, n, d = batch.shape
     best = np.full(r, np.inf)
     for i in range(n - 1):
-        d2 = toroidal_distance2(batch[:, i:i + 1, :], batch[:, i + 1:, :])
+        d2 = toroidal_distance2(batch[:, i:i + 1, :], batch[:, i + 1:, :], periodic)
         best = np.minimum(best, d2.min(axis=1))
     return best
 
 
-def _min_distance2_grid(batch, cells):
+def _min_distance2_grid(batch, cells, periodic=True):
     """Smallest squared distance per realization among pairs in the same or adjacent
-    cells of a ``cells``^d grid (cells >= 3, so the 3^d neighbours are distinct)."""
+    cells of a grid of ``cells ** d`` (cells >= 3, so the 3^d neighbours are distinct; in
+    the cube a wrapped neighbour cell is farther than a cell, and never the answer)."""
     r, n, d = batch.shape
     pts, flat, start, _ = sorted_by_cell(batch, cells)
     starts = start[:-1].astype(np.int64)
@@ -69,19 +70,19 @@ def _min_distance2_grid(batch, cells):
                 break
             j = np.where(valid, first + k, own)
             valid &= j != own
-            d2 = toroidal_distance2(pts, pts[j])
+            d2 = toroidal_distance2(pts, pts[j], periodic)
             best = np.where(valid, np.minimum(best, d2), best)
     out = np.full(r, np.inf)
     np.minimum.at(out, realization, best)
     return out
 
 
-def _min_distance2(batch):
+def _min_distance2(batch, periodic=True):
     r, n, d = batch.shape
     if n == 1:
         return np.full(r, np.inf)
     if n <= 64:
-        return _min_distance2_brute(batch)
+        return _min_distance2_brute(batch, periodic)
     # Start from a cell a little wider than d_max (no set can beat it, so the grid
     # nearly always holds the closest pair); widen until the pair found is closer
     # than a cell, which proves no pair in non-adjacent cells can be closer.
@@ -90,20 +91,23 @@ def _min_distance2(batch):
     while True:
         cells = int(1.0 / size)
         if cells < 3:
-            return _min_distance2_brute(batch)
-        best = _min_distance2_grid(batch, cells)
+            return _min_distance2_brute(batch, periodic)
+        best = _min_distance2_grid(batch, cells, periodic)
         if np.all(best <= (1.0 / cells) ** 2):
             return best
         size *= 2.0
 
 
-def min_distance(points):
+def min_distance(points, periodic=True):
     """Smallest toroidal distance between two points, per realization.
 
     Parameters
     ----------
     points : ndarray, shape (n, d) or (r, n, d), or a list of (n_k, d) arrays
-        Points in [0, 1)^d (a list: sets of different sizes, one value each).
+        Points in [0, 1)^d, any d (a list: sets of different sizes, one value each).
+    periodic : bool
+        False: the Euclidean distance in the unit cube, without wrapping (a single point
+        then has none: inf).
 
     Returns
     -------
@@ -129,12 +133,13 @@ def min_distance(points):
     >>> round(min_distance(np.array([[0.05, 0.5], [0.95, 0.5]])), 12)
     0.1
     """
+    periodic = check_bool(periodic, "periodic")
     sets = point_sets(points)
     if sets is not None:
-        return np.array([min_distance(p) for p in sets])
+        return np.array([min_distance(p, periodic) for p in sets])
     batch, single = check_points(points, "points")
-    d2 = _min_distance2(batch)
-    out = np.minimum(np.sqrt(d2), 1.0)
+    d2 = _min_distance2(batch, periodic)
+    out = np.minimum(np.sqrt(d2), 1.0) if periodic else np.sqrt(d2)
     return float(out[0]) if single else out
 
 

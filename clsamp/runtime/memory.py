@@ -7,6 +7,7 @@ work (:func:`check_host_bytes`).
 """
 
 import os
+import time
 
 import numpy as np
 
@@ -16,7 +17,7 @@ from . import discovery, programs
 __all__ = [
     'table', 'Output', 'is_device_array', 'to_device', 'to_host', 'bounds', 'device_block',
     'concatenate', 'host_memory_available', 'check_host_bytes', 'gib', 'work_budget', 'fit',
-    'chunk_ranges']
+    'chunk_ranges', 'wait']
 
 
 _tables = {}            # (device index, key) -> pyopencl.array.Array, least recently used first
@@ -127,6 +128,39 @@ def to_device(array):
         return array
     import pyopencl.array as cla
     return cla.to_device(discovery.queue(), np.ascontiguousarray(array))
+
+
+def wait(event=None):
+    """Wait for ``event``, or for all the work enqueued on the current queue, so that Ctrl-C
+    is taken while a long kernel runs.
+
+    A blocking read waits inside OpenCL, where Python cannot take a signal until the kernel
+    ends (seconds for a large CCVT launch); this polls the event's status with sleeps
+    growing from 0.1 ms to 10 ms, so a KeyboardInterrupt arrives within about 10 ms. The
+    polling costs about 0.1-0.5 ms a call: it is for launches that run long (CCVT's power
+    passes and solve chunks), not for every read.
+
+    Parameters
+    ----------
+    event : pyopencl.Event, optional
+        By default a marker after everything enqueued so far.
+
+    Returns
+    -------
+    pyopencl.Event
+        The event waited for, complete.
+    """
+    import pyopencl as cl
+    q = discovery.queue()
+    if event is None:
+        event = cl.enqueue_marker(q)
+    q.flush()
+    delay = 1e-4
+    while event.command_execution_status > cl.command_execution_status.COMPLETE:
+        time.sleep(delay)
+        delay = min(2 * delay, 0.01)
+    event.wait()                    # raises where the command failed (a negative status)
+    return event
 
 
 def to_host(array, into=None):

@@ -225,7 +225,7 @@ def program(file, defines=None, options=()):
         Kernel file name inside ``kernels/``.
     defines : dict, optional
         ``-D`` build options (``{"DIM": 3}`` becomes ``-DDIM=3``; ``True`` becomes 1;
-        ``False``/``None`` leave the name undefined). Code-changing parameters go
+        ``False`` or ``None`` leave the name undefined). Code-changing parameters go
         here so each variant compiles only what it needs.
     options : sequence of str
         Other compiler options (``-cl-mad-enable``: only where results need not be

@@ -22,7 +22,8 @@ from .base import (
     sampler_class,
     sampler_names,
 )
+from .dither import dither_mask
 from .engine import as_qmc_engine
 
-__all__ = ["Rate", "SampleInfo", "Sampler", "as_qmc_engine", "make_sampler", "register",
-           "sampler_class", "sampler_names"]
+__all__ = ["Rate", "SampleInfo", "Sampler", "as_qmc_engine", "dither_mask", "make_sampler",
+           "register", "sampler_class", "sampler_names"]

@@ -16,11 +16,12 @@ from .. import number_theory as nt
 from .. import runtime
 from ..errors import InvalidArgumentError
 from ..geometry import torus
-from ..validation import check_choice
+from ..validation import check_choice, check_positive_int
 from .base import register
 from .lowdiscrepancy import LowDiscrepancySampler, shift_vectors
 
 LATTICE_TABLE = "lattice_kuo_33002.npz"
+ORDERS = ("radical_inverse", "gray", "natural")
 _U32, _U64 = np.uint32, np.uint64
 
 
@@ -53,6 +54,75 @@ def kuo_vector(d):
     if not 1 <= d <= len(z):
         raise InvalidArgumentError(f"'d' must be in [1, {len(z)}] for the shipped lattice, got {d}")
     return z[:d].copy()
+
+
+def korobov(a, d, modulus=2**32):
+    """Korobov's generating vector (1, a, a^2, ..., a^(d-1)) mod ``modulus``.
+
+    Parameters
+    ----------
+    a : int
+        The generator, 1 <= a < modulus.
+    d : int
+        Dimensions.
+    modulus : int
+        The lattice size it is meant for (2^32: the extensible base-2 lattice; n for a
+        lattice of n points in ``order="natural"``).
+
+    Returns
+    -------
+    ndarray of uint64
+
+    References
+    ----------
+    .. [1] N. M. Korobov, "The approximate computation of multiple integrals", Dokl.
+       Akad. Nauk SSSR 124 (1959).
+
+    Examples
+    --------
+    >>> korobov(3, 4, 101).tolist()
+    [1, 3, 9, 27]
+    """
+    modulus = check_positive_int(modulus, "modulus", maximum=2**32)
+    a = check_positive_int(a, "a")
+    if a >= modulus:
+        raise InvalidArgumentError(f"'a' must be below the modulus {modulus}, got {a}")
+    d = check_positive_int(d, "d")
+    return np.array([pow(a, j, modulus) for j in range(d)], dtype=_U64)
+
+
+def check_generating_vector(vector, d):
+    """A user's generating vector: 1-D positive integers below 2^32, its first ``d``.
+
+    Parameters
+    ----------
+    vector : array_like of int
+    d : int
+        The dimension asked for, at most the vector's length.
+
+    Returns
+    -------
+    ndarray of uint32
+        (d,).
+
+    Raises
+    ------
+    InvalidArgumentError
+        Anything else.
+    """
+    try:
+        z = np.asarray(vector)
+    except (TypeError, ValueError):
+        z = np.asarray([None])
+    if z.ndim != 1 or z.size < 1 or z.dtype.kind not in "iu":
+        raise InvalidArgumentError(
+            f"'generating_vector' must be a 1-D array of positive integers, got {vector!r}"[:200])
+    if np.any(z < 1) or np.any(z.astype(object) >= 2**32):
+        raise InvalidArgumentError("'generating_vector' entries must be in [1, 2^32)")
+    if not isinstance(d, (int, np.integer)) or not 1 <= d <= z.size:
+        raise InvalidArgumentError(
+            f"'d' must be in [1, {z.size}] for the {z.size} entries of 'generating_vector', got {d!r}")
+    return z[:d].astype(_U32)
 
 
 def fibonacci(count):
@@ -89,13 +159,14 @@ class _Shifted(LowDiscrepancySampler):
         u = shift_vectors(self.seed, np.arange(realizations.start, realizations.stop), self.d)
         return torus.shift(points[None], u[:, None, :])
 
-    def _run(self, kernel_name, table, n, realizations, start, scalars, out):
+    def _run(self, kernel_name, table, n, realizations, start, scalars, out, defines=None):
         r = len(realizations)
         target = runtime.Output((r, n, self.d), host=out)
         shifts = (shift_vectors(self.seed, np.arange(realizations.start, realizations.stop), self.d)
                   if self.randomize else np.zeros((1, self.d)))
         local = runtime.local_size()
-        kernel = runtime.kernel("lattice.cl", kernel_name, defines={"SHIFT": int(bool(self.randomize))})
+        kernel = runtime.kernel("lattice.cl", kernel_name,
+                                defines={"SHIFT": int(bool(self.randomize)), **(defines or {})})
         kernel(runtime.queue(), (-(-n // local) * local, r), (local, 1), target.buffer, table.data,
                runtime.to_device(np.ascontiguousarray(shifts, dtype=np.float64)).data,
                np.uint32(n), np.uint32(self.d), np.uint32(start), *scalars)
@@ -120,15 +191,33 @@ class LatticeSampler(_Shifted):
     coordinate is the integer ``i F_(m-1) mod F_m`` divided by F_m with one correctly
     rounded division.
 
+    A ``generating_vector`` of one's own (a search's result, LatNet Builder's, or
+    :func:`korobov`'s) replaces Kuo's, in any of the three orders:
+
+    * ``"radical_inverse"`` (the default): point i is frac(Φ_2(i) z), the extensible
+      sequence above (qmcpy's ``order="RADICAL INVERSE"``);
+    * ``"gray"``: point i is frac(Φ_2(g(i)) z) with g(i) = i xor (i >> 1), the Gray code:
+      the same first 2^m points in an order where consecutive indices differ in one bit
+      (qmcpy's ``"GRAY"``);
+    * ``"natural"``: the rank-1 lattice rule of n points, point i = frac(i z / n), for any
+      n (qmcpy's ``"LINEAR"`` for n = 2^m): a point set, so ``start`` must be 0; each
+      coordinate is the integer ``i z mod n`` over n, one correctly rounded division.
+      The Fibonacci lattice is this order with z = (1, F_(m-1)).
+
     Parameters
     ----------
     d : int
-        Dimension (1 to 9125 for ``"kuo"``, 2 for ``"fibonacci"``).
+        Dimension (1 to 9125 for ``"kuo"``, 2 for ``"fibonacci"``, at most the length of a
+        ``generating_vector``, whose first d entries are used, as qmcpy's).
     seed : int
     randomize : {None, "shift"}
         ``"shift"``: x + u mod 1, u uniform per realization and dimension (Cranley-Patterson
         1976): every point uniform, the lattice structure kept on the torus.
     generator : {"kuo", "fibonacci"}
+    generating_vector : array_like of int, optional
+        Positive integers below 2^32, one per dimension (with ``generator="kuo"``).
+    order : {"radical_inverse", "gray", "natural"}, optional
+        As above; ``"natural"`` for the Fibonacci lattice (its only order).
     backend : {"opencl", "numpy"}
 
     Notes
@@ -153,28 +242,49 @@ class LatticeSampler(_Shifted):
     [[0.0, 0.0], [0.125, 0.625], [0.25, 0.25]]
     >>> clsamp.make_sampler("lattice", d=3).sample(4)[:, 1].tolist()
     [0.0, 0.5, 0.75, 0.25]
+    >>> from clsamp.samplers.lattice import korobov
+    >>> z = korobov(3, 2, 8)
+    >>> clsamp.make_sampler("lattice", generating_vector=z, order="natural").sample(8)[:3].tolist()
+    [[0.0, 0.0], [0.125, 0.375], [0.25, 0.75]]
+    >>> clsamp.make_sampler("lattice", d=2, order="gray").sample(4)[:, 0].tolist()
+    [0.0, 0.5, 0.75, 0.25]
     """
 
     max_d = len(_kuo()[0])
     max_d_source = "the shipped generating vector"
 
-    def __init__(self, d=2, seed=0, backend="opencl", randomize=None, generator="kuo"):
+    def __init__(self, d=2, seed=0, backend="opencl", randomize=None, generator="kuo",
+                 generating_vector=None, order=None):
+        generator = check_choice(generator, "generator", ("kuo", "fibonacci"))
+        order = check_choice(order, "order", (None,) + ORDERS)
+        z = None
+        if generating_vector is not None:
+            if generator != "kuo":
+                raise InvalidArgumentError("'generating_vector' replaces the Kuo vector; the "
+                                           "Fibonacci lattice has its own")
+            z = check_generating_vector(generating_vector, d)
         super().__init__(d=d, seed=seed, backend=backend, randomize=randomize)
-        self.generator = check_choice(generator, "generator", ("kuo", "fibonacci"))
+        self.generator = generator
         if self.generator == "fibonacci":
             if self.d != 2:
                 raise InvalidArgumentError(f"'d' must be 2 for the Fibonacci lattice, got {self.d}")
+            if order not in (None, "natural"):
+                raise InvalidArgumentError(f"the Fibonacci lattice has one order, 'natural'; got {order!r}")
             self._fib = fibonacci(47)                       # F_47 < 2^32 <= F_48
+            order = "natural"
+        self.order = order or "radical_inverse"
+        self.generating_vector = kuo_vector(self.d) if z is None and generator == "kuo" else z
 
     @property
     def sequence(self):
-        """The Kuo lattice is an extensible sequence; the Fibonacci lattice a point set."""
-        return self.generator == "kuo"
+        """The radical-inverse and Gray orders are extensible sequences; the natural order
+        (and the Fibonacci lattice) a point set."""
+        return self.order != "natural"
 
     @property
     def accepts_start(self):
-        """``start`` continues the Kuo sequence; the Fibonacci lattice takes only 0."""
-        return self.generator == "kuo"
+        """``start`` continues a sequence; a point set takes only 0."""
+        return self.sequence
 
     def valid_n(self, n):
         """The valid point count nearest to ``n``.
@@ -193,30 +303,33 @@ class LatticeSampler(_Shifted):
             return n
         return min(self._fib, key=lambda f: (abs(f - n), f))
 
-    def _fibonacci_pair(self, n):
+    def _vector(self, n):
+        """The generating vector for n points: Fibonacci's (1, F_(m-1)) for n = F_m."""
+        if self.generator == "kuo":
+            return self.generating_vector
         m = self._fib.index(n, 1) if n > 1 else 1
-        return n, self._fib[m - 1]
+        return np.array([1, self._fib[m - 1]], dtype=_U32)
 
     def _reference(self, n, realizations, start):
         index = _U64(start) + np.arange(n, dtype=_U64)
-        if self.generator == "kuo":
-            z = kuo_vector(self.d).astype(_U64)
+        z = self._vector(n).astype(_U64)
+        if self.order == "natural":
+            x = ((index[:, None] * z[None, :]) % _U64(n)).astype(np.float64) / float(n)
+        else:
+            if self.order == "gray":
+                index = index ^ (index >> _U64(1))
             radical = nt.reverse_bits32(index.astype(_U32)).astype(_U64)
             x = ((radical[:, None] * z[None, :]) & _U64(0xFFFFFFFF)).astype(np.float64) * 2.0**-32
-        else:
-            size, step = self._fibonacci_pair(n)
-            x = np.stack([index.astype(np.float64) / float(size),
-                          ((index * _U64(step)) % _U64(size)).astype(np.float64) / float(size)], axis=1)
         return self._shift(x, realizations)
 
     def _device(self, n, realizations, start, out=None):
-        if self.generator == "kuo":
-            table = runtime.table(("lattice kuo", self.d), lambda: kuo_vector(self.d))
-            return self._run("lattice_points", table, n, realizations, start, (), out)
-        size, step = self._fibonacci_pair(n)
-        table = runtime.table(("lattice fibonacci",), lambda: np.zeros(1, dtype=_U32))
-        return self._run("fibonacci_points", table, n, realizations, start,
-                            (np.uint32(size), np.uint32(step)), out)
+        z = self._vector(n)
+        key = ("lattice", self.generator, self.d, z.tobytes() if self.generator == "kuo" else n)
+        table = runtime.table(key, lambda: z)
+        if self.order == "natural":
+            return self._run("natural_points", table, n, realizations, start, (), out)
+        return self._run("lattice_points", table, n, realizations, start, (), out,
+                         {"GRAY": int(self.order == "gray")})
 
 
 @cache

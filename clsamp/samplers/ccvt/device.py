@@ -186,7 +186,7 @@ def ccvt_device(sites, points, members, iterations, callback=None, fused=None, t
     return b["sites"].get(), energies, b["ids"].get(), converged
 
 
-SOLVE_CHUNK = 64       # iterations of ccvt_solve per launch: Python (and Ctrl-C) runs between
+SOLVE_CHUNK = 64       # iterations of ccvt_solve per launch: Python runs between
 
 
 def _finish(bar):
@@ -207,8 +207,8 @@ def solve_device(b, n, p, iterations, active, running, resume, energies, bar=Non
 
     The iterations run in launches of at most :data:`SOLVE_CHUNK`, each resuming where the
     last stopped (every piece of state is in the buffers, the energy in ``status``), with
-    the realizations that converged taken out: the same bits as one launch, and a Ctrl-C
-    waits for one chunk at most.
+    the realizations that converged taken out: the same bits as one launch; Ctrl-C is taken while a chunk runs
+    (:func:`clsamp.runtime.wait`).
 
     Parameters
     ----------
@@ -250,6 +250,7 @@ def solve_device(b, n, p, iterations, active, running, resume, energies, bar=Non
               b["dirty"].data, b["touched"].data, b["site_energy"].data,
               np.int64(ccvt_near2(n)), np.uint32(chunk), np.uint32(resume), active.data,
               b["status"].data, history.data, state.data)
+        runtime.wait()                          # Ctrl-C is taken within the chunk
         h, st = history.get(), state.get()
         for k in running:
             energies[k].extend(it.exact_total(h[k, :st[k, 0], 0], h[k, :st[k, 0], 1]))

@@ -203,6 +203,7 @@ class PowerPass:
                    cla.to_device(q, np.ascontiguousarray(w)).data, np.uint32(n),
                    np.uint32(self.G), np.uint32(self.table.shape[2]),
                    owner.data, second.data, margin.data)
+            runtime.wait()                      # Ctrl-C is taken while the pass runs
         if owner_only:
             return (owner.get(),)
         return owner.get(), second.get(), margin.get()

@@ -111,6 +111,7 @@ def _run(sites, realizations, p, iterations, seed, backend, callback=None, densi
             run = ccvt_reference(start, points, members, iterations, callback)
         else:
             on_device = density_points_device(seed, realizations[lo:hi], M, density)
+            runtime.wait()                  # Ctrl-C is taken while the density is drawn
             points = on_device.get()
             members = start_partition(start, points, p, backend, weight, on_device)
             run = ccvt_device(start, on_device, members, iterations, callback, progress=progress)

@@ -90,8 +90,8 @@ def kd_partition(sites, points, p):
 
 def start_lattice(n, p):
     """The proxy density of the start's weights: a regular lattice of up to
-    ``START_LATTICE``^2 points per site (at most p / START_SHARE, at least
-    ``START_MIN_SIDE``^2: the relaxation of :func:`start_sites` moves the sites to means
+    ``START_LATTICE ** 2`` points per site (at most p / START_SHARE, at least
+    ``START_MIN_SIDE ** 2``: the relaxation of :func:`start_sites` moves the sites to means
     of these).
 
     Parameters

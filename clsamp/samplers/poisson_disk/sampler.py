@@ -33,7 +33,7 @@ def _throw_darts(backend, n):
     """Run rounds until every realization is maximal or (n given) holds n points.
 
     Each round: one dart per active entry (``throw``), a few greedy steps among the
-    valid darts (``resolve``), then the entries are refined (``refine``/``emit``): covered ones are
+    valid darts (``resolve``), then the entries are refined (``refine``, ``emit``): covered ones are
     dropped, uncovered ones kept or split into their 2^d halves. With n given, the round
     that passes n keeps only its highest-priority darts, so exactly n points remain, and a
     realization that becomes maximal with fewer than n points is marked short.

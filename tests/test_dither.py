@@ -1,0 +1,86 @@
+"""Dither masks (issue 37): void and cluster (Ulichney 1993) in 1-4 dimensions and its
+spatiotemporal variant (Wolfe et al. 2022): every rank once, progressive blue-noise
+levels, low-frequency power far below white noise's, reproducible from the seed."""
+
+import numpy as np
+import pytest
+
+import clsamp
+from clsamp.errors import InvalidArgumentError
+from clsamp.samplers.dither import INITIAL_DENSITY, mask_spectrum
+
+
+def _low(power, shape, below):
+    """Mean power at integer frequencies 0 < |k| < below."""
+    grids = np.meshgrid(*[np.fft.fftfreq(n) * n for n in shape], indexing="ij")
+    f = np.sqrt(sum(g * g for g in grids))
+    return power[(f > 0) & (f < below)].mean()
+
+
+def _white(shape, seed=0):
+    return np.random.default_rng(seed).permutation(int(np.prod(shape))).reshape(shape)
+
+
+@pytest.mark.parametrize("size, d", [(64, 2), (128, 1), (16, 3), (8, 4)])
+def test_every_rank_once_and_far_less_low_frequency_power_than_white_noise(size, d):
+    mask = clsamp.dither_mask(size, d=d, seed=3)
+    assert mask.shape == (size,) * d and mask.dtype == np.int64
+    assert np.array_equal(np.sort(mask.ravel()), np.arange(size ** d))
+    below = max(2, size / 8)
+    blue = _low(mask_spectrum(mask), mask.shape, below)
+    white = _low(mask_spectrum(_white(mask.shape)), mask.shape, below)
+    assert white > 0.5 and blue < 0.02 * white, (blue, white)
+
+
+def test_every_threshold_level_is_a_blue_pattern_holding_the_levels_below():
+    mask = clsamp.dither_mask(64, seed=5)
+    n = mask.size
+    for level in (n // 16, n // 4, n // 2, 3 * n // 4):
+        pattern = mask < level
+        assert pattern.sum() == level
+        # no two ones adjacent at the lowest level: the minimum spacing of a blue pattern
+        if level == n // 16:
+            ones = np.argwhere(pattern)
+            gaps = np.abs(ones[:, None, :] - ones[None, :, :])
+            gaps = np.minimum(gaps, 64 - gaps)
+            d2 = (gaps ** 2).sum(-1) + np.eye(len(ones), dtype=int) * 10**6
+            assert d2.min() >= 4          # ones at least two pixels apart (mean spacing 4)
+        power = mask_spectrum(pattern.astype(float))
+        assert _low(power, pattern.shape, 8) < 0.1
+    assert INITIAL_DENSITY == 0.1
+
+
+def test_the_same_seed_gives_the_same_mask_and_seeds_differ():
+    a = clsamp.dither_mask(32, seed=11)
+    assert np.array_equal(a, clsamp.dither_mask(32, seed=11))
+    assert not np.array_equal(a, clsamp.dither_mask(32, seed=12))
+
+
+def test_spatiotemporal_frames_are_blue_and_each_pixel_is_blue_in_time():
+    frames, size = 16, 24
+    mask = clsamp.dither_mask(size, seed=2, temporal=frames)
+    assert mask.shape == (frames, size, size)
+    assert np.array_equal(np.sort(mask.ravel()), np.arange(mask.size))
+    white = _white(mask.shape)
+    # each frame (its thresholds) blue in space
+    space = _low(mask_spectrum(mask, axes=(1, 2)), (size, size), 4)
+    assert space < 0.05 * _low(mask_spectrum(white, axes=(1, 2)), (size, size), 4)
+    # each pixel's sequence over the frames blue in time: little power at 1 and 2 cycles
+    time = mask_spectrum(mask, axes=(0,))
+    assert time[1:3].mean() < 0.2 * mask_spectrum(white, axes=(0,))[1:3].mean()
+    # a plain 3-D mask of the same shape is blue in 3-D, not per pixel in time as much
+    plain = clsamp.dither_mask(size, d=3, seed=2)[:frames]
+    assert mask_spectrum(plain, axes=(0,))[1:3].mean() > time[1:3].mean()
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"size": 1}, "'size' must be at least 2"),
+    ({"size": 8, "d": 5}, "'d' must be 1 to 4"),
+    ({"size": 8, "temporal": 1}, "'temporal'"),
+    ({"size": 8, "sigma": 0}, "'sigma'"),
+    ({"size": 8, "seed": -1}, "'seed'"),
+    ({"size": 4096, "d": 3}, "at most"),
+])
+def test_bad_arguments_are_one_line_before_any_work(kwargs, match):
+    with pytest.raises(InvalidArgumentError, match=match):
+        clsamp.dither_mask(**kwargs)
