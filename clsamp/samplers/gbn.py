@@ -18,7 +18,7 @@ import numpy as np
 from .. import runtime
 from ..errors import InvalidArgumentError
 from ..geometry.cells import cells_for, neighbour_cells, sorted_by_cell
-from ..validation import check_choice, check_positive_int, check_real
+from ..validation import check_bool, check_positive_int, check_real
 from .base import SampleInfo, Sampler, info_field, make_sampler, register, sampler_class
 
 SIGMA = 0.5          # the kernel's standard deviation, in mean spacings n^(-1/d)
@@ -496,7 +496,7 @@ class GBNSampler(Sampler):
         self.step = check_real(step, "step", minimum=0.0, open_minimum=True)
         self.iterations = check_positive_int(iterations, "iterations")
         self.tol = check_real(tol, "tol", minimum=0.0, maximum=1.0)
-        self.periodic = bool(check_choice(periodic, "periodic", (True, False)))
+        self.periodic = check_bool(periodic, "periodic")
         self.cut = check_real(cut, "cut", minimum=1.0, maximum=8.0)
         if not isinstance(init, str) or init.partition(":")[0] in ("gbn",):
             raise InvalidArgumentError(
