@@ -451,13 +451,12 @@ class GBNSampler(Sampler):
     measurements behind the defaults).
 
     The kernel is cut at ``cut`` sigmas and shifted to 0 there (g(r) - g(R) for r < R),
-    so that the energy stays continuous and F is its exact gradient; pairs are found
-    through a grid of cells at least R wide, so a step costs O(n). On the torus the
-    differences wrap and R is at most 1/2. In the cube (``periodic=False``) the energy
-    also holds the domain's attraction, as the authors' bounded-domain code has it: the
-    cross term
-    -2 n sum_i A(x_i) with A(x) the Gaussian's integral over the cube (a product of
-    erf terms): near a face nothing beyond it pushes back on the points, and the
+    so that the energy stays continuous and F is exactly -s^2/2 times its gradient (in
+    n times the energy per point); pairs are found through a grid of cells at least R
+    wide, so a step costs O(n). On the torus the differences wrap and R is at most 1/2.
+    In the cube (``periodic=False``) the energy also holds the domain's attraction, as
+    the authors' bounded-domain code has it: the cross term -2 n sum_i A(x_i), A(x) the
+    Gaussian's integral over the cube (a product of erf terms): near a face nothing beyond it pushes back on the points, and the
     domain's pull, which there points inward, takes its place, so the points do not
     bunch on the faces; a step that leaves the cube is projected back.
 
