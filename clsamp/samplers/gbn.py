@@ -456,9 +456,10 @@ class GBNSampler(Sampler):
     wide, so a step costs O(n). On the torus the differences wrap and R is at most 1/2.
     In the cube (``periodic=False``) the energy also holds the domain's attraction, as
     the authors' bounded-domain code has it: the cross term -2 n sum_i A(x_i), A(x) the
-    Gaussian's integral over the cube (a product of erf terms): near a face nothing beyond it pushes back on the points, and the
-    domain's pull, which there points inward, takes its place, so the points do not
-    bunch on the faces; a step that leaves the cube is projected back.
+    Gaussian's integral over the cube (a product of erf terms): near a face nothing
+    beyond it pushes back on the points, and the domain's pull, which there points
+    inward, takes its place, so the points do not bunch on the faces; a step that leaves
+    the cube is projected back.
 
     A step that would raise the energy is rejected and the step halved, so the energy
     never rises (``energy_history``); a run stops when an accepted step lowers it by at
