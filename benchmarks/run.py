@@ -41,6 +41,7 @@ MODULES = (
     "bench_poisson_disk",
     "bench_render",
     "bench_voronoi",
+    "bench_gbn",
 )
 
 

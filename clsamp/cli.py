@@ -127,7 +127,7 @@ def _add_sample(sub):
     p.add_argument("name", help="sampler name (see `clsamp sample --list`), e.g. jittered, sobol:owen",
                    nargs="?")
     p.add_argument("-n", type=int, help="points per set")
-    p.add_argument("-d", type=int, default=2, help="dimension (default 2)")
+    p.add_argument("-d", "--d", dest="d", type=int, default=2, help="dimension (default 2)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--realizations", type=int, default=None, help="independent sets (default one)")
     p.add_argument("--start", type=int, default=0, help="index of the first point (sequences)")

@@ -19,6 +19,7 @@
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #pragma OPENCL FP_CONTRACT OFF
 #include "torus.h"
+#include "cells.h"
 
 /* PERIODIC 1: distances on the torus; 0: in the unit cube, each pair of the PCF weighted
  * by the translation edge correction 1 / prod_k (1 - |x_k - y_k|) (Ohser 1983) */
@@ -30,34 +31,6 @@
 #else
 #define pair_distance2 cube_distance2
 #endif
-
-/* the flat index of neighbour o (0 .. 3^D - 1, digits -1, 0, +1) of cell coordinates c,
- * wrapped on the torus; with G == 1 the one cell */
-inline uint neighbour(const int *c, uint o, const int G)
-{
-    if (G == 1)
-        return 0;
-    uint flat = 0;
-    int digits[D];
-    for (int k = D - 1; k >= 0; --k) {
-        digits[k] = (int)(o % 3) - 1;
-        o /= 3;
-    }
-    for (int k = 0; k < D; ++k) {
-        int v = c[k] + digits[k];
-        v = v < 0 ? v + G : v >= G ? v - G : v;
-        flat = flat * (uint)G + (uint)v;
-    }
-    return flat;
-}
-
-inline void cell_coordinates(uint flat, const int G, int *c)
-{
-    for (int k = D - 1; k >= 0; --k) {
-        c[k] = (int)(flat % (uint)G);
-        flat /= (uint)G;
-    }
-}
 
 #ifdef NR
 #if UNIFORM

@@ -20,7 +20,7 @@ import clsamp
 from clsamp.render import Scene, render
 
 N = 1 << 20
-SMALL = {"ccvt": 1024, "lloyd": 1024, "poisson_disk": 1024, "pmj02bn": 4096}
+SMALL = {"ccvt": 1024, "lloyd": 1024, "poisson_disk": 1024, "pmj02bn": 4096, "gbn": 1024}
 
 
 def digest(array):

@@ -4,6 +4,8 @@
   wrapped differences and distances, the densest packings (d_max).
 * :mod:`clsamp.geometry.integer_torus` -- points on the exact 2^22 integer torus of the
   Voronoi optimizers: differences, distances, rounded means and exact sums in int64.
+* :mod:`clsamp.geometry.cells` -- a grid of cells for neighbour searches: points sorted
+  by (set, cell) and the 3^d stencil of neighbouring cells (``kernels/cells.h``).
 * :mod:`clsamp.geometry.voronoi` -- nearest-site assignment of a regular density grid
   (OpenCL and NumPy), the CVT energy it gives, and the grid helpers around it.
 """

@@ -15,6 +15,7 @@ import numpy as np
 
 from .. import runtime
 from ..errors import InvalidArgumentError
+from ..geometry.cells import cells_for, sorted_by_cell
 from ..geometry.torus import distance2
 from ..validation import check_bool, check_choice, check_points, point_sets
 
@@ -40,49 +41,6 @@ def mean_spacing(n, d):
     float
     """
     return float(n) ** (-1.0 / d)
-
-
-def sorted_by_cell(batch, cells):
-    """The points of all realizations sorted by (realization, cell) of a grid of cells, the
-    order the neighbour kernels walk them in.
-
-    Parameters
-    ----------
-    batch : ndarray (r, n, d)
-        Checked sets.
-    cells : int
-        Cells per axis: a grid of ``cells ** d`` cells.
-
-    Returns
-    -------
-    points : ndarray (r n, d)
-        Sorted.
-    cell : ndarray of uint32, shape (r n,)
-        The flat cell of each sorted point.
-    start : ndarray of uint32, shape (r cells^d + 1,)
-        The first sorted index of each (realization, cell).
-    order : ndarray of int64, shape (r n,)
-        Sorted index -> original (flat) index.
-    """
-    r, n, d = batch.shape
-    index = np.minimum((batch * cells).astype(np.int64), cells - 1)
-    flat = np.zeros((r, n), dtype=np.int64)
-    for k in range(d):
-        flat = flat * cells + index[..., k]
-    total = cells ** d
-    key = (np.arange(r, dtype=np.int64)[:, None] * total + flat).ravel()
-    order = np.argsort(key, kind="stable")
-    counts = np.bincount(key, minlength=r * total)
-    start = np.concatenate(([0], np.cumsum(counts))).astype(np.uint32)
-    pts = np.ascontiguousarray(batch.reshape(r * n, d)[order])
-    return pts, flat.ravel()[order].astype(np.uint32), start, order
-
-
-def _cells_for(reach):
-    """Cells per axis for neighbours within ``reach``: 1 (every pair) when fewer than 3
-    cells of that width fit, so the 3^d neighbouring cells are always distinct."""
-    cells = int(math.floor(1.0 / reach)) if reach > 0 else 1
-    return cells if cells >= 3 else 1
 
 
 def _check_sets(points, name="points"):
@@ -165,7 +123,7 @@ def _pcf_sums_device(sets, radii, sigma, cut, uniform, periodic=True):
     r, (n, d) = len(sets), sets[0].shape
     batch = np.stack(sets)
     reach = float(radii[-1] + cut * sigma)
-    cells = _cells_for(reach)
+    cells = cells_for(reach)
     pts, cell, start, _ = sorted_by_cell(batch, cells)
     items = -(-n // POINTS_PER_ITEM)
     defines = {"D": d, "NR": len(radii), "UNIFORM": int(uniform), "PPI": POINTS_PER_ITEM,

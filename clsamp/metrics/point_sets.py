@@ -21,10 +21,10 @@ import numpy as np
 
 from ..errors import InvalidArgumentError
 from ..geometry import integer_torus, voronoi
+from ..geometry.cells import sorted_by_cell
 from ..geometry.torus import PACKING_DENSITY, max_min_distance
 from ..geometry.torus import distance2 as toroidal_distance2
 from ..validation import check_bool, check_points, check_positive_int, point_sets
-from .neighbors import sorted_by_cell
 
 __all__ = ["min_distance", "relative_radius", "max_min_distance", "normalized_energy",
            "HEXAGONAL_NE", "WHITE_NOISE_NE"]

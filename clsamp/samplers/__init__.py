@@ -4,6 +4,7 @@
 from . import (  # noqa: F401
     ccvt,  # ccvt
     digital_net,  # digital_net (user matrices), faure, niederreiter
+    gbn,  # gbn (Gaussian blue noise)
     lattice,  # lattice (rank-1: Kuo's extensible sequence, Fibonacci), kronecker (R_d)
     lloyd,  # lloyd
     lowdiscrepancy,  # van_der_corput, halton, hammersley, sobol

@@ -1,0 +1,538 @@
+"""The ``gbn`` sampler: Gaussian blue noise (Ahmed, Ren, Wonka 2022), gradient descent on
+the sum of Gaussian kernels between the points, in any dimension, on the unit torus or in
+the unit cube.
+
+One step is one pair pass, an n-body sum over the neighbours within the kernel's cutoff
+found through a grid of cells (:mod:`clsamp.geometry.cells`), so a step costs O(n):
+``gbn_pairs`` in ``kernels/gbn.cl`` on the device, :func:`pair_pass_reference` here in
+NumPy, the same bits (an exponential of our own, :func:`exp_neg`, in both). Everything
+else -- the binning, the domain's attraction in the cube, the step and its control -- is
+host code both backends share (:func:`gbn_optimize`).
+"""
+
+import dataclasses
+import math
+
+import numpy as np
+
+from .. import runtime
+from ..errors import InvalidArgumentError
+from ..geometry.cells import cells_for, neighbour_cells, sorted_by_cell
+from ..validation import check_bool, check_positive_int, check_real
+from .base import SampleInfo, Sampler, info_field, make_sampler, register, sampler_class
+
+SIGMA = 0.5          # the kernel's standard deviation, in mean spacings n^(-1/d)
+STEP = math.pi / 2   # the step, relative to the kernel's mass (see GBNSampler)
+CUT = 4.0            # pairs farther than CUT sigma do not interact
+ITERATIONS = 200
+TOL = 1e-4
+HALVINGS = 40        # a set whose step has been halved this often has converged
+MAX_D = 64
+
+# e^-t by range reduction and the Taylor polynomial of degree 13 (kernels/gbn.cl): the
+# constants of fdlibm's exp (ln 2 split so that k ln2_hi is exact) and 1/k!.
+INV_LN2 = 1.44269504088896338700e+00
+LN2_HI = 6.93147180369123816490e-01
+LN2_LO = 1.90821492927058770002e-10
+EXP_COEFFICIENTS = tuple(1.0 / math.factorial(k) for k in range(14))
+EXP_DEFINES = {"GBN_INV_LN2": repr(INV_LN2), "GBN_LN2_HI": repr(LN2_HI), "GBN_LN2_LO": repr(LN2_LO),
+               **{f"GBN_C{k}": repr(c) for k, c in enumerate(EXP_COEFFICIENTS)}}
+
+
+def exp_neg(t):
+    """e^-t for 0 <= t < 700, with the operations of ``gbn_exp_neg`` in ``kernels/gbn.cl``
+    (so the kernel and the NumPy reference agree bit for bit; within 3e-16 relative of
+    ``np.exp(-t)``).
+
+    Parameters
+    ----------
+    t : ndarray of float64
+
+    Returns
+    -------
+    ndarray of float64
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clsamp.samplers.gbn import exp_neg
+    >>> t = np.linspace(0, 8, 9)
+    >>> bool(np.allclose(exp_neg(t), np.exp(-t), rtol=1e-15, atol=0))
+    True
+    """
+    t = np.asarray(t, dtype=np.float64)
+    k = (t * INV_LN2 + 0.5).astype(np.int64)
+    kd = k.astype(np.float64)
+    r = (kd * LN2_HI - t) + kd * LN2_LO
+    p = np.full_like(r, EXP_COEFFICIENTS[13])
+    for c in EXP_COEFFICIENTS[12::-1]:
+        p = p * r + c
+    return np.ldexp(p, -k)
+
+
+@dataclasses.dataclass(frozen=True)
+class Kernel:
+    """The Gaussian of one optimization and what follows from it.
+
+    Attributes
+    ----------
+    n, d : int
+    sigma : float
+        Standard deviation in mean spacings; ``s = sigma * n^(-1/d)`` on the unit domain.
+    periodic : bool
+    cut : float
+        Cutoff in sigmas; on the torus at most 1/2 (a pair meets through its nearest image).
+    """
+
+    n: int
+    d: int
+    sigma: float
+    periodic: bool
+    cut: float = CUT
+
+    @property
+    def s(self):
+        """The standard deviation on the unit domain, sigma n^(-1/d)."""
+        return self.sigma * float(self.n) ** (-1.0 / self.d)
+
+    @property
+    def reach(self):
+        """The cutoff R: ``cut`` s, at most 1/2 on the torus."""
+        reach = self.cut * self.s
+        return min(reach, 0.5) if self.periodic else reach
+
+    @property
+    def inv2s2(self):
+        """1 / (2 s^2)."""
+        return 1.0 / (2.0 * self.s * self.s)
+
+    @property
+    def R2(self):
+        """R^2."""
+        return self.reach * self.reach
+
+    @property
+    def gR(self):
+        """exp(-R^2 / 2 s^2), by :func:`exp_neg`: the kernel's value at the cutoff."""
+        return float(exp_neg(np.float64(self.R2 * self.inv2s2)))
+
+    @property
+    def cells(self):
+        """Cells per axis of the neighbour grid (:func:`clsamp.geometry.cells.cells_for`), at
+        most about 4 cells a point (wider cells find the same pairs)."""
+        cells = min(cells_for(self.reach), int((4.0 * self.n) ** (1.0 / self.d)))
+        return cells if cells >= 3 else 1
+
+    @property
+    def stencil(self):
+        """Cells a point's neighbours may lie in: 3^d, or 1 for a 1-cell grid."""
+        return 3 ** self.d if self.cells > 1 else 1
+
+    @property
+    def mass(self):
+        """The Gaussian's integral in points, sum_j g(x_i - x_j) for uniform points:
+        (2 pi)^(d/2) sigma^d."""
+        return (2.0 * math.pi) ** (self.d / 2.0) * self.sigma ** self.d
+
+
+def pair_pass_reference(pts, cell, start, n, kernel):
+    """NumPy twin of ``gbn_pairs``: per sorted point, its energy and force from the
+    neighbours within the cutoff, summed in the kernel's order.
+
+    Parameters
+    ----------
+    pts : ndarray (total, d)
+        Points sorted by (set, cell) (:func:`clsamp.geometry.cells.sorted_by_cell`).
+    cell : ndarray of uint32 (total,)
+    start : ndarray of uint32 (sets cells^d + 1,)
+    n : int
+        Points per set.
+    kernel : Kernel
+
+    Returns
+    -------
+    energy : ndarray (total,)
+        sum_j (e_ij - gR), e_ij = exp(-r_ij^2 / 2 s^2), over partners within the cutoff.
+    force : ndarray (total, d)
+        sum_j (x_i - x_j) e_ij.
+    """
+    total, d = pts.shape
+    G = kernel.cells
+    own = np.arange(total, dtype=np.int64)
+    slot_base = (own // n) * G ** d
+    start = start.astype(np.int64)
+    energy = np.zeros(total)
+    force = [np.zeros(total) for _ in range(d)]
+    R2, inv2s2, gR = kernel.R2, kernel.inv2s2, kernel.gR
+    for o in range(kernel.stencil):
+        slot = slot_base + neighbour_cells(cell, o, G, d)
+        first, stop = start[slot], start[slot + 1]
+        for k in range(int((stop - first).max(initial=0))):
+            j = first + k
+            live = np.flatnonzero((j < stop) & (j != own))
+            if live.size == 0:
+                continue
+            i, jj = live, j[live]
+            w = [pts[i, a] - pts[jj, a] for a in range(d)]
+            if kernel.periodic:
+                w = [np.where(v > 0.5, v - 1.0, v) for v in w]
+                w = [np.where(v < -0.5, v + 1.0, v) for v in w]
+            r2 = w[0] * w[0]
+            for a in range(1, d):
+                r2 = r2 + w[a] * w[a]
+            near = r2 < R2
+            i, r2 = i[near], r2[near]
+            e = exp_neg(r2 * inv2s2)
+            energy[i] = energy[i] + (e - gR)
+            for a in range(d):
+                force[a][i] = force[a][i] + w[a][near] * e
+    return energy, np.stack(force, axis=1)
+
+
+def _loop_bound(kernel, start):
+    """The most loop iterations one work-item of ``gbn_pairs`` can run."""
+    most = int(np.diff(start.astype(np.int64)).max(initial=0))
+    return kernel.stencil * (2 * kernel.d + 1) * (most + 1)
+
+
+def pair_pass_device(pts, cell, start, n, kernel):
+    """``gbn_pairs`` on the current device: :func:`pair_pass_reference`'s result, the same
+    bits.
+
+    Parameters
+    ----------
+    pts, cell, start, n, kernel
+        As :func:`pair_pass_reference` takes them.
+
+    Returns
+    -------
+    energy, force
+        As :func:`pair_pass_reference` returns them.
+
+    Raises
+    ------
+    NoDeviceError
+        A device without fp64, or one that stops long loops where a work-item's loops
+        would pass its limit.
+    """
+    limit = runtime.loop_limit()
+    if limit is not None and _loop_bound(kernel, start) > limit:
+        runtime.require_short_loops("gbn's pair pass")
+    total, d = pts.shape
+    defines = {"D": d, "PERIODIC": int(kernel.periodic), **EXP_DEFINES}
+    pairs = runtime.kernel("gbn.cl", "gbn_pairs", defines)
+    out = runtime.Output((total, d + 1), np.float64, host=np.empty((total, d + 1)))
+    local = runtime.local_size(64)
+    pairs(runtime.queue(), (-(-total // local) * local,), (local,), runtime.to_device(pts).data,
+          runtime.to_device(start).data, np.uint32(n), np.uint32(total), np.int32(kernel.cells),
+          np.uint32(kernel.stencil), np.float64(kernel.R2), np.float64(kernel.inv2s2),
+          np.float64(kernel.gR), out.buffer)
+    result = out.finish()
+    return result[:, 0].copy(), result[:, 1:]
+
+
+def _attraction(x, kernel):
+    """The unit cube's pull on each point: A(x) = prod_k a(x_k), the integral of the
+    Gaussian over the cube, a(t) = s sqrt(pi/2) (erf(t / s sqrt 2) + erf((1 - t) / s sqrt 2)),
+    and its gradient, a'(t) = exp(-t^2 / 2 s^2) - exp(-(1 - t)^2 / 2 s^2) in axis k."""
+    from scipy.special import erf
+    s = kernel.s
+    u = 1.0 / (s * math.sqrt(2.0))
+    a = s * math.sqrt(math.pi / 2.0) * (erf(x * u) + erf((1.0 - x) * u))
+    da = np.exp(-(x * u) ** 2) - np.exp(-((1.0 - x) * u) ** 2)
+    total = np.prod(a, axis=-1)
+    grad = np.empty_like(x)
+    for k in range(x.shape[-1]):
+        others = np.prod(np.delete(a, k, axis=-1), axis=-1) if x.shape[-1] > 1 else 1.0
+        grad[..., k] = da[..., k] * others
+    return total, grad
+
+
+def gbn_energy(points, kernel, backend="opencl"):
+    """The energy and the descent direction of sets, as the optimizer sees them.
+
+    Parameters
+    ----------
+    points : ndarray (r, n, d)
+        In [0, 1)^d.
+    kernel : Kernel
+    backend : {"opencl", "numpy"}
+        Where the pair pass runs (the same bits either way).
+
+    Returns
+    -------
+    energy : ndarray (r,)
+        Per point: (sum over ordered pairs within the cutoff of g(r) - g(R), less
+        2 n sum_i A(x_i) in the cube) / n.
+    force : ndarray (r, n, d)
+        F_i = sum_j (x_i - x_j) g(r_ij) (+ n s^2 grad A(x_i) in the cube), which is
+        -(s^2 / 2) times the gradient of n times the energy.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clsamp.samplers.gbn import Kernel, gbn_energy
+    >>> pts = np.random.default_rng(0).random((1, 64, 2))
+    >>> energy, force = gbn_energy(pts, Kernel(n=64, d=2, sigma=0.5, periodic=True))
+    >>> energy.shape, force.shape
+    ((1,), (1, 64, 2))
+    """
+    if backend != "numpy":
+        runtime.require_fp64()
+    return _evaluate(np.asarray(points, dtype=np.float64), kernel,
+                     pair_pass_reference if backend == "numpy" else pair_pass_device)
+
+
+def _evaluate(x, kernel, pair_pass):
+    """Energy per point (sets,) and force (sets, n, d) of sets x (sets, n, d)."""
+    sets, n, d = x.shape
+    pts, cell, start, order = sorted_by_cell(x, kernel.cells)
+    e_sorted, f_sorted = pair_pass(pts, cell, start, n, kernel)
+    e = np.empty(sets * n)
+    f = np.empty((sets * n, d))
+    e[order] = e_sorted
+    f[order] = f_sorted
+    e = e.reshape(sets, n)
+    f = f.reshape(sets, n, d)
+    if not kernel.periodic:
+        pull, grad = _attraction(x, kernel)
+        e = e - 2.0 * n * pull
+        f = f + (n * kernel.s * kernel.s) * grad
+    energy = np.array([math.fsum(row) / n for row in e])
+    return energy, f
+
+
+def _move(x, tau, f, periodic):
+    y = x + tau[:, None, None] * f
+    if periodic:
+        y = y - np.floor(y)
+        return np.where(y >= 1.0, 0.0, y)
+    return np.clip(y, 0.0, np.nextafter(1.0, 0.0))
+
+
+@dataclasses.dataclass(frozen=True)
+class GBNInfo(SampleInfo):
+    """What a Gaussian-blue-noise optimization did, per realization (first axis).
+
+    Attributes
+    ----------
+    realizations : ndarray (r,)
+        The realization indices.
+    energy_history : ndarray (r, T)
+        The energy per point after each iteration (entry t after t + 1): never rising.
+        A set that converged before the call's longest run holds its last value.
+    initial_energy : ndarray (r,)
+        The energy of the starting points.
+    iterations : ndarray (r,)
+        The iterations each set ran (a rejected step counts: it costs a pass).
+    converged : ndarray of bool (r,)
+        Whether the set stopped because a step lowered the energy by at most ``tol`` of
+        it (or the step fell below 2^-40 of its start), before ``iterations``.
+    step : ndarray (r,)
+        The step it ended with (halved at every rejection).
+    """
+
+    energy_history: np.ndarray = info_field("pad")
+    initial_energy: np.ndarray = info_field()
+    iterations: np.ndarray = info_field()
+    converged: np.ndarray = info_field()
+    step: np.ndarray = info_field()
+
+
+def gbn_optimize(start_points, kernel, step=STEP, iterations=ITERATIONS, tol=TOL,
+                 backend="opencl", realizations=None):
+    """Gradient descent on the Gaussian energy from given starting sets.
+
+    Parameters
+    ----------
+    start_points : ndarray (r, n, d)
+        In [0, 1)^d.
+    kernel : Kernel
+    step : float
+        The step relative to the kernel's mass (:class:`GBNSampler`).
+    iterations : int
+        The most iterations.
+    tol : float
+        Converged when an accepted step lowers the energy by at most ``tol`` times its
+        magnitude (0: run every iteration).
+    backend : {"opencl", "numpy"}
+        Where the pair pass runs; the rest is shared host code.
+    realizations : array_like of int, optional
+        The indices the info names (default 0..r-1).
+
+    Returns
+    -------
+    points : ndarray (r, n, d)
+    info : GBNInfo
+    """
+    pair_pass = pair_pass_reference if backend == "numpy" else pair_pass_device
+    if backend != "numpy":
+        runtime.require_fp64()
+    x = np.array(start_points, dtype=np.float64)
+    r = x.shape[0]
+    energy, force = _evaluate(x, kernel, pair_pass)
+    initial = energy.copy()
+    tau0 = step / kernel.mass
+    tau = np.full(r, tau0)
+    active = np.ones(r, dtype=bool)
+    converged = np.zeros(r, dtype=bool)
+    ran = np.zeros(r, dtype=np.int64)
+    history = []
+    for _ in range(iterations):
+        idx = np.flatnonzero(active)
+        if idx.size == 0:
+            break
+        y = _move(x[idx], tau[idx], force[idx], kernel.periodic)
+        e_new, f_new = _evaluate(y, kernel, pair_pass)
+        ran[idx] += 1
+        ok = e_new <= energy[idx]
+        good, bad = idx[ok], idx[~ok]
+        drop = energy[good] - e_new[ok]
+        x[good], force[good] = y[ok], f_new[ok]
+        energy[good] = e_new[ok]
+        tau[bad] *= 0.5
+        done = np.zeros(r, dtype=bool)
+        done[good] = drop <= tol * np.abs(energy[good])
+        done[bad] = tau[bad] < tau0 * 2.0 ** -HALVINGS
+        converged |= done
+        active &= ~done
+        history.append(energy.copy())
+    history = np.stack(history, axis=1) if history else np.empty((r, 0))
+    index = np.arange(r) if realizations is None else np.asarray(realizations)
+    info = GBNInfo(realizations=index.astype(np.int64), energy_history=history,
+                   initial_energy=initial, iterations=ran, converged=converged, step=tau)
+    return x, info
+
+
+@register("gbn")
+class GBNSampler(Sampler):
+    """Gaussian blue noise: points that minimize the sum of Gaussian kernels between them.
+
+    Parameters
+    ----------
+    d : int
+        Dimension, 1 to 64.
+    seed : int
+        Seeds the starting points (the ``init`` sampler's realization k with this seed).
+    sigma : float
+        The Gaussian's standard deviation in mean spacings n^(-1/d) (default 0.5).
+    step : float
+        The gradient step relative to the kernel's mass (default pi/2; see Notes).
+    iterations : int
+        The most iterations (default 200).
+    tol : float
+        Stop once a step lowers the energy by at most this fraction of it (default 1e-4,
+        which n = 1024 sets reach after about 110 iterations in 2-D and 60 in 4-D, at
+        rho near 0.78; 0 runs every iteration).
+    periodic : bool
+        True (default): the unit torus, distances wrapped. False: the unit cube, with the
+        boundary treatment of the authors' bounded-domain code (the domain, a uniform
+        density, attracts the points; see Notes).
+    init : str
+        The sampler the starting points come from (default ``"random"``; ``"jittered"``
+        and any other registered sampler that makes n points in d dimensions).
+    cut : float
+        Pairs farther apart than ``cut`` sigmas do not interact (default 4).
+    backend : {"opencl", "numpy"}
+
+    Notes
+    -----
+    The energy of n points is the sum over ordered pairs of the Gaussian
+    g(r) = exp(-r^2 / 2 s^2), s = sigma n^(-1/d): the squared L2 norm of the points'
+    density filtered by a Gaussian, less the self terms, whose minimizers are blue noise
+    (Ahmed et al. 2022). Its gradient moves point i along
+    F_i = sum_j (x_i - x_j) g(|x_i - x_j|), and an iteration is the step
+    x_i <- x_i + tau F_i with tau = step / ((2 pi)^(d/2) sigma^d): the step relative to
+    the kernel's mass in points, so that one step moves a point by a like fraction of the
+    spacing in every dimension. With sigma = 1 and step = pi/2 in 2-D, tau = 1/4, the
+    time step of the authors' published code (which defaults to sigma = 1 mean spacing);
+    sigma = 0.5 reaches a large minimum distance in far fewer iterations, at a
+    low-frequency power still far below Poisson disk's (docs/performance.md gives the
+    measurements behind the defaults).
+
+    The kernel is cut at ``cut`` sigmas and shifted to 0 there (g(r) - g(R) for r < R),
+    so that the energy stays continuous and F is exactly -s^2/2 times its gradient (in
+    n times the energy per point); pairs are found through a grid of cells at least R
+    wide, so a step costs O(n). On the torus the differences wrap and R is at most 1/2.
+    In the cube (``periodic=False``) the energy also holds the domain's attraction, as
+    the authors' bounded-domain code has it: the cross term -2 n sum_i A(x_i), A(x) the
+    Gaussian's integral over the cube (a product of erf terms): near a face nothing
+    beyond it pushes back on the points, and the domain's pull, which there points
+    inward, takes its place, so the points do not bunch on the faces; a step that leaves
+    the cube is projected back.
+
+    A step that would raise the energy is rejected and the step halved, so the energy
+    never rises (``energy_history``); a run stops when an accepted step lowers it by at
+    most ``tol`` of it. The pair pass runs on the device (``kernels/gbn.cl``); its NumPy
+    twin gives the same bits, and so does every device.
+
+    References
+    ----------
+    .. [1] A. G. M. Ahmed, J. Ren, P. Wonka, "Gaussian Blue Noise", ACM Trans. Graph.
+       41(6), 2022 (SIGGRAPH Asia).
+
+    Examples
+    --------
+    >>> import clsamp
+    >>> s = clsamp.make_sampler("gbn", d=2, seed=1, iterations=30)
+    >>> pts, info = s.sample(256, return_info=True)
+    >>> pts.shape, bool(info.energy_history[0, -1] < info.initial_energy[0])
+    ((256, 2), True)
+    >>> bool(clsamp.metrics.relative_radius(pts) > 0.6)
+    True
+    """
+
+    max_d = MAX_D
+    max_d_source = "the pair pass keeps a point and its force in private memory"
+    expensive = True
+    accepts_start = False
+    needs_fp64 = True
+    info = GBNInfo
+
+    def __init__(self, d=2, seed=0, sigma=SIGMA, step=STEP, iterations=ITERATIONS, tol=TOL,
+                 periodic=True, init="random", cut=CUT, backend="opencl"):
+        super().__init__(d=d, seed=seed, backend=backend)
+        self.sigma = check_real(sigma, "sigma", minimum=0.0, open_minimum=True, maximum=64.0)
+        self.step = check_real(step, "step", minimum=0.0, open_minimum=True)
+        self.iterations = check_positive_int(iterations, "iterations")
+        self.tol = check_real(tol, "tol", minimum=0.0, maximum=1.0)
+        self.periodic = check_bool(periodic, "periodic")
+        self.cut = check_real(cut, "cut", minimum=1.0, maximum=8.0)
+        if not isinstance(init, str) or init.partition(":")[0] in ("gbn",):
+            raise InvalidArgumentError(
+                f"'init' must name another sampler (such as 'random' or 'jittered'), got {init!r}")
+        cls = sampler_class(init)
+        if cls.info is not None or (cls.dimensions is not None and d not in cls.dimensions) \
+                or d > cls.max_d:
+            raise InvalidArgumentError(
+                f"'init' must name a sampler that makes sets in {d}-D without iterating, "
+                f"got {init!r}")
+        self.init = init
+
+    def valid_n(self, n):
+        """The count nearest to ``n`` the ``init`` sampler makes (every n for ``random``).
+
+        Parameters
+        ----------
+        n : int
+
+        Returns
+        -------
+        int
+        """
+        return self._start_sampler().valid_n(n)
+
+    def _start_sampler(self):
+        return make_sampler(self.init, d=self.d, seed=self.seed, backend=self.backend)
+
+    def _run(self, n, realizations, backend):
+        start = self._start_sampler().sample(n, realizations=realizations)
+        kernel = Kernel(n=n, d=self.d, sigma=self.sigma, periodic=self.periodic, cut=self.cut)
+        return gbn_optimize(start, kernel, self.step, self.iterations, self.tol, backend,
+                            np.arange(realizations.start, realizations.stop))
+
+    def _reference(self, n, realizations, start):
+        return self._run(n, realizations, "numpy")
+
+    def _device(self, n, realizations, start, out=None):
+        return self._run(n, realizations, "opencl")

@@ -1,0 +1,106 @@
+/* Gaussian blue noise (Ahmed, Ren, Wonka 2022): the pair pass of one gradient step, an
+ * n-body sum over the neighbours within the kernel's cutoff found through a grid of cells
+ * (kernels/cells.h). NumPy twin: pair_pass_reference in clsamp/samplers/gbn.py, the same
+ * bits: exactly rounded double operations in the same order, no contraction, and the
+ * exponential gbn_exp_neg below (range reduction and a Horner polynomial) instead of the
+ * device's exp, whose last bits differ between devices.
+ *
+ * The points of the sets being optimized come sorted by (set, cell) of a G^D grid in pts
+ * (total, D) (each point's cell found again here from its coordinates), and start
+ * (sets G^D + 1) holds the first sorted index of each (set, cell); G >= 3 (the 3^D cells around a cell distinct,
+ * each at least the cutoff wide) or G == 1 (every pair). For every sorted point i the
+ * partners j != i in its 3^D neighbouring cells, in stencil order then sorted order, with
+ * squared distance r2 < R2 (wrapped on the torus when PERIODIC) add
+ *     e = exp(-r2 inv2s2),  energy += e - gR,  force[k] += (x_i - x_j)[k] e,
+ * gR = exp(-R2 inv2s2), so that the kernel cut at the cutoff stays continuous; row i of
+ * out (total, D + 1) is (energy, force).
+ *
+ * Build options: D (dimensions), PERIODIC (1: the unit torus, differences wrapped into
+ * [-1/2, 1/2]; 0: the unit cube), GBN_INV_LN2, GBN_LN2_HI, GBN_LN2_LO and GBN_C0 ..
+ * GBN_C13 (the exponential's constants, from clsamp.samplers.gbn.EXP_DEFINES).
+ * Launch: one work-item per sorted point, grid (total,).
+ */
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#pragma OPENCL FP_CONTRACT OFF
+#include "cells.h"
+
+#ifndef GBN_C13
+#error "gbn.cl needs the exponential's constants (clsamp.samplers.gbn.EXP_DEFINES)"
+#endif
+
+/* e^-t for 0 <= t < 700: t = k ln 2 - r with |r| <= ln 2 / 2, e^r by its Taylor
+ * polynomial of degree 13 (truncation below 5e-18 relative), times 2^-k exactly */
+inline double gbn_exp_neg(const double t)
+{
+    const int k = (int)(t * GBN_INV_LN2 + 0.5);
+    const double kd = (double)k;
+    const double r = (kd * GBN_LN2_HI - t) + kd * GBN_LN2_LO;
+    double p = GBN_C13;
+    p = p * r + GBN_C12;
+    p = p * r + GBN_C11;
+    p = p * r + GBN_C10;
+    p = p * r + GBN_C9;
+    p = p * r + GBN_C8;
+    p = p * r + GBN_C7;
+    p = p * r + GBN_C6;
+    p = p * r + GBN_C5;
+    p = p * r + GBN_C4;
+    p = p * r + GBN_C3;
+    p = p * r + GBN_C2;
+    p = p * r + GBN_C1;
+    p = p * r + GBN_C0;
+    return p * as_double((ulong)(1023 - k) << 52);
+}
+
+__kernel void gbn_pairs(__global const double *pts, __global const uint *start, const uint n,
+                        const uint total, const int G, const uint noff, const double R2,
+                        const double inv2s2, const double gR, __global double *out)
+{
+    const uint gi = get_global_id(0);
+    if (gi >= total)
+        return;
+    const uint r = gi / n;
+    uint total_cells = 1;
+    for (int k = 0; k < D; ++k)
+        total_cells *= (uint)G;
+    double x[D], f[D], w[D];
+    for (int k = 0; k < D; ++k) {
+        x[k] = pts[(size_t)gi * D + k];
+        f[k] = 0.0;
+    }
+    double e_sum = 0.0;
+    int c[D];                   /* the cell, as clsamp.geometry.cells.sorted_by_cell finds it */
+    for (int k = 0; k < D; ++k) {
+        const int v = (int)(x[k] * (double)G);
+        c[k] = v < G - 1 ? v : G - 1;
+    }
+    for (uint o = 0; o < noff; ++o) {
+        const size_t slot = (size_t)r * total_cells + neighbour(c, o, G);
+        const uint s1 = start[slot + 1];
+        for (uint j = start[slot]; j < s1; ++j) {
+            if (j == gi)
+                continue;
+            __global const double *y = pts + (size_t)j * D;
+            double r2 = 0.0;
+            for (int k = 0; k < D; ++k) {
+                double v = x[k] - y[k];
+#if PERIODIC
+                v = v > 0.5 ? v - 1.0 : v;
+                v = v < -0.5 ? v + 1.0 : v;
+#endif
+                w[k] = v;
+                r2 = k == 0 ? v * v : r2 + v * v;
+            }
+            if (r2 >= R2)
+                continue;
+            const double e = gbn_exp_neg(r2 * inv2s2);
+            e_sum = e_sum + (e - gR);
+            for (int k = 0; k < D; ++k)
+                f[k] = f[k] + w[k] * e;
+        }
+    }
+    __global double *row = out + (size_t)gi * (D + 1);
+    row[0] = e_sum;
+    for (int k = 0; k < D; ++k)
+        row[1 + k] = f[k];
+}
