@@ -27,16 +27,16 @@ MAX_GENZ_D = 16
 class Genz(Integrand):
     """One of Genz's six test families on the unit cube, with its exact integral.
 
-    ==============  ===============================================  ====================
-    kind            f(x)                                             character
-    ==============  ===============================================  ====================
-    oscillatory     cos(2 pi u_1 + sum a_j x_j)                      smooth
-    product_peak    prod (a_j^-2 + (x_j - u_j)^2)^-1                 smooth, a peak at u
-    corner_peak     (1 + sum a_j x_j)^-(d + 1)                       smooth, a corner peak
-    gaussian        exp(-sum a_j^2 (x_j - u_j)^2)                    smooth
-    continuous      exp(-sum a_j |x_j - u_j|)                        kinks along x_j = u_j
-    discontinuous   0 if x_1 > u_1 or x_2 > u_2, else exp(sum a_j x_j)  steps along axes
-    ==============  ===============================================  ====================
+    ==============  ====================================================  ======================
+    kind            f(x)                                                  character
+    ==============  ====================================================  ======================
+    oscillatory     cos(2 pi u_1 + sum a_j x_j)                           smooth
+    product_peak    prod (a_j^-2 + (x_j - u_j)^2)^-1                      smooth, a peak at u
+    corner_peak     (1 + sum a_j x_j)^-(d + 1)                            smooth, a corner peak
+    gaussian        exp(-sum a_j^2 (x_j - u_j)^2)                         smooth
+    continuous      exp(-sum a_j abs(x_j - u_j))                          kinks along x_j = u_j
+    discontinuous   0 if x_1 > u_1 or x_2 > u_2, else exp(sum a_j x_j)    steps along axes
+    ==============  ====================================================  ======================
 
     Parameters
     ----------
