@@ -40,6 +40,7 @@ import numpy as np
 from . import parallel, runtime
 from .errors import InvalidArgumentError
 from .nufft import MIN_TOL, grid_size, kernel_transform, nufft_parameters, spread_reference
+from .spectral_stats import anisotropy, check_spectrum, radial_mean  # noqa: F401  (public here)
 from .validation import check_choice, check_int, check_points, check_real, point_sets
 
 __all__ = [
@@ -117,34 +118,6 @@ def _check_resolution(resolution):
     return resolution
 
 
-def check_spectrum(P, name="P"):
-    """Check that ``P`` is a spectrum as :func:`power_spectrum` returns them.
-
-    Parameters
-    ----------
-    P : ndarray
-        (R,) or (R, R), R even and at least 2, finite (else InvalidArgumentError).
-    name : str
-        The argument's name in the error message.
-
-    Returns
-    -------
-    ndarray
-        ``P`` as float64.
-    """
-    if not isinstance(P, np.ndarray) or P.ndim not in (1, 2):
-        shape = getattr(P, "shape", type(P).__name__)
-        raise InvalidArgumentError(f"'{name}' must be a 1-D or 2-D spectrum array, got {shape}")
-    if P.ndim == 2 and P.shape[0] != P.shape[1]:
-        raise InvalidArgumentError(f"'{name}' must be square (R, R), got {P.shape}")
-    if P.shape[0] < 2 or P.shape[0] % 2:
-        raise InvalidArgumentError(f"'{name}' must have an even side >= 2, got {P.shape}")
-    P = np.asarray(P, dtype=np.float64)
-    if not np.all(np.isfinite(P)):
-        raise InvalidArgumentError(f"'{name}' contains NaN or infinite values")
-    return P
-
-
 # -- the public entry point -------------------------------------------------------------
 def power_spectrum(points, resolution=256, method="auto", tol=None, backend="opencl", progress=True):
     """Periodogram of a point set, or the expected spectrum of a batch of realizations.
@@ -152,7 +125,7 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
     Parameters
     ----------
     points : ndarray or pyopencl.array.Array, shape (n, d) or (r, n, d), or a list of (n_k, d)
-        Points in [0, 1)^d, d = 1 or 2. A batch gives the mean of the r periodograms
+        Points in [0, 1)^d, d = 1, 2 or 3. A batch gives the mean of the r periodograms
         (never the transform of the union of the sets). A device array
         (``Sampler.sample_device``) is read where it is, with no copy to the host. A list
         of sets of different sizes (``sample_sets`` of maximal Poisson disk) gives the mean
@@ -162,7 +135,7 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
     method : {"auto", "direct", "fast"}
         ``"direct"`` is exact to fp64 rounding; ``"fast"`` is a NUFFT whose error is below
         ``tol``; ``"auto"`` picks the cheaper one that meets ``tol`` (direct when ``tol``
-        is None and the exact sum is cheap, else fast).
+        is None and the exact sum is cheap, else fast). 3-D spectra are direct.
     tol : float, optional
         For ``"fast"``: the largest error allowed, relative to the DC value N, i.e.
         max_ω |P̃(ω) - P(ω)| <= tol·N. In [5e-13, 0.1]; default 1e-12.
@@ -173,8 +146,9 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
 
     Returns
     -------
-    P : ndarray, shape (R,) or (R, R), float64
-        P[i, j] is frequency (i - R/2) along x and (j - R/2) along y; P[R/2, R/2] = N.
+    P : ndarray, shape (R,), (R, R) or (R, R, R), float64
+        P[i, j] is frequency (i - R/2) along x and (j - R/2) along y; P[R/2, R/2] = N
+        (and P[i, j, k] in 3-D).
 
     Notes
     -----
@@ -185,7 +159,10 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
     frequency. Twiddles are e((u0 + 16q)X)·e(sX), two exactly reduced sincos factors, so
     each is within a few ulps; a sum of N of them carries an error <= ~N·2^-50 and
     |ΔP| <= 2|S|·|ΔS|/N <= ~4N·2^-50 ≈ 4e-15·N, in practice ~1e-16·N (sums of
-    random-sign rounding errors). Since P(-ω) = P(ω), only u <= 0 is computed.
+    random-sign rounding errors). Since P(-ω) = P(ω), only u <= 0 is computed. In 3-D,
+    S(u, v, w) = Σ_k a_k(u) b_k(v) c_k(w) is, for each u, the product of the panel
+    (a_k(u) b_k(v)) with the panel c: the twiddles come from the device, the R products of
+    R × N by N × R complex matrices from the host's BLAS, so the work is R^3 N a set.
 
     *Fast.* Spreading the points onto a grid of M = σR nodes per axis with the kernel
     φ(z) = exp(β(√(1-z²) - 1)), |z| <= 1, w nodes wide, then an FFT, gives
@@ -217,10 +194,10 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
     ((32, 32), 256.0)
     """
     check_choice(backend, "backend", BACKENDS)
-    sets = point_sets(points, "points", d=(1, 2))
+    sets = point_sets(points, "points", d=(1, 2, 3))
     if sets is not None:
         return _sets_spectrum(sets, resolution, method, tol, backend, progress)
-    batch, _ = check_points(points, "points", d=(1, 2), keep_device=backend == "opencl")
+    batch, _ = check_points(points, "points", d=(1, 2, 3), keep_device=backend == "opencl")
     resolution = _check_resolution(resolution)
     # the spectrum and the working copies of its halves
     runtime.check_host_bytes(3 * 8 * resolution ** batch.shape[-1],
@@ -232,6 +209,9 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
             raise InvalidArgumentError(
                 f"'tol' must be >= {MIN_TOL:g} for method='fast' (the fp64 floor of the NUFFT); "
                 f"got {tol:g}; method='direct' is exact")
+    if batch.shape[-1] == 3 and method == "fast":
+        raise InvalidArgumentError("'method' 'fast' (the NUFFT) computes 1-D and 2-D spectra; a 3-D "
+                                   "spectrum is 'direct' (exact)")
     if method == "auto":
         method = _choose_method(batch.shape, resolution, tol)
     if method == "fast":
@@ -299,8 +279,9 @@ def expected_spectrum(sampler, n, realizations, resolution=256, method="auto", t
         sampler = make_sampler(sampler, d=2, backend=backend)
     elif not isinstance(sampler, Sampler):
         raise InvalidArgumentError(f"'sampler' must be a Sampler or a sampler name, got {sampler!r}")
-    if sampler.d not in (1, 2):
-        raise InvalidArgumentError(f"'sampler' makes {sampler.d}-dimensional points; spectra need d = 1 or 2")
+    if sampler.d not in (1, 2, 3):
+        raise InvalidArgumentError(
+            f"'sampler' makes {sampler.d}-dimensional points; spectra need d = 1, 2 or 3")
     n = check_int(n, "n", minimum=1)
     if sampler.valid_n(n) != n:
         raise InvalidArgumentError(
@@ -339,7 +320,7 @@ def _sets_spectrum(sets, resolution, method, tol, backend, progress):
 
 def _direct_seconds(r, n, resolution, d):
     """Rough cost of the exact sum at the direct path's rate on 2 CPU cores, plus twiddles."""
-    flops = 8.0 * r * n * resolution * (resolution / 2 + 1) if d == 2 else 8.0 * r * n * resolution
+    flops = 8.0 * r * n * resolution ** (d - 1) * (resolution / 2 + 1 if d > 1 else 1)
     return flops / 35e9 + r * n * resolution * d * 2e-9
 
 
@@ -351,6 +332,8 @@ def _fast_seconds(r, n, resolution, d, tol):
 
 def _choose_method(shape, resolution, tol):
     r, n, d = shape
+    if d == 3:
+        return "direct"
     direct = _direct_seconds(r, n, resolution, d)
     if tol is None:
         return "direct" if direct < 0.5 else "fast"
@@ -430,14 +413,14 @@ def direct_reference(points, resolution):
     Parameters
     ----------
     points, resolution
-        As :func:`power_spectrum` (d = 1 or 2).
+        As :func:`power_spectrum` (d = 1, 2 or 3).
 
     Returns
     -------
     ndarray
         Laid out as :func:`power_spectrum`'s.
     """
-    batch, _ = check_points(points, "points", d=(1, 2))
+    batch, _ = check_points(points, "points", d=(1, 2, 3))
     resolution = _check_resolution(resolution)
     r, n, d = batch.shape
     freqs = frequencies(resolution)
@@ -446,9 +429,56 @@ def direct_reference(points, resolution):
         A = twiddles_reference(batch[k, :, 0], freqs)
         if d == 1:
             S = A.sum(axis=0)
-        else:
+        elif d == 2:
             S = A.T @ twiddles_reference(batch[k, :, 1], freqs)
+        else:
+            S = _sum3(A, twiddles_reference(batch[k, :, 1], freqs),
+                      twiddles_reference(batch[k, :, 2], freqs))
         P += S.real**2 + S.imag**2
+    return P / (r * n)
+
+
+def _sum3(A, B, C):
+    """S(u, v, w) = Σ_k A[k, u] B[k, v] C[k, w]: the products A[k, u] B[k, v] of a group of
+    u as one (g R × N) panel, times C in one GEMM (groups of at most 64 MiB of panel)."""
+    n, R = A.shape
+    group = max(1, min(R, (64 << 20) // max(1, 16 * n * R)))
+    out = np.empty((R, B.shape[1], C.shape[1]), dtype=np.complex128)
+    for u0 in range(0, R, group):
+        u1 = min(R, u0 + group)
+        panel = (A[:, u0:u1, None] * B[:, None, :]).reshape(n, -1)
+        out[u0:u1] = (panel.T @ C).reshape(u1 - u0, B.shape[1], C.shape[1])
+    return out
+
+
+def _direct3(batch, resolution, progress):
+    """The 3-D direct sum: each axis' twiddle panel from ``spectrum_twiddles`` into host
+    memory, the products by :func:`_sum3` in the host's BLAS, a set and a chunk of points
+    at a time."""
+    (r, n, _), R = batch.shape, resolution
+    points_per_chunk = min(n, runtime.fit(3 * 2 * R * 8 + 24, WORKING_SET))
+    twiddles = runtime.kernel("spectrum.cl", "spectrum_twiddles",
+                              {"SUPER": _SUPER, "KBLOCK": 128, "FINE": _FINE}, _MAD)
+    queue, local = runtime.queue(), runtime.local_size(64)
+    point_chunks = [(a, min(n, a + points_per_chunk)) for a in range(0, n, points_per_chunk)]
+    bar = _progress(r * len(point_chunks), progress, _direct_seconds(r, n, R, 3), "spectrum (direct)")
+    P = np.zeros((R, R, R))
+    for k in range(r):
+        S = np.zeros((R, R, R), dtype=np.complex128)
+        for k0, k1 in point_chunks:
+            nc = k1 - k0
+            pts = _block(batch, k, k + 1, k0, k1)
+            panels = [runtime.Output(None, host=np.empty((1, nc, 2, R))) for _ in range(3)]
+            for axis, out in enumerate(panels):
+                twiddles(queue, (_pad(nc, local), 1), (local, 1), pts.data, out.buffer, np.uint32(nc),
+                         np.uint32(3), np.uint32(axis), np.int64(-(R // 2)), np.uint32(R), np.uint32(R))
+            A, B, C = (panel.finish()[0] for panel in panels)
+            S += _sum3(*(T[:, 0] + 1j * T[:, 1] for T in (A, B, C)))
+            if bar is not None:
+                bar.update(1)
+        P += S.real**2 + S.imag**2
+    if bar is not None:
+        bar.close()
     return P / (r * n)
 
 
@@ -470,6 +500,8 @@ def _direct(batch, resolution, backend, progress):
         return direct_reference(batch, resolution)
     import pyopencl.array as cla
     runtime.require_fp64()
+    if batch.shape[-1] == 3:
+        return _direct3(batch, resolution, progress)
     if HOST_GEMM and batch.shape[-1] == 2 and runtime.current_device().type == "cpu":
         return _direct_host_gemm(batch, resolution, progress)
     queue = runtime.queue()
@@ -691,105 +723,3 @@ def _fast(batch, resolution, tol, backend, progress):
     # ky < 0: P(kx, ky) = Q(-kx, -ky); row of -kx in Q is R - i, column of -ky is half - (j - half)
     P[:, :half] = Q[resolution:0:-1, half:0:-1]
     return P / (r * n)
-
-
-# -- radial mean and anisotropy ------------------------------------------------------------
-def _annuli(P, bin_width):
-    """Annulus index of every frequency, and the number of complete annuli."""
-    bin_width = check_real(bin_width, "bin_width", minimum=0.0, open_minimum=True)
-    R = P.shape[0]
-    f = np.arange(-(R // 2), R // 2, dtype=np.float64)
-    rho = np.abs(f) if P.ndim == 1 else np.hypot(f[:, None], f[None, :])
-    index = np.floor(rho / bin_width + 0.5).astype(np.int64)
-    count = int(math.floor((R // 2) / bin_width - 0.5))
-    if count < 1:
-        raise InvalidArgumentError(
-            f"'bin_width' {bin_width:g} leaves no complete annulus in a spectrum of side {R}")
-    index[rho == 0] = 0                     # DC is never averaged
-    index[index > count] = 0                # annuli cut by the square's edge are left out
-    return index, count
-
-
-def radial_mean(P, bin_width=1.0):
-    """Radially averaged power spectrum: the mean of P over annuli around DC.
-
-    Parameters
-    ----------
-    P : ndarray, shape (R,) or (R, R)
-        A spectrum from :func:`power_spectrum` (DC at index R/2).
-    bin_width : float
-        Width Δ of the annuli in integer frequencies (default 1).
-
-    Returns
-    -------
-    freqs : ndarray
-        Centres bΔ of the annuli, b = 1, 2, ..., up to the last annulus that lies whole
-        inside the square (bΔ + Δ/2 <= R/2).
-    values : ndarray
-        Mean of P(ω) over bΔ - Δ/2 <= |ω| < bΔ + Δ/2. DC (b = 0) is excluded.
-
-    Notes
-    -----
-    As in Lagae & Dutré 2008 and PSA (Heck et al. 2013); white noise gives 1 at every
-    frequency. :func:`normalized_frequency` rescales ``freqs`` for comparing N.
-
-    Examples
-    --------
-    >>> import clsamp
-    >>> pts = clsamp.make_sampler("random", seed=3).sample(1024, realizations=8)
-    >>> f, m = clsamp.radial_mean(clsamp.power_spectrum(pts, resolution=64))
-    >>> f[:3], bool(abs(m.mean() - 1) < 0.05)
-    (array([1., 2., 3.]), True)
-    """
-    P = check_spectrum(P)
-    index, count = _annuli(P, bin_width)
-    sums = np.bincount(index.ravel(), P.ravel(), minlength=count + 1)
-    counts = np.bincount(index.ravel(), minlength=count + 1)
-    b = np.arange(1, count + 1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return b * float(bin_width), sums[1:] / counts[1:]
-
-
-def anisotropy(P, bin_width=1.0):
-    """Anisotropy of a 2-D spectrum per annulus, in dB: 10·log10(s² / m²).
-
-    s² is the variance of P over the annulus (unbiased, divided by count - 1) and m its
-    mean (:func:`radial_mean`): 0 dB is as anisotropic as one white-noise periodogram,
-    and the expected spectrum of r white-noise realizations gives about -10·log10(r) dB.
-
-    Parameters
-    ----------
-    P, bin_width
-        As :func:`radial_mean`; P must be 2-D (else InvalidArgumentError).
-
-    Returns
-    -------
-    freqs, values : ndarray
-        Annulus centres as in :func:`radial_mean`; anisotropy in dB (-inf where P is
-        constant on the annulus, NaN where its mean is 0).
-
-    References
-    ----------
-    Lagae & Dutré 2008; Heck, Schlömer & Deussen 2013 (see :func:`power_spectrum`).
-
-    Examples
-    --------
-    >>> import clsamp
-    >>> pts = clsamp.make_sampler("random", seed=3).sample(1024, realizations=10)
-    >>> f, a = clsamp.anisotropy(clsamp.power_spectrum(pts, resolution=64))
-    >>> bool(abs(a[10:].mean() + 10) < 1.5)
-    True
-    """
-    P = check_spectrum(P)
-    if P.ndim != 2:
-        raise InvalidArgumentError(f"'P' must be a 2-D spectrum for anisotropy, got shape {P.shape}")
-    index, count = _annuli(P, bin_width)
-    flat = index.ravel()
-    counts = np.bincount(flat, minlength=count + 1)
-    mean = np.bincount(flat, P.ravel(), minlength=count + 1) / np.maximum(counts, 1)
-    # two passes: the variance of nearly equal values (regular grids) without cancellation
-    squares = np.bincount(flat, (P.ravel() - mean[flat]) ** 2, minlength=count + 1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        variance = squares[1:] / (counts[1:] - 1)
-        values = 10.0 * np.log10(variance / mean[1:] ** 2)
-    return np.arange(1, count + 1) * float(bin_width), values

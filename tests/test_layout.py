@@ -19,7 +19,7 @@ LAYERS = [
               "generating_matrices", "permutation", "files", "parallel", "transforms"}),
     ("geometry", {"geometry"}),
     ("samplers", {"samplers"}),
-    ("analysis", {"nufft", "spectrum", "metrics"}),
+    ("analysis", {"nufft", "spectral_stats", "spectrum", "metrics"}),
     ("experiments", {"integrands", "integrand_kernel", "families", "estimates", "sweep", "results", "theory",
                      "integration"}),
     ("render", {"scene", "pixel_sampling", "render_numpy", "render"}),

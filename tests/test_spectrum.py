@@ -311,12 +311,58 @@ def test_cli_spectrum(tmp_path):
     assert cli.main(["spectrum", "random", "-o", str(tmp_path / "x.png")]) == 2   # no -n
 
 
+# -- 3-D (issue 37) ------------------------------------------------------------------------
+def test_a_3d_spectrum_is_the_direct_sum():
+    pts = white(2, 300, d=3, seed=4)
+    R = 8
+    f = np.arange(-R // 2, R // 2)
+    want = np.zeros((R, R, R))
+    for s in pts:
+        phase = (s[:, 0, None, None, None] * f[None, :, None, None]
+                 + s[:, 1, None, None, None] * f[None, None, :, None]
+                 + s[:, 2, None, None, None] * f[None, None, None, :])
+        want += np.abs(np.exp(-2j * np.pi * phase).sum(axis=0)) ** 2
+    want /= 2 * 300
+    for backend in ("opencl", "numpy"):
+        P = clsamp.power_spectrum(pts, R, backend=backend)
+        assert P.shape == (R, R, R) and P[4, 4, 4] == pytest.approx(300.0, rel=1e-14)
+        assert np.abs(P - want).max() < 1e-12 * 300, backend
+    bigger = white(3, 2000, d=3, seed=5)
+    np.testing.assert_allclose(clsamp.power_spectrum(bigger, 16),
+                               clsamp.power_spectrum(bigger, 16, backend="numpy"), rtol=0, atol=1e-11 * 2000)
+
+
+def test_3d_spectra_of_known_patterns_and_their_radial_statistics():
+    # white noise: flat at 1, its shells as anisotropic as r periodograms (-10 log10 r dB)
+    P = clsamp.power_spectrum(white(8, 2048, d=3, seed=6), 16)
+    f, m = clsamp.radial_mean(P)
+    assert f.tolist() == list(range(1, 8)) and abs(m.mean() - 1) < 0.05
+    _, a = clsamp.anisotropy(P)
+    assert abs(a[2:].mean() + 10 * math.log10(8)) < 1.5
+    # a regular 8^3 grid: power N at multiples of 8 along every axis, none elsewhere
+    g = (np.stack(np.meshgrid(*[np.arange(8)] * 3, indexing="ij"), -1).reshape(-1, 3) + 0.5) / 8
+    P = clsamp.power_spectrum(g, 16)
+    peaks = np.zeros((16, 16, 16), dtype=bool)
+    peaks[np.ix_(*[[0, 8]] * 3)] = True
+    assert np.allclose(P[peaks], 512, rtol=1e-12) and np.abs(P[~peaks]).max() < 1e-9
+    # the expected spectrum of a 3-D sampler, and the refusals
+    E = clsamp.expected_spectrum(clsamp.make_sampler("jittered", d=3, seed=1), 512, 2, resolution=8,
+                                 progress=False)
+    assert E.shape == (8, 8, 8) and E[4, 4, 4] == pytest.approx(512)
+    with pytest.raises(InvalidArgumentError, match="'method' 'fast'.*3-D spectrum is 'direct'"):
+        clsamp.power_spectrum(g, 16, method="fast")
+    with pytest.raises(InvalidArgumentError, match="equal sides"):
+        clsamp.radial_mean(np.ones((8, 8, 4)))
+    with pytest.raises(InvalidArgumentError, match="2-D or 3-D"):
+        clsamp.anisotropy(np.ones(8))
+
+
 # -- bad input ------------------------------------------------------------------------------
 @pytest.mark.parametrize("points, match", [
     (np.array([[0.1, np.nan]]), "NaN"),
     (np.array([[0.1, 1.0]]), r"\[0, 1\)"),
     (np.array([[-0.1, 0.5]]), r"\[0, 1\)"),
-    (np.zeros((4, 3)), "dimensions"),
+    (np.zeros((4, 4)), "dimensions"),
     (np.zeros(5), "shape"),
     (np.zeros((2, 2), dtype=np.int64), "dtype"),
 ])
