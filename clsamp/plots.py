@@ -20,7 +20,7 @@ from .validation import check_choice, check_real
 __all__ = ["points", "points_figure", "spectrum", "radial_mean", "anisotropy", "spectrum_figure",
            "sampler_figure", "radial_mean_families", "pair_correlation", "pcf_figure",
            "discrepancy", "discrepancy_figure", "convergence", "family_spread",
-           "family_convergence", "accuracy_time", "error_time", "error_time_figure",
+           "family_convergence", "accuracy_time", "error_time", "error_time_figure", "quality_time",
            "render_comparison", "error_spectra", "spectrum_image", "save_spectrum_png",
            "save_spectrum_exr", "pyplot"]
 
@@ -647,6 +647,34 @@ def error_time_figure(path, panels):
 
 
 # -- renders ---------------------------------------------------------------------------
+def quality_time(path, rows, title=None):
+    """Samplers' quality against the seconds they took: low-frequency power (down is better)
+    and ρ (up is better), one labelled dot a sampler, seconds on a log axis.
+
+    Parameters
+    ----------
+    path : str or Path
+    rows : sequence of (label, seconds, low-frequency power, rho)
+    title : str, optional
+
+    Returns
+    -------
+    Path
+    """
+    fig, (low, rho) = pyplot().subplots(1, 2, figsize=(10, 3.8))
+    for label, seconds, power, radius in rows:
+        for ax, value in ((low, power), (rho, radius)):
+            ax.scatter([seconds], [value], s=18)
+            ax.annotate(label, (seconds, value), fontsize=7, xytext=(3, 3), textcoords="offset points")
+    low.set(xscale="log", yscale="log", xlabel="seconds", ylabel="low-frequency power (white noise 1)")
+    rho.set(xscale="log", xlabel="seconds", ylabel="ρ (relative radius)")
+    for ax in (low, rho):
+        ax.grid(True, which="both", alpha=0.2)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    return _save(fig, path)
+
+
 def render_comparison(path, reference, images, columns=4):
     """Rendered images beside their reference, each titled with its MSE against it.
 

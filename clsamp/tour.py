@@ -9,7 +9,6 @@ page, and the others still run and keep their results.
 
 import dataclasses
 import html
-import inspect
 import json
 import platform
 import time
@@ -31,6 +30,7 @@ from .report import (
     versions,
     write_html,
 )
+from .tour_blue import quiet_sampler, section_blue_noise
 from .tour_cost import section_cost
 
 # Samplers shown in section 1, with the parameters that make each one its textbook self.
@@ -74,25 +74,6 @@ def tour_sampler_params(name, quick):
     params = dict(dict(TOUR_SAMPLERS).get(name, {}))
     params.update(TOUR_BUDGETS.get(name, {}).get("quick" if quick else "full", {}))
     return params
-
-
-def quiet_sampler(name, seed, params):
-    """``make_sampler(name, d=2, seed=seed, **params)`` with the sampler's own progress bar
-    off where it has one (the tour shows its own, or none with ``--no-progress``).
-
-    Parameters
-    ----------
-    name : str
-    seed : int
-    params : dict
-
-    Returns
-    -------
-    Sampler
-    """
-    from .samplers import make_sampler, sampler_class
-    takes = "progress" in inspect.signature(sampler_class(name)).parameters
-    return make_sampler(name, d=2, seed=seed, **params, **({"progress": False} if takes else {}))
 
 
 def section_samplers(report, quick):
@@ -641,7 +622,8 @@ SECTIONS = (
     ("render", "3. Ambient occlusion at 128 rays: samplers in images", section_render),
     ("cost", "4. What accuracy costs in time", section_cost),
     ("stability", "5. Stability: the hard cases", section_stability),
-    ("device", "6. Device, versions and timings", section_device),
+    ("blue_noise", "6. Blue noise since 2009: quality against seconds, and in 4-D", section_blue_noise),
+    ("device", "7. Device, versions and timings", section_device),
 )
 
 

@@ -114,3 +114,19 @@ def test_accuracy_against_time_is_timed_as_medians(tour):
     assert set(per_estimate) >= {"random", "sobol:owen"}
     assert all(len(v) == 4 and min(v) > 0 for v in per_estimate.values())
     assert f"median of {REPEATS}" in (tour / "index.html").read_text()
+
+
+def test_the_blue_noise_section_compares_the_optimizers_and_renders_depth_of_field(tour):
+    # issue 37: quality against seconds for every registered optimizer; 4-D sets in a render
+    from clsamp.samplers import sampler_names
+    from clsamp.tour_blue import BLUE_NOISE, DOF_SAMPLERS
+    data = json.loads((tour / "tour.json").read_text())["sections"]["blue_noise"]["data"]
+    shown = [name for name, _ in BLUE_NOISE if name in sampler_names()]
+    assert "gbn" in shown and all("error" not in data[name] for name in shown), data
+    for name in shown:
+        assert data[name]["seconds"] > 0 and 0 < data[name]["rho"] <= 1
+    assert data["gbn"]["low_frequency_power"] < data["poisson_disk"]["low_frequency_power"] / 5
+    dof = data["depth_of_field"]
+    assert set(dof) == set(DOF_SAMPLERS) and all(dof[s]["mse"] > 0 for s in dof)
+    assert dof["gbn"]["mse"] < dof["random"]["mse"]
+    assert (tour / "img" / "blue_quality_time.png").exists()
