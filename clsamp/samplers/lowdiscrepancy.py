@@ -33,6 +33,8 @@ from .base import Rate, Sampler, register
 # RANDOMIZE in the kernel: LMS scrambles the matrices (lms_matrices), then plain or xor points
 _CODES = {None: 0, "shift": 1, "xor": 2, "owen": 3, "permute": 4, "lms": 0, "lms+shift": 2}
 LMS = ("lms", "lms+shift")
+HIGHER_ORDER_RANDOMIZATIONS = (None, "xor", "lms", "lms+shift")   # those that keep the order
+MAX_ORDER = 3
 _SCALE32 = 2.0**-32
 MAX_HALTON_DIMENSION = 21201
 
@@ -230,6 +232,16 @@ class DigitalNetB2(LowDiscrepancySampler):
     ``"lms+shift"`` then xors ``"xor"``'s digit vector. Every randomization but
     ``"shift"`` keeps each prefix of 2^m points a (t, m, d)-net.
 
+    ``order`` alpha >= 2 (Sobol' and base-2 ``digital_net``) makes a higher-order net by digit
+    interlacing (Dick 2008): dimension j interlaces the digits of base dimensions
+    alpha j, ..., alpha j + alpha - 1 (:func:`clsamp.generating_matrices.interlace_columns`,
+    applied to the matrices, so the same kernel makes the points). Its randomizations are
+    those that keep the order: the digital shift ``"xor"`` (Dick 2008), and ``"lms"``,
+    ``"lms+shift"`` with L drawn per base dimension and interlaced, so the scrambled net is
+    the interlacing of the scrambled base net (as qmcpy's ``DigitalNetB2(alpha=...)``).
+    ``"owen"`` of the interlaced digits and the Cranley-Patterson ``"shift"`` lose the order
+    and are refused.
+
     Parameters
     ----------
     d : int
@@ -241,19 +253,76 @@ class DigitalNetB2(LowDiscrepancySampler):
     randomizations = (None, "shift", "xor", "owen", "lms", "lms+shift")
     net_name = "digital net"
     base = 2
+    order = 1
+
+    def base_columns(self):
+        """The base net's column words, before interlacing.
+
+        Returns
+        -------
+        ndarray of uint32
+            (order d, 32).
+        """
+        raise NotImplementedError
 
     def gray_columns(self):
-        """The column words the Gray-code kernel xors.
+        """The column words the Gray-code kernel xors: :meth:`base_columns`, interlaced
+        for a higher-order net.
 
         Returns
         -------
         ndarray of uint32
             (d, 32).
         """
-        raise NotImplementedError
+        return gm.interlace_columns(self.base_columns(), self.order)
+
+    def _set_order(self, order, base_dimensions, source):
+        """Keep ``order`` after checking it, and the randomization and dimensions it needs."""
+        self.order = check_int(order, "order", minimum=1, maximum=MAX_ORDER)
+        if self.order == 1:
+            return
+        if self.randomize not in HIGHER_ORDER_RANDOMIZATIONS:
+            raise InvalidArgumentError(
+                f"'randomize' must be one of {HIGHER_ORDER_RANDOMIZATIONS} with order={self.order} "
+                f"(the Cranley-Patterson shift and Owen scrambling of the interlaced digits lose "
+                f"the higher order), got {self.randomize!r}")
+        if self.order * self.d > base_dimensions:
+            raise InvalidArgumentError(
+                f"'d' must be at most {base_dimensions // self.order} with order={self.order}: "
+                f"d = {self.d} interlaces {self.order * self.d} dimensions of {source}, which has "
+                f"{base_dimensions}")
+
+    def convergence_rate(self, case):
+        """The published rate of the MSE (:meth:`Sampler.convergence_rate`); for a
+        higher-order net of order alpha and a smooth integrand, in any dimension:
+
+        * ``"xor"`` (a random digital shift): N^(-2 alpha) (Dick 2008, Thm. 5.2: the
+          worst-case error of an order-alpha net is O(N^-alpha (log N)^(alpha d)) for
+          functions of smoothness alpha, so the mean square error over the shifts too);
+        * ``"lms+shift"``: N^(-2 alpha - 1) (Dick 2011: scrambling the base net before
+          interlacing, RMSE O(N^(-alpha - 1/2 + eps)); LMS with a digital shift has the
+          gain coefficients of nested uniform scrambling, Owen 2003).
+
+        Parameters
+        ----------
+        case : {"best", "worst", "axis"}
+
+        Returns
+        -------
+        Rate or None
+        """
+        if self.order == 1:
+            return super().convergence_rate(case)
+        if case != "best":
+            return None
+        if self.randomize == "xor":
+            return Rate(-2.0 * self.order, "Dick 2008")
+        if self.randomize == "lms+shift":
+            return Rate(-2.0 * self.order - 1, "Dick 2011")
+        return None
 
     def _table_key(self):
-        return (type(self).__name__, self.d)
+        return (type(self).__name__, self.d, self.order)
 
     def _warn_weaker(self, n, start):
         total = power = start + (n or 0)
@@ -271,7 +340,11 @@ class DigitalNetB2(LowDiscrepancySampler):
         columns = self.gray_columns()
         out = np.empty((len(realizations), n, self.d))
         if self.randomize in LMS:
-            scrambled = gm.lms_apply(gm.lms_row_masks(self.seed, rs, self.d), columns[None])
+            # a higher-order net: scramble the base net, then interlace (as qmcpy)
+            base = self.base_columns() if self.order > 1 else columns
+            scrambled = gm.lms_apply(gm.lms_row_masks(self.seed, rs, len(base)), base[None])
+            scrambled = gm.interlace_columns(scrambled.reshape(-1, nt.SOBOL_BITS), self.order)
+            scrambled = scrambled.reshape(len(rs), self.d, nt.SOBOL_BITS)
             seeds = scramble_words(self.seed, rs, self.d)[..., 0]
             for k in range(len(rs)):
                 x = nt.sobol_integers(index, scrambled[k])
@@ -320,7 +393,8 @@ class DigitalNetB2(LowDiscrepancySampler):
         queue = runtime.queue()
         stride = -(-self.d // self._width()) * self._width()
         tables = cla.empty(queue, (len(realizations) * nt.SOBOL_BITS * stride,), np.uint32)
-        kernel = runtime.kernel("lowdiscrepancy.cl", "lms_matrices", defines={"LD_LMS": 1})
+        kernel = runtime.kernel("lowdiscrepancy.cl", "lms_matrices",
+                                defines={"LD_LMS": 1, "LD_INTERLACE": self.order})
         local = runtime.local_size()
         kernel(queue, (-(-stride // local) * local, len(realizations)), (local, 1), tables.data,
                table.data, np.uint32(self.d), np.uint32(stride), np.uint32(realizations.start),
@@ -364,6 +438,13 @@ class SobolSampler(DigitalNetB2):
         state, ``(x >> 11) 2^-53``, which below index 2^32 are exactly the 32-bit
         points. ``randomize`` then one of None, ``"shift"`` and ``"xor"`` (whose
         64-bit digit vector begins with the 32-bit one).
+    order : {1, 2, 3}
+        With alpha = 2 or 3, the higher-order net of order alpha by digit interlacing of
+        dimensions alpha j .. alpha j + alpha - 1 of the alpha d-dimensional Sobol' net
+        [6]_ (see :class:`DigitalNetB2`; d at most 21201 / alpha; 32-bit). Randomizations:
+        None, ``"xor"``, ``"lms"``, ``"lms+shift"``. For smooth integrands the MSE falls as
+        N^(-2 alpha) with ``"xor"`` [6]_ (N^-3 for ``order=1`` with ``"lms+shift"``); the
+        32 output digits hold alpha m base digits while alpha m <= 32 (N = 2^m).
 
     Notes
     -----
@@ -383,6 +464,10 @@ class SobolSampler(DigitalNetB2):
     .. [4] A. B. Owen, "Randomly permuted (t,m,s)-nets and (t,s)-sequences" (1995).
     .. [5] J. Matoušek, "On the L2-discrepancy for anchored boxes", J. Complexity 14
        (1998).
+    .. [6] J. Dick, "Walsh spaces containing smooth functions and quasi-Monte Carlo rules
+       of arbitrary high order", SIAM J. Numer. Anal. 46(3) (2008); J. Dick, "Higher order
+       scrambled digital nets achieve the optimal rate of the root mean square error for
+       smooth integrands", Ann. Statist. 39(3) (2011).
 
     Examples
     --------
@@ -401,22 +486,26 @@ class SobolSampler(DigitalNetB2):
     max_d_source = "the Joe-Kuo direction-number table"
     net_name = "Sobol'"
 
-    def __init__(self, d=2, seed=0, backend="opencl", randomize=None, bits=32):
+    def __init__(self, d=2, seed=0, backend="opencl", randomize=None, bits=32, order=1):
         self.bits = check_choice(bits, "bits", (32, 64))
         super().__init__(d=d, seed=seed, backend=backend, randomize=randomize)
         if self.bits == 64 and self.randomize not in (None, "shift", "xor"):
             raise InvalidArgumentError(
                 f"'randomize' must be None, 'shift' or 'xor' with bits=64, got {self.randomize!r}")
+        self._set_order(order, self.max_d, "the Joe-Kuo table")
+        if self.order > 1 and self.bits == 64:
+            raise InvalidArgumentError(f"'order' must be 1 with bits=64 (interlaced nets are "
+                                       f"32-bit), got {self.order}")
 
     def __repr__(self):
-        wide = ", bits=64" if self.bits == 64 else ""
+        wide = (", bits=64" if self.bits == 64 else "") + (f", order={self.order}" if self.order > 1 else "")
         return super().__repr__()[:-1] + wide + ")"
 
     def _last_index(self):
         return 2**64 - 1 if self.bits == 64 else self.max_n
 
     def _table_key(self):
-        return (type(self).__name__, self.d, self.bits)
+        return (type(self).__name__, self.d, self.bits, self.order)
 
     def _matrices64(self):
         """(d, 64) uint64: V_jc = m_jc 2^(63-c), whose top halves are the 32-bit V_jc for c < 32."""
@@ -444,15 +533,15 @@ class SobolSampler(DigitalNetB2):
         table = runtime.table(self._table_key(), lambda: self._matrices64().T.copy(), dtype=np.uint64)
         return self._launch("sobol_points64", table, n, realizations, np.uint64(start), {}, out)
 
-    def gray_columns(self):
+    def base_columns(self):
         """The Joe-Kuo direction numbers (:func:`clsamp.number_theory.sobol_matrices`).
 
         Returns
         -------
         ndarray of uint32
-            (d, 32).
+            (order d, 32).
         """
-        return nt.sobol_matrices(self.d)
+        return nt.sobol_matrices(self.order * self.d)
 
     def convergence_rate(self, case):
         """The published rate of the MSE for ``case`` (:meth:`Sampler.convergence_rate`).
@@ -469,8 +558,11 @@ class SobolSampler(DigitalNetB2):
         Returns
         -------
         Rate or None
-            None for other randomizations or dimensions.
+            None for other randomizations or dimensions; with ``order`` >= 2,
+            :meth:`DigitalNetB2.convergence_rate`.
         """
+        if self.order > 1:
+            return super().convergence_rate(case)
         if self.randomize != "owen" or self.d != 2:
             return None
         return {"best": Rate(-3.0, "Owen 1997"), "worst": Rate(-1.5, "He and Wang 2015")}.get(case)
