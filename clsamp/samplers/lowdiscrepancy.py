@@ -28,13 +28,12 @@ from .. import philox, runtime
 from ..errors import InvalidArgumentError, NoDeviceError
 from ..geometry import torus
 from ..validation import check_choice, check_int
+from . import higher_order
 from .base import Rate, Sampler, register
 
 # RANDOMIZE in the kernel: LMS scrambles the matrices (lms_matrices), then plain or xor points
 _CODES = {None: 0, "shift": 1, "xor": 2, "owen": 3, "permute": 4, "lms": 0, "lms+shift": 2}
 LMS = ("lms", "lms+shift")
-HIGHER_ORDER_RANDOMIZATIONS = (None, "xor", "lms", "lms+shift")   # those that keep the order
-MAX_ORDER = 3
 _SCALE32 = 2.0**-32
 MAX_HALTON_DIMENSION = 21201
 
@@ -232,15 +231,10 @@ class DigitalNetB2(LowDiscrepancySampler):
     ``"lms+shift"`` then xors ``"xor"``'s digit vector. Every randomization but
     ``"shift"`` keeps each prefix of 2^m points a (t, m, d)-net.
 
-    ``order`` alpha >= 2 (Sobol' and base-2 ``digital_net``) makes a higher-order net by digit
-    interlacing (Dick 2008): dimension j interlaces the digits of base dimensions
-    alpha j, ..., alpha j + alpha - 1 (:func:`clsamp.generating_matrices.interlace_columns`,
-    applied to the matrices, so the same kernel makes the points). Its randomizations are
-    those that keep the order: the digital shift ``"xor"`` (Dick 2008), and ``"lms"``,
-    ``"lms+shift"`` with L drawn per base dimension and interlaced, so the scrambled net is
-    the interlacing of the scrambled base net (as qmcpy's ``DigitalNetB2(alpha=...)``).
-    ``"owen"`` of the interlaced digits and the Cranley-Patterson ``"shift"`` lose the order
-    and are refused.
+    ``order`` alpha >= 2 (``sobol``, base-2 ``digital_net``): the higher-order net that
+    interlaces the digits of base dimensions alpha j .. alpha j + alpha - 1 into dimension j
+    (:mod:`clsamp.samplers.higher_order`, Dick 2008), with None, ``"xor"``, ``"lms"`` and
+    ``"lms+shift"`` (L per base dimension, interlaced).
 
     Parameters
     ----------
@@ -277,31 +271,12 @@ class DigitalNetB2(LowDiscrepancySampler):
         return gm.interlace_columns(self.base_columns(), self.order)
 
     def _set_order(self, order, base_dimensions, source):
-        """Keep ``order`` after checking it, and the randomization and dimensions it needs."""
-        self.order = check_int(order, "order", minimum=1, maximum=MAX_ORDER)
-        if self.order == 1:
-            return
-        if self.randomize not in HIGHER_ORDER_RANDOMIZATIONS:
-            raise InvalidArgumentError(
-                f"'randomize' must be one of {HIGHER_ORDER_RANDOMIZATIONS} with order={self.order} "
-                f"(the Cranley-Patterson shift and Owen scrambling of the interlaced digits lose "
-                f"the higher order), got {self.randomize!r}")
-        if self.order * self.d > base_dimensions:
-            raise InvalidArgumentError(
-                f"'d' must be at most {base_dimensions // self.order} with order={self.order}: "
-                f"d = {self.d} interlaces {self.order * self.d} dimensions of {source}, which has "
-                f"{base_dimensions}")
+        """Keep ``order`` (:func:`clsamp.samplers.higher_order.check_order`)."""
+        self.order = higher_order.check_order(order, self.d, self.randomize, base_dimensions, source)
 
     def convergence_rate(self, case):
-        """The published rate of the MSE (:meth:`Sampler.convergence_rate`); for a
-        higher-order net of order alpha and a smooth integrand, in any dimension:
-
-        * ``"xor"`` (a random digital shift): N^(-2 alpha) (Dick 2008, Thm. 5.2: the
-          worst-case error of an order-alpha net is O(N^-alpha (log N)^(alpha d)) for
-          functions of smoothness alpha, so the mean square error over the shifts too);
-        * ``"lms+shift"``: N^(-2 alpha - 1) (Dick 2011: scrambling the base net before
-          interlacing, RMSE O(N^(-alpha - 1/2 + eps)); LMS with a digital shift has the
-          gain coefficients of nested uniform scrambling, Owen 2003).
+        """The published rate of the MSE (:meth:`Sampler.convergence_rate`; with ``order``
+        >= 2, :func:`clsamp.samplers.higher_order.rate`).
 
         Parameters
         ----------
@@ -313,13 +288,7 @@ class DigitalNetB2(LowDiscrepancySampler):
         """
         if self.order == 1:
             return super().convergence_rate(case)
-        if case != "best":
-            return None
-        if self.randomize == "xor":
-            return Rate(-2.0 * self.order, "Dick 2008")
-        if self.randomize == "lms+shift":
-            return Rate(-2.0 * self.order - 1, "Dick 2011")
-        return None
+        return higher_order.rate(self.order, self.randomize, case)
 
     def _table_key(self):
         return (type(self).__name__, self.d, self.order)
@@ -439,12 +408,9 @@ class SobolSampler(DigitalNetB2):
         points. ``randomize`` then one of None, ``"shift"`` and ``"xor"`` (whose
         64-bit digit vector begins with the 32-bit one).
     order : {1, 2, 3}
-        With alpha = 2 or 3, the higher-order net of order alpha by digit interlacing of
-        dimensions alpha j .. alpha j + alpha - 1 of the alpha d-dimensional Sobol' net
-        [6]_ (see :class:`DigitalNetB2`; d at most 21201 / alpha; 32-bit). Randomizations:
-        None, ``"xor"``, ``"lms"``, ``"lms+shift"``. For smooth integrands the MSE falls as
-        N^(-2 alpha) with ``"xor"`` [6]_ (N^-3 for ``order=1`` with ``"lms+shift"``); the
-        32 output digits hold alpha m base digits while alpha m <= 32 (N = 2^m).
+        2 or 3: the higher-order net of that order [6]_, interlacing the alpha d-dimensional
+        Sobol' net (:mod:`clsamp.samplers.higher_order`); randomize None, ``"xor"``,
+        ``"lms"`` or ``"lms+shift"``.
 
     Notes
     -----
@@ -465,9 +431,7 @@ class SobolSampler(DigitalNetB2):
     .. [5] J. Matoušek, "On the L2-discrepancy for anchored boxes", J. Complexity 14
        (1998).
     .. [6] J. Dick, "Walsh spaces containing smooth functions and quasi-Monte Carlo rules
-       of arbitrary high order", SIAM J. Numer. Anal. 46(3) (2008); J. Dick, "Higher order
-       scrambled digital nets achieve the optimal rate of the root mean square error for
-       smooth integrands", Ann. Statist. 39(3) (2011).
+       of arbitrary high order", SIAM J. Numer. Anal. 46(3) (2008).
 
     Examples
     --------
