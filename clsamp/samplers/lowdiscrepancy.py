@@ -270,6 +270,10 @@ class DigitalNetB2(LowDiscrepancySampler):
         """
         return gm.interlace_columns(self.base_columns(), self.order)
 
+    def __repr__(self):
+        text = super().__repr__()
+        return text if self.order == 1 else text[:-1] + f", order={self.order})"
+
     def _set_order(self, order, base_dimensions, source):
         """Keep ``order`` (:func:`clsamp.samplers.higher_order.check_order`)."""
         self.order = higher_order.check_order(order, self.d, self.randomize, base_dimensions, source)
@@ -462,7 +466,7 @@ class SobolSampler(DigitalNetB2):
                                        f"32-bit), got {self.order}")
 
     def __repr__(self):
-        wide = (", bits=64" if self.bits == 64 else "") + (f", order={self.order}" if self.order > 1 else "")
+        wide = ", bits=64" if self.bits == 64 else ""
         return super().__repr__()[:-1] + wide + ")"
 
     def _last_index(self):
