@@ -174,6 +174,51 @@ def natural_to_gray(columns):
     return np.bitwise_xor.accumulate(np.asarray(columns, dtype=_U32), axis=-1)
 
 
+def interlace_columns(columns, order):
+    """Digit interlacing (Dick 2008): the column words of the order-``order`` net whose
+    dimension j interlaces the digits of base dimensions order j, ..., order j + order - 1.
+
+    Output digit order r + v of dimension j is digit r of base dimension order j + v, for
+    r < ceil((32 - v) / order): as matrices, row order r + v of C'_j is row r of
+    C_(order j + v), so the interlaced net is again a digital net (with 32 output digits; the
+    base digits past them are dropped). A base net of m digit columns keeps all its digits
+    while order m <= 32.
+
+    Parameters
+    ----------
+    columns : ndarray of uint32
+        (order d, k) column words (output digit r at bit 31 - r), the base net's.
+    order : int
+        The interlacing factor alpha >= 1 (1 returns the columns).
+
+    Returns
+    -------
+    ndarray of uint32
+        (d, k).
+
+    References
+    ----------
+    .. [1] J. Dick, "Walsh spaces containing smooth functions and quasi-Monte Carlo rules of
+       arbitrary high order", SIAM J. Numer. Anal. 46(3) (2008), 1519-1553.
+
+    Examples
+    --------
+    >>> [hex(int(w)) for w in interlace_columns(np.array([[0xC0000000], [0x80000000]]), 2)[0]]
+    ['0xe0000000']
+    """
+    columns = np.asarray(columns, dtype=_U32)
+    if order == 1:
+        return columns.copy()
+    d = columns.shape[0] // order
+    base = columns[:d * order].reshape(d, order, *columns.shape[1:])
+    out = np.zeros((d, *columns.shape[1:]), dtype=_U32)
+    for v in range(order):
+        for r in range(-(-(BITS - v) // order)):
+            bit = (base[:, v] >> _U32(BITS - 1 - r)) & _U32(1)
+            out |= bit << _U32(BITS - 1 - (order * r + v))
+    return out
+
+
 # -- Faure -----------------------------------------------------------------------------
 def faure_base(d):
     """Faure's base for d dimensions: the smallest prime b >= d (and >= 2).

@@ -45,6 +45,9 @@ a deterministic sampler that is not shifted, has no published rate here: the ver
 ``"unknown"``. That includes samplers with no theorem for their rate, such as
 multijittered, correlated_multijittered and Owen-scrambled Halton (bases 2 and 3, not a
 base-2 net), whatever slope a measurement shows (docs/performance.md lists measured ones).
+Higher-order nets (``sobol`` and ``digital_net`` with ``order=2 | 3``) declare N^(-2 alpha) with
+the digital shift (Dick 2008) and N^(-2 alpha - 1) with ``"lms+shift"`` (Dick 2011) for smooth
+integrands in any d (:mod:`clsamp.samplers.higher_order`).
 Shifted rank-1 lattices (``lattice``) reach O(N^(-2α+ε)) for periodic integrands of
 smoothness α in a Korobov space (Sloan and Joe 1994), which the integrands here do not
 have as a finite α; ``kronecker`` has no published MSE rate: both say unknown.

@@ -10,6 +10,7 @@
  *   HAMMERSLEY  (radical_points) dimension 0 is i / n instead of a radical inverse
  *   DIMS_PER_ITEM  dimensions per work-item, grid axis 2 (dims.h; all when undefined)
  *   LD_LMS      (sobol_points) one table per realization, made by lms_matrices
+ *   LD_INTERLACE  (lms_matrices) the order alpha of an interlaced (higher-order) net
  *
  * Kernels: sobol_points (any base-2 digital net in Gray-code order), sobol_points64,
  * lms_matrices, digital_points (base b >= 3),
@@ -36,6 +37,9 @@
 #endif
 #ifndef LD_LMS
 #define LD_LMS 0
+#endif
+#ifndef LD_INTERLACE
+#define LD_INTERLACE 1
 #endif
 
 /* Vector types of width LD_WIDTH (2 or 4): Sobol works on LD_WIDTH dimensions at once,
@@ -239,6 +243,18 @@ __kernel void sobol_points64(__global ulong *out, __global const ulong *matrices
  * stride) table; row k of L_(r,j) is word 4 + k of Philox (scramble_stream, counter (j,
  * realization0 + r, block 1 + k / 4)), block 0 staying the seeds of the digital shift.
  * Grid: (stride, realizations); columns j >= d are zero. */
+#if LD_INTERLACE > 1
+/* Row k = LD_INTERLACE r + v of an interlaced L: row r of base dimension v's L, its entry l
+ * (bit 31 - l) moved to column LD_INTERLACE l + v (generating_matrices.interlace_columns). */
+inline uint lms_interlaced_row(uint row, uint v)
+{
+    uint y = 0;
+    for (uint l = 0; LD_INTERLACE * l + v < 32; ++l)
+        y |= ((row >> (31u - l)) & 1u) << (31u - (LD_INTERLACE * l + v));
+    return y;
+}
+#endif
+
 __kernel void lms_matrices(__global uint *out, __global const uint *matrices, const uint d,
                            const uint stride, const uint realization0, const uint key_lo,
                            const uint key_hi, const uint scramble_stream)
@@ -251,6 +267,7 @@ __kernel void lms_matrices(__global uint *out, __global const uint *matrices, co
     uint rows[32];
     if (j < d) {
         const uint2 key = (uint2)(key_lo, key_hi);
+#if LD_INTERLACE == 1
         for (uint b = 0; b < 8; ++b) {
             const uint4 w = clsamp_block(key, scramble_stream, realization0 + r, j, 1 + b);
             rows[4 * b] = lms_row(w.x, 4 * b);
@@ -258,6 +275,20 @@ __kernel void lms_matrices(__global uint *out, __global const uint *matrices, co
             rows[4 * b + 2] = lms_row(w.z, 4 * b + 2);
             rows[4 * b + 3] = lms_row(w.w, 4 * b + 3);
         }
+#else
+        /* a higher-order net: the base dimensions' L, interlaced as their matrices are */
+        for (uint v = 0; v < LD_INTERLACE; ++v)
+            for (uint b = 0; LD_INTERLACE * 4 * b + v < 32; ++b) {
+                const uint4 w = clsamp_block(key, scramble_stream, realization0 + r,
+                                             LD_INTERLACE * j + v, 1 + b);
+                const uint words[4] = {w.x, w.y, w.z, w.w};
+                for (uint q = 0; q < 4; ++q) {
+                    const uint k = LD_INTERLACE * (4 * b + q) + v;
+                    if (k < 32)
+                        rows[k] = lms_interlaced_row(lms_row(words[q], 4 * b + q), v);
+                }
+            }
+#endif
     }
     for (uint c = 0; c < 32; ++c)
         o[(size_t)c * stride] = j < d ? lms_apply(rows, matrices[(size_t)c * stride + j]) : 0u;

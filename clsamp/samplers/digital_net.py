@@ -46,7 +46,7 @@ class _DigitalNet(DigitalNetB2):
             while base ** (rows + 1) <= 2**53:
                 rows += 1
             cols = nt.digit_count(base)
-        self.matrices = np.ascontiguousarray(matrices[:self.d, :rows, :cols],
+        self.matrices = np.ascontiguousarray(matrices[:self.order * self.d, :rows, :cols],
                                              dtype=np.uint8 if base < 256 else np.uint32)
         self._points = base ** self.matrices.shape[2]        # b^m: the points the columns index
         self._digest = hashlib.sha1(self.matrices.tobytes()).hexdigest()
@@ -55,15 +55,15 @@ class _DigitalNet(DigitalNetB2):
         return min(self.max_n, self._points - 1)
 
     def _table_key(self):
-        return (type(self).__name__, self.base, self.matrices.shape, self._digest)
+        return (type(self).__name__, self.base, self.matrices.shape, self._digest, self.order)
 
-    def gray_columns(self):
-        """The Gray-code columns of a base-2 net (:meth:`DigitalNetB2.gray_columns`).
+    def base_columns(self):
+        """The Gray-code columns of a base-2 net (:meth:`DigitalNetB2.base_columns`).
 
         Returns
         -------
         ndarray of uint32
-            (d, 32).
+            (order d, 32).
         """
         return gm.natural_to_gray(gm.columns_base2(self.matrices))
 
@@ -148,6 +148,12 @@ class DigitalNetSampler(_DigitalNet):
         Default: the Joe-Kuo Sobol' matrices (base 2), as qmcpy's ``DigitalNetB2``.
     base : int
         A prime, 2 to 2^20.
+    order : {1, 2, 3}
+        In base 2, alpha >= 2 interlaces the digits of matrices alpha j .. alpha j + alpha - 1
+        into dimension j (a higher-order net, Dick 2008; as qmcpy's
+        ``DigitalNetB2(alpha=...)``), so d alpha matrices are needed; randomizations None,
+        ``"xor"``, ``"lms"``, ``"lms+shift"`` (see
+        :class:`clsamp.samplers.lowdiscrepancy.DigitalNetB2`).
     backend : {"opencl", "numpy"}
 
     Notes
@@ -170,7 +176,8 @@ class DigitalNetSampler(_DigitalNet):
     [0.0, 0.3333333333333333, 0.6666666666666666, 0.1111111111111111]
     """
 
-    def __init__(self, d=2, seed=0, backend="opencl", randomize=None, matrices=None, base=2):
+    def __init__(self, d=2, seed=0, backend="opencl", randomize=None, matrices=None, base=2,
+                 order=1):
         base = check_int(base, "base", minimum=2, maximum=nt.MAX_BASE)
         if any(base % p == 0 for p in range(2, int(base**0.5) + 1)):
             raise InvalidArgumentError(f"'base' must be a prime (digits form a field), got {base}")
@@ -178,13 +185,19 @@ class DigitalNetSampler(_DigitalNet):
             if base != 2:
                 raise InvalidArgumentError(
                     f"'matrices' must be given in base {base} (the default is Sobol's, base 2)")
-            matrices = _sobol_digits(check_int(d, "d", minimum=1, maximum=nt.sobol_max_dimension()))
+            alpha = check_int(order, "order", minimum=1)
+            matrices = _sobol_digits(check_int(d, "d", minimum=1,
+                                               maximum=nt.sobol_max_dimension() // alpha) * alpha)
         matrices = _check_matrices(matrices, base)
         if not 1 <= check_int(d, "d") <= len(matrices):
             raise InvalidArgumentError(
                 f"'d' must be in [1, {len(matrices)}] for the {len(matrices)} matrices given, got {d}")
         super().__init__(d=d, seed=seed, backend=backend,
                          randomize=_base_b_choice(randomize, base))
+        if base != 2 and order != 1:
+            raise InvalidArgumentError(f"'order' must be 1 in base {base} (interlacing is "
+                                       f"implemented in base 2), got {order!r}")
+        self._set_order(order, len(matrices), "the matrices given")
         self._set_matrices(matrices, base)
 
 
@@ -277,7 +290,7 @@ class NiederreiterSampler(DigitalNetB2):
     max_d_source = "the construction's cost"
     net_name = "Niederreiter"
 
-    def gray_columns(self):
+    def base_columns(self):
         """The columns of :func:`clsamp.generating_matrices.niederreiter_matrices`.
 
         Returns

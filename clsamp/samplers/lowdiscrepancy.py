@@ -28,6 +28,7 @@ from .. import philox, runtime
 from ..errors import InvalidArgumentError, NoDeviceError
 from ..geometry import torus
 from ..validation import check_choice, check_int
+from . import higher_order
 from .base import Rate, Sampler, register
 
 # RANDOMIZE in the kernel: LMS scrambles the matrices (lms_matrices), then plain or xor points
@@ -230,6 +231,11 @@ class DigitalNetB2(LowDiscrepancySampler):
     ``"lms+shift"`` then xors ``"xor"``'s digit vector. Every randomization but
     ``"shift"`` keeps each prefix of 2^m points a (t, m, d)-net.
 
+    ``order`` alpha >= 2 (``sobol``, base-2 ``digital_net``): the higher-order net that
+    interlaces the digits of base dimensions alpha j .. alpha j + alpha - 1 into dimension j
+    (:mod:`clsamp.samplers.higher_order`, Dick 2008), with None, ``"xor"``, ``"lms"`` and
+    ``"lms+shift"`` (L per base dimension, interlaced).
+
     Parameters
     ----------
     d : int
@@ -241,19 +247,55 @@ class DigitalNetB2(LowDiscrepancySampler):
     randomizations = (None, "shift", "xor", "owen", "lms", "lms+shift")
     net_name = "digital net"
     base = 2
+    order = 1
+
+    def base_columns(self):
+        """The base net's column words, before interlacing.
+
+        Returns
+        -------
+        ndarray of uint32
+            (order d, 32).
+        """
+        raise NotImplementedError
 
     def gray_columns(self):
-        """The column words the Gray-code kernel xors.
+        """The column words the Gray-code kernel xors: :meth:`base_columns`, interlaced
+        for a higher-order net.
 
         Returns
         -------
         ndarray of uint32
             (d, 32).
         """
-        raise NotImplementedError
+        return gm.interlace_columns(self.base_columns(), self.order)
+
+    def __repr__(self):
+        text = super().__repr__()
+        return text if self.order == 1 else text[:-1] + f", order={self.order})"
+
+    def _set_order(self, order, base_dimensions, source):
+        """Keep ``order`` (:func:`clsamp.samplers.higher_order.check_order`)."""
+        self.order = higher_order.check_order(order, self.d, self.randomize, base_dimensions, source)
+
+    def convergence_rate(self, case):
+        """The published rate of the MSE (:meth:`Sampler.convergence_rate`; with ``order``
+        >= 2, :func:`clsamp.samplers.higher_order.rate`).
+
+        Parameters
+        ----------
+        case : {"best", "worst", "axis"}
+
+        Returns
+        -------
+        Rate or None
+        """
+        if self.order == 1:
+            return super().convergence_rate(case)
+        return higher_order.rate(self.order, self.randomize, case)
 
     def _table_key(self):
-        return (type(self).__name__, self.d)
+        return (type(self).__name__, self.d, self.order)
 
     def _warn_weaker(self, n, start):
         total = power = start + (n or 0)
@@ -271,7 +313,11 @@ class DigitalNetB2(LowDiscrepancySampler):
         columns = self.gray_columns()
         out = np.empty((len(realizations), n, self.d))
         if self.randomize in LMS:
-            scrambled = gm.lms_apply(gm.lms_row_masks(self.seed, rs, self.d), columns[None])
+            # a higher-order net: scramble the base net, then interlace (as qmcpy)
+            base = self.base_columns() if self.order > 1 else columns
+            scrambled = gm.lms_apply(gm.lms_row_masks(self.seed, rs, len(base)), base[None])
+            scrambled = gm.interlace_columns(scrambled.reshape(-1, nt.SOBOL_BITS), self.order)
+            scrambled = scrambled.reshape(len(rs), self.d, nt.SOBOL_BITS)
             seeds = scramble_words(self.seed, rs, self.d)[..., 0]
             for k in range(len(rs)):
                 x = nt.sobol_integers(index, scrambled[k])
@@ -320,7 +366,8 @@ class DigitalNetB2(LowDiscrepancySampler):
         queue = runtime.queue()
         stride = -(-self.d // self._width()) * self._width()
         tables = cla.empty(queue, (len(realizations) * nt.SOBOL_BITS * stride,), np.uint32)
-        kernel = runtime.kernel("lowdiscrepancy.cl", "lms_matrices", defines={"LD_LMS": 1})
+        kernel = runtime.kernel("lowdiscrepancy.cl", "lms_matrices",
+                                defines={"LD_LMS": 1, "LD_INTERLACE": self.order})
         local = runtime.local_size()
         kernel(queue, (-(-stride // local) * local, len(realizations)), (local, 1), tables.data,
                table.data, np.uint32(self.d), np.uint32(stride), np.uint32(realizations.start),
@@ -364,6 +411,10 @@ class SobolSampler(DigitalNetB2):
         state, ``(x >> 11) 2^-53``, which below index 2^32 are exactly the 32-bit
         points. ``randomize`` then one of None, ``"shift"`` and ``"xor"`` (whose
         64-bit digit vector begins with the 32-bit one).
+    order : {1, 2, 3}
+        2 or 3: the higher-order net of that order [6]_, interlacing the alpha d-dimensional
+        Sobol' net (:mod:`clsamp.samplers.higher_order`); randomize None, ``"xor"``,
+        ``"lms"`` or ``"lms+shift"``.
 
     Notes
     -----
@@ -383,6 +434,8 @@ class SobolSampler(DigitalNetB2):
     .. [4] A. B. Owen, "Randomly permuted (t,m,s)-nets and (t,s)-sequences" (1995).
     .. [5] J. Matoušek, "On the L2-discrepancy for anchored boxes", J. Complexity 14
        (1998).
+    .. [6] J. Dick, "Walsh spaces containing smooth functions and quasi-Monte Carlo rules
+       of arbitrary high order", SIAM J. Numer. Anal. 46(3) (2008).
 
     Examples
     --------
@@ -401,12 +454,16 @@ class SobolSampler(DigitalNetB2):
     max_d_source = "the Joe-Kuo direction-number table"
     net_name = "Sobol'"
 
-    def __init__(self, d=2, seed=0, backend="opencl", randomize=None, bits=32):
+    def __init__(self, d=2, seed=0, backend="opencl", randomize=None, bits=32, order=1):
         self.bits = check_choice(bits, "bits", (32, 64))
         super().__init__(d=d, seed=seed, backend=backend, randomize=randomize)
         if self.bits == 64 and self.randomize not in (None, "shift", "xor"):
             raise InvalidArgumentError(
                 f"'randomize' must be None, 'shift' or 'xor' with bits=64, got {self.randomize!r}")
+        self._set_order(order, self.max_d, "the Joe-Kuo table")
+        if self.order > 1 and self.bits == 64:
+            raise InvalidArgumentError(f"'order' must be 1 with bits=64 (interlaced nets are "
+                                       f"32-bit), got {self.order}")
 
     def __repr__(self):
         wide = ", bits=64" if self.bits == 64 else ""
@@ -416,7 +473,7 @@ class SobolSampler(DigitalNetB2):
         return 2**64 - 1 if self.bits == 64 else self.max_n
 
     def _table_key(self):
-        return (type(self).__name__, self.d, self.bits)
+        return (type(self).__name__, self.d, self.bits, self.order)
 
     def _matrices64(self):
         """(d, 64) uint64: V_jc = m_jc 2^(63-c), whose top halves are the 32-bit V_jc for c < 32."""
@@ -444,15 +501,15 @@ class SobolSampler(DigitalNetB2):
         table = runtime.table(self._table_key(), lambda: self._matrices64().T.copy(), dtype=np.uint64)
         return self._launch("sobol_points64", table, n, realizations, np.uint64(start), {}, out)
 
-    def gray_columns(self):
+    def base_columns(self):
         """The Joe-Kuo direction numbers (:func:`clsamp.number_theory.sobol_matrices`).
 
         Returns
         -------
         ndarray of uint32
-            (d, 32).
+            (order d, 32).
         """
-        return nt.sobol_matrices(self.d)
+        return nt.sobol_matrices(self.order * self.d)
 
     def convergence_rate(self, case):
         """The published rate of the MSE for ``case`` (:meth:`Sampler.convergence_rate`).
@@ -469,8 +526,11 @@ class SobolSampler(DigitalNetB2):
         Returns
         -------
         Rate or None
-            None for other randomizations or dimensions.
+            None for other randomizations or dimensions; with ``order`` >= 2,
+            :meth:`DigitalNetB2.convergence_rate`.
         """
+        if self.order > 1:
+            return super().convergence_rate(case)
         if self.randomize != "owen" or self.d != 2:
             return None
         return {"best": Rate(-3.0, "Owen 1997"), "worst": Rate(-1.5, "He and Wang 2015")}.get(case)
