@@ -69,7 +69,18 @@ class Weighting:
 
     def cells(self, points_per_set, d):
         """Cells per axis of the neighbour grid: at least d_max wide, at most about one
-        point a cell (narrower cells only add empty ones to the stencil)."""
+        point a cell (narrower cells only add empty ones to the stencil).
+
+        Parameters
+        ----------
+        points_per_set : int
+        d : int
+
+        Returns
+        -------
+        int
+            At least 3, or 1 (one cell holding every pair).
+        """
         cells = min(cells_for(self.d_max), int(points_per_set ** (1.0 / d)))
         return cells if cells >= 3 else 1
 
