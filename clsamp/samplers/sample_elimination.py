@@ -264,28 +264,32 @@ def eliminate(weight, offset, nbr, w, keep):
     ([0, 2], [1], 0.0)
     """
     m = len(weight)
-    current = weight.tolist()
+    current = np.array(weight, dtype=np.float64)
     starts = np.asarray(offset).tolist()
-    neighbours = np.asarray(nbr).tolist()
-    pair = np.asarray(w).tolist()
-    alive = [True] * m
-    heap = [(-v, i) for i, v in enumerate(current)]
+    nbr = np.asarray(nbr, dtype=np.intp)
+    alive = np.ones(m, dtype=bool)
+    heap = [(-v, i) for i, v in enumerate(current.tolist())]
     heapq.heapify(heap)
     gone = []
     pop, push = heapq.heappop, heapq.heappush
+    # Weights only fall, so each remaining candidate keeps one entry whose key is at least
+    # its weight, refreshed when it surfaces: an entry that surfaces with its exact weight
+    # is the heaviest candidate (and the lowest index among equal ones), as an eagerly
+    # updated heap would give, with one push per surfacing instead of per update. The
+    # removed candidate's terms leave all its neighbours at once (the removed ones' too:
+    # they have no entry left).
     while len(gone) < m - keep:
         negative, i = pop(heap)
-        if not alive[i] or -negative != current[i]:
-            continue        # an entry left behind by a lowered weight
+        weight_i = current[i]
+        if -negative != weight_i:
+            push(heap, (-float(weight_i), i))
+            continue
         alive[i] = False
         gone.append(i)
-        for p in range(starts[i], starts[i + 1]):
-            j = neighbours[p]
-            if alive[j]:
-                current[j] -= pair[p]
-                push(heap, (-current[j], j))
+        a, b = starts[i], starts[i + 1]
+        current[nbr[a:b]] -= w[a:b]
     survivors = np.flatnonzero(alive)
-    last = max((current[i] for i in survivors), default=0.0)
+    last = current[survivors].max(initial=0.0)
     return survivors, np.array(gone, dtype=np.int64), float(last)
 
 
