@@ -376,8 +376,8 @@ class SampleEliminationSampler(Sampler):
     removed, its neighbours' weights lose its terms, and a max-heap gives the next,
     until n remain (Yuksel 2015).
 
-    Progressive ordering (the paper's section 5, as the author's cySampleElim does it):
-    the n survivors are eliminated again to n // 2 with d_max for n // 2 points (d_min
+    Progressive ordering (the paper's progressive sampling, as the author's cySampleElim
+    does it): the n survivors are eliminated again to n // 2 with d_max for n // 2 points (d_min
     kept), those to n // 4, and so on while 3 or more remain; the output lists the last
     survivors, then each stage's eliminated points from the last stage to the first,
     each in reverse order of removal, so the first n // 2^k points are the survivors of
