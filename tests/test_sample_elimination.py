@@ -175,3 +175,21 @@ def test_the_cube_variant_spreads_without_wrapping():
 def test_bad_parameters_are_refused_by_name(params, name):
     with pytest.raises(InvalidArgumentError, match=f"'{name}'"):
         clsamp.make_sampler("sample_elimination", **params)
+
+
+
+def test_realizations_split_across_launches_give_the_same_sets(monkeypatch):
+    from clsamp.runtime import memory
+    from clsamp.samplers import sample_elimination
+    s = clsamp.make_sampler("sample_elimination", d=3, seed=8, progressive=True)
+    whole = s.sample(100, realizations=3)
+    launches = []
+
+    def spy(pts, *args):
+        launches.append(len(pts))
+        return neighbour_weights_device(pts, *args)
+    # room for the 3 sets of output (the base's chunk) but for one realization's pair lists
+    monkeypatch.setattr(memory, "work_budget", lambda: 3 * 100 * 3 * 8 + 1)
+    monkeypatch.setattr(sample_elimination, "neighbour_weights_device", spy)
+    assert np.array_equal(s.sample(100, realizations=3), whole)
+    assert launches[:3] == [500] * 3           # the candidates, one realization a launch

@@ -11,12 +11,13 @@ heap walked one candidate at a time, host code both backends share (:func:`elimi
 
 import dataclasses
 import heapq
+import math
 
 import numpy as np
 
 from .. import runtime
 from ..geometry.cells import cells_for, neighbour_cells, sorted_by_cell
-from ..geometry.torus import PACKING_DENSITY, max_min_distance
+from ..geometry.torus import PACKING_DENSITY, ball_volume, max_min_distance
 from ..validation import check_bool, check_positive_int, check_real
 from .base import SampleInfo, Sampler, info_field, make_sampler, register
 
@@ -298,6 +299,14 @@ def _eliminate_sets(points, keep, weighting, backend):
     the survivors (ascending candidate indices), the eliminated (in order) and the last
     weight."""
     sets, m, d = points.shape
+    if backend != "numpy" and sets > 1:
+        # the device holds the candidates and their pair lists: a realization's neighbours
+        # are about M V_d d_max^d (here with a margin of 4)
+        pairs = min(m, math.ceil(4 * m * ball_volume(d, weighting.d_max)))
+        ranges = runtime.chunk_ranges(sets, m * (8 * d + 40) + 12 * m * pairs)
+        if len(ranges) > 1:
+            return [result for lo, hi in ranges
+                    for result in _eliminate_sets(points[lo:hi], keep, weighting, backend)]
     cells = weighting.cells(m, d)
     pts, _, start, order = sorted_by_cell(points, cells)
     run = neighbour_weights_reference if backend == "numpy" else neighbour_weights_device
