@@ -3,7 +3,8 @@ by (set, cell), and the 3^d stencil of neighbouring cells, in the order
 ``kernels/cells.h`` walks them.
 
 Users: the pair statistics of :mod:`clsamp.metrics.neighbors` and the minimum distance
-(analysis), and the ``gbn`` sampler's n-body pass (samplers); the kernels include
+(analysis), and the ``gbn`` sampler's n-body pass and ``sample_elimination``'s neighbour search
+(samplers); the kernels include
 ``cells.h``.
 """
 

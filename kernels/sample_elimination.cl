@@ -1,0 +1,129 @@
+/* Weighted sample elimination (Yuksel 2015): the neighbour search and the weights, the
+ * O(M k) part of eliminating M candidates down to n. NumPy twin: neighbour_weights_reference
+ * in clsamp/samplers/sample_elimination.py, the same bits: exactly rounded double
+ * operations (the square root and the division included) in the same order, no
+ * contraction, the power by squaring. The elimination itself, a heap, is host code both
+ * backends share.
+ *
+ * The candidates of every set come sorted by (set, cell) of a G^D grid in pts (total, D)
+ * (each point's cell found again here from its coordinates), and start (sets G^D + 1)
+ * holds the first sorted index of each (set, cell); G >= 3 (the 3^D cells around a cell
+ * distinct, each at least d_max wide) or G == 1 (every pair). The neighbours of sorted
+ * point i are the j != i of its set in its 3^D neighbouring cells with squared distance
+ * r2 < R2 = d_max^2 (wrapped on the torus when PERIODIC), in stencil order then sorted
+ * order; the weight of a pair is
+ *     w_ij = (1 - max(sqrt(r2), d_min) / d_max)^ALPHA,
+ * which is symmetric to the bit (the wrapped differences of i - j and j - i have one
+ * magnitude).
+ *
+ * se_count: count[i] = the neighbours of i.
+ * se_pairs: with offset = the exclusive prefix sum of count (host), writes the neighbours
+ *     (their sorted indices) and their weights to nbr[offset[i] ..] and w[offset[i] ..],
+ *     and the sum of the weights in that order to weight[i].
+ *
+ * Build options: D (dimensions), PERIODIC (1: the unit torus; 0: the unit cube), ALPHA
+ * (the weight's exponent, a positive integer).
+ * Launch: one work-item per sorted point, grid (total,).
+ */
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#pragma OPENCL FP_CONTRACT OFF
+#include "cells.h"
+
+/* the cell of x as clsamp.geometry.cells.sorted_by_cell finds it */
+inline void se_cell(const double *x, const int G, int *c)
+{
+    for (int k = 0; k < D; ++k) {
+        const int v = (int)(x[k] * (double)G);
+        c[k] = v < G - 1 ? v : G - 1;
+    }
+}
+
+inline double se_r2(const double *x, __global const double *y)
+{
+    double r2 = 0.0;
+    for (int k = 0; k < D; ++k) {
+        double v = x[k] - y[k];
+#if PERIODIC
+        v = v > 0.5 ? v - 1.0 : v;
+        v = v < -0.5 ? v + 1.0 : v;
+#endif
+        r2 = k == 0 ? v * v : r2 + v * v;
+    }
+    return r2;
+}
+
+/* t^ALPHA by squaring, low bits of ALPHA first */
+inline double se_power(double t)
+{
+    double p = 1.0;
+    for (uint e = ALPHA; e != 0; e >>= 1) {
+        if (e & 1)
+            p = p * t;
+        t = t * t;
+    }
+    return p;
+}
+
+__kernel void se_count(__global const double *pts, __global const uint *start, const uint n,
+                       const uint total, const int G, const uint noff, const double R2,
+                       __global uint *count)
+{
+    const uint gi = get_global_id(0);
+    if (gi >= total)
+        return;
+    uint total_cells = 1;
+    for (int k = 0; k < D; ++k)
+        total_cells *= (uint)G;
+    double x[D];
+    for (int k = 0; k < D; ++k)
+        x[k] = pts[(size_t)gi * D + k];
+    int c[D];
+    se_cell(x, G, c);
+    uint found = 0;
+    for (uint o = 0; o < noff; ++o) {
+        const size_t slot = (size_t)(gi / n) * total_cells + neighbour(c, o, G);
+        const uint s1 = start[slot + 1];
+        for (uint j = start[slot]; j < s1; ++j)
+            found += (j != gi && se_r2(x, pts + (size_t)j * D) < R2) ? 1u : 0u;
+    }
+    count[gi] = found;
+}
+
+__kernel void se_pairs(__global const double *pts, __global const uint *start, const uint n,
+                       const uint total, const int G, const uint noff, const double R2,
+                       const double d_min, const double d_max,
+                       __global const ulong *offset, __global uint *nbr, __global double *w,
+                       __global double *weight)
+{
+    const uint gi = get_global_id(0);
+    if (gi >= total)
+        return;
+    uint total_cells = 1;
+    for (int k = 0; k < D; ++k)
+        total_cells *= (uint)G;
+    double x[D];
+    for (int k = 0; k < D; ++k)
+        x[k] = pts[(size_t)gi * D + k];
+    int c[D];
+    se_cell(x, G, c);
+    ulong at = offset[gi];
+    double sum = 0.0;
+    for (uint o = 0; o < noff; ++o) {
+        const size_t slot = (size_t)(gi / n) * total_cells + neighbour(c, o, G);
+        const uint s1 = start[slot + 1];
+        for (uint j = start[slot]; j < s1; ++j) {
+            if (j == gi)
+                continue;
+            const double r2 = se_r2(x, pts + (size_t)j * D);
+            if (r2 >= R2)
+                continue;
+            const double dist = sqrt(r2);
+            const double e = se_power(1.0 - (dist > d_min ? dist : d_min) / d_max);
+            nbr[at] = j;
+            w[at] = e;
+            at += 1;
+            sum = sum + e;
+        }
+    }
+    weight[gi] = sum;
+}
