@@ -58,6 +58,14 @@ class Device:
     implementation: str = ""   # the platform's version string ("OpenCL 3.0 PoCL 3.1 ...")
     extensions: tuple = ()     # the device's OpenCL extensions ("cl_khr_fp64", ...)
 
+    @property
+    def simulator(self):
+        """Whether the device is Oclgrind, an OpenCL simulator that interprets kernels one
+        instruction at a time to check memory accesses and races (tests/test_oclgrind.py):
+        correct, but thousands of times slower than a real device, so never the default and
+        left out of cross-device comparisons and benchmarks."""
+        return self.platform == "Oclgrind"
+
     def __str__(self):
         fp64 = "yes" if self.fp64 else "no"
         return f"[{self.index}] {self.name} ({self.type}, {self.platform}, fp64={fp64})"
@@ -305,9 +313,10 @@ def compiles(spec):
 
 def _default_device():
     """The first CPU device with fp64 (else the first device with fp64, else the first CPU
-    device, else any) whose compiler works: clsamp's kernels compute in double precision."""
+    device, else any) whose compiler works: clsamp's kernels compute in double precision.
+    A simulator (Oclgrind, which calls itself a GPU) comes last."""
     records = devices()
-    order = [r.index for r in sorted(records, key=lambda r: (not r.fp64, r.type != "cpu", r.index))]
+    order = [r.index for r in sorted(records, key=lambda r: (r.simulator, not r.fp64, r.type != "cpu", r.index))]
     for index in order:
         if compiles(index):
             return index
