@@ -30,36 +30,39 @@ inline uint ld_ctz(uint x)
  *
  * LLVM's instcombine turns the or-of-masked-shifts reversal into the intrinsic
  * llvm.bitreverse, which x86 lowers to a few byte shuffles but Oclgrind's interpreter
- * lacks ("Undefined external function"): there (CLSAMP_OCLGRIND, set by the runtime for
- * that device only) the fields of 1, 2 and 4 bits swap by delta swaps
- * (t = ((x >> s) ^ x) & m; x ^= t ^ (t << s); Knuth, TAOCP 4A, 7.1.3), which the idiom
- * matcher does not see, and the bytes by the same or-of-shifts (llvm.bswap, which
- * Oclgrind has). Same bits either way; elsewhere the matched form keeps its speed
- * (docs/performance.md). */
+ * lacks ("Undefined external function"; a form with the bytes swapped by shifts, which
+ * becomes llvm.bswap and a rotate, gave wrong bits there in vector lanes past the first).
+ * There (CLSAMP_OCLGRIND, set by the runtime for that device only) the fields of 1, 2, 4,
+ * 8 and 16 bits swap by delta swaps (t = ((x >> s) ^ x) & m; x ^= t ^ (t << s); Knuth,
+ * TAOCP 4A, 7.1.3), which no idiom matcher sees. Same bits either way; elsewhere the
+ * matched form keeps its speed (docs/performance.md). */
 #if CLSAMP_OCLGRIND
 #define CLSAMP_DELTA_SWAP(x, T, s, m)                                      \
     do {                                                                   \
         const T t_ = (((x) >> (s)) ^ (x)) & (m);                           \
         (x) ^= t_ ^ (t_ << (s));                                           \
     } while (0)
-#define CLSAMP_REVERSE_BITS_IN_BYTES(x, T)                                 \
-    CLSAMP_DELTA_SWAP(x, T, 1, 0x55555555u);                               \
-    CLSAMP_DELTA_SWAP(x, T, 2, 0x33333333u);                               \
-    CLSAMP_DELTA_SWAP(x, T, 4, 0x0F0F0F0Fu)
-#else
-#define CLSAMP_REVERSE_BITS_IN_BYTES(x, T)                                 \
-    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);               \
-    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);               \
-    x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4)
-#endif
-
 #define CLSAMP_REVERSE_BITS32(name, T)                                     \
     inline T name(T x)                                                     \
     {                                                                      \
-        CLSAMP_REVERSE_BITS_IN_BYTES(x, T);                                \
+        CLSAMP_DELTA_SWAP(x, T, 1, 0x55555555u);                           \
+        CLSAMP_DELTA_SWAP(x, T, 2, 0x33333333u);                           \
+        CLSAMP_DELTA_SWAP(x, T, 4, 0x0F0F0F0Fu);                           \
+        CLSAMP_DELTA_SWAP(x, T, 8, 0x00FF00FFu);                           \
+        CLSAMP_DELTA_SWAP(x, T, 16, 0x0000FFFFu);                          \
+        return x;                                                          \
+    }
+#else
+#define CLSAMP_REVERSE_BITS32(name, T)                                     \
+    inline T name(T x)                                                     \
+    {                                                                      \
+        x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);           \
+        x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);           \
+        x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);           \
         x = ((x >> 8) & 0x00FF00FFu) | ((x & 0x00FF00FFu) << 8);           \
         return (x >> 16) | (x << 16);                                      \
     }
+#endif
 
 #define CLSAMP_LK_HASH(name, T)                                            \
     inline T name(T x, T seed)                                             \

@@ -316,7 +316,8 @@ def _default_device():
     device, else any) whose compiler works: clsamp's kernels compute in double precision.
     A simulator (Oclgrind, which calls itself a GPU) comes last."""
     records = devices()
-    order = [r.index for r in sorted(records, key=lambda r: (r.simulator, not r.fp64, r.type != "cpu", r.index))]
+    rank = lambda r: (r.simulator, not r.fp64, r.type != "cpu", r.index)  # noqa: E731
+    order = [r.index for r in sorted(records, key=rank)]
     for index in order:
         if compiles(index):
             return index
