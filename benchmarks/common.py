@@ -205,11 +205,14 @@ def machine_gauge():
 
 def select_devices(spec):
     """``None`` -> the default device; ``"all"`` -> every device whose compiler works (those
-    without fp64 included: run.py reports what they refuse); else one index/name."""
+    without fp64 included: run.py reports what they refuse), but a simulator (Oclgrind:
+    its times say nothing of a device; tests/test_oclgrind.py runs it); else one index/name."""
     if spec == "all":
         usable = []
         for device in runtime.devices():
-            if not runtime.compiles(device.index):
+            if device.simulator:
+                print(f"skipping {device}: a simulator, not timed", file=sys.stderr)
+            elif not runtime.compiles(device.index):
                 print(f"skipping {device}: its compiler fails", file=sys.stderr)
             else:
                 usable.append(device)
