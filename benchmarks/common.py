@@ -228,7 +228,11 @@ def on_device(device):
 
 
 def short_name(device):
-    return f"[{device.index}] {device.name[:28]} ({device.type})"
+    """``[index] name (type, implementation)``: Intel's CPU runtime names its device by the
+    CPU alone ("AMD EPYC"), so the implementation tells it from PoCL's."""
+    words = device.platform.replace("(R)", "").split() or ["?"]
+    implementation = "PoCL" if device.platform == "Portable Computing Language" else words[0]
+    return f"[{device.index}] {device.name[:28]} ({device.type}, {implementation})"
 
 
 def print_tables(rows, file=sys.stdout):
