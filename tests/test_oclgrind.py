@@ -49,9 +49,7 @@ REPORT = re.compile(r"^\s*(Kernel|Entity): |OCLGRIND|Oclgrind -|data race|Invali
 ENVIRONMENT = {"OCLGRIND_DATA_RACES": "1", "OCLGRIND_MAX_ERRORS": "20"}
 
 # Parameters that keep the iterating samplers small on an interpreter.
-SMALL = {"lloyd": {"iterations": 2, "density": 8}, "ccvt": {"points_per_site": 8, "iterations": 2},
-         "poisson_disk": {}}
-
+SMALL = {"lloyd": {"iterations": 2, "density": 8}, "ccvt": {"points_per_site": 8, "iterations": 2}}
 SAMPLER_N = {"lloyd": 64, "ccvt": 64, "poisson_disk": 64}
 
 # Checks that cannot run on Oclgrind, with why; they are skipped by name.

@@ -12,6 +12,7 @@ import contextlib
 import dataclasses
 import os
 import threading
+import warnings
 
 import numpy as np
 
@@ -278,6 +279,30 @@ def without_fp64():
             _without_fp64 = before
 
 
+def _build(program, options=()):
+    """Build a pyopencl Program, hiding what a compiler says on success.
+
+    Intel's CPU runtime logs every build ("Compilation started", vectorizer remarks), which
+    pyopencl turns into a ``CompilerWarning`` per program; a failed build still raises with
+    its log. ``PYOPENCL_COMPILER_OUTPUT=1`` shows the logs again.
+
+    Parameters
+    ----------
+    program : pyopencl.Program
+    options : sequence of str
+
+    Returns
+    -------
+    pyopencl.Program
+        The built program.
+    """
+    cl = _cl()
+    with warnings.catch_warnings():
+        if os.environ.get("PYOPENCL_COMPILER_OUTPUT", "0") in ("", "0"):
+            warnings.simplefilter("ignore", cl.CompilerWarning)
+        return program.build(options=list(options))
+
+
 def compiles(spec):
     """Whether a device builds a one-line kernel.
 
@@ -304,7 +329,7 @@ def compiles(spec):
         if index in _broken:
             return False
         try:
-            cl.Program(_state(index)[0], _PROBE).build()
+            _build(cl.Program(_state(index)[0], _PROBE))
             return True
         except cl.Error as error:
             _broken[index] = str(error).strip().splitlines()

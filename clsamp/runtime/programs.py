@@ -277,7 +277,7 @@ def program(file, defines=None, options=()):
                 f"({device.platform}) has none (no cl_khr_fp64); choose another with "
                 "clsamp.use_device or CLSAMP_DEVICE (`clsamp devices` lists them)")
         try:
-            built = cl.Program(ctx, source).build(options=list(key[2]))
+            built = discovery._build(cl.Program(ctx, source), key[2])
         except cl.RuntimeError as error:
             hint = f"\n{discovery._UNKNOWN_CPU_HINT}" if "unknown target CPU" in str(error) else ""
             raise BuildError(
