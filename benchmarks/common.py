@@ -205,11 +205,14 @@ def machine_gauge():
 
 def select_devices(spec):
     """``None`` -> the default device; ``"all"`` -> every device whose compiler works (those
-    without fp64 included: run.py reports what they refuse); else one index/name."""
+    without fp64 included: run.py reports what they refuse), but a simulator (Oclgrind:
+    its times say nothing of a device; tests/test_oclgrind.py runs it); else one index/name."""
     if spec == "all":
         usable = []
         for device in runtime.devices():
-            if not runtime.compiles(device.index):
+            if device.simulator:
+                print(f"skipping {device}: a simulator, not timed", file=sys.stderr)
+            elif not runtime.compiles(device.index):
                 print(f"skipping {device}: its compiler fails", file=sys.stderr)
             else:
                 usable.append(device)
@@ -225,7 +228,11 @@ def on_device(device):
 
 
 def short_name(device):
-    return f"[{device.index}] {device.name[:28]} ({device.type})"
+    """``[index] name (type, implementation)``: Intel's CPU runtime names its device by the
+    CPU alone ("AMD EPYC"), so the implementation tells it from PoCL's."""
+    words = device.platform.replace("(R)", "").split() or ["?"]
+    implementation = "PoCL" if device.platform == "Portable Computing Language" else words[0]
+    return f"[{device.index}] {device.name[:28]} ({device.type}, {implementation})"
 
 
 def print_tables(rows, file=sys.stdout):

@@ -695,7 +695,8 @@ def _fast(batch, resolution, tol, backend, progress):
         else:
             pts = _block(batch, r0, r1)
             # the grids the FFT reads are written into host memory (on a CPU device in place)
-            grids = runtime.Output(None, host=np.empty((rc,) + (M,) * d))
+            # (read-write: with one block the spreading adds into it)
+            grids = runtime.Output(None, host=np.empty((rc,) + (M,) * d), read_write=True)
             if blocks > 1:
                 copies = cla.empty(queue, rc * blocks * size, np.float64)
                 spread(queue, (blocks, rc), (1, 1), pts.data, copies.data, np.uint32(n), np.uint32(M),

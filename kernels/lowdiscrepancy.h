@@ -31,7 +31,33 @@ inline uint ld_ctz64(ulong x)
 
 /* The 32 bits of x in reverse order, and Vegdahl's LK hash on reversed bits (a nested
  * scramble of the binary digits; Burley 2020 after Laine and Karras 2011), for uint or a
- * uint vector T: the twins of clsamp.number_theory.reverse_bits32 and lk_hash. */
+ * uint vector T: the twins of clsamp.number_theory.reverse_bits32 and lk_hash.
+ *
+ * LLVM's instcombine turns the or-of-masked-shifts reversal into the intrinsic
+ * llvm.bitreverse, which x86 lowers to a few byte shuffles but Oclgrind's interpreter
+ * lacks ("Undefined external function"; a form with the bytes swapped by shifts, which
+ * becomes llvm.bswap and a rotate, gave wrong bits there in vector lanes past the first).
+ * There (CLSAMP_OCLGRIND, set by the runtime for that device only) the fields of 1, 2, 4,
+ * 8 and 16 bits swap by delta swaps (t = ((x >> s) ^ x) & m; x ^= t ^ (t << s); Knuth,
+ * TAOCP 4A, 7.1.3), which no idiom matcher sees. Same bits either way; elsewhere the
+ * matched form keeps its speed (docs/performance.md). */
+#if CLSAMP_OCLGRIND
+#define CLSAMP_DELTA_SWAP(x, T, s, m)                                      \
+    do {                                                                   \
+        const T t_ = (((x) >> (s)) ^ (x)) & (m);                           \
+        (x) ^= t_ ^ (t_ << (s));                                           \
+    } while (0)
+#define CLSAMP_REVERSE_BITS32(name, T)                                     \
+    inline T name(T x)                                                     \
+    {                                                                      \
+        CLSAMP_DELTA_SWAP(x, T, 1, 0x55555555u);                           \
+        CLSAMP_DELTA_SWAP(x, T, 2, 0x33333333u);                           \
+        CLSAMP_DELTA_SWAP(x, T, 4, 0x0F0F0F0Fu);                           \
+        CLSAMP_DELTA_SWAP(x, T, 8, 0x00FF00FFu);                           \
+        CLSAMP_DELTA_SWAP(x, T, 16, 0x0000FFFFu);                          \
+        return x;                                                          \
+    }
+#else
 #define CLSAMP_REVERSE_BITS32(name, T)                                     \
     inline T name(T x)                                                     \
     {                                                                      \
@@ -41,6 +67,7 @@ inline uint ld_ctz64(ulong x)
         x = ((x >> 8) & 0x00FF00FFu) | ((x & 0x00FF00FFu) << 8);           \
         return (x >> 16) | (x << 16);                                      \
     }
+#endif
 
 #define CLSAMP_LK_HASH(name, T)                                            \
     inline T name(T x, T seed)                                             \

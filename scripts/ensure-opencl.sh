@@ -6,10 +6,15 @@
 # itself (AMD Zen 5 and later) 'generic' and then refuses that target: every kernel build
 # fails there. Debian's pocl-opencl-icd (PoCL 3.1) picks its code target from the CPU's
 # features and works; pyopencl's loader finds it in /etc/OpenCL/vendors, and clsamp uses the
-# first CPU device that compiles. Where a device already compiles, this does nothing.
+# first CPU device that compiles. Where a device already compiles, this installs nothing.
+# Where Intel's CPU runtime is pip-installed (intel-opencl-rt), it registers it with
+# pyopencl's loader first (scripts/register-intel-opencl.sh).
 set -uo pipefail
 
 check() { python -c "import clsamp; print('clsamp uses', clsamp.current_device())"; }
+
+# Intel's CPU runtime, where it is pip-installed here (CI installs it; clsamp does not need it)
+bash "$(dirname "$0")/register-intel-opencl.sh"
 
 check 2>/dev/null && exit 0
 echo "ensure-opencl: no OpenCL device here compiles a kernel; installing Debian's PoCL" >&2

@@ -283,3 +283,37 @@ def test_sample_device_matches_sample(name, randomize):
     # sample() writes into host memory on a CPU device; sample_device() keeps a device array
     s = make(name, randomize, d=11)
     np.testing.assert_array_equal(s.sample_device(257, realizations=2).get(), s.sample(257, realizations=2))
+
+
+# -- the bit reversal Oclgrind builds (kernels/lowdiscrepancy.h, CLSAMP_OCLGRIND) ----------------
+
+# every kernel path that reverses bits: Sobol' Owen (vector lanes, d = 5), the base-2 digits of
+# Halton and Hammersley (Owen, xor, shift), Van der Corput, the lattice's radical-inverse order
+# and ZSobol
+REVERSING = [("sobol", "owen", 5), ("halton", "owen", 3), ("halton", "xor", 2), ("halton", "shift", 2),
+             ("hammersley", "owen", 2), ("van_der_corput", "owen", 1), ("lattice", None, 5),
+             ("zsobol", None, 2)]
+
+
+def test_the_oclgrind_bit_reversal_gives_the_same_bits(monkeypatch):
+    """On Oclgrind the runtime builds with CLSAMP_OCLGRIND, and the kernels reverse bits by
+    delta swaps instead of the form LLVM turns into llvm.bitreverse; forced here on the
+    default device, the samplers whose kernels reverse bits give the same bits."""
+    from clsamp.runtime import programs
+
+    def points():
+        out = []
+        for name, randomize, d in REVERSING:
+            params = {"randomize": randomize} if randomize else {}
+            s = clsamp.make_sampler(name, d=d, seed=6, **params)
+            out.append(s.sample(s.valid_n(300), realizations=range(2, 4)))
+        return out
+
+    plain = points()
+    device_defines = programs.device_defines
+    built = programs.build_count()
+    monkeypatch.setattr(programs, "device_defines", lambda d: {**device_defines(d), "CLSAMP_OCLGRIND": 1})
+    swapped = points()
+    assert programs.build_count() > built                      # the other form was built
+    for a, b in zip(plain, swapped, strict=True):
+        assert np.array_equal(a.view(np.uint64), b.view(np.uint64))

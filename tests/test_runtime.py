@@ -202,3 +202,24 @@ def test_capabilities_of_the_default_device():
     runs = runtime.capabilities()
     assert set(runs) == set(runtime.CAPABILITIES)
     assert all(why is None for why in runs.values()) == runtime.current_device().fp64
+
+
+def test_what_a_compiler_says_on_success_is_hidden(monkeypatch):
+    """Intel's CPU runtime logs every build; pyopencl makes that a CompilerWarning, which
+    the runtime hides unless PYOPENCL_COMPILER_OUTPUT=1 asks for it."""
+    import warnings
+
+    import pyopencl as cl
+
+    class Chatty:
+        def build(self, options=()):
+            warnings.warn("Compilation started\nCompilation done", cl.CompilerWarning, stacklevel=2)
+            return self
+
+    monkeypatch.delenv("PYOPENCL_COMPILER_OUTPUT", raising=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert isinstance(runtime.discovery._build(Chatty()), Chatty)
+    monkeypatch.setenv("PYOPENCL_COMPILER_OUTPUT", "1")
+    with pytest.warns(cl.CompilerWarning, match="Compilation started"):
+        runtime.discovery._build(Chatty())

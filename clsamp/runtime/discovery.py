@@ -12,6 +12,7 @@ import contextlib
 import dataclasses
 import os
 import threading
+import warnings
 
 import numpy as np
 
@@ -57,6 +58,14 @@ class Device:
     local_memory: int    # bytes
     implementation: str = ""   # the platform's version string ("OpenCL 3.0 PoCL 3.1 ...")
     extensions: tuple = ()     # the device's OpenCL extensions ("cl_khr_fp64", ...)
+
+    @property
+    def simulator(self):
+        """Whether the device is Oclgrind, an OpenCL simulator that interprets kernels one
+        instruction at a time to check memory accesses and races (tests/test_oclgrind.py):
+        correct, but thousands of times slower than a real device, so never the default and
+        left out of cross-device comparisons and benchmarks."""
+        return self.platform == "Oclgrind"
 
     def __str__(self):
         fp64 = "yes" if self.fp64 else "no"
@@ -270,6 +279,30 @@ def without_fp64():
             _without_fp64 = before
 
 
+def _build(program, options=()):
+    """Build a pyopencl Program, hiding what a compiler says on success.
+
+    Intel's CPU runtime logs every build ("Compilation started", vectorizer remarks), which
+    pyopencl turns into a ``CompilerWarning`` per program; a failed build still raises with
+    its log. ``PYOPENCL_COMPILER_OUTPUT=1`` shows the logs again.
+
+    Parameters
+    ----------
+    program : pyopencl.Program
+    options : sequence of str
+
+    Returns
+    -------
+    pyopencl.Program
+        The built program.
+    """
+    cl = _cl()
+    with warnings.catch_warnings():
+        if os.environ.get("PYOPENCL_COMPILER_OUTPUT", "0") in ("", "0"):
+            warnings.simplefilter("ignore", cl.CompilerWarning)
+        return program.build(options=list(options))
+
+
 def compiles(spec):
     """Whether a device builds a one-line kernel.
 
@@ -296,7 +329,7 @@ def compiles(spec):
         if index in _broken:
             return False
         try:
-            cl.Program(_state(index)[0], _PROBE).build()
+            _build(cl.Program(_state(index)[0], _PROBE))
             return True
         except cl.Error as error:
             _broken[index] = str(error).strip().splitlines()
@@ -305,9 +338,11 @@ def compiles(spec):
 
 def _default_device():
     """The first CPU device with fp64 (else the first device with fp64, else the first CPU
-    device, else any) whose compiler works: clsamp's kernels compute in double precision."""
+    device, else any) whose compiler works: clsamp's kernels compute in double precision.
+    A simulator (Oclgrind, which calls itself a GPU) comes last."""
     records = devices()
-    order = [r.index for r in sorted(records, key=lambda r: (not r.fp64, r.type != "cpu", r.index))]
+    rank = lambda r: (r.simulator, not r.fp64, r.type != "cpu", r.index)  # noqa: E731
+    order = [r.index for r in sorted(records, key=rank)]
     for index in order:
         if compiles(index):
             return index

