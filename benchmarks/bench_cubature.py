@@ -9,7 +9,8 @@
   same NumPy integrand handed to both (qmcpy through ``CustomFun(Uniform(...))``): Keister
   in d = 4 and 8 (:func:`clsamp.integrands.keister`) and a Genz Gaussian in d = 3
   (``genz("gaussian", 3, seed=1)``), at abs_tol 1e-3, 1e-4, 1e-5 (``--quick``: 1e-3,
-  1e-4). Seconds: median of 3 calls after a warm-up, each side in the same run; quality:
+  1e-4). Seconds: median of 3 calls after a warm-up (one call after the warm-up where the
+  warm-up took over 10 s), each side in the same run, one after the other; quality:
   the points each used and the error each reached. qmcpy is optional (``pip install
   clsamp[bench]``); without it the rows have no peer.
 - ``--genz N``: the reliability study. N random members of each of Genz's six families
@@ -54,6 +55,14 @@ def _qmcpy(f, d, tol, method):
     return float(np.asarray(estimate).reshape(-1)[0]), int(data.n_total)
 
 
+def _timed(fn):
+    t0 = time.perf_counter()
+    fn()                                    # the warm-up
+    if time.perf_counter() - t0 > 10.0:
+        return timed(fn, repeats=1, warmup=0)
+    return timed(fn, repeats=3, warmup=0)
+
+
 def run(devices, quick):
     try:
         import qmcpy  # noqa: F401
@@ -69,14 +78,14 @@ def run(devices, quick):
             g = f.__call__                          # the NumPy integrand, the same for both
             for method, peer_name in METHODS.items():
                 for tol in tolerances:
-                    t, res = timed(lambda g=g, f=f, tol=tol, m=method: clsamp.integrate(
-                        g, f.d, abs_tol=tol, method=m, max_n=2**26, progress=False), repeats=3)
+                    t, res = _timed(lambda g=g, f=f, tol=tol, m=method: clsamp.integrate(
+                        g, f.d, abs_tol=tol, method=m, max_n=2**26, progress=False))
                     quality = (f"clsamp {res.n} points, error {abs(res.estimate - f.integral):.1e}, "
                                f"bound {res.half_width:.1e}")
                     peer, t_peer = "", None
                     if have_qmcpy:
-                        t_peer, (estimate, n) = timed(
-                            lambda g=g, f=f, tol=tol, m=method: _qmcpy(g, f.d, tol, m), repeats=3)
+                        t_peer, (estimate, n) = _timed(
+                            lambda g=g, f=f, tol=tol, m=method: _qmcpy(g, f.d, tol, m))
                         peer = f"qmcpy {peer_name}"
                         quality += (f"; qmcpy {n} points ({n / res.n:.2g}x), "
                                     f"error {abs(estimate - f.integral):.1e}")

@@ -32,6 +32,8 @@ References
    (the estimate that meets a relative tolerance).
 """
 
+import warnings
+
 import numpy as np
 
 from . import number_theory as nt
@@ -43,6 +45,7 @@ M_MIN = 10               # the first 2^10 points (qmcpy's n_init)
 R_LAG = 4                # r: the bound sums the coefficients of wavenumbers 2^(m-r-1) .. 2^(m-r) - 1
 PERIODIZATIONS = ("none", "baker", "sidi")
 _ONE_BELOW = 1.0 - 2.0**-53
+CHUNK = 2**20            # points sampled and evaluated at a time
 
 __all__ = ["fudge", "walsh_coefficients", "fourier_coefficients", "Cubature", "PERIODIZATIONS"]
 
@@ -183,18 +186,25 @@ class Cubature:
         return self.sampler.label
 
     def _block(self, start, count):
-        """f at the points start .. start + count - 1, in natural order for the transform."""
-        x = self.sampler.sample(count, start=start)
-        if self.method == "digital":
-            # the sampler runs in Gray-code order (point p is C g(p)): natural index i
-            # sits at p = g^-1(i), which stays inside [start, start + count)
-            i = np.arange(start, start + count, dtype=np.uint32)
-            p = i.copy()
-            for s in (1, 2, 4, 8, 16):
-                p ^= p >> np.uint32(s)
-            x = x[p.astype(np.int64) - start]
-            return self.values(x)
-        return _periodize(self.values, x, self.periodization)
+        """f at the points start .. start + count - 1, in natural order for the transform,
+        CHUNK points at a time (count and start are multiples of a power of 2 >= the chunk)."""
+        chunk = min(count, CHUNK)
+        return np.concatenate([self._chunk(base, chunk) for base in range(start, start + count, chunk)])
+
+    def _chunk(self, start, count):
+        if self.method == "lattice":
+            return _periodize(self.values, self.sampler.sample(count, start=start), self.periodization)
+        # the sampler runs in Gray-code order (point p is C g(p)): natural index i sits at
+        # p = g^-1(i); an aligned block of 2^k indices maps onto an aligned block of 2^k
+        # positions (the bits above k of g^-1(i) depend on those of i only)
+        p = np.arange(start, start + count, dtype=np.uint32)
+        for s in (1, 2, 4, 8, 16):
+            p ^= p >> np.uint32(s)
+        first = int(p.min())
+        with warnings.catch_warnings():     # a chunk alone is no net; the 2^m points together are
+            warnings.filterwarnings("ignore", "the balance properties of", UserWarning)
+            x = self.sampler.sample(count, start=first)
+        return self.values(x[p.astype(np.int64) - first])
 
     def _transform(self, y):
         return walsh_coefficients(y) if self.method == "digital" else fourier_coefficients(y)
