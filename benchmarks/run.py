@@ -38,6 +38,7 @@ MODULES = (
     "bench_metrics",
     "bench_convergence",
     "bench_families",
+    "bench_cubature",
     "bench_poisson_disk",
     "bench_render",
     "bench_voronoi",

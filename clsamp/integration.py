@@ -24,13 +24,15 @@ import warnings
 import numpy as np
 
 from . import runtime
+from .cubature import M_MIN, Cubature, check_periodization, combine
 from .errors import InvalidArgumentError
 from .integrand_kernel import IntegrandKernel, combine_sums
 from .integrands import Integrand, make_integrand
 from .samplers import Sampler, make_sampler
-from .validation import check_int, check_real, check_seed
+from .validation import check_choice, check_int, check_real, check_seed
 
 BLOCK = 2**20           # points one call of a Python integrand gets at most
+METHODS = ("replications", "digital", "lattice")
 
 __all__ = ["IntegrationResult", "integrate"]
 
@@ -55,7 +57,11 @@ class IntegrationResult:
     converged : bool
         Whether the half-width met the tolerance before ``max_n``.
     replications, confidence, sampler, tolerance
-        How it was asked (``tolerance``: the half-width that was the target).
+        How it was asked (``tolerance``: the half-width that was the target). The
+        guaranteed methods report one replication and confidence 1 (their bound holds for
+        every integrand in the cone, not with a probability).
+    method : str
+        ``"replications"``, ``"digital"`` or ``"lattice"``.
     history : list of (n, estimate, half_width)
         One row per doubling.
     """
@@ -70,10 +76,32 @@ class IntegrationResult:
     confidence: float
     sampler: str
     tolerance: float
+    method: str = "replications"
     history: list = dataclasses.field(default_factory=list)
 
 
 # -- the integrand ---------------------------------------------------------------------
+def _python_values(f, x):
+    """f at the (m, d) points x, checked: one finite value a point."""
+    v = np.asarray(f(x), dtype=np.float64)
+    if v.shape != (len(x),):
+        raise InvalidArgumentError(
+            f"'f' must return one value per point, shape ({len(x)},) for points "
+            f"({len(x)}, {x.shape[1]}); it returned shape {v.shape}")
+    if not np.all(np.isfinite(v)):
+        bad = int(np.count_nonzero(~np.isfinite(v)))
+        raise InvalidArgumentError(
+            f"'f' returned {bad} NaN or infinite values (of {len(x)}); the first at "
+            f"x = {x[np.flatnonzero(~np.isfinite(v))[0]].tolist()}")
+    return v
+
+
+def _blocked_values(f, x):
+    """f at the points x, BLOCK points a call."""
+    x = np.ascontiguousarray(x)
+    return np.concatenate([_python_values(f, x[a:a + BLOCK]) for a in range(0, max(len(x), 1), BLOCK)])
+
+
 def _python_sums(f, points, count):
     """Per replication, the sum of f over its ``count`` points (points: (R, count, d))."""
     r, _, d = points.shape
@@ -82,22 +110,8 @@ def _python_sums(f, points, count):
     per_call = max(1, BLOCK // count) if count <= BLOCK else 1
     for lo in range(0, r, per_call):
         hi = min(r, lo + per_call)
-        block = flat[lo * count:hi * count]
-        values = []
-        for a in range(0, len(block), BLOCK):
-            x = block[a:a + BLOCK]
-            v = np.asarray(f(x), dtype=np.float64)
-            if v.shape != (len(x),):
-                raise InvalidArgumentError(
-                    f"'f' must return one value per point, shape ({len(x)},) for points "
-                    f"({len(x)}, {d}); it returned shape {v.shape}")
-            if not np.all(np.isfinite(v)):
-                bad = int(np.count_nonzero(~np.isfinite(v)))
-                raise InvalidArgumentError(
-                    f"'f' returned {bad} NaN or infinite values (of {len(x)}); the first at "
-                    f"x = {x[np.flatnonzero(~np.isfinite(v))[0]].tolist()}")
-            values.append(v)
-        total[lo:hi] = np.sum(np.concatenate(values).reshape(hi - lo, count), axis=1)
+        values = _blocked_values(f, flat[lo * count:hi * count])
+        total[lo:hi] = np.sum(values.reshape(hi - lo, count), axis=1)
     return total
 
 
@@ -107,8 +121,49 @@ def _check_tolerance(value, name):
     return check_real(value, name, minimum=0.0, open_minimum=True)
 
 
+def _guaranteed(f, d, method, periodization, abs_tol, rel_tol, max_n, seed, progress, t0):
+    """integrate's single-sequence methods: double n until the cone bound meets the tolerance."""
+    if isinstance(f, (str, Integrand)):
+        integrand = make_integrand(f, d=d)
+        if integrand.d != d:
+            raise InvalidArgumentError(
+                f"integrand {integrand.name!r} is {integrand.d}-dimensional, 'd' is {d}")
+        f = integrand
+    elif not callable(f):
+        raise InvalidArgumentError(
+            f"'f' must be a callable, an Integrand or an integrand name, got {f!r}")
+    if max_n < 2**M_MIN:
+        raise InvalidArgumentError(f"'max_n' must be at least {2**M_MIN} for method={method!r}, got {max_n}")
+    rule = Cubature(lambda x: _blocked_values(f, x), d, method, seed, periodization)
+    from tqdm import tqdm
+    bar = tqdm(desc=f"integrate ({method})", unit="round", disable=not progress, delay=2)
+    history = []
+    while True:
+        mean, bound = rule.step()
+        estimate, half, converged = combine(mean, bound, abs_tol, rel_tol)
+        tolerance = max(abs_tol, rel_tol * abs(estimate))
+        history.append((rule.n, estimate, half))
+        bar.set_postfix_str(f"n={rule.n}, {estimate:.8g} +- {half:.2g} (target {tolerance:.2g})",
+                            refresh=False)
+        bar.update(1)
+        if converged:
+            break
+        if 2 * rule.n > max_n:
+            warnings.warn(
+                f"integrate stopped at max_n = {max_n} points (n = {rule.n}) with error bound "
+                f"{half:.3g}, above the tolerance {tolerance:.3g}: the estimate {estimate:.10g} "
+                "is not as accurate as asked", UserWarning, stacklevel=3)
+            break
+    bar.close()
+    return IntegrationResult(estimate=estimate, half_width=half, n=rule.n, evaluations=rule.n,
+                             seconds=time.perf_counter() - t0, converged=converged, replications=1,
+                             confidence=1.0, sampler=rule.label, tolerance=tolerance, method=method,
+                             history=history)
+
+
 def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**24, replications=16,
-              confidence=0.95, seed=0, n_start=1024, progress=True):
+              confidence=0.95, seed=0, n_start=1024, progress=True, method="replications",
+              periodization=None):
     """The integral of ``f`` over [0, 1)^d, with a confidence interval, to a tolerance.
 
     Parameters
@@ -141,6 +196,18 @@ def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**2
     progress : bool
         A progress bar (one step per doubling, with the estimate and its half-width) once
         the call has run 2 s.
+    method : {"replications", "digital", "lattice"}
+        ``"replications"`` (the default): the replicated Student-t interval above.
+        ``"digital"`` and ``"lattice"``: one randomized sequence (a digitally shifted
+        Sobol' sequence, a shifted rank-1 lattice), n = 2^10, 2^11, ..., stopping when the
+        cone-based bound of Hickernell and Jiménez Rugama (:mod:`clsamp.cubature`) meets
+        the tolerance; the bound is guaranteed for integrands whose Walsh (Fourier)
+        coefficients decay steadily, and may fail for others (discontinuities, spikes
+        the first points miss). These ignore ``sampler``, ``replications``,
+        ``confidence`` and ``n_start``; ``max_n`` is the number of points.
+    periodization : {"none", "baker", "sidi"}, optional
+        ``method="lattice"`` only: integrate f(ψ(x)) prod ψ'(x_j) with Baker's tent
+        (the default) or Sidi's sin^2 transform, or f itself (``"none"``).
 
     Returns
     -------
@@ -149,8 +216,15 @@ def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**2
     Raises
     ------
     InvalidArgumentError
-        No tolerance or a non-positive one; a deterministic sampler; ``f`` returning the
-        wrong shape, NaN or infinities (the message says which and where).
+        No tolerance or a non-positive one; a deterministic sampler; an unknown method or
+        periodization; ``f`` returning the wrong shape, NaN or infinities (the message
+        says which and where).
+
+    Notes
+    -----
+    With ``rel_tol`` the guaranteed methods return Hickernell, Jiménez Rugama and Li's
+    estimate, which meets max(abs_tol, rel_tol |I|) for every I inside the bound, and
+    ``half_width`` its distance to the bound's far end.
 
     Examples
     --------
@@ -158,14 +232,22 @@ def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**2
     >>> res = clsamp.integrate(lambda x: np.prod(x, axis=1), 3, abs_tol=1e-6, progress=False)
     >>> bool(abs(res.estimate - 0.125) < 1e-5), res.converged
     (True, True)
+    >>> net = clsamp.integrate(clsamp.integrands.keister(3), 3, abs_tol=1e-4, method="digital")
+    >>> bool(abs(net.estimate - 2.168309102165) < 1e-4), net.method, net.n
+    (True, 'digital', 262144)
     """
     t0 = time.perf_counter()
+    method = check_choice(method, "method", METHODS)
+    periodization = check_periodization(periodization, method)
     d = check_int(d, "d", minimum=1)
     abs_tol = _check_tolerance(abs_tol, "abs_tol")
     rel_tol = _check_tolerance(rel_tol, "rel_tol")
     if abs_tol == 0.0 and rel_tol == 0.0:
         raise InvalidArgumentError("give 'abs_tol' or 'rel_tol' (or both): the half-width to reach")
     max_n = check_int(max_n, "max_n", minimum=2)
+    if method != "replications":
+        return _guaranteed(f, d, method, periodization, abs_tol, rel_tol, max_n, check_seed(seed),
+                           progress, t0)
     r = check_int(replications, "replications", minimum=2, maximum=2**16)
     confidence = check_real(confidence, "confidence", minimum=0.0, maximum=1.0,
                             open_minimum=True, open_maximum=True)

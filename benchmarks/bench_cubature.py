@@ -1,0 +1,129 @@
+"""Guaranteed adaptive cubature (``integrate(method="digital" | "lattice")``) against qmcpy.
+
+    python benchmarks/bench_cubature.py [--device all] [--quick] [--out FILE]
+    python benchmarks/bench_cubature.py --genz 200 [--abs-tol 1e-6] [--rel-tol 1e-3]
+
+- ``clsamp.integrate(f, d, method="digital")`` against qmcpy's ``CubQMCNetG`` (on its
+  ``DigitalNetB2``: LMS + digital shift, radical-inverse order) and ``method="lattice"``
+  against ``CubQMCLatticeG`` (``Lattice``, random shift, Baker's tent on both sides), on the
+  same NumPy integrand handed to both (qmcpy through ``CustomFun(Uniform(...))``): Keister
+  in d = 4 and 8 (:func:`clsamp.integrands.keister`) and a Genz Gaussian in d = 3
+  (``genz("gaussian", 3, seed=1)``), at abs_tol 1e-3, 1e-4, 1e-5 (``--quick``: 1e-3,
+  1e-4). Seconds: median of 3 calls after a warm-up (one call after the warm-up where the
+  warm-up took over 10 s), each side in the same run, one after the other; quality:
+  the points each used and the error each reached. qmcpy is optional (``pip install
+  clsamp[bench]``); without it the rows have no peer.
+- ``--genz N``: the reliability study. N random members of each of Genz's six families
+  (``genz(kind, d, seed)``, d = 2 + seed mod 7, so 2..8), each integrated by both methods
+  to max(abs_tol, rel_tol |I|); per family and method the share of members whose estimate
+  meets the tolerance, the share that converged before ``max_n`` = 2^22, and the median
+  points used.
+"""
+
+import argparse
+import sys
+import time
+import warnings
+
+import numpy as np
+from common import Row, main, on_device, short_name, timed
+
+import clsamp
+from clsamp.integrands import genz, keister
+from clsamp.integrands.qmc import GENZ_KINDS
+
+TOLERANCES = (1e-3, 1e-4, 1e-5)
+METHODS = {"digital": "CubQMCNetG", "lattice": "CubQMCLatticeG"}
+
+
+def _cases():
+    return [("Keister d=4", keister(4)), ("Keister d=8", keister(8)),
+            ("Genz Gaussian d=3", genz("gaussian", 3, seed=1))]
+
+
+def _qmcpy(f, d, tol, method):
+    import qmcpy
+    if method == "digital":
+        solver = qmcpy.CubQMCNetG(qmcpy.CustomFun(qmcpy.Uniform(qmcpy.DigitalNetB2(d, seed=7)), g=f),
+                                  abs_tol=tol, n_limit=2**30)
+    else:
+        solver = qmcpy.CubQMCLatticeG(qmcpy.CustomFun(qmcpy.Uniform(qmcpy.Lattice(d, seed=7)), g=f),
+                                      abs_tol=tol, n_limit=2**20)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        estimate, data = solver.integrate()
+    return float(np.asarray(estimate).reshape(-1)[0]), int(data.n_total)
+
+
+def _timed(fn):
+    t0 = time.perf_counter()
+    fn()                                    # the warm-up
+    if time.perf_counter() - t0 > 10.0:
+        return timed(fn, repeats=1, warmup=0)
+    return timed(fn, repeats=3, warmup=0)
+
+
+def run(devices, quick):
+    try:
+        import qmcpy  # noqa: F401
+        have_qmcpy = True
+    except ImportError:
+        have_qmcpy = False
+    tolerances = TOLERANCES[:2] if quick else TOLERANCES
+    rows = []
+    for device in devices:
+        on_device(device)
+        dev = short_name(device)
+        for label, f in _cases():
+            g = f.__call__                          # the NumPy integrand, the same for both
+            for method, peer_name in METHODS.items():
+                for tol in tolerances:
+                    t, res = _timed(lambda g=g, f=f, tol=tol, m=method: clsamp.integrate(
+                        g, f.d, abs_tol=tol, method=m, max_n=2**26, progress=False))
+                    quality = (f"clsamp {res.n} points, error {abs(res.estimate - f.integral):.1e}, "
+                               f"bound {res.half_width:.1e}")
+                    peer, t_peer = "", None
+                    if have_qmcpy:
+                        t_peer, (estimate, n) = _timed(
+                            lambda g=g, f=f, tol=tol, m=method: _qmcpy(g, f.d, tol, m))
+                        peer = f"qmcpy {peer_name}"
+                        quality += (f"; qmcpy {n} points ({n / res.n:.2g}x), "
+                                    f"error {abs(estimate - f.integral):.1e}")
+                    rows.append(Row(f"integrate {method} {label}, abs_tol {tol:g}", "one sequence",
+                                    dev, t, peer, t_peer, quality))
+    return rows
+
+
+def genz_reliability(instances, abs_tol, rel_tol, max_n=2**22):
+    """Per (family, method): (met, converged, median n, seconds) over ``instances`` members."""
+    out = {}
+    warnings.simplefilter("ignore", UserWarning)
+    for kind in GENZ_KINDS:
+        for method in METHODS:
+            t0, met, converged, ns = time.perf_counter(), 0, 0, []
+            for seed in range(instances):
+                d = 2 + seed % 7
+                f = genz(kind, d, seed)
+                res = clsamp.integrate(f, d, abs_tol=abs_tol, rel_tol=rel_tol, method=method,
+                                       max_n=max_n, seed=seed, progress=False)
+                met += abs(res.estimate - f.integral) <= max(abs_tol, rel_tol * abs(f.integral))
+                converged += res.converged
+                ns.append(res.n)
+            out[(kind, method)] = (met / instances, converged / instances, int(np.median(ns)),
+                                   time.perf_counter() - t0)
+            print(f"{kind:14s} {method:8s} met {met / instances:6.1%}  converged "
+                  f"{converged / instances:6.1%}  median n {int(np.median(ns)):8d}  "
+                  f"{time.perf_counter() - t0:6.1f} s", flush=True)
+    return out
+
+
+if __name__ == "__main__":
+    if "--genz" in sys.argv:
+        p = argparse.ArgumentParser(description=__doc__)
+        p.add_argument("--genz", type=int, required=True)
+        p.add_argument("--abs-tol", type=float, default=1e-6)
+        p.add_argument("--rel-tol", type=float, default=1e-3)
+        a = p.parse_args()
+        genz_reliability(a.genz, a.abs_tol, a.rel_tol)
+    else:
+        main(run, __doc__)

@@ -1,0 +1,305 @@
+"""Guaranteed adaptive cubature on one randomized sequence: the cone-based error bounds of
+Hickernell and Jiménez Rugama, for digital nets (fast Walsh transform) and for rank-1
+lattices (fast Fourier transform).
+
+With n = 2^m points of a digital net (a lattice), the discrete Walsh (Fourier)
+coefficients f~_m(κ) of the integrand's values estimate its true coefficients. For
+integrands in a cone C, whose coefficients decay steadily, the sum of the true
+coefficients that alias onto the mean is bounded by a multiple of a sum of the discrete
+ones that the points can see:
+
+    |I - mean| <= C(m) S~_(m-r, m)(f),   S~_(m-r, m) = sum_(κ = 2^(m-r-1))^(2^(m-r) - 1) |f~_m(κ~(κ))|,
+
+with r = 4 (``R_LAG``) and the inflation factor C(m) = 5 2^-m (``fudge``), κ~ the
+ordering of the wavenumbers that puts each coefficient before the smaller ones it aliases
+with (``_order_wavenumbers``). n doubles from 2^10 until the bound meets the tolerance.
+The algorithm, its constants and the wavenumber ordering are those of the authors' GAIL
+``cubSobol_g`` / ``cubLattice_g`` and of qmcpy's ``CubQMCNetG`` / ``CubQMCLatticeG``.
+
+The transforms run in NumPy (a butterfly loop for Walsh, ``np.fft`` for Fourier) on the
+host, on the values of f; the points come from the samplers (on the device).
+
+References
+----------
+.. [1] F. J. Hickernell, Ll. A. Jiménez Rugama, "Reliable adaptive cubature using digital
+   sequences", in Monte Carlo and Quasi-Monte Carlo Methods, MCQMC 2014, Springer (2016),
+   367-383.
+.. [2] Ll. A. Jiménez Rugama, F. J. Hickernell, "Adaptive multidimensional integration
+   based on rank-1 lattices", in Monte Carlo and Quasi-Monte Carlo Methods, MCQMC 2014,
+   Springer (2016), 407-422.
+.. [3] F. J. Hickernell, Ll. A. Jiménez Rugama, D. Li, "Adaptive quasi-Monte Carlo methods
+   for cubature", in Contemporary Computational Mathematics, Springer (2018), 597-619
+   (the estimate that meets a relative tolerance).
+"""
+
+import warnings
+
+import numpy as np
+
+from . import number_theory as nt
+from .errors import InvalidArgumentError
+from .samplers import make_sampler
+from .transforms import sidi, tent
+
+M_MIN = 10               # the first 2^10 points (qmcpy's n_init)
+R_LAG = 4                # r: the bound sums the coefficients of wavenumbers 2^(m-r-1) .. 2^(m-r) - 1
+PERIODIZATIONS = ("none", "baker", "sidi")
+_ONE_BELOW = 1.0 - 2.0**-53
+CHUNK = 2**20            # points sampled and evaluated at a time
+
+__all__ = ["fudge", "walsh_coefficients", "fourier_coefficients", "Cubature", "PERIODIZATIONS"]
+
+
+def fudge(m):
+    """The inflation factor C(m) = 5 2^-m of the error bound (the authors' default).
+
+    Parameters
+    ----------
+    m : int
+        log2 of the number of points.
+
+    Returns
+    -------
+    float
+    """
+    return 5.0 * 2.0**-m
+
+
+def walsh_coefficients(y):
+    """The discrete Walsh coefficients (1/n) sum_i y_i (-1)^popcount(k & i), k = 0 .. n-1.
+
+    Parameters
+    ----------
+    y : ndarray of float64
+        Values at the points of a base-2 digital net in natural (radical-inverse) order,
+        x_i = C i: n a power of 2.
+
+    Returns
+    -------
+    ndarray of float64
+        (n,); entry 0 is the mean.
+
+    Examples
+    --------
+    >>> walsh_coefficients(np.array([1.0, 2.0, 3.0, 4.0])).tolist()
+    [2.5, -0.5, -1.0, 0.0]
+    """
+    n = y.size
+    out = np.array(y, dtype=np.float64)
+    h = 1
+    while h < n:                         # butterflies over bit log2(h) of the index
+        pairs = out.reshape(-1, 2, h)
+        out = np.stack([pairs[:, 0] + pairs[:, 1], pairs[:, 0] - pairs[:, 1]], axis=1).reshape(n)
+        h *= 2
+    return out / n
+
+
+def fourier_coefficients(y):
+    """The discrete Fourier coefficients (1/n) sum_j y(x_j) e^(-2 pi i jk/n) of a rank-1
+    lattice, from values in radical-inverse order.
+
+    Parameters
+    ----------
+    y : ndarray of float64
+        Values at the points of the sequence frac(Φ_2(i) z + Δ), i = 0 .. n-1: point i is
+        the lattice's point j = Φ_2(i) n; n a power of 2.
+
+    Returns
+    -------
+    ndarray of complex128
+        (n,); entry 0 is the mean.
+    """
+    n = y.size
+    m = n.bit_length() - 1
+    natural = y[_bit_reverse(np.arange(n), m)]
+    return np.fft.fft(natural) / n
+
+
+def _bit_reverse(i, m):
+    return (nt.reverse_bits32(i) >> np.uint32(32 - m)).astype(np.int64) if m else np.zeros_like(i)
+
+
+def _order_wavenumbers(kappa, size, top, bottom, m):
+    """Reorder the map κ -> wavenumber so that of each pair (κ, κ + 2^l) that alias at
+    level l the larger coefficient comes first, for l = top, top - 1, .., bottom + 1 (GAIL's
+    ``kappanumap``)."""
+    for level in range(top, bottom, -1):
+        nl = 2**level
+        flip = np.flatnonzero(size[kappa[nl + 1:2 * nl]] > size[kappa[1:nl]]) + 1
+        if flip.size:
+            at = (flip[None, :] + np.arange(0, 2**m - 1, 2 * nl)[:, None]).ravel()
+            kappa[at], kappa[at + nl] = kappa[at + nl], kappa[at].copy()
+    return kappa
+
+
+def _periodize(values, x, periodization):
+    if periodization == "none":
+        return values(np.minimum(x, _ONE_BELOW))
+    if periodization == "baker":
+        return values(np.minimum(tent(x), _ONE_BELOW))
+    psi, weight = sidi(x, 2)
+    return values(np.minimum(psi, _ONE_BELOW)) * np.prod(weight, axis=1)
+
+
+class Cubature:
+    """One run of the adaptive rule: the points, the coefficients, the bound.
+
+    Parameters
+    ----------
+    values : callable
+        (count, d) points -> (count,) values of f (checked by the caller).
+    d : int
+        The dimension.
+    method : {"digital", "lattice"}
+        A digitally shifted Sobol' sequence (Joe-Kuo, ``make_sampler("sobol",
+        randomize="xor")``) and Walsh coefficients, or a shifted rank-1 lattice in
+        radical-inverse order (``make_sampler("lattice", randomize="shift")``, Kuo's
+        vector) and Fourier coefficients.
+    seed : int
+        Of the shift.
+    periodization : {"none", "baker", "sidi"}
+        Lattice only: f is integrated as f(ψ(x)) prod ψ'(x_j) with Baker's tent or
+        Sidi's sin^2 transform (:func:`clsamp.transforms.sidi`, k = 2).
+
+    Notes
+    -----
+    :meth:`step` evaluates the next 2^m points (the first 2^10 on the first call),
+    updates the coefficients in O(n log n) from those of the points already seen (the
+    butterfly of the doubling, with twiddles e^(-pi i k / n) for the lattice) and
+    returns (mean, bound). See the module's references.
+    """
+
+    def __init__(self, values, d, method, seed, periodization="none"):
+        if method == "digital":
+            self.sampler = make_sampler("sobol", d=d, seed=seed, randomize="xor")
+        else:
+            self.sampler = make_sampler("lattice", d=d, seed=seed, randomize="shift")
+        self.values, self.method, self.periodization = values, method, periodization
+        self.n, self.total = 0, 0.0
+        self.coefficients = self.kappa = None
+
+    @property
+    def label(self):
+        """The sampler and transform, as the result reports them."""
+        if self.method == "lattice" and self.periodization != "none":
+            return f"{self.sampler.label}, {self.periodization}"
+        return self.sampler.label
+
+    def _block(self, start, count):
+        """f at the points start .. start + count - 1, in natural order for the transform,
+        CHUNK points at a time (count and start are multiples of a power of 2 >= the chunk)."""
+        chunk = min(count, CHUNK)
+        return np.concatenate([self._chunk(base, chunk) for base in range(start, start + count, chunk)])
+
+    def _chunk(self, start, count):
+        if self.method == "lattice":
+            return _periodize(self.values, self.sampler.sample(count, start=start), self.periodization)
+        # the sampler runs in Gray-code order (point p is C g(p)): natural index i sits at
+        # p = g^-1(i); an aligned block of 2^k indices maps onto an aligned block of 2^k
+        # positions (the bits above k of g^-1(i) depend on those of i only)
+        p = np.arange(start, start + count, dtype=np.uint32)
+        for s in (1, 2, 4, 8, 16):
+            p ^= p >> np.uint32(s)
+        first = int(p.min())
+        with warnings.catch_warnings():     # a chunk alone is no net; the 2^m points together are
+            warnings.filterwarnings("ignore", "the balance properties of", UserWarning)
+            x = self.sampler.sample(count, start=first)
+        return self.values(x[p.astype(np.int64) - first])
+
+    def _transform(self, y):
+        return walsh_coefficients(y) if self.method == "digital" else fourier_coefficients(y)
+
+    def step(self):
+        """Evaluate the next points (2^10 at first, then as many as are done) and bound the error.
+
+        Returns
+        -------
+        mean, bound : float
+            The sample mean of the 2^m points and C(m) S~_(m-r, m).
+        """
+        if self.n == 0:
+            n = 2**M_MIN
+            y = self._block(0, n)
+            self.coefficients = self._transform(y)
+            m = M_MIN
+            self.kappa = _order_wavenumbers(np.arange(n), np.abs(self.coefficients), m - 1, 0, m)
+        else:
+            n = self.n
+            y = self._block(n, n)
+            new = self._transform(y)
+            if self.method == "lattice":
+                new = new * np.exp(-1j * np.pi * np.arange(n) / n)
+            self.coefficients = np.concatenate([self.coefficients + new, self.coefficients - new]) / 2
+            m = (2 * n).bit_length() - 1
+            self.kappa = _order_wavenumbers(np.concatenate([self.kappa, n + self.kappa]),
+                                            np.abs(self.coefficients), m - 1, m - R_LAG - 1, m)
+            n = 2 * n
+        self.total += float(np.sum(y))
+        self.n = n
+        low = 2**(m - R_LAG - 1)
+        bound = fudge(m) * float(np.sum(np.abs(self.coefficients[self.kappa[low:2 * low]])))
+        return self.total / n, bound
+
+
+def combine(mean, bound, abs_tol, rel_tol):
+    """The estimate that meets max(abs_tol, rel_tol |I|) for every I in mean +- bound, if one does.
+
+    Parameters
+    ----------
+    mean, bound : float
+    abs_tol, rel_tol : float
+        0 for a tolerance not asked.
+
+    Returns
+    -------
+    estimate, half_width : float
+        The estimate and the largest distance from it to mean +- bound.
+    met : bool
+        Whether every I in mean +- bound is within max(abs_tol, rel_tol |I|) of it.
+
+    Notes
+    -----
+    The estimate is (l + u + tol(l) - tol(u)) / 2 for the interval [l, u] (Hickernell,
+    Jiménez Rugama and Li 2018, the module's [3]); with rel_tol = 0 it is the mean.
+    """
+    low, high = mean - bound, mean + bound
+
+    def tol(v):
+        return max(abs_tol, rel_tol * abs(v))
+
+    estimate = 0.5 * (low + high + tol(low) - tol(high))
+    met = high - low <= tol(low) + tol(high)
+    return estimate, max(estimate - low, high - estimate), met
+
+
+def check_periodization(periodization, method):
+    """The periodization a method uses (None: Baker's tent for lattices, none for nets).
+
+    Parameters
+    ----------
+    periodization : str or None
+        One of :data:`PERIODIZATIONS`, or None for the method's default.
+    method : str
+        The integration method (a periodization other than "none" needs "lattice").
+
+    Returns
+    -------
+    str
+        One of :data:`PERIODIZATIONS`.
+
+    Raises
+    ------
+    InvalidArgumentError
+        An unknown periodization, or one given to a method other than "lattice".
+    """
+    if periodization is None:
+        return "baker" if method == "lattice" else "none"
+    if not isinstance(periodization, str) or periodization not in PERIODIZATIONS:
+        raise InvalidArgumentError(
+            f"'periodization' must be one of {', '.join(map(repr, PERIODIZATIONS))} or None, "
+            f"got {periodization!r}")
+    if method != "lattice" and periodization != "none":
+        raise InvalidArgumentError(
+            f"'periodization' applies to method='lattice' only, got {periodization!r} with "
+            f"method={method!r}")
+    return periodization

@@ -1,0 +1,167 @@
+"""Guaranteed adaptive cubature: integrate(method="digital" | "lattice") (clsamp.cubature)."""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+import clsamp
+from clsamp import number_theory as nt
+from clsamp.cubature import Cubature, combine, fourier_coefficients, walsh_coefficients
+from clsamp.integrands import genz, keister
+from clsamp.integrands.qmc import GENZ_KINDS
+from clsamp.transforms import sidi
+
+
+def test_the_transforms_equal_their_definitions():
+    rng = np.random.default_rng(3)
+    y = rng.random(32)
+    k, i = np.meshgrid(np.arange(32), np.arange(32), indexing="ij")
+    walsh = np.array([[(-1) ** bin(a & b).count("1") for b in range(32)] for a in range(32)])
+    assert np.allclose(walsh_coefficients(y), walsh @ y / 32, rtol=0, atol=1e-14)
+    # sequence position i holds the lattice's point j = bitreverse_5(i)
+    j = (nt.reverse_bits32(np.arange(32)) >> np.uint32(27)).astype(np.int64)
+    dft = np.exp(-2j * np.pi * np.outer(np.arange(32), j) / 32) @ y / 32
+    assert np.allclose(fourier_coefficients(y), dft, rtol=0, atol=1e-14)
+
+
+@pytest.mark.parametrize("method", ["digital", "lattice"])
+def test_doubling_updates_equal_a_fresh_transform(method):
+    seen = []
+
+    def f(x):
+        seen.append(x)
+        return np.exp(np.sum(x, axis=1))
+
+    rule = Cubature(f, 3, method, 5, "none")
+    for _ in range(3):
+        rule.step()
+    assert rule.n == 4096
+    y = f(np.concatenate(seen[:3]))
+    fresh = walsh_coefficients(y) if method == "digital" else fourier_coefficients(y)
+    assert np.allclose(rule.coefficients, fresh, rtol=0, atol=1e-13)
+    assert math.isclose(rule.total / rule.n, float(np.mean(y)), rel_tol=1e-14)
+
+
+@pytest.mark.parametrize("method", ["digital", "lattice"])
+def test_sampling_in_chunks_changes_nothing(method, monkeypatch):
+    from clsamp import cubature
+    runs = []
+    for chunk in (2**20, 128):
+        monkeypatch.setattr(cubature, "CHUNK", chunk)
+        rule = Cubature(lambda x: np.exp(np.sum(x, axis=1)) + x[:, 0] ** 3, 3, method, 4, "none")
+        runs.append([rule.step() for _ in range(3)])
+    assert runs[0] == runs[1]
+
+
+def test_the_digital_points_are_in_natural_order():
+    # x_(2^k) xor x_0 is column k of the generating matrix (in Gray-code order it would be
+    # columns k and k - 1 together)
+    got = []
+    rule = Cubature(lambda x: got.append(x) or np.zeros(len(x)), 4, "digital", 9)
+    rule.step()
+    bits = (got[0] * 2.0**32).astype(np.uint64).astype(np.uint32)
+    columns = nt.sobol_matrices(4)
+    for k in range(10):
+        assert np.array_equal(bits[2**k] ^ bits[0], columns[:, k])
+
+
+@pytest.mark.parametrize("method", ["digital", "lattice"])
+@pytest.mark.parametrize("tol", [1e-3, 1e-4, 1e-5])
+def test_keister_meets_the_tolerance(method, tol):
+    f = keister(3)
+    res = clsamp.integrate(f, 3, abs_tol=tol, method=method, seed=2, progress=False)
+    assert res.converged and res.method == method
+    assert res.half_width <= tol
+    assert abs(res.estimate - f.integral) <= tol
+    assert res.evaluations == res.n and res.n & (res.n - 1) == 0 and res.n >= 1024
+    assert res.replications == 1 and res.confidence == 1.0
+
+
+# Families where the cone holds for nearly every member: over 200 members each method meets
+# the tolerance in >= 96 % of them (docs/performance.md holds the rates of all six and the
+# command; the corner peak's, 65-71 %, are the method failing where its assumption does).
+# The 40 members here are a sample of those 200: >= 37 of 40 (oscillatory on the lattice
+# meets 37, its 200-member rate being 96 %).
+CONE_FAMILIES = ("oscillatory", "product_peak", "gaussian", "continuous", "discontinuous")
+
+
+@pytest.mark.parametrize("method", ["digital", "lattice"])
+@pytest.mark.parametrize("kind", GENZ_KINDS)
+def test_genz_members_meet_the_tolerance(kind, method):
+    abs_tol, rel_tol, members = 1e-6, 1e-3, 40
+    met = converged = 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        for seed in range(members):
+            d = 2 + seed % 7
+            f = genz(kind, d, seed)
+            res = clsamp.integrate(f, d, abs_tol=abs_tol, rel_tol=rel_tol, method=method,
+                                   max_n=2**22, seed=seed, progress=False)
+            met += abs(res.estimate - f.integral) <= max(abs_tol, rel_tol * abs(f.integral))
+            converged += res.converged
+    if kind in CONE_FAMILIES:
+        assert met >= 37, (kind, method, met, converged)
+    else:
+        assert met >= 0.5 * members, (kind, method, met, converged)
+
+
+def test_relative_tolerance_and_periodizations():
+    f = keister(2)
+    for periodization in ("none", "baker", "sidi"):
+        res = clsamp.integrate(f, 2, rel_tol=1e-5, method="lattice", periodization=periodization,
+                               progress=False)
+        assert res.converged and abs(res.estimate - f.integral) <= 1e-5 * abs(f.integral)
+        assert res.sampler.endswith(periodization) or periodization == "none"
+    # the estimate meets max(abs, rel |I|) for every I in mean +- bound
+    for mean, bound in ((1.0, 0.0009), (-2.0, 0.0019), (0.0, 0.9e-4)):
+        estimate, half, met = combine(mean, bound, 1e-4, 1e-3)
+        assert met
+        for truth in np.linspace(mean - bound, mean + bound, 101):
+            assert abs(estimate - truth) <= max(1e-4, 1e-3 * abs(truth)) + 1e-15
+        assert math.isclose(half, max(estimate - mean + bound, mean + bound - estimate))
+    assert not combine(1.0, 0.01, 1e-4, 1e-3)[2]
+
+
+def test_sidi_preserves_the_integral():
+    from scipy.integrate import quad
+    for k in (1, 2, 3, 4):
+        assert quad(lambda t, k=k: float(sidi(t, k)[1]), 0, 1, epsabs=1e-14)[0] == pytest.approx(1, abs=1e-12)
+        t = np.linspace(0, 1, 33)
+        psi, _ = sidi(t, k)
+        assert psi[0] == 0 and psi[-1] == 1 and np.all(np.diff(psi) > 0)
+        for x in (0.1, 0.37, 0.8):
+            assert quad(lambda t, k=k: float(sidi(t, k)[1]), 0, x, epsabs=1e-14)[0] == pytest.approx(
+                float(sidi(x, k)[0]), abs=1e-12)
+
+
+def test_max_n_warns_and_the_default_method_is_unchanged():
+    with pytest.warns(UserWarning, match="max_n"):
+        res = clsamp.integrate(genz("discontinuous", 2, 0), 2, abs_tol=1e-9, method="digital",
+                               max_n=4096, progress=False)
+    assert not res.converged and res.n == 4096
+    rep = clsamp.integrate(lambda x: np.prod(x, axis=1), 3, abs_tol=1e-5, progress=False)
+    assert rep.method == "replications" and rep.replications == 16
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"method": "sobol"}, r"'method' must be one of"),
+    ({"method": "lattice", "periodization": "tent"}, r"'periodization' must be one of"),
+    ({"method": "digital", "periodization": "baker"}, r"method='lattice' only"),
+    ({"method": "digital", "max_n": 512}, r"'max_n' must be at least 1024"),
+    ({"method": "lattice", "abs_tol": None}, r"give 'abs_tol' or 'rel_tol'"),
+])
+def test_bad_arguments_are_one_line(kwargs, match):
+    args = {"abs_tol": 1e-3, **kwargs}
+    with pytest.raises(clsamp.ClsampError, match=match) as info:
+        clsamp.integrate(lambda x: x[:, 0], 2, progress=False, **args)
+    assert "\n" not in str(info.value)
+
+
+def test_bad_integrand_values_are_named():
+    with pytest.raises(ValueError, match="one value per point"):
+        clsamp.integrate(lambda x: x, 2, abs_tol=1e-3, method="digital", progress=False)
+    with pytest.raises(ValueError, match="NaN or infinite"):
+        clsamp.integrate(lambda x: np.where(x[:, 0] < 0.5, np.nan, 1.0), 2, abs_tol=1e-3, method="lattice",
+                         progress=False)
