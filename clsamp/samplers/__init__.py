@@ -11,6 +11,7 @@ from . import (  # noqa: F401
     pmj,  # pmj02, pmj02bn (progressive multi-jittered (0, 2) sequences)
     poisson_disk,  # poisson_disk (dart throwing)
     random,  # random
+    sot,  # sot (sliced optimal transport, projective variant)
     stratified,  # regular, jittered, uncorrelated_jitter, latin_hypercube, (correlated_)multijittered
     zsobol,  # zsobol (Morton-ordered Owen-scrambled Sobol' for renderers)
 )

@@ -1,0 +1,527 @@
+"""The ``sot`` sampler: sliced optimal transport sampling (Paulin et al. 2020), points moved
+toward the uniform measure on [0, 1)^d by 1-D optimal transports along random directions,
+with the projective variant that optimizes chosen coordinate projections as well.
+
+One batch is three passes -- the 1-D targets of each direction (the quantiles of the cube's
+projection), the projections of the points, the move -- in ``kernels/sot.cl`` on the device
+and in :func:`quantiles_reference`, :func:`project_reference` and :func:`move_reference`
+here, the same bits. The directions, their CDFs (:class:`Slice`) and the sort that matches
+projections to targets are host code both backends share (:func:`sot_optimize`).
+"""
+
+import dataclasses
+import itertools
+import math
+
+import numpy as np
+
+from .. import philox, runtime
+from ..errors import InvalidArgumentError
+from ..validation import check_positive_int, check_real
+from .base import SampleInfo, Sampler, info_field, make_sampler, register
+
+DIRECTIONS = 32      # directions a batch (full space), as the authors' code
+ITERATIONS = 256
+STEP = 1.0
+TOL = 0.0
+WINDOW = 16          # the cost is compared over windows of this many batches
+MAX_D = 8
+QTOL = 1e-14         # quantile solver: stop when the step is at most QTOL times the range
+QMAX = 200
+CANCEL = 1e-8        # the most relative error the CDF's alternating sum may carry
+EPS = 2.0 ** -52
+TOP = 1.0 - 2.0 ** -53
+DEFINES = {"QTOL": repr(QTOL), "QMAX": QMAX}
+
+
+@dataclasses.dataclass(frozen=True)
+class Slice:
+    """The distribution of <theta, U>, U uniform in [0, 1)^d, as the quantile pass reads it.
+
+    <theta, U> = base + sum_j a_j U_j over the kept components a_1 >= ... >= a_m > 0 of
+    |theta| (U_j uniform in [0, 1)), whose CDF is the alternating sum over the 2^m vertices
+    of the box, F(t) = norm sum_v sign_v (t - c_v)_+^m. Components small enough that the sum
+    would cancel to more than ``CANCEL`` relative error (bounded by
+    2^-52 2^m total^m norm) are replaced by their mean a_j / 2, which moves a quantile by
+    at most a_j / 2 (and by O(a_j^2) where the density is smooth).
+
+    Attributes
+    ----------
+    c, sign : ndarray (K, 2^d)
+        Vertex sums and signs (the first 2^m of each row used, in vertex order v = 0, 1, ...,
+        bit j of v choosing a_(j+1)).
+    m : ndarray of int32 (K,)
+    norm, total, base : ndarray (K,)
+        1 / (m! prod a_j), sum a_j, and sum of the negative theta_j plus the dropped a_j / 2.
+    """
+
+    c: np.ndarray
+    sign: np.ndarray
+    m: np.ndarray
+    norm: np.ndarray
+    total: np.ndarray
+    base: np.ndarray
+
+    @classmethod
+    def of(cls, theta):
+        """The slices of directions theta (K, d), unit vectors.
+
+        Parameters
+        ----------
+        theta : ndarray (K, d)
+
+        Returns
+        -------
+        Slice
+        """
+        K, d = theta.shape
+        c = np.zeros((K, 2 ** d))
+        sign = np.zeros((K, 2 ** d))
+        m_of = np.zeros(K, dtype=np.int32)
+        norm, total, base = np.zeros(K), np.zeros(K), np.zeros(K)
+        for k in range(K):
+            a = sorted((abs(float(v)) for v in theta[k]), reverse=True)
+            low = 0.0
+            for v in theta[k]:
+                low = low + min(float(v), 0.0)
+            m = d
+            while m > 1 and _cancellation(a[:m]) > CANCEL:
+                low = low + a[m - 1] * 0.5
+                m -= 1
+            kept = a[:m]
+            for v in range(2 ** m):
+                s, odd = 0.0, 0
+                for j in range(m):
+                    if v >> j & 1:
+                        s, odd = s + kept[j], odd ^ 1
+                c[k, v], sign[k, v] = s, -1.0 if odd else 1.0
+            prod = 1.0
+            for v in kept:
+                prod = prod * v
+            m_of[k], norm[k], base[k] = m, 1.0 / (math.factorial(m) * prod), low
+            t = 0.0
+            for v in kept:
+                t = t + v
+            total[k] = t
+        return cls(c, sign, m_of, norm, total, base)
+
+
+def _cancellation(a):
+    """A bound of the alternating vertex sum's relative error for components a (> 0)."""
+    if a[-1] <= 0.0:
+        return math.inf
+    m, s = len(a), sum(a)
+    return EPS * 2 ** m * s ** m / (math.factorial(m) * math.prod(a))
+
+
+def quantiles_reference(sl, n):
+    """NumPy twin of ``sot_quantiles``: the n targets of each slice.
+
+    Parameters
+    ----------
+    sl : Slice
+    n : int
+
+    Returns
+    -------
+    ndarray (K, n)
+        Row k: F_k^-1((i + 1/2) / n), i = 0..n-1, increasing.
+    """
+    K = sl.m.shape[0]
+    half = (n + 1) // 2
+    i = np.arange(half, dtype=np.float64)[None, :] * np.ones((K, 1))
+    p = (i + 0.5) / float(n)
+    total, norm, m = sl.total[:, None], sl.norm[:, None], sl.m[:, None]
+    lo = np.zeros_like(p)
+    hi = np.broadcast_to(total * 0.5, p.shape).copy()
+    t = hi * 0.5
+    dx_old = hi.copy()
+    active = np.ones(p.shape, dtype=bool)
+    for _ in range(QMAX):
+        if not active.any():
+            break
+        F = np.zeros_like(p)
+        dF = np.zeros_like(p)
+        for v in range(sl.c.shape[1]):
+            used = (v < (1 << m)) & active
+            u = t - sl.c[:, v:v + 1]
+            on = used & (u > 0.0)
+            w = np.ones_like(p)
+            for j in range(1, int(sl.m.max())):
+                w = np.where(j < m, w * u, w)
+            F = np.where(on, F + sl.sign[:, v:v + 1] * (w * u), F)
+            dF = np.where(on, dF + sl.sign[:, v:v + 1] * w, dF)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            f = F * norm - p
+            df = dF * norm * m.astype(np.float64)
+            below = f < 0.0
+            lo = np.where(active & below, t, lo)
+            hi = np.where(active & ~below, t, hi)
+            tn = t - f / df
+            newton = (df > 0.0) & (tn > lo) & (tn < hi) & (np.abs(tn - t) < 0.5 * np.abs(dx_old))
+        nxt = np.where(newton, tn, lo + (hi - lo) * 0.5)
+        dx = nxt - t
+        dx_old = np.where(active, dx, dx_old)
+        t = np.where(active, nxt, t)
+        active &= ~(np.abs(dx) <= QTOL * total)
+    q = np.empty((K, n))
+    q[:, :half] = sl.base[:, None] + t
+    q[:, n - half:] = (sl.base[:, None] + (total - t))[:, ::-1]
+    if n % 2:
+        q[:, half - 1] = sl.base + sl.total * 0.5
+    return q
+
+
+def project_reference(x, theta):
+    """NumPy twin of ``sot_project``: <theta_k, x_i> summed over the coordinates in order.
+
+    Parameters
+    ----------
+    x : ndarray (sets, n, d)
+    theta : ndarray (sets, K, d)
+
+    Returns
+    -------
+    ndarray (sets, K, n)
+    """
+    p = theta[:, :, None, 0] * x[:, None, :, 0]
+    for j in range(1, x.shape[-1]):
+        p = p + theta[:, :, None, j] * x[:, None, :, j]
+    return p
+
+
+def move_reference(x, theta, q, rank, proj, scale):
+    """NumPy twin of ``sot_move``: each point moved by ``scale`` times the sum over the
+    batch of its 1-D displacements along their directions.
+
+    Parameters
+    ----------
+    x : ndarray (sets, n, d)
+    theta : ndarray (sets, K, d)
+    q : ndarray (sets, K, n)
+        The targets, sorted.
+    rank : ndarray of uint32 (sets, K, n)
+        The rank of each point's projection.
+    proj : ndarray (sets, K, n)
+    scale : float
+
+    Returns
+    -------
+    points : ndarray (sets, n, d)
+    cost : ndarray (sets, n)
+        Per point, the sum over the batch of its squared displacement.
+    """
+    sets, n, d = x.shape
+    disp = np.take_along_axis(q, rank.astype(np.intp), axis=2) - proj
+    shift = np.zeros((sets, n, d))
+    cost = np.zeros((sets, n))
+    for k in range(theta.shape[1]):
+        cost = cost + disp[:, k] * disp[:, k]
+        shift = shift + disp[:, k, :, None] * theta[:, k, None, :]
+    y = x + shift * scale
+    y = np.where(y < 0.0, 0.0, y)
+    return np.where(y > TOP, TOP, y), cost
+
+
+def _quantiles_device(sl, n):
+    K = sl.m.shape[0]
+    d = int(round(math.log2(sl.c.shape[1])))
+    kernel = runtime.kernel("sot.cl", "sot_quantiles", {"D": d, **DEFINES})
+    out = runtime.Output((K, n), np.float64, host=np.empty((K, n)))
+    items = K * ((n + 1) // 2)
+    local = runtime.local_size(64)
+    kernel(runtime.queue(), (-(-items // local) * local,), (local,),
+           runtime.to_device(sl.c).data, runtime.to_device(sl.sign).data,
+           runtime.to_device(sl.m).data, runtime.to_device(sl.norm).data,
+           runtime.to_device(sl.total).data, runtime.to_device(sl.base).data,
+           np.uint32(n), np.uint32(K), out.buffer)
+    return out.finish()
+
+
+def _project_device(x, theta):
+    sets, n, d = x.shape
+    K = theta.shape[1]
+    kernel = runtime.kernel("sot.cl", "sot_project", {"D": d, **DEFINES})
+    out = runtime.Output((sets, K, n), np.float64, host=np.empty((sets, K, n)))
+    local = runtime.local_size(64)
+    kernel(runtime.queue(), (-(-(sets * K * n) // local) * local,), (local,),
+           runtime.to_device(x).data, runtime.to_device(theta).data, np.uint32(n), np.uint32(K),
+           np.uint32(sets), out.buffer)
+    return out.finish()
+
+
+def _move_device(x, theta, q, rank, proj, scale):
+    sets, n, d = x.shape
+    K = theta.shape[1]
+    kernel = runtime.kernel("sot.cl", "sot_move", {"D": d, **DEFINES})
+    out = runtime.Output((sets, n, d), np.float64, host=np.empty((sets, n, d)))
+    cost = runtime.Output((sets, n), np.float64, host=np.empty((sets, n)))
+    local = runtime.local_size(64)
+    kernel(runtime.queue(), (-(-(sets * n) // local) * local,), (local,),
+           runtime.to_device(x).data, runtime.to_device(theta).data,
+           runtime.to_device(q).data, runtime.to_device(rank).data,
+           runtime.to_device(proj).data, np.uint32(n), np.uint32(K), np.uint32(sets),
+           np.float64(scale), out.buffer, cost.buffer)
+    return out.finish(), cost.finish()
+
+
+PASSES = {"numpy": (quantiles_reference, project_reference, move_reference),
+          "opencl": (_quantiles_device, _project_device, _move_device)}
+
+
+def subspaces(projections, d):
+    """The coordinate subspaces a projective run also optimizes.
+
+    Parameters
+    ----------
+    projections : None, "pairs" or sequence of sequences of int
+        None: none; ``"pairs"``: every 2-D coordinate projection; else the listed axes.
+    d : int
+
+    Returns
+    -------
+    tuple of tuple of int
+    """
+    if projections is None:
+        return ()
+    if isinstance(projections, str):
+        if projections != "pairs":
+            raise InvalidArgumentError(
+                f"'projections' must be None, 'pairs' or a list of tuples of axes, got {projections!r}")
+        return tuple(itertools.combinations(range(d), 2))
+    try:
+        spaces = tuple(tuple(int(a) for a in axes) for axes in projections)
+    except (TypeError, ValueError):
+        raise InvalidArgumentError(
+            f"'projections' must be None, 'pairs' or a list of tuples of axes, got {projections!r}") from None
+    for axes in spaces:
+        if not axes or len(set(axes)) != len(axes) or min(axes) < 0 or max(axes) >= d:
+            raise InvalidArgumentError(
+                f"'projections' must list distinct axes in 0..{d - 1} per projection, got {axes!r}")
+    return spaces
+
+
+def directions(seed, realizations, batch, K, d, spaces=()):
+    """The unit directions of one batch: K in the full space, then K // 2 (at least 1) in
+    each subspace, each a normalized Gaussian vector (Box-Muller on Philox (seed,
+    ``Stream.DIRECTIONS``, realization, batch-local index)) restricted to its axes.
+
+    Parameters
+    ----------
+    seed : int
+    realizations : ndarray of int (sets,)
+    batch : int
+        The iteration.
+    K : int
+    d : int
+    spaces : tuple of tuple of int
+
+    Returns
+    -------
+    ndarray (sets, K + len(spaces) max(K // 2, 1), d)
+    """
+    per = max(K // 2, 1)
+    total = K + per * len(spaces)
+    mask = np.ones((total, d))
+    for s, axes in enumerate(spaces):
+        mask[K + s * per:K + (s + 1) * per] = 0.0
+        mask[K + s * per:K + (s + 1) * per, list(axes)] = 1.0
+    r = np.asarray(realizations, dtype=np.uint32)[:, None, None]
+    index = (np.uint64(batch) * np.uint64(total) + np.arange(total, dtype=np.uint64))
+    index = index.astype(np.uint32)[None, :, None]
+    dim = np.arange(d, dtype=np.uint32)[None, None, :]
+    u1 = philox.uniform(seed, philox.Stream.DIRECTIONS, r, index, 2 * dim)
+    u2 = philox.uniform(seed, philox.Stream.DIRECTIONS, r, index, 2 * dim + 1)
+    g = np.sqrt(-2.0 * np.log1p(-u1)) * np.cos(2.0 * math.pi * u2) * mask
+    norm = np.sqrt((g * g).sum(axis=-1, keepdims=True))
+    first = np.zeros_like(g)
+    first[..., 0] = 1.0
+    return np.where(norm > 0.0, g / np.where(norm > 0.0, norm, 1.0), first * mask.max(-1, keepdims=True))
+
+
+@dataclasses.dataclass(frozen=True)
+class SOTInfo(SampleInfo):
+    """What a sliced-optimal-transport run did, per realization (first axis).
+
+    Attributes
+    ----------
+    realizations : ndarray (r,)
+    cost_history : ndarray (r, T)
+        Entry t: the sliced transport cost of batch t before its move, the mean over its
+        directions of the mean squared 1-D displacement. A set that stopped early holds
+        its last value.
+    iterations : ndarray (r,)
+        The batches each set ran.
+    converged : ndarray of bool (r,)
+        Whether the set stopped because the mean cost over the last ``WINDOW`` batches fell
+        by at most ``tol`` of the previous window's, before ``iterations``.
+    """
+
+    cost_history: np.ndarray = info_field("pad")
+    iterations: np.ndarray = info_field()
+    converged: np.ndarray = info_field()
+
+
+def _ranks(proj):
+    """The rank of each projection in its row, ties by index (a stable sort)."""
+    order = np.argsort(proj, axis=-1, kind="stable")
+    rank = np.empty(proj.shape, dtype=np.uint32)
+    np.put_along_axis(rank, order, np.arange(proj.shape[-1], dtype=np.uint32)[None, None, :]
+                      * np.ones(proj.shape[:-1] + (1,), dtype=np.uint32), axis=-1)
+    return rank
+
+
+def sot_optimize(start_points, seed, directions_per_batch=DIRECTIONS, iterations=ITERATIONS,
+                 step=STEP, tol=TOL, spaces=(), backend="opencl", realizations=None):
+    """Sliced optimal transport from given starting sets.
+
+    Parameters
+    ----------
+    start_points : ndarray (r, n, d)
+    seed : int
+        Seeds the directions.
+    directions_per_batch : int
+        K, the full-space directions of a batch.
+    iterations : int
+    step : float
+        The fraction of the batch's mean displacement applied.
+    tol : float
+        Stop when a window's mean cost is not below (1 - tol) times the previous one's
+        (0: run every batch).
+    spaces : tuple of tuple of int
+        Subspaces also optimized (:func:`subspaces`).
+    backend : {"opencl", "numpy"}
+    realizations : array_like of int, optional
+        The indices of the sets (their directions; default 0..r-1).
+
+    Returns
+    -------
+    points : ndarray (r, n, d)
+    info : SOTInfo
+    """
+    if backend != "numpy":
+        runtime.require_fp64()
+    quantiles, project, move = PASSES["numpy" if backend == "numpy" else "opencl"]
+    x = np.array(start_points, dtype=np.float64)
+    r, n, d = x.shape
+    index = np.arange(r) if realizations is None else np.asarray(realizations)
+    active = np.ones(r, dtype=bool)
+    converged = np.zeros(r, dtype=bool)
+    ran = np.zeros(r, dtype=np.int64)
+    history = []
+    cost = np.zeros(r)
+    for it in range(iterations):
+        idx = np.flatnonzero(active)
+        if idx.size == 0:
+            break
+        theta = directions(seed, index[idx], it, directions_per_batch, d, spaces)
+        K = theta.shape[1]
+        q = quantiles(Slice.of(theta.reshape(-1, d)), n).reshape(idx.size, K, n)
+        proj = project(np.ascontiguousarray(x[idx]), theta)
+        y, per_point = move(np.ascontiguousarray(x[idx]), theta, q, _ranks(proj), proj, step / K)
+        x[idx] = y
+        cost[idx] = [math.fsum(row) / (n * K) for row in per_point]
+        ran[idx] += 1
+        history.append(cost.copy())
+        if tol > 0.0 and it + 1 >= 2 * WINDOW:
+            h = np.stack(history[-2 * WINDOW:], axis=1)[idx]
+            done = h[:, WINDOW:].mean(axis=1) >= (1.0 - tol) * h[:, :WINDOW].mean(axis=1)
+            converged[idx[done]] = True
+            active[idx[done]] = False
+    history = np.stack(history, axis=1) if history else np.empty((r, 0))
+    info = SOTInfo(realizations=index.astype(np.int64), cost_history=history, iterations=ran,
+                   converged=converged)
+    return x, info
+
+
+@register("sot")
+class SOTSampler(Sampler):
+    """Sliced optimal transport sampling: points moved toward the uniform measure on the
+    unit cube by 1-D optimal transports along random directions.
+
+    Parameters
+    ----------
+    d : int
+        Dimension, 2 to 8.
+    seed : int
+        Seeds the starting points (the ``random`` sampler's) and the directions.
+    directions : int
+        Full-space directions a batch (default 32).
+    iterations : int
+        Batches (default 256).
+    step : float
+        The fraction of the batch's mean displacement applied (default 1, as the paper).
+    tol : float
+        Stop once the mean transport cost over 16 batches is not below (1 - tol) times that
+        of the 16 before (default 0: run every batch).
+    projections : None, "pairs" or list of tuples of int
+        The projective variant: also optimize these coordinate projections (``"pairs"``:
+        every 2-D one), each with ``directions // 2`` directions a batch drawn in its
+        subspace.
+    backend : {"opencl", "numpy"}
+
+    Notes
+    -----
+    A batch draws K random unit directions theta_k, projects the points on each, sorts the
+    projections and matches the i-th smallest to the quantile F_k^-1((i + 1/2) / n) of
+    <theta_k, U>, U uniform in [0, 1)^d: the 1-D optimal transport between the projected
+    points and the projected measure. Each point then moves by ``step`` times the mean over
+    the batch of its 1-D displacements along their directions, a step of stochastic
+    gradient descent on the sliced Wasserstein distance between the points and the uniform
+    measure (Paulin et al. 2020, Algorithm 1); ``cost_history`` is that distance as the
+    batches see it, which falls on average. The projected measure is the distribution of a
+    sum of scaled uniforms, whose CDF is a piecewise polynomial of degree d (the
+    alternating sum over the cube's vertices); its quantiles are found by safeguarded
+    Newton steps to 1e-14 of their range. The projective variant ("projective blue noise")
+    also draws directions within chosen coordinate subspaces, so that those projections of
+    the set are optimized too, as the authors' multi-projection code does.
+
+    Points stay in the cube [0, 1)^d (a move outside is clamped; the target measure is the
+    cube's, not the torus's). Directions, quantile setup and the sort are host code; the
+    quantiles, projections and moves run on the device (``kernels/sot.cl``), and the NumPy
+    twin gives the same bits.
+
+    References
+    ----------
+    .. [1] L. Paulin, N. Bonneel, D. Coeurjolly, J.-C. Iehl, A. Webanck, M. Desbrun,
+       V. Ostromoukhov, "Sliced Optimal Transport Sampling", ACM Trans. Graph. 39(4),
+       2020 (SIGGRAPH).
+
+    Examples
+    --------
+    >>> import clsamp
+    >>> s = clsamp.make_sampler("sot", d=2, seed=1, iterations=64)
+    >>> pts, info = s.sample(256, return_info=True)
+    >>> pts.shape, bool(info.cost_history[0, -8:].mean() < info.cost_history[0, :8].mean())
+    ((256, 2), True)
+    """
+
+    dimensions = tuple(range(2, MAX_D + 1))
+    max_d = MAX_D
+    max_d_source = "the projected cube's CDF sums 2^d vertex terms"
+    expensive = True
+    accepts_start = False
+    needs_fp64 = True
+    info = SOTInfo
+
+    def __init__(self, d=2, seed=0, directions=DIRECTIONS, iterations=ITERATIONS, step=STEP,
+                 tol=TOL, projections=None, backend="opencl"):
+        super().__init__(d=d, seed=seed, backend=backend)
+        self.directions = check_positive_int(directions, "directions", maximum=4096)
+        self.iterations = check_positive_int(iterations, "iterations")
+        self.step = check_real(step, "step", minimum=0.0, open_minimum=True, maximum=2.0)
+        self.tol = check_real(tol, "tol", minimum=0.0, maximum=1.0)
+        self.projections = subspaces(projections, self.d)
+
+    def _run(self, n, realizations, backend):
+        start = make_sampler("random", d=self.d, seed=self.seed,
+                             backend=self.backend).sample(n, realizations=realizations)
+        return sot_optimize(start, self.seed, self.directions, self.iterations, self.step,
+                            self.tol, self.projections, backend,
+                            np.arange(realizations.start, realizations.stop))
+
+    def _reference(self, n, realizations, start):
+        return self._run(n, realizations, "numpy")
+
+    def _device(self, n, realizations, start, out=None):
+        return self._run(n, realizations, "opencl")
