@@ -42,6 +42,7 @@ MODULES = (
     "bench_render",
     "bench_voronoi",
     "bench_gbn",
+    "bench_sot",
 )
 
 

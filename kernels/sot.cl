@@ -23,6 +23,18 @@
  * point's transport cost over the batch before the move.
  * Launch: one work-item per (set, i).
  *
+ * sot_sort_init, sot_bitonic, sot_rank: the rank of each projection in its row, ties by
+ * index (the order of a stable sort, NumPy's argsort(kind="stable")), by a bitonic sort of
+ * rows of P = 2^e >= n (key, index) pairs in global memory: sot_sort_init pads each row
+ * with (+inf, index) (projections are finite, so the padding sorts last); each
+ * sot_bitonic launch is one compare-exchange stage (k, j) over rows * P / 2 work-items,
+ * ascending by (key, index) where bit k of the lower position is clear;
+ * sot_bitonic_local runs the stages with j < L, L = 2 get_local_size(0) (a power of two
+ * dividing P), in local memory, a work-group per L consecutive pairs of a row: for k from
+ * kmin to kmax, j from jtop (k == kmin) or k / 2 down to 1; sot_rank scatters
+ * rank[row, index[row, j]] = j for j < n. Lexicographic order on distinct (key, index)
+ * pairs is total, so the sorted order is unique: the same as the stable sort's.
+ *
  * Build options: D (dimensions), QTOL, QMAX.
  */
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
@@ -129,4 +141,84 @@ __kernel void sot_move(__global const double *x, __global const double *theta,
         out[(size_t)gid * D + j] = v > top ? top : v;
     }
     cost[gid] = c;
+}
+
+__kernel void sot_sort_init(__global const double *proj, const uint n, const uint P,
+                            const uint rows, __global double *key, __global uint *index)
+{
+    const uint g = get_global_id(0);
+    if (g >= rows * P)
+        return;
+    const uint row = g / P, i = g % P;
+    key[g] = i < n ? proj[(size_t)row * n + i] : INFINITY;
+    index[g] = i;
+}
+
+__kernel void sot_bitonic(__global double *key, __global uint *index, const uint P,
+                          const uint rows, const uint k, const uint j)
+{
+    const uint g = get_global_id(0);
+    const uint hp = P >> 1;
+    if (g >= rows * hp)
+        return;
+    const uint row = g / hp, t = g % hp;
+    const uint low = t & (j - 1);
+    const uint i = ((t - low) << 1) + low;
+    const size_t a = (size_t)row * P + i, b = a + j;
+    const double ka = key[a], kb = key[b];
+    const uint ia = index[a], ib = index[b];
+    const int greater = ka > kb || (ka == kb && ia > ib);
+    const int up = (i & k) == 0;
+    if (greater == up) {
+        key[a] = kb;
+        key[b] = ka;
+        index[a] = ib;
+        index[b] = ia;
+    }
+}
+
+__kernel void sot_bitonic_local(__global double *key, __global uint *index, const uint P,
+                                const uint kmin, const uint kmax, const uint jtop,
+                                __local double *lk, __local uint *li)
+{
+    const uint L2 = get_local_size(0), L = 2 * L2, lid = get_local_id(0);
+    const uint blocks = P / L, grp = get_group_id(0);
+    const uint base = (grp % blocks) * L;
+    const size_t off = (size_t)(grp / blocks) * P + base;
+    lk[lid] = key[off + lid];
+    lk[lid + L2] = key[off + lid + L2];
+    li[lid] = index[off + lid];
+    li[lid + L2] = index[off + lid + L2];
+    barrier(CLK_LOCAL_MEM_FENCE);
+    for (uint k = kmin; k <= kmax; k <<= 1) {
+        for (uint j = k == kmin ? jtop : k >> 1; j >= 1; j >>= 1) {
+            const uint low = lid & (j - 1);
+            const uint i = ((lid - low) << 1) + low;
+            const double ka = lk[i], kb = lk[i + j];
+            const uint ia = li[i], ib = li[i + j];
+            const int greater = ka > kb || (ka == kb && ia > ib);
+            const int up = ((base + i) & k) == 0;
+            if (greater == up) {
+                lk[i] = kb;
+                lk[i + j] = ka;
+                li[i] = ib;
+                li[i + j] = ia;
+            }
+            barrier(CLK_LOCAL_MEM_FENCE);
+        }
+    }
+    key[off + lid] = lk[lid];
+    key[off + lid + L2] = lk[lid + L2];
+    index[off + lid] = li[lid];
+    index[off + lid + L2] = li[lid + L2];
+}
+
+__kernel void sot_rank(__global const uint *index, const uint n, const uint P, const uint rows,
+                       __global uint *rank)
+{
+    const uint g = get_global_id(0);
+    if (g >= rows * n)
+        return;
+    const uint row = g / n, j = g % n;
+    rank[(size_t)row * n + index[(size_t)row * P + j]] = j;
 }

@@ -26,6 +26,7 @@ def test_every_pass_gives_the_twins_bits(d, n):
     proj = sot.project_reference(x, theta)
     assert np.array_equal(sot._project_device(x, theta), proj)
     rank = sot._ranks(proj)
+    assert np.array_equal(sot._ranks_device(proj, d), rank)
     q = q.reshape(2, 6, n)
     moved, cost = sot.move_reference(x, theta, q, rank, proj, 1.0 / 6)
     moved_d, cost_d = sot._move_device(x, theta, q, rank, proj, 1.0 / 6)
@@ -61,6 +62,16 @@ def test_the_quantiles_are_the_projected_cubes(d):
                      p[None] * a[:, None] + b[:, None] / 2)
         t = np.where(p[None] > 0.5, (a + b)[:, None] - t[:, ::-1], t)
         assert np.allclose(q, low[:, None] + t, rtol=0, atol=1e-13)
+
+
+@pytest.mark.parametrize("n", [1, 2, 5, 64, 1000])
+def test_the_device_sort_ranks_ties_by_index(n):
+    # coarse keys: many ties, and -0.0 beside 0.0, ranked as a stable sort ranks them
+    rng = np.random.default_rng(n)
+    proj = np.round(rng.normal(size=(3, 4, n)), 1)
+    proj[0, 0, ::2] = -0.0
+    proj[0, 0, 1::2] = 0.0
+    assert np.array_equal(sot._ranks_device(proj, 2), sot._ranks(proj))
 
 
 def test_small_components_are_replaced_by_their_mean():

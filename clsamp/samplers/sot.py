@@ -2,11 +2,13 @@
 toward the uniform measure on [0, 1)^d by 1-D optimal transports along random directions,
 with the projective variant that optimizes chosen coordinate projections as well.
 
-One batch is three passes -- the 1-D targets of each direction (the quantiles of the cube's
-projection), the projections of the points, the move -- in ``kernels/sot.cl`` on the device
-and in :func:`quantiles_reference`, :func:`project_reference` and :func:`move_reference`
-here, the same bits. The directions, their CDFs (:class:`Slice`) and the sort that matches
-projections to targets are host code both backends share (:func:`sot_optimize`).
+One batch is four passes -- the 1-D targets of each direction (the quantiles of the cube's
+projection), the projections of the points, their ranks, the move -- in ``kernels/sot.cl``
+on the device and in :func:`quantiles_reference`, :func:`project_reference`, a stable sort
+and :func:`move_reference` here (:func:`batch_reference`), the same bits. The ranks come
+from a bitonic sort on GPUs and from NumPy's sort on CPU devices, where it is faster; both
+order ties by index. The directions and their CDFs (:class:`Slice`) are host code both
+backends share (:func:`sot_optimize`).
 """
 
 import dataclasses
@@ -223,50 +225,121 @@ def move_reference(x, theta, q, rank, proj, scale):
     return np.where(y > TOP, TOP, y), cost
 
 
-def _quantiles_device(sl, n):
-    K = sl.m.shape[0]
-    d = int(round(math.log2(sl.c.shape[1])))
-    kernel = runtime.kernel("sot.cl", "sot_quantiles", {"D": d, **DEFINES})
-    out = runtime.Output((K, n), np.float64, host=np.empty((K, n)))
-    items = K * ((n + 1) // 2)
+def _launch(name, d, items, *args):
+    """Run kernel ``name`` of ``kernels/sot.cl`` over ``items`` work-items."""
+    kernel = runtime.kernel("sot.cl", name, {"D": d, **DEFINES})
     local = runtime.local_size(64)
-    kernel(runtime.queue(), (-(-items // local) * local,), (local,),
-           runtime.to_device(sl.c).data, runtime.to_device(sl.sign).data,
-           runtime.to_device(sl.m).data, runtime.to_device(sl.norm).data,
-           runtime.to_device(sl.total).data, runtime.to_device(sl.base).data,
-           np.uint32(n), np.uint32(K), out.buffer)
+    kernel(runtime.queue(), (-(-items // local) * local,), (local,), *args)
+
+
+def _output(shape, dtype, host):
+    return runtime.Output(shape, dtype, host=np.empty(shape, dtype) if host else None)
+
+
+def _quantiles_device(sl, n, host=True):
+    K = sl.m.shape[0]
+    out = _output((K, n), np.float64, host)
+    _launch("sot_quantiles", int(round(math.log2(sl.c.shape[1]))), K * ((n + 1) // 2),
+            *(runtime.to_device(a).data for a in (sl.c, sl.sign, sl.m, sl.norm, sl.total, sl.base)),
+            np.uint32(n), np.uint32(K), out.buffer)
     return out.finish()
 
 
-def _project_device(x, theta):
+def _project_device(x, theta, host=True):
     sets, n, d = x.shape
     K = theta.shape[1]
-    kernel = runtime.kernel("sot.cl", "sot_project", {"D": d, **DEFINES})
-    out = runtime.Output((sets, K, n), np.float64, host=np.empty((sets, K, n)))
-    local = runtime.local_size(64)
-    kernel(runtime.queue(), (-(-(sets * K * n) // local) * local,), (local,),
-           runtime.to_device(x).data, runtime.to_device(theta).data, np.uint32(n), np.uint32(K),
-           np.uint32(sets), out.buffer)
+    out = _output((sets, K, n), np.float64, host)
+    _launch("sot_project", d, sets * K * n, runtime.to_device(x).data,
+            runtime.to_device(theta).data, np.uint32(n), np.uint32(K), np.uint32(sets), out.buffer)
     return out.finish()
+
+
+def _ranks_device(proj, d, host=True):
+    """:func:`_ranks` of projections (sets, K, n) by the device's bitonic sort."""
+    import pyopencl.array as cla
+    shape = proj.shape
+    rows, n = shape[0] * shape[1], shape[2]
+    P = 1 << max(n - 1, 1).bit_length()
+    q = runtime.queue()
+    key, index = cla.empty(q, rows * P, np.float64), cla.empty(q, rows * P, np.uint32)
+    _launch("sot_sort_init", d, rows * P, runtime.to_device(proj).data, np.uint32(n),
+            np.uint32(P), np.uint32(rows), key.data, index.data)
+    # stages with j < L in local memory, the longer ones one global launch each
+    L2 = 1 << (min(P // 2, runtime.local_size(256)).bit_length() - 1)
+    local = _local_sort(d, rows * P // 2, L2, key, index, P)
+    local(2, 2 * L2, 1)
+    k = 4 * L2
+    while k <= P:
+        j = k >> 1
+        while j >= 2 * L2:
+            _launch("sot_bitonic", d, rows * P // 2, key.data, index.data, np.uint32(P),
+                    np.uint32(rows), np.uint32(k), np.uint32(j))
+            j >>= 1
+        local(k, k, L2)
+        k <<= 1
+    out = _output(shape, np.uint32, host)
+    _launch("sot_rank", d, rows * n, index.data, np.uint32(n), np.uint32(P), np.uint32(rows),
+            out.buffer)
+    return out.finish()
+
+
+def _local_sort(d, items, L2, key, index, P):
+    """``sot_bitonic_local`` over rows of P pairs, work-groups of L2 items, as a function of
+    (kmin, kmax, jtop)."""
+    import pyopencl as cl
+    kernel = runtime.kernel("sot.cl", "sot_bitonic_local", {"D": d, **DEFINES})
+
+    def run(kmin, kmax, jtop):
+        kernel(runtime.queue(), (items,), (L2,), key.data, index.data, np.uint32(P),
+               np.uint32(kmin), np.uint32(kmax), np.uint32(jtop), cl.LocalMemory(16 * L2),
+               cl.LocalMemory(8 * L2))
+    return run
 
 
 def _move_device(x, theta, q, rank, proj, scale):
     sets, n, d = x.shape
     K = theta.shape[1]
-    kernel = runtime.kernel("sot.cl", "sot_move", {"D": d, **DEFINES})
-    out = runtime.Output((sets, n, d), np.float64, host=np.empty((sets, n, d)))
-    cost = runtime.Output((sets, n), np.float64, host=np.empty((sets, n)))
-    local = runtime.local_size(64)
-    kernel(runtime.queue(), (-(-(sets * n) // local) * local,), (local,),
-           runtime.to_device(x).data, runtime.to_device(theta).data,
-           runtime.to_device(q).data, runtime.to_device(rank).data,
-           runtime.to_device(proj).data, np.uint32(n), np.uint32(K), np.uint32(sets),
-           np.float64(scale), out.buffer, cost.buffer)
+    out, cost = _output((sets, n, d), np.float64, True), _output((sets, n), np.float64, True)
+    _launch("sot_move", d, sets * n, *(runtime.to_device(a).data for a in (x, theta, q, rank, proj)),
+            np.uint32(n), np.uint32(K), np.uint32(sets), np.float64(scale), out.buffer, cost.buffer)
     return out.finish(), cost.finish()
 
 
-PASSES = {"numpy": (quantiles_reference, project_reference, move_reference),
-          "opencl": (_quantiles_device, _project_device, _move_device)}
+def batch_reference(x, theta, sl, scale):
+    """One batch in NumPy: the targets, projections, ranks and move (:func:`move_reference`'s
+    result).
+
+    Parameters
+    ----------
+    x : ndarray (sets, n, d)
+    theta : ndarray (sets, K, d)
+    sl : Slice
+        Of ``theta`` reshaped to (sets K, d).
+    scale : float
+
+    Returns
+    -------
+    points, cost
+        As :func:`move_reference` returns them.
+    """
+    sets, n, _ = x.shape
+    q = quantiles_reference(sl, n).reshape(sets, theta.shape[1], n)
+    proj = project_reference(x, theta)
+    return move_reference(x, theta, q, _ranks(proj), proj, scale)
+
+
+def _batch_device(x, theta, sl, scale):
+    q = _quantiles_device(sl, x.shape[1], host=False)
+    if runtime.current_device().type == "cpu":
+        # on a CPU device NumPy's sort beats the bitonic network (docs/performance.md);
+        # both give the stable sort's ranks
+        proj = _project_device(x, theta)
+        rank = _ranks(proj)
+    else:
+        proj = _project_device(x, theta, host=False)
+        rank = _ranks_device(proj.reshape(theta.shape[:2] + (x.shape[1],)), x.shape[2],
+                             host=False)
+    return _move_device(x, theta, q, rank, proj, scale)
 
 
 def subspaces(projections, d):
@@ -401,7 +474,7 @@ def sot_optimize(start_points, seed, directions_per_batch=DIRECTIONS, iterations
     """
     if backend != "numpy":
         runtime.require_fp64()
-    quantiles, project, move = PASSES["numpy" if backend == "numpy" else "opencl"]
+    batch = batch_reference if backend == "numpy" else _batch_device
     x = np.array(start_points, dtype=np.float64)
     r, n, d = x.shape
     index = np.arange(r) if realizations is None else np.asarray(realizations)
@@ -416,9 +489,8 @@ def sot_optimize(start_points, seed, directions_per_batch=DIRECTIONS, iterations
             break
         theta = directions(seed, index[idx], it, directions_per_batch, d, spaces)
         K = theta.shape[1]
-        q = quantiles(Slice.of(theta.reshape(-1, d)), n).reshape(idx.size, K, n)
-        proj = project(np.ascontiguousarray(x[idx]), theta)
-        y, per_point = move(np.ascontiguousarray(x[idx]), theta, q, _ranks(proj), proj, step / K)
+        y, per_point = batch(np.ascontiguousarray(x[idx]), theta, Slice.of(theta.reshape(-1, d)),
+                             step / K)
         x[idx] = y
         cost[idx] = [math.fsum(row) / (n * K) for row in per_point]
         ran[idx] += 1
@@ -477,9 +549,9 @@ class SOTSampler(Sampler):
     the set are optimized too, as the authors' multi-projection code does.
 
     Points stay in the cube [0, 1)^d (a move outside is clamped; the target measure is the
-    cube's, not the torus's). Directions, quantile setup and the sort are host code; the
-    quantiles, projections and moves run on the device (``kernels/sot.cl``), and the NumPy
-    twin gives the same bits.
+    cube's, not the torus's). Directions and each direction's vertex sums are host code; the
+    quantiles, projections, the sort (a bitonic network; NumPy's on CPU devices) and the
+    moves run on the device (``kernels/sot.cl``), and the NumPy twin gives the same bits.
 
     References
     ----------
