@@ -12,7 +12,7 @@
  * (t in [0, total / 2], where no cancellation beyond the one Slice bounds occurs) and mirrored:
  * q_(n-1-i) = base + (total - t_i); an odd n's middle is base + total / 2. The solver is
  * Newton's step kept inside a bisection bracket (Numerical Recipes' rtsafe), stopped when
- * the step is at most QTOL total or after QMAX steps.
+ * Newton's step (taken) or the step made is at most QTOL total, or after QMAX steps.
  * Launch: grid (directions, n / 2) as one axis, directions * ((n + 1) / 2) work-items.
  *
  * sot_project: proj[set, k, i] = sum_j theta[set, k, j] x[set, i, j], j in order.
@@ -84,6 +84,10 @@ __kernel void sot_quantiles(__global const double *c, __global const double *sig
         else
             hi = t;
         const double tn = t - f / df;
+        if (df > 0.0 && fabs(tn - t) <= QTOL * total) {
+            t = tn;
+            break;
+        }
         double next;
         if (df > 0.0 && tn > lo && tn < hi && fabs(tn - t) < 0.5 * fabs(dx_old))
             next = tn;

@@ -160,6 +160,9 @@ def quantiles_reference(sl, n):
             lo = np.where(active & below, t, lo)
             hi = np.where(active & ~below, t, hi)
             tn = t - f / df
+            done = active & (df > 0.0) & (np.abs(tn - t) <= QTOL * total)
+            t = np.where(done, tn, t)
+            active &= ~done
             newton = (df > 0.0) & (tn > lo) & (tn < hi) & (np.abs(tn - t) < 0.5 * np.abs(dx_old))
         nxt = np.where(newton, tn, lo + (hi - lo) * 0.5)
         dx = nxt - t
