@@ -131,44 +131,44 @@ def quantiles_reference(sl, n):
     """
     K = sl.m.shape[0]
     half = (n + 1) // 2
-    i = np.arange(half, dtype=np.float64)[None, :] * np.ones((K, 1))
-    p = (i + 0.5) / float(n)
-    total, norm, m = sl.total[:, None], sl.norm[:, None], sl.m[:, None]
-    lo = np.zeros_like(p)
-    hi = np.broadcast_to(total * 0.5, p.shape).copy()
+    row = np.repeat(np.arange(K), half)
+    p = (np.tile(np.arange(half, dtype=np.float64), K) + 0.5) / float(n)
+    total, norm, m = sl.total[row], sl.norm[row], sl.m[row]
+    lo = np.zeros(K * half)
+    hi = total * 0.5
     t = hi * 0.5
     dx_old = hi.copy()
-    active = np.ones(p.shape, dtype=bool)
+    live = np.arange(K * half)          # the quantiles still being solved
     for _ in range(QMAX):
-        if not active.any():
+        if live.size == 0:
             break
-        F = np.zeros_like(p)
-        dF = np.zeros_like(p)
-        for v in range(sl.c.shape[1]):
-            used = (v < (1 << m)) & active
-            u = t - sl.c[:, v:v + 1]
-            on = used & (u > 0.0)
-            w = np.ones_like(p)
-            for j in range(1, int(sl.m.max())):
-                w = np.where(j < m, w * u, w)
-            F = np.where(on, F + sl.sign[:, v:v + 1] * (w * u), F)
-            dF = np.where(on, dF + sl.sign[:, v:v + 1] * w, dF)
+        r, x, mm, tol = row[live], t[live], m[live], QTOL * total[live]
+        F = np.zeros(live.size)
+        dF = np.zeros(live.size)
+        for v in range(1 << int(mm.max())):
+            u = x - sl.c[r, v]
+            on = (v < (1 << mm)) & (u > 0.0)
+            w = np.ones(live.size)
+            for j in range(1, int(mm.max())):
+                w = np.where(j < mm, w * u, w)
+            F = np.where(on, F + sl.sign[r, v] * (w * u), F)
+            dF = np.where(on, dF + sl.sign[r, v] * w, dF)
         with np.errstate(divide="ignore", invalid="ignore"):
-            f = F * norm - p
-            df = dF * norm * m.astype(np.float64)
+            f = F * norm[live] - p[live]
+            df = dF * norm[live] * mm.astype(np.float64)
             below = f < 0.0
-            lo = np.where(active & below, t, lo)
-            hi = np.where(active & ~below, t, hi)
-            tn = t - f / df
-            done = active & (df > 0.0) & (np.abs(tn - t) <= QTOL * total)
-            t = np.where(done, tn, t)
-            active &= ~done
-            newton = (df > 0.0) & (tn > lo) & (tn < hi) & (np.abs(tn - t) < 0.5 * np.abs(dx_old))
-        nxt = np.where(newton, tn, lo + (hi - lo) * 0.5)
-        dx = nxt - t
-        dx_old = np.where(active, dx, dx_old)
-        t = np.where(active, nxt, t)
-        active &= ~(np.abs(dx) <= QTOL * total)
+            lo_l = np.where(below, x, lo[live])
+            hi_l = np.where(below, hi[live], x)
+            tn = x - f / df
+            done = (df > 0.0) & (np.abs(tn - x) <= tol)
+            newton = (df > 0.0) & (tn > lo_l) & (tn < hi_l) & (np.abs(tn - x) < 0.5 * np.abs(dx_old[live]))
+        nxt = np.where(newton, tn, lo_l + (hi_l - lo_l) * 0.5)
+        dx = nxt - x
+        t[live] = np.where(done, tn, nxt)
+        lo[live], hi[live], dx_old[live] = lo_l, hi_l, dx
+        live = live[~(done | (np.abs(dx) <= tol))]
+    t = t.reshape(K, half)
+    total = sl.total[:, None]
     q = np.empty((K, n))
     q[:, :half] = sl.base[:, None] + t
     q[:, n - half:] = (sl.base[:, None] + (total - t))[:, ::-1]
