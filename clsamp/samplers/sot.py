@@ -410,9 +410,10 @@ def directions(seed, realizations, batch, K, d, spaces=()):
     u2 = philox.uniform(seed, philox.Stream.DIRECTIONS, r, index, 2 * dim + 1)
     g = np.sqrt(-2.0 * np.log1p(-u1)) * np.cos(2.0 * math.pi * u2) * mask
     norm = np.sqrt((g * g).sum(axis=-1, keepdims=True))
-    first = np.zeros_like(g)
-    first[..., 0] = 1.0
-    return np.where(norm > 0.0, g / np.where(norm > 0.0, norm, 1.0), first * mask.max(-1, keepdims=True))
+    # a vector of zeros (every u1 of it 0) becomes the first axis of its subspace
+    first = np.zeros((total, d))
+    first[np.arange(total), np.argmax(mask, axis=1)] = 1.0
+    return np.where(norm > 0.0, g / np.where(norm > 0.0, norm, 1.0), first)
 
 
 @dataclasses.dataclass(frozen=True)
