@@ -44,6 +44,7 @@ MODULES = (
     "bench_voronoi",
     "bench_gbn",
     "bench_sample_elimination",
+    "bench_sot",
 )
 
 

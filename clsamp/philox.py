@@ -39,6 +39,7 @@ class Stream:
     INIT = 6            # initial sites of optimizing samplers
     EXPERIMENT = 7      # convergence experiments
     FAMILY = 8          # the members of integrand families
+    DIRECTIONS = 9      # the directions of sliced optimal transport (sot)
 
 
 def seed_key(seed):

@@ -12,6 +12,7 @@ from . import (  # noqa: F401
     poisson_disk,  # poisson_disk (dart throwing)
     random,  # random
     sample_elimination,  # sample_elimination (weighted sample elimination)
+    sot,  # sot (sliced optimal transport, projective variant)
     stratified,  # regular, jittered, uncorrelated_jitter, latin_hypercube, (correlated_)multijittered
     zsobol,  # zsobol (Morton-ordered Owen-scrambled Sobol' for renderers)
 )

@@ -1,0 +1,603 @@
+"""The ``sot`` sampler: sliced optimal transport sampling (Paulin et al. 2020), points moved
+toward the uniform measure on [0, 1)^d by 1-D optimal transports along random directions,
+with the projective variant that optimizes chosen coordinate projections as well.
+
+One batch is four passes -- the 1-D targets of each direction (the quantiles of the cube's
+projection), the projections of the points, their ranks, the move -- in ``kernels/sot.cl``
+on the device and in :func:`quantiles_reference`, :func:`project_reference`, a stable sort
+and :func:`move_reference` here (:func:`batch_reference`), the same bits. The ranks come
+from a bitonic sort on GPUs and from NumPy's sort on CPU devices, where it is faster; both
+order ties by index. The directions and their CDFs (:class:`Slice`) are host code both
+backends share (:func:`sot_optimize`).
+"""
+
+import dataclasses
+import itertools
+import math
+
+import numpy as np
+
+from .. import philox, runtime
+from ..errors import InvalidArgumentError
+from ..validation import check_positive_int, check_real
+from .base import SampleInfo, Sampler, info_field, make_sampler, register
+
+DIRECTIONS = 32      # directions a batch (full space), as the authors' code
+ITERATIONS = 256
+STEP = 1.0
+TOL = 0.0
+WINDOW = 16          # the cost is compared over windows of this many batches
+MAX_D = 8
+QTOL = 1e-14         # quantile solver: stop when the step is at most QTOL times the range
+QMAX = 200
+CANCEL = 1e-8        # the most relative error the CDF's alternating sum may carry
+EPS = 2.0 ** -52
+TOP = 1.0 - 2.0 ** -53
+DEFINES = {"QTOL": repr(QTOL), "QMAX": QMAX}
+
+
+@dataclasses.dataclass(frozen=True)
+class Slice:
+    """The distribution of <theta, U>, U uniform in [0, 1)^d, as the quantile pass reads it.
+
+    <theta, U> = base + sum_j a_j U_j over the kept components a_1 >= ... >= a_m > 0 of
+    |theta| (U_j uniform in [0, 1)), whose CDF is the alternating sum over the 2^m vertices
+    of the box, F(t) = norm sum_v sign_v (t - c_v)_+^m. Components small enough that the sum
+    would cancel to more than ``CANCEL`` relative error (bounded by
+    2^-52 2^m total^m norm) are replaced by their mean a_j / 2, which moves a quantile by
+    at most a_j / 2 (and by O(a_j^2) where the density is smooth).
+
+    Attributes
+    ----------
+    c, sign : ndarray (K, 2^d)
+        Vertex sums and signs (the first 2^m of each row used, in vertex order v = 0, 1, ...,
+        bit j of v choosing a_(j+1)).
+    m : ndarray of int32 (K,)
+    norm, total, base : ndarray (K,)
+        1 / (m! prod a_j), sum a_j, and sum of the negative theta_j plus the dropped a_j / 2.
+    """
+
+    c: np.ndarray
+    sign: np.ndarray
+    m: np.ndarray
+    norm: np.ndarray
+    total: np.ndarray
+    base: np.ndarray
+
+    @classmethod
+    def of(cls, theta):
+        """The slices of directions theta (K, d), unit vectors.
+
+        Parameters
+        ----------
+        theta : ndarray (K, d)
+
+        Returns
+        -------
+        Slice
+        """
+        K, d = theta.shape
+        c = np.zeros((K, 2 ** d))
+        sign = np.zeros((K, 2 ** d))
+        m_of = np.zeros(K, dtype=np.int32)
+        norm, total, base = np.zeros(K), np.zeros(K), np.zeros(K)
+        for k in range(K):
+            a = sorted((abs(float(v)) for v in theta[k]), reverse=True)
+            low = 0.0
+            for v in theta[k]:
+                low = low + min(float(v), 0.0)
+            m = d
+            while m > 1 and _cancellation(a[:m]) > CANCEL:
+                low = low + a[m - 1] * 0.5
+                m -= 1
+            kept = a[:m]
+            for v in range(2 ** m):
+                s, odd = 0.0, 0
+                for j in range(m):
+                    if v >> j & 1:
+                        s, odd = s + kept[j], odd ^ 1
+                c[k, v], sign[k, v] = s, -1.0 if odd else 1.0
+            prod = 1.0
+            for v in kept:
+                prod = prod * v
+            m_of[k], norm[k], base[k] = m, 1.0 / (math.factorial(m) * prod), low
+            t = 0.0
+            for v in kept:
+                t = t + v
+            total[k] = t
+        return cls(c, sign, m_of, norm, total, base)
+
+
+def _cancellation(a):
+    """A bound of the alternating vertex sum's relative error for components a (> 0)."""
+    if a[-1] <= 0.0:
+        return math.inf
+    m, s = len(a), sum(a)
+    return EPS * 2 ** m * s ** m / (math.factorial(m) * math.prod(a))
+
+
+def quantiles_reference(sl, n):
+    """NumPy twin of ``sot_quantiles``: the n targets of each slice.
+
+    Parameters
+    ----------
+    sl : Slice
+    n : int
+
+    Returns
+    -------
+    ndarray (K, n)
+        Row k: F_k^-1((i + 1/2) / n), i = 0..n-1, increasing.
+    """
+    K = sl.m.shape[0]
+    half = (n + 1) // 2
+    row = np.repeat(np.arange(K), half)
+    p = (np.tile(np.arange(half, dtype=np.float64), K) + 0.5) / float(n)
+    total, norm, m = sl.total[row], sl.norm[row], sl.m[row]
+    lo = np.zeros(K * half)
+    hi = total * 0.5
+    t = hi * 0.5
+    dx_old = hi.copy()
+    live = np.arange(K * half)          # the quantiles still being solved
+    for _ in range(QMAX):
+        if live.size == 0:
+            break
+        r, x, mm, tol = row[live], t[live], m[live], QTOL * total[live]
+        F = np.zeros(live.size)
+        dF = np.zeros(live.size)
+        for v in range(1 << int(mm.max())):
+            u = x - sl.c[r, v]
+            on = (v < (1 << mm)) & (u > 0.0)
+            w = np.ones(live.size)
+            for j in range(1, int(mm.max())):
+                w = np.where(j < mm, w * u, w)
+            F = np.where(on, F + sl.sign[r, v] * (w * u), F)
+            dF = np.where(on, dF + sl.sign[r, v] * w, dF)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            f = F * norm[live] - p[live]
+            df = dF * norm[live] * mm.astype(np.float64)
+            below = f < 0.0
+            lo_l = np.where(below, x, lo[live])
+            hi_l = np.where(below, hi[live], x)
+            tn = x - f / df
+            done = (df > 0.0) & (np.abs(tn - x) <= tol)
+            newton = (df > 0.0) & (tn > lo_l) & (tn < hi_l) & (np.abs(tn - x) < 0.5 * np.abs(dx_old[live]))
+        nxt = np.where(newton, tn, lo_l + (hi_l - lo_l) * 0.5)
+        dx = nxt - x
+        t[live] = np.where(done, tn, nxt)
+        lo[live], hi[live], dx_old[live] = lo_l, hi_l, dx
+        live = live[~(done | (np.abs(dx) <= tol))]
+    t = t.reshape(K, half)
+    total = sl.total[:, None]
+    q = np.empty((K, n))
+    q[:, :half] = sl.base[:, None] + t
+    q[:, n - half:] = (sl.base[:, None] + (total - t))[:, ::-1]
+    if n % 2:
+        q[:, half - 1] = sl.base + sl.total * 0.5
+    return q
+
+
+def project_reference(x, theta):
+    """NumPy twin of ``sot_project``: <theta_k, x_i> summed over the coordinates in order.
+
+    Parameters
+    ----------
+    x : ndarray (sets, n, d)
+    theta : ndarray (sets, K, d)
+
+    Returns
+    -------
+    ndarray (sets, K, n)
+    """
+    p = theta[:, :, None, 0] * x[:, None, :, 0]
+    for j in range(1, x.shape[-1]):
+        p = p + theta[:, :, None, j] * x[:, None, :, j]
+    return p
+
+
+def move_reference(x, theta, q, rank, proj, scale):
+    """NumPy twin of ``sot_move``: each point moved by ``scale`` times the sum over the
+    batch of its 1-D displacements along their directions.
+
+    Parameters
+    ----------
+    x : ndarray (sets, n, d)
+    theta : ndarray (sets, K, d)
+    q : ndarray (sets, K, n)
+        The targets, sorted.
+    rank : ndarray of uint32 (sets, K, n)
+        The rank of each point's projection.
+    proj : ndarray (sets, K, n)
+    scale : float
+
+    Returns
+    -------
+    points : ndarray (sets, n, d)
+    cost : ndarray (sets, n)
+        Per point, the sum over the batch of its squared displacement.
+    """
+    sets, n, d = x.shape
+    disp = np.take_along_axis(q, rank.astype(np.intp), axis=2) - proj
+    shift = np.zeros((sets, n, d))
+    cost = np.zeros((sets, n))
+    for k in range(theta.shape[1]):
+        cost = cost + disp[:, k] * disp[:, k]
+        shift = shift + disp[:, k, :, None] * theta[:, k, None, :]
+    y = x + shift * scale
+    y = np.where(y < 0.0, 0.0, y)
+    return np.where(y > TOP, TOP, y), cost
+
+
+def _launch(name, d, items, *args):
+    """Run kernel ``name`` of ``kernels/sot.cl`` over ``items`` work-items."""
+    kernel = runtime.kernel("sot.cl", name, {"D": d, **DEFINES})
+    local = runtime.local_size(64)
+    kernel(runtime.queue(), (-(-items // local) * local,), (local,), *args)
+
+
+def _output(shape, dtype, host):
+    return runtime.Output(shape, dtype, host=np.empty(shape, dtype) if host else None)
+
+
+def _quantiles_device(sl, n, host=True):
+    K = sl.m.shape[0]
+    out = _output((K, n), np.float64, host)
+    _launch("sot_quantiles", int(round(math.log2(sl.c.shape[1]))), K * ((n + 1) // 2),
+            *(runtime.to_device(a).data for a in (sl.c, sl.sign, sl.m, sl.norm, sl.total, sl.base)),
+            np.uint32(n), np.uint32(K), out.buffer)
+    return out.finish()
+
+
+def _project_device(x, theta, host=True):
+    sets, n, d = x.shape
+    K = theta.shape[1]
+    out = _output((sets, K, n), np.float64, host)
+    _launch("sot_project", d, sets * K * n, runtime.to_device(x).data,
+            runtime.to_device(theta).data, np.uint32(n), np.uint32(K), np.uint32(sets), out.buffer)
+    return out.finish()
+
+
+def _ranks_device(proj, d, host=True):
+    """:func:`_ranks` of projections (sets, K, n) by the device's bitonic sort."""
+    import pyopencl.array as cla
+    shape = proj.shape
+    rows, n = shape[0] * shape[1], shape[2]
+    P = 1 << max(n - 1, 1).bit_length()
+    q = runtime.queue()
+    key, index = cla.empty(q, rows * P, np.float64), cla.empty(q, rows * P, np.uint32)
+    _launch("sot_sort_init", d, rows * P, runtime.to_device(proj).data, np.uint32(n),
+            np.uint32(P), np.uint32(rows), key.data, index.data)
+    # stages with j < L in local memory, the longer ones one global launch each
+    L2 = 1 << (min(P // 2, runtime.local_size(256)).bit_length() - 1)
+    local = _local_sort(d, rows * P // 2, L2, key, index, P)
+    local(2, 2 * L2, 1)
+    k = 4 * L2
+    while k <= P:
+        j = k >> 1
+        while j >= 2 * L2:
+            _launch("sot_bitonic", d, rows * P // 2, key.data, index.data, np.uint32(P),
+                    np.uint32(rows), np.uint32(k), np.uint32(j))
+            j >>= 1
+        local(k, k, L2)
+        k <<= 1
+    out = _output(shape, np.uint32, host)
+    _launch("sot_rank", d, rows * n, index.data, np.uint32(n), np.uint32(P), np.uint32(rows),
+            out.buffer)
+    return out.finish()
+
+
+def _local_sort(d, items, L2, key, index, P):
+    """``sot_bitonic_local`` over rows of P pairs, work-groups of L2 items, as a function of
+    (kmin, kmax, jtop)."""
+    import pyopencl as cl
+    kernel = runtime.kernel("sot.cl", "sot_bitonic_local", {"D": d, **DEFINES})
+
+    def run(kmin, kmax, jtop):
+        kernel(runtime.queue(), (items,), (L2,), key.data, index.data, np.uint32(P),
+               np.uint32(kmin), np.uint32(kmax), np.uint32(jtop), cl.LocalMemory(16 * L2),
+               cl.LocalMemory(8 * L2))
+    return run
+
+
+def _move_device(x, theta, q, rank, proj, scale):
+    sets, n, d = x.shape
+    K = theta.shape[1]
+    out, cost = _output((sets, n, d), np.float64, True), _output((sets, n), np.float64, True)
+    _launch("sot_move", d, sets * n, *(runtime.to_device(a).data for a in (x, theta, q, rank, proj)),
+            np.uint32(n), np.uint32(K), np.uint32(sets), np.float64(scale), out.buffer, cost.buffer)
+    return out.finish(), cost.finish()
+
+
+def batch_reference(x, theta, sl, scale):
+    """One batch in NumPy: the targets, projections, ranks and move (:func:`move_reference`'s
+    result).
+
+    Parameters
+    ----------
+    x : ndarray (sets, n, d)
+    theta : ndarray (sets, K, d)
+    sl : Slice
+        Of ``theta`` reshaped to (sets K, d).
+    scale : float
+
+    Returns
+    -------
+    points, cost
+        As :func:`move_reference` returns them.
+    """
+    sets, n, _ = x.shape
+    q = quantiles_reference(sl, n).reshape(sets, theta.shape[1], n)
+    proj = project_reference(x, theta)
+    return move_reference(x, theta, q, _ranks(proj), proj, scale)
+
+
+def _batch_device(x, theta, sl, scale):
+    q = _quantiles_device(sl, x.shape[1], host=False)
+    if runtime.current_device().type == "cpu":
+        # on a CPU device NumPy's sort beats the bitonic network (docs/performance.md);
+        # both give the stable sort's ranks
+        proj = _project_device(x, theta)
+        rank = _ranks(proj)
+    else:
+        proj = _project_device(x, theta, host=False)
+        rank = _ranks_device(proj.reshape(theta.shape[:2] + (x.shape[1],)), x.shape[2],
+                             host=False)
+    return _move_device(x, theta, q, rank, proj, scale)
+
+
+def subspaces(projections, d):
+    """The coordinate subspaces a projective run also optimizes.
+
+    Parameters
+    ----------
+    projections : None, "pairs" or sequence of sequences of int
+        None: none; ``"pairs"``: every 2-D coordinate projection; else the listed axes.
+    d : int
+
+    Returns
+    -------
+    tuple of tuple of int
+    """
+    if projections is None:
+        return ()
+    if isinstance(projections, str):
+        if projections != "pairs":
+            raise InvalidArgumentError(
+                f"'projections' must be None, 'pairs' or a list of tuples of axes, got {projections!r}")
+        return tuple(itertools.combinations(range(d), 2))
+    try:
+        spaces = tuple(tuple(int(a) for a in axes) for axes in projections)
+    except (TypeError, ValueError):
+        raise InvalidArgumentError(
+            f"'projections' must be None, 'pairs' or a list of tuples of axes, got {projections!r}") from None
+    for axes in spaces:
+        if not axes or len(set(axes)) != len(axes) or min(axes) < 0 or max(axes) >= d:
+            raise InvalidArgumentError(
+                f"'projections' must list distinct axes in 0..{d - 1} per projection, got {axes!r}")
+    return spaces
+
+
+def directions(seed, realizations, batch, K, d, spaces=()):
+    """The unit directions of one batch: K in the full space, then K // 2 (at least 1) in
+    each subspace, each a normalized Gaussian vector (Box-Muller on Philox (seed,
+    ``Stream.DIRECTIONS``, realization, batch-local index)) restricted to its axes.
+
+    Parameters
+    ----------
+    seed : int
+    realizations : ndarray of int (sets,)
+    batch : int
+        The iteration.
+    K : int
+    d : int
+    spaces : tuple of tuple of int
+
+    Returns
+    -------
+    ndarray (sets, K + len(spaces) max(K // 2, 1), d)
+    """
+    per = max(K // 2, 1)
+    total = K + per * len(spaces)
+    mask = np.ones((total, d))
+    for s, axes in enumerate(spaces):
+        mask[K + s * per:K + (s + 1) * per] = 0.0
+        mask[K + s * per:K + (s + 1) * per, list(axes)] = 1.0
+    r = np.asarray(realizations, dtype=np.uint32)[:, None, None]
+    index = (np.uint64(batch) * np.uint64(total) + np.arange(total, dtype=np.uint64))
+    index = index.astype(np.uint32)[None, :, None]
+    dim = np.arange(d, dtype=np.uint32)[None, None, :]
+    u1 = philox.uniform(seed, philox.Stream.DIRECTIONS, r, index, 2 * dim)
+    u2 = philox.uniform(seed, philox.Stream.DIRECTIONS, r, index, 2 * dim + 1)
+    g = np.sqrt(-2.0 * np.log1p(-u1)) * np.cos(2.0 * math.pi * u2) * mask
+    norm = np.sqrt((g * g).sum(axis=-1, keepdims=True))
+    # a vector of zeros (every u1 of it 0) becomes the first axis of its subspace
+    first = np.zeros((total, d))
+    first[np.arange(total), np.argmax(mask, axis=1)] = 1.0
+    return np.where(norm > 0.0, g / np.where(norm > 0.0, norm, 1.0), first)
+
+
+@dataclasses.dataclass(frozen=True)
+class SOTInfo(SampleInfo):
+    """What a sliced-optimal-transport run did, per realization (first axis).
+
+    Attributes
+    ----------
+    realizations : ndarray (r,)
+    cost_history : ndarray (r, T)
+        Entry t: the sliced transport cost of batch t before its move, the mean over its
+        directions of the mean squared 1-D displacement. A set that stopped early holds
+        its last value.
+    iterations : ndarray (r,)
+        The batches each set ran.
+    converged : ndarray of bool (r,)
+        Whether the set stopped because the mean cost over the last ``WINDOW`` batches fell
+        by at most ``tol`` of the previous window's, before ``iterations``.
+    """
+
+    cost_history: np.ndarray = info_field("pad")
+    iterations: np.ndarray = info_field()
+    converged: np.ndarray = info_field()
+
+
+def _ranks(proj):
+    """The rank of each projection in its row, ties by index (a stable sort)."""
+    order = np.argsort(proj, axis=-1, kind="stable")
+    rank = np.empty(proj.shape, dtype=np.uint32)
+    np.put_along_axis(rank, order, np.arange(proj.shape[-1], dtype=np.uint32)[None, None, :]
+                      * np.ones(proj.shape[:-1] + (1,), dtype=np.uint32), axis=-1)
+    return rank
+
+
+def sot_optimize(start_points, seed, directions_per_batch=DIRECTIONS, iterations=ITERATIONS,
+                 step=STEP, tol=TOL, spaces=(), backend="opencl", realizations=None):
+    """Sliced optimal transport from given starting sets.
+
+    Parameters
+    ----------
+    start_points : ndarray (r, n, d)
+    seed : int
+        Seeds the directions.
+    directions_per_batch : int
+        K, the full-space directions of a batch.
+    iterations : int
+    step : float
+        The fraction of the batch's mean displacement applied.
+    tol : float
+        Stop when a window's mean cost is not below (1 - tol) times the previous one's
+        (0: run every batch).
+    spaces : tuple of tuple of int
+        Subspaces also optimized (:func:`subspaces`).
+    backend : {"opencl", "numpy"}
+    realizations : array_like of int, optional
+        The indices of the sets (their directions; default 0..r-1).
+
+    Returns
+    -------
+    points : ndarray (r, n, d)
+    info : SOTInfo
+    """
+    if backend != "numpy":
+        runtime.require_fp64()
+    batch = batch_reference if backend == "numpy" else _batch_device
+    x = np.array(start_points, dtype=np.float64)
+    r, n, d = x.shape
+    index = np.arange(r) if realizations is None else np.asarray(realizations)
+    active = np.ones(r, dtype=bool)
+    converged = np.zeros(r, dtype=bool)
+    ran = np.zeros(r, dtype=np.int64)
+    history = []
+    cost = np.zeros(r)
+    for it in range(iterations):
+        idx = np.flatnonzero(active)
+        if idx.size == 0:
+            break
+        theta = directions(seed, index[idx], it, directions_per_batch, d, spaces)
+        K = theta.shape[1]
+        y, per_point = batch(np.ascontiguousarray(x[idx]), theta, Slice.of(theta.reshape(-1, d)),
+                             step / K)
+        x[idx] = y
+        cost[idx] = [math.fsum(row) / (n * K) for row in per_point]
+        ran[idx] += 1
+        history.append(cost.copy())
+        if tol > 0.0 and it + 1 >= 2 * WINDOW:
+            h = np.stack(history[-2 * WINDOW:], axis=1)[idx]
+            done = h[:, WINDOW:].mean(axis=1) >= (1.0 - tol) * h[:, :WINDOW].mean(axis=1)
+            converged[idx[done]] = True
+            active[idx[done]] = False
+    history = np.stack(history, axis=1) if history else np.empty((r, 0))
+    info = SOTInfo(realizations=index.astype(np.int64), cost_history=history, iterations=ran,
+                   converged=converged)
+    return x, info
+
+
+@register("sot")
+class SOTSampler(Sampler):
+    """Sliced optimal transport sampling: points moved toward the uniform measure on the
+    unit cube by 1-D optimal transports along random directions.
+
+    Parameters
+    ----------
+    d : int
+        Dimension, 2 to 8.
+    seed : int
+        Seeds the starting points (the ``random`` sampler's) and the directions.
+    directions : int
+        Full-space directions a batch (default 32).
+    iterations : int
+        Batches (default 256).
+    step : float
+        The fraction of the batch's mean displacement applied (default 1, as the paper).
+    tol : float
+        Stop once the mean transport cost over 16 batches is not below (1 - tol) times that
+        of the 16 before (default 0: run every batch).
+    projections : None, "pairs" or list of tuples of int
+        The projective variant: also optimize these coordinate projections (``"pairs"``:
+        every 2-D one), each with ``directions // 2`` directions a batch drawn in its
+        subspace.
+    backend : {"opencl", "numpy"}
+
+    Notes
+    -----
+    A batch draws K random unit directions theta_k, projects the points on each, sorts the
+    projections and matches the i-th smallest to the quantile F_k^-1((i + 1/2) / n) of
+    <theta_k, U>, U uniform in [0, 1)^d: the 1-D optimal transport between the projected
+    points and the projected measure. Each point then moves by ``step`` times the mean over
+    the batch of its 1-D displacements along their directions, a step of stochastic
+    gradient descent on the sliced Wasserstein distance between the points and the uniform
+    measure (Paulin et al. 2020, Algorithm 1); ``cost_history`` is that distance as the
+    batches see it, which falls on average. The projected measure is the distribution of a
+    sum of scaled uniforms, whose CDF is a piecewise polynomial of degree d (the
+    alternating sum over the cube's vertices); its quantiles are found by safeguarded
+    Newton steps to 1e-14 of their range. The projective variant ("projective blue noise")
+    also draws directions within chosen coordinate subspaces, so that those projections of
+    the set are optimized too, as the authors' multi-projection code does.
+
+    Points stay in the cube [0, 1)^d (a move outside is clamped; the target measure is the
+    cube's, not the torus's). Directions and each direction's vertex sums are host code; the
+    quantiles, projections, the sort (a bitonic network; NumPy's on CPU devices) and the
+    moves run on the device (``kernels/sot.cl``), and the NumPy twin gives the same bits.
+
+    References
+    ----------
+    .. [1] L. Paulin, N. Bonneel, D. Coeurjolly, J.-C. Iehl, A. Webanck, M. Desbrun,
+       V. Ostromoukhov, "Sliced Optimal Transport Sampling", ACM Trans. Graph. 39(4),
+       2020 (SIGGRAPH).
+
+    Examples
+    --------
+    >>> import clsamp
+    >>> s = clsamp.make_sampler("sot", d=2, seed=1, iterations=64)
+    >>> pts, info = s.sample(256, return_info=True)
+    >>> pts.shape, bool(info.cost_history[0, -8:].mean() < info.cost_history[0, :8].mean())
+    ((256, 2), True)
+    """
+
+    dimensions = tuple(range(2, MAX_D + 1))
+    max_d = MAX_D
+    max_d_source = "the projected cube's CDF sums 2^d vertex terms"
+    expensive = True
+    accepts_start = False
+    needs_fp64 = True
+    info = SOTInfo
+
+    def __init__(self, d=2, seed=0, directions=DIRECTIONS, iterations=ITERATIONS, step=STEP,
+                 tol=TOL, projections=None, backend="opencl"):
+        super().__init__(d=d, seed=seed, backend=backend)
+        self.directions = check_positive_int(directions, "directions", maximum=4096)
+        self.iterations = check_positive_int(iterations, "iterations")
+        self.step = check_real(step, "step", minimum=0.0, open_minimum=True, maximum=2.0)
+        self.tol = check_real(tol, "tol", minimum=0.0, maximum=1.0)
+        self.projections = subspaces(projections, self.d)
+
+    def _run(self, n, realizations, backend):
+        start = make_sampler("random", d=self.d, seed=self.seed,
+                             backend=self.backend).sample(n, realizations=realizations)
+        return sot_optimize(start, self.seed, self.directions, self.iterations, self.step,
+                            self.tol, self.projections, backend,
+                            np.arange(realizations.start, realizations.stop))
+
+    def _reference(self, n, realizations, start):
+        return self._run(n, realizations, "numpy")
+
+    def _device(self, n, realizations, start, out=None):
+        return self._run(n, realizations, "opencl")
