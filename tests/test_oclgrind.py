@@ -49,8 +49,10 @@ REPORT = re.compile(r"^\s*(Kernel|Entity): |OCLGRIND|Oclgrind -|data race|Invali
 ENVIRONMENT = {"OCLGRIND_DATA_RACES": "1", "OCLGRIND_MAX_ERRORS": "20"}
 
 # Parameters that keep the iterating samplers small on an interpreter.
-SMALL = {"lloyd": {"iterations": 2, "density": 8}, "ccvt": {"points_per_site": 8, "iterations": 2}}
-SAMPLER_N = {"lloyd": 64, "ccvt": 64, "poisson_disk": 64}
+SMALL = {"lloyd": {"iterations": 2, "density": 8}, "ccvt": {"points_per_site": 8, "iterations": 2},
+         "gbn": {"iterations": 2}, "sot": {"iterations": 2, "directions": 4}}
+SAMPLER_N = {"lloyd": 64, "ccvt": 64, "poisson_disk": 64, "gbn": 64, "sot": 64,
+             "sample_elimination": 64}
 
 # Checks that cannot run on Oclgrind, with why; they are skipped by name.
 SKIPS = {}
@@ -58,7 +60,14 @@ SKIPS = {}
 # Checks whose kernels run under Oclgrind's memory and race checks but whose values Oclgrind
 # computes wrongly: the values are not compared there (the test skips, by name, after the
 # reports are checked).
+_LMS_BASE_B = ("Oclgrind 21.10 computes kernels/lowdiscrepancy.cl's lms_digits tables in base 5 "
+               "differently from PoCL, Intel and the NumPy twin, which agree bit for bit, from the "
+               "third row of L on, with no memory or race report; not yet diagnosed (a minimal "
+               "kernel of clsamp_bits words also differs there alone, while every other sampler "
+               "drawing such words matches)")
 UNCOMPARED = {
+    "sampler-faure:lms-d5": _LMS_BASE_B,
+    "sampler-faure:lms+shift-d5": _LMS_BASE_B,
     "star-discrepancy-bounds": "Oclgrind 21.10 zero-extends a true lane of a double4 "
                                "comparison to 255, not 1, where LLVM folds 'count -= (a < b)' "
                                "into a zero extension (kernels/anchored_counts.cl), so its counts "
@@ -104,7 +113,7 @@ def _sampler_cases():
     return cases
 
 
-def _sampler_check(name, d, randomize):
+def _sampler_check(name, d, randomize, label):
     def run():
         params = {**SMALL.get(name, {}), **({"randomize": randomize} if randomize else {})}
         device = clsamp.make_sampler(name, d=d, seed=3, **params)
@@ -112,14 +121,15 @@ def _sampler_check(name, d, randomize):
         # enough points for several work-items and work-groups (Oclgrind is a GPU to clsamp:
         # few points a work-item)
         n = device.valid_n(SAMPLER_N.get(name, 300))
-        _same_bits(device.sample(n, realizations=range(1, 3)),
-                   reference.sample(n, realizations=range(1, 3)))
+        made = device.sample(n, realizations=range(1, 3))
+        if label not in UNCOMPARED:
+            _same_bits(made, reference.sample(n, realizations=range(1, 3)))
     return run
 
 
 for _name, _d, _randomize in _sampler_cases():
-    check(f"sampler-{_name}" + (f":{_randomize}" if _randomize else "") + f"-d{_d}")(
-        _sampler_check(_name, _d, _randomize))
+    _label = f"sampler-{_name}" + (f":{_randomize}" if _randomize else "") + f"-d{_d}"
+    check(_label)(_sampler_check(_name, _d, _randomize, _label))
 
 
 def _points(n=128, r=2, seed=1):
