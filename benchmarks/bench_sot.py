@@ -17,9 +17,8 @@ once), which gives the same bits (checked). The peer column is the twin; the rat
 seconds over device seconds.
 """
 
-import numpy as np
 from bench_gbn import low_frequency_power
-from common import Row, main, on_device, short_name, timed
+from common import main, on_device, short_name, to_quality
 
 import clsamp
 from clsamp.metrics import max_min_distance, nearest_neighbor_distances
@@ -53,21 +52,9 @@ def run(devices, quick):
         dev = short_name(device)
         for d in (2, 4):
             for n in sizes:
-                for iterations in LADDER:
-                    sampler = clsamp.make_sampler("sot", d=d, seed=1, iterations=iterations)
-                    pts = sampler.sample(n)
-                    met, quality = _quality(pts, n, d, target[n, d])
-                    if met:
-                        break
-                t_cl, pts = timed(lambda: sampler.sample(n), repeats=3)   # noqa: B023
-                twin = clsamp.make_sampler("sot", d=d, seed=1, iterations=iterations,
-                                           backend="numpy")
-                t_np, ref = timed(lambda: twin.sample(n), repeats=1, warmup=0)   # noqa: B023
-                same = "bit-identical" if np.array_equal(ref, pts) else "DIFFERS"
-                reached = "" if met else f"quality not reached in {iterations} batches: "
-                rows.append(Row("sot to quality", f"{n}x{d}D, {iterations} it", dev, t_cl,
-                                "numpy twin", t_np, f"{reached}{quality}, {same}",
-                                {"iterations": iterations, "reached": met}))
+                rows.append(to_quality("sot", d, n, LADDER,
+                                       lambda pts, n=n, d=d: _quality(pts, n, d, target[n, d]),
+                                       dev, unit="batches"))
     return rows
 
 

@@ -163,6 +163,31 @@ def timed(fn, repeats=5, warmup=1, min_time=0.0):
     return statistics.median(times), result
 
 
+def to_quality(name, d, n, ladder, quality, device, unit="iterations", **params):
+    """An iterating sampler timed where it first reaches a quality: climb ``ladder`` (its
+    ``iterations``) until ``quality(points)`` gives (True, text), then time that setting
+    against its NumPy twin (which must give the same bits).
+
+    Returns
+    -------
+    Row
+        "<name> to quality"; its extra holds the iterations and whether the quality was met.
+    """
+    import numpy as np
+    for iterations in ladder:
+        sampler = clsamp.make_sampler(name, d=d, seed=1, iterations=iterations, **params)
+        met, text = quality(sampler.sample(n))
+        if met:
+            break
+    t_cl, pts = timed(lambda: sampler.sample(n), repeats=3)
+    twin = clsamp.make_sampler(name, d=d, seed=1, iterations=iterations, backend="numpy", **params)
+    t_np, ref = timed(lambda: twin.sample(n), repeats=1, warmup=0)
+    same = "bit-identical" if np.array_equal(ref, pts) else "DIFFERS"
+    reached = "" if met else f"quality not reached in {iterations} {unit}: "
+    return Row(f"{name} to quality", f"{n}x{d}D, {iterations} it", device, t_cl, "numpy twin", t_np,
+               f"{reached}{text}, {same}", {"iterations": iterations, "reached": met})
+
+
 def copy_bandwidth(nbytes, repeats=None):
     """GB/s (1e9 bytes a second) of ``np.copyto(dst, src)`` for float64 arrays of ``nbytes``.
 

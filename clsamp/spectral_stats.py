@@ -10,7 +10,7 @@ import numpy as np
 from .errors import InvalidArgumentError
 from .validation import check_real
 
-__all__ = ["check_spectrum", "radial_mean", "anisotropy"]
+__all__ = ["check_spectrum", "radial_mean", "anisotropy", "low_frequency_power"]
 
 
 def check_spectrum(P, name="P"):
@@ -142,3 +142,36 @@ def anisotropy(P, bin_width=1.0):
         variance = squares[1:] / (counts[1:] - 1)
         values = 10.0 * np.log10(variance / mean[1:] ** 2)
     return np.arange(1, count + 1) * float(bin_width), values
+
+
+def low_frequency_power(P, n):
+    """The mean of a spectrum over the integer frequencies 0 < |k| < sqrt(n) / 2: 1 for
+    white noise, near 0 for blue noise (the figure issue 37 compares optimizers by).
+
+    Parameters
+    ----------
+    P : ndarray, shape (R, R) or (R, R, R)
+        From :func:`clsamp.power_spectrum` (DC at R/2), with R/2 >= sqrt(n) / 2.
+    n : int
+        Points per set.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> import clsamp
+    >>> from clsamp.spectral_stats import low_frequency_power
+    >>> pts = clsamp.make_sampler("random", seed=1).sample(256, realizations=8)
+    >>> bool(abs(low_frequency_power(clsamp.power_spectrum(pts, resolution=32), 256) - 1) < 0.2)
+    True
+    """
+    P = check_spectrum(P)
+    R = P.shape[0]
+    if R // 2 < math.sqrt(n) / 2:
+        raise InvalidArgumentError(f"'P' of side {R} holds no frequency up to sqrt({n}) / 2")
+    f = np.arange(-(R // 2), R // 2, dtype=np.float64)
+    grids = np.meshgrid(*([f] * P.ndim), indexing="ij")
+    rho = np.sqrt(sum(g * g for g in grids))
+    return float(P[(rho > 0) & (rho < 0.5 * math.sqrt(n))].mean())

@@ -14,6 +14,7 @@ import numpy as np
 
 from . import plots
 from .report import img, table
+from .spectral_stats import low_frequency_power
 
 # (name, parameters) of the optimizers compared, oldest first
 BLUE_NOISE = (
@@ -45,27 +46,6 @@ def quiet_sampler(name, seed, params):
     from .samplers import make_sampler, sampler_class
     takes = "progress" in inspect.signature(sampler_class(name)).parameters
     return make_sampler(name, d=2, seed=seed, **params, **({"progress": False} if takes else {}))
-
-
-def low_frequency_power(P, n):
-    """The mean of an expected spectrum over the integer frequencies 0 < |k| < sqrt(n) / 2:
-    1 for white noise, near 0 for blue noise.
-
-    Parameters
-    ----------
-    P : ndarray (R, R)
-        From :func:`clsamp.power_spectrum` (DC at R/2), R >= sqrt(n).
-    n : int
-        Points per set.
-
-    Returns
-    -------
-    float
-    """
-    R = P.shape[0]
-    f = np.arange(-(R // 2), R // 2)
-    rho = np.hypot(f[:, None], f[None, :])
-    return float(P[(rho > 0) & (rho < 0.5 * np.sqrt(n))].mean())
 
 
 def section_blue_noise(report, quick):

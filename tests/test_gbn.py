@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import clsamp
+from clsamp import spectral_stats
 from clsamp.errors import InvalidArgumentError
 from clsamp.geometry.cells import sorted_by_cell
 from clsamp.metrics import max_min_distance, nearest_neighbor_distances, relative_radius
@@ -24,9 +25,7 @@ def low_frequency_power(points):
     n = points.shape[-2]
     resolution = 2 * math.ceil(math.sqrt(n) / 2) + 2
     P = clsamp.power_spectrum(points, resolution=resolution, method="direct", progress=False)
-    f = np.arange(resolution) - resolution // 2
-    radius = np.hypot(f[:, None], f[None, :])
-    return float(P[(radius > 0) & (radius < 0.5 * math.sqrt(n))].mean())
+    return spectral_stats.low_frequency_power(P, n)
 
 
 def test_exp_is_close_to_numpy_exp():
