@@ -32,6 +32,7 @@ from .report import (
 )
 from .tour_blue import quiet_sampler, section_blue_noise
 from .tour_cost import section_cost
+from .tour_qmc import section_qmc
 
 # Samplers shown in section 1, with the parameters that make each one its textbook self.
 TOUR_SAMPLERS = (
@@ -623,7 +624,8 @@ SECTIONS = (
     ("cost", "4. What accuracy costs in time", section_cost),
     ("stability", "5. Stability: the hard cases", section_stability),
     ("blue_noise", "6. Blue noise since 2009: quality against seconds, and in 4-D", section_blue_noise),
-    ("device", "7. Device, versions and timings", section_device),
+    ("qmc", "7. QMC: integrate's cost against tolerance, and higher-order nets", section_qmc),
+    ("device", "8. Device, versions and timings", section_device),
 )
 
 

@@ -23,8 +23,8 @@ LAYERS = [
     ("experiments", {"integrands", "integrand_kernel", "families", "estimates", "sweep", "results", "theory",
                      "integration", "cubature"}),
     ("render", {"scene", "pixel_sampling", "render_numpy", "render"}),
-    ("report", {"plot_axes", "plot_points", "plots", "report", "tour_blue", "tour_cost", "tour", "cli",
-                "__main__", "__init__"}),
+    ("report", {"plot_axes", "plot_points", "plots", "report", "tour_blue", "tour_cost", "tour_qmc",
+                "tour", "cli", "__main__", "__init__"}),
 ]
 
 

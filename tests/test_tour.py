@@ -130,3 +130,17 @@ def test_the_blue_noise_section_compares_the_optimizers_and_renders_depth_of_fie
     assert set(dof) == set(DOF_SAMPLERS) and all(dof[s]["mse"] > 0 for s in dof)
     assert dof["gbn"]["mse"] < dof["random"]["mse"]
     assert (tour / "img" / "blue_quality_time.png").exists()
+
+
+def test_the_qmc_section_costs_integrate_by_method_and_fits_higher_order_rates(tour):
+    # issue 38: integrate's cost against tolerance for the three methods; higher-order rates
+    from clsamp.tour_qmc import METHODS, ORDERS, tour_qmc_plan
+    data = json.loads((tour / "tour.json").read_text())["sections"]["qmc"]["data"]
+    _, tolerances, _, _ = tour_qmc_plan(quick=True)
+    for label, _ in METHODS:
+        run = data["integrate"][label]
+        assert run["tolerances"] == list(tolerances) and min(run["seconds"]) > 0, run
+        assert all(e <= 2 * t for e, t in zip(run["errors"], tolerances, strict=True)), run
+    slopes = {label: data["higher_order"][label]["comparison"]["slope"] for label, _ in ORDERS}
+    assert slopes["order 2, digital shift"] < slopes["order 1, Owen scrambling"] < -2.5, slopes
+    assert (tour / "img" / "qmc_cost.png").exists() and (tour / "img" / "qmc_higher_order.png").exists()
