@@ -1,6 +1,8 @@
 """Power spectra: the expected spectrum of r realizations of N points at R², clsamp's exact
 (direct) and NUFFT (fast) paths against finufft (nufft2d1, isign=-1, same tolerance) and the
-NumPy separable GEMM (``clsamp.spectrum.direct_reference``), in one run.
+NumPy separable GEMM (``clsamp.spectrum.direct_reference``), in one run; and one 3-D set of
+4096 points at R³ (R = 32, 64): the fast path against the exact direct sum and finufft
+(nufft3d1).
 
 Max error is max_ω |P̃(ω) - P(ω)| / N against clsamp's direct result (itself checked
 against the NumPy reference in the same run). The direct rows also report the kernel's rate
@@ -17,8 +19,8 @@ from clsamp import philox, spectrum
 from clsamp.spectrum import nufft_parameters, power_spectrum
 
 
-def _points(r, n):
-    return philox.uniform_block(1, philox.Stream.POINTS, np.arange(r), n, 2, 0)
+def _points(r, n, d=2):
+    return philox.uniform_block(1, philox.Stream.POINTS, np.arange(r), n, d, 0)
 
 
 def twiddles_by_recurrence(x, f0, count, reseed=32):
@@ -74,6 +76,49 @@ def _finufft(points, resolution, tol):
     return total / (points.shape[0] * points.shape[1])
 
 
+def _finufft3(points, resolution, tol):
+    import finufft
+    total = np.zeros((resolution,) * 3)
+    c = np.ones(points.shape[1], dtype=np.complex128)
+    for block in points:
+        x, y, z = (2 * np.pi * block[:, a] for a in range(3))
+        f = finufft.nufft3d1(x, y, z, c, (resolution,) * 3, eps=tol, isign=-1)
+        total += f.real**2 + f.imag**2
+    return total / (points.shape[0] * points.shape[1])
+
+
+def run_3d(dev, quick, have_finufft):
+    """One 3-D set of 4096 points: direct, then fast at three tolerances against finufft."""
+    rows = []
+    pts = _points(1, 4096, 3)
+    for R in (32,) if quick else (32, 64):
+        size = f"1x4096 at {R}^3"
+        t_direct, exact = timed(lambda: power_spectrum(pts, R, method="direct", progress=False),
+                                repeats=3)
+        rows.append(Row("spectrum 3-D direct", size, dev, t_direct))
+        for tol in (1e-3, 1e-6, 1e-12):
+            rows.append(_fast_row("spectrum 3-D", size, dev, pts, R, tol, exact, 5,
+                                  _finufft3 if have_finufft else None, t_direct))
+    return rows
+
+
+def _fast_row(case, size, dev, pts, R, tol, exact, repeats, peer, t_direct=None):
+    """One row: the fast path at ``tol`` against the exact ``exact``, and against finufft
+    (``peer``, a function of (points, R, tol); None: not installed)."""
+    d, n = pts.shape[-1], pts.shape[1]
+    sigma, width, _ = nufft_parameters(tol, d)
+    t_fast, fast = timed(lambda: power_spectrum(pts, R, method="fast", tol=tol, progress=False),
+                         repeats=repeats)
+    quality = f"max err {np.abs(fast - exact).max() / n:.1e} (sigma {sigma}, w {width})"
+    if t_direct is not None:
+        quality += f"; {t_direct / t_fast:.0f}x direct"
+    if peer is None:
+        return Row(f"{case} fast tol={tol:g}", size, dev, t_fast, quality=quality)
+    t_fi, fi = timed(lambda: peer(pts, R, tol), repeats=repeats)
+    quality += f"; finufft err {np.abs(fi - exact).max() / n:.1e}"
+    return Row(f"{case} fast tol={tol:g}", size, dev, t_fast, f"finufft nufft{d}d1", t_fi, quality)
+
+
 def run(devices, quick):
     rows = []
     r, n, R = (8, 1024, 64) if quick else (64, 4096, 256)
@@ -102,18 +147,9 @@ def run(devices, quick):
                         f"max err {err:.1e}; {rate:.1f} vs numpy {rate_np:.1f} GFLOP/s "
                         f"({rate / rate_np:.0%})"))
         for tol in (1e-3, 1e-6, 1e-9, 1e-12):
-            sigma, width, _ = nufft_parameters(tol)
-            t_fast, fast = timed(lambda: power_spectrum(pts, R, method="fast", tol=tol, progress=False),
-                                 repeats=3)
-            err = np.abs(fast - exact).max() / n
-            quality = f"max err {err:.1e} (sigma {sigma}, w {width})"
-            if have_finufft:
-                t_fi, fi = timed(lambda: _finufft(pts, R, tol), repeats=3)
-                quality += f"; finufft err {np.abs(fi - exact).max() / n:.1e}"
-                rows.append(Row(f"spectrum fast tol={tol:g}", size, dev, t_fast, "finufft nufft2d1",
-                                t_fi, quality))
-            else:
-                rows.append(Row(f"spectrum fast tol={tol:g}", size, dev, t_fast, quality=quality))
+            rows.append(_fast_row("spectrum", size, dev, pts, R, tol, exact, 3,
+                                  _finufft if have_finufft else None))
+        rows += run_3d(dev, quick, have_finufft)
     return rows
 
 

@@ -9,7 +9,10 @@ Cases (``--quick`` in brackets):
   (the difference of an 11- and a 1-iteration run over 10, for both) against a periodic Lloyd
   iteration with ``scipy.spatial.cKDTree(boxsize=1)`` on the same density grid (tree of
   the sites, nearest-site query, centroids unwrapped relative to the site); both from
-  the same starting sites, N*E after 10 iterations of each.
+  the same starting sites, N*E after 10 iterations of each. Then 3-D and 4-D, 1024 sites
+  and 256 density points per site (64^3, 23^4) [3-D only, 256 sites x 64]: seconds per
+  iteration (the difference of a 4- and a 1-iteration run) against the same cKDTree Lloyd
+  in d dimensions, and the energy E (not normalized: N*E is a 2-D figure) of both after 3.
 * CCVT until no exchange improves: 1024 sites x 1024 points per site, then 256 x 1024
   and 4096 x 256 (Balzer's other two cases), and 256, 1024, 4096 sites x 256 for the
   growth with n at one p [256 x 64, 1024 x 64, 4096 x 16]: seconds (all of it: density,
@@ -37,6 +40,7 @@ from common import GAUGE_PUBLISHED, Row, machine_gauge, main, on_device, short_n
 
 from clsamp import metrics
 from clsamp.geometry import integer_torus as it
+from clsamp.geometry import voronoi
 from clsamp.samplers import lloyd
 from clsamp.samplers.ccvt import ccvt_optimize, density, start
 from clsamp.samplers.optimizer import initial_sites
@@ -45,25 +49,28 @@ BALZER = {(1024, 1024): 4.9, (256, 1024): 1.0, (4096, 256): 4.5}
 
 
 def ckdtree_lloyd(sites, g, iterations):
-    """Periodic Lloyd with scipy's cKDTree: (sites, [energy after each iteration])."""
+    """Periodic Lloyd with scipy's cKDTree on the g^d grid of cell centres, d the sites':
+    (sites, [energy after each iteration])."""
     from scipy.spatial import cKDTree
+    d = sites.shape[1]
     c = (np.arange(g) + 0.5) / g
-    density = np.stack(np.meshgrid(c, c), -1).reshape(-1, 2)
+    density = np.stack(np.meshgrid(*[c] * d), -1).reshape(-1, d)
     sites = np.array(sites, dtype=np.float64)
     energies = []
     n = len(sites)
     for _ in range(iterations + 1):
-        d, label = cKDTree(sites, boxsize=1.0).query(density, k=1)
-        energies.append(float(np.mean(d * d)))
+        dist, label = cKDTree(sites, boxsize=1.0).query(density, k=1)
+        energies.append(float(np.mean(dist * dist)))
         if len(energies) == iterations + 1:
             break
         off = density - sites[label]
         off -= np.round(off)
         count = np.bincount(label, minlength=n)
         full = count > 0
-        for axis in range(2):
+        for axis in range(d):
             shift = np.bincount(label, weights=off[:, axis], minlength=n)
             sites[full, axis] = (sites[full, axis] + shift[full] / count[full]) % 1.0
+        sites[sites >= 1.0] = 0.0        # -tiny % 1.0 rounds to 1.0, outside cKDTree's box
     return sites, energies[1:]
 
 
@@ -72,6 +79,29 @@ def ccvt_start(sites, points, p, relax):
     partition."""
     relaxed, weight = start.start_sites(sites, p, steps=relax)
     return start.start_partition(relaxed, points, p, "opencl", weight)
+
+
+def lloyd_row(dev, d, n, density_per_site, steps, peer):
+    """Seconds per Lloyd iteration in d dimensions (the difference of a ``steps + 1``- and a
+    1-iteration run) against the cKDTree Lloyd's (``peer``: its seconds per iteration and
+    its energy after ``steps``, measured once for all devices), with both energies."""
+    begin = it.to_unit(initial_sites(1, np.arange(1), n, d=d))
+    lloyd.lloyd_relax(begin, density_per_site, 1)          # build the kernels
+    t1, _ = timed(lambda: lloyd.lloyd_relax(begin, density_per_site, 1), repeats=1)
+    tn, (_, info) = timed(lambda: lloyd.lloyd_relax(begin, density_per_site, steps + 1), repeats=1)
+    g = voronoi.density_side(n, density_per_site, d)
+    return Row(f"lloyd iteration {d}-D", f"{n} sites, {g}^{d} density", dev,
+               max(tn - t1, 1e-9) / steps, "scipy cKDTree Lloyd", peer[0],
+               f"E after {steps}: {info.energy_history[0, steps - 1]:.6g} (cKDTree {peer[1]:.6g})")
+
+
+def ckdtree_peer(d, n, density_per_site, steps):
+    """The cKDTree Lloyd's seconds per iteration and its energy after ``steps``."""
+    begin = it.to_unit(initial_sites(1, np.arange(1), n, d=d))[0]
+    g = voronoi.density_side(n, density_per_site, d)
+    t1, _ = timed(lambda: ckdtree_lloyd(begin, g, 1), repeats=1)
+    tn, (_, e) = timed(lambda: ckdtree_lloyd(begin, g, steps + 1), repeats=1)
+    return max(tn - t1, 1e-9) / steps, e[steps - 1]
 
 
 def run(devices, quick):
@@ -88,6 +118,8 @@ def run(devices, quick):
     ccvt_cases = [(n, p, 0) for n, p in cases] + [(n, p, start.RELAX_STEPS) for n, p in cases[:3]]
     gauges = [] if quick else [machine_gauge()]
     ccvt_rows = []
+    higher = [(3, 256, 64)] if quick else [(3, 1024, 256), (4, 1024, 256)]
+    peers = {case: ckdtree_peer(*case, 3) for case in higher}
     for device in devices:
         on_device(device)
         dev = short_name(device)
@@ -102,6 +134,7 @@ def run(devices, quick):
                         f"after 1: {ne[0]:.5f} ({n_lloyd * e_kd[0]:.5f}); set N*E after "
                         f"11: {metrics.normalized_energy(relaxed[0]):.5f} "
                         f"(cKDTree {metrics.normalized_energy(kd_sites):.5f})"))
+        rows += [lloyd_row(dev, *case, 3, peers[case]) for case in higher]
         for n, p, relax in ccvt_cases:
             sites = initial_sites(1, np.arange(1), n)
             ccvt_optimize(it.to_unit(initial_sites(2, np.arange(1), 16)),

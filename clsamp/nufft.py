@@ -14,6 +14,7 @@ import numpy as np
 from .errors import InvalidArgumentError
 
 MIN_TOL = 5e-13          # the fast path's floor in 2-D (w = 16, σ = 2: 1.7e-13 worst case)
+COST_RESOLUTION = {1: 256, 2: 256, 3: 64}   # R of the case nufft_parameters' cost model weighs
 
 
 SIGMAS = (1.25, 1.5, 2.0)     # oversampling factors the fast path chooses from
@@ -63,14 +64,15 @@ def nufft_parameters(tol, d=2, sigma=None):
     |S̃| <= (1 + e)^d |S|, so |P̃ - P| <= ((1 + e)^{2d} - 1)·N, required <= tol/1.2 (a
     margin for offsets between the measured ones). Among those, the σ with the lowest
     modelled cost (spreading ~ w^d per point against the FFT ~ (σR)^d per realization, in
-    the proportions of the benchmark case, 4096 points at R = 256).
+    the proportions of the benchmark case, 4096 points at R = 256 in 1-D and 2-D, R = 64 in
+    3-D). In 3-D the floor is about 7e-13 (six factors of 1 + e instead of four).
 
     Parameters
     ----------
     tol : float
         The error allowed, relative to N.
     d : int
-        1 or 2.
+        1, 2 or 3.
     sigma : float, optional
         Use this σ instead of choosing among ``SIGMAS``.
 
@@ -91,7 +93,7 @@ def nufft_parameters(tol, d=2, sigma=None):
         for width in range(2, MAX_WIDTH + 1):
             e = kernel_error(s, width)
             if (1.0 + e) ** (2 * d) - 1.0 <= tol / 1.2:
-                cost = 4096 * width**d * 3e-9 + (s * 256) ** d * 6e-9
+                cost = 4096 * width**d * 3e-9 + (s * COST_RESOLUTION[d]) ** d * 6e-9
                 if best is None or cost < best[0]:
                     best = (cost, s, width)
                 break
@@ -215,12 +217,13 @@ def spread_reference(points, grid, width, beta):
     """Spread a batch (r, n, d) onto r periodic grids of ``grid`` nodes per axis.
 
     NumPy reference of ``spectrum_spread``: node j of an axis gets φ((j - xM)·2/w) from every
-    point within w/2 nodes, a 2-D node the product of its axes' weights.
+    point within w/2 nodes, a 2-D or 3-D node the product of its axes' weights (in 3-D
+    (φ_x φ_y)·φ_z, the kernel's order).
 
     Parameters
     ----------
     points : array_like
-        (r, n, d) points in [0, 1)^d, d = 1 or 2.
+        (r, n, d) points in [0, 1)^d, d = 1, 2 or 3.
     grid : int
         M, nodes per axis.
     width : int
@@ -229,7 +232,7 @@ def spread_reference(points, grid, width, beta):
     Returns
     -------
     ndarray of float64
-        (r, M) or (r, M, M).
+        (r, M), (r, M, M) or (r, M, M, M).
     """
     batch = np.asarray(points, dtype=np.float64)
     r, n, d = batch.shape
@@ -244,8 +247,16 @@ def spread_reference(points, grid, width, beta):
         nodes %= M
         if d == 1:
             out[k] = np.bincount(nodes[:, 0].ravel(), weights[:, 0].ravel(), minlength=M)
-        else:
+        elif d == 2:
             flat = nodes[:, 0, :, None] * M + nodes[:, 1, None, :]
             w2 = weights[:, 0, :, None] * weights[:, 1, None, :]
             out[k] = np.bincount(flat.ravel(), w2.ravel(), minlength=M * M).reshape(M, M)
+        else:
+            step = max(1, 2**20 // width**3)               # points per bincount: bounded memory
+            for a in range(0, n, step):
+                nd, wt = nodes[a:a + step], weights[a:a + step]
+                flat = (nd[:, 0, :, None, None] * M + nd[:, 1, None, :, None]) * M \
+                    + nd[:, 2, None, None, :]
+                w3 = (wt[:, 0, :, None] * wt[:, 1, None, :])[:, :, :, None] * wt[:, 2, None, None, :]
+                out[k] += np.bincount(flat.ravel(), w3.ravel(), minlength=M**3).reshape(M, M, M)
     return out

@@ -2,7 +2,7 @@
  * NumPy reference: clsamp.spectrum.spread_reference. The FFT and the deconvolution run on the
  * host (clsamp/spectrum.py).
  *
- * Build options: DIM (1 or 2), WIDTH (kernel width in grid nodes, <= 16). Built with
+ * Build options: DIM (1, 2 or 3), WIDTH (kernel width in grid nodes, <= 16). Built with
  * -cl-mad-enable: spectra are measurements, and the NUFFT's error bound is far above an ulp.
  */
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
@@ -34,12 +34,26 @@ inline int wrap(const int i, const int M)
     return i < 0 ? i + M : (i >= M ? i - M : i);
 }
 
+/* Add a * (wys[0..WIDTH-1]) to the WIDTH nodes j0 .. j0 + WIDTH - 1 (wrapped) of a row. */
+inline void spread_row(__global double *row, const int j0, const uint M, const double a,
+                       const double *wys)
+{
+    if (j0 >= 0 && j0 + WIDTH <= (int)M) {
+        for (int m = 0; m < WIDTH; ++m)
+            row[j0 + m] += a * wys[m];
+    } else {
+        for (int m = 0; m < WIDTH; ++m)
+            row[wrap(j0 + m, M)] += a * wys[m];
+    }
+}
+
 /* Every point of block c of realization r adds its tensor-product kernel to the WIDTH^DIM
  * nodes nearest to it on a periodic grid of M nodes per axis:
- *     copies[r][c][i][j] += phi((i - x M) 2 / WIDTH) phi((j - y M) 2 / WIDTH).
- * Each work-item owns one grid copy, so there are no atomics and each node sums its points
- * in index order (deterministic); spectrum_sum_copies adds the copies when a realization's
- * points are split over several work-items. Grid (copies, realizations). */
+ *     copies[r][c][i][j] += phi((i - x M) 2 / WIDTH) phi((j - y M) 2 / WIDTH)
+ * (and the factor phi((l - z M) 2 / WIDTH) of node l on a third axis in 3-D, the last axis
+ * contiguous). Each work-item owns one grid copy, so there are no atomics and each node sums
+ * its points in index order (deterministic); spectrum_sum_copies adds the copies when a
+ * realization's points are split over several work-items. Grid (copies, realizations). */
 __kernel void spectrum_spread(__global const double *points, __global double *copies,
                               const uint n, const uint M, const uint blocks, const double beta)
 {
@@ -47,11 +61,9 @@ __kernel void spectrum_spread(__global const double *points, __global double *co
     const uint r = get_global_id(1);
     if (c >= blocks)
         return;
-#if DIM == 1
-    const size_t size = M;
-#else
-    const size_t size = (size_t)M * M;
-#endif
+    size_t size = M;
+    for (int a = 1; a < DIM; ++a)
+        size *= M;
     __global double *g = copies + ((size_t)r * blocks + c) * size;
     for (size_t i = 0; i < size; ++i)
         g[i] = 0.0;
@@ -64,20 +76,19 @@ __kernel void spectrum_spread(__global const double *points, __global double *co
 #if DIM == 1
         for (int l = 0; l < WIDTH; ++l)
             g[wrap(i0 + l, M)] += wxs[l];
-#else
+#elif DIM == 2
         double wys[16];
         const int j0 = axis_weights(p[k * 2 + 1] * M, beta, wys);
-        const bool inside = j0 >= 0 && j0 + WIDTH <= (int)M;
+        for (int l = 0; l < WIDTH; ++l)
+            spread_row(g + (size_t)wrap(i0 + l, M) * M, j0, M, wxs[l], wys);
+#else
+        double wys[16], wzs[16];
+        const int j0 = axis_weights(p[k * 3 + 1] * M, beta, wys);
+        const int l0 = axis_weights(p[k * 3 + 2] * M, beta, wzs);
         for (int l = 0; l < WIDTH; ++l) {
-            __global double *row = g + (size_t)wrap(i0 + l, M) * M;
-            const double a = wxs[l];
-            if (inside) {
-                for (int m = 0; m < WIDTH; ++m)
-                    row[j0 + m] += a * wys[m];
-            } else {
-                for (int m = 0; m < WIDTH; ++m)
-                    row[wrap(j0 + m, M)] += a * wys[m];
-            }
+            __global double *plane = g + (size_t)wrap(i0 + l, M) * M * M;
+            for (int m = 0; m < WIDTH; ++m)
+                spread_row(plane + (size_t)wrap(j0 + m, M) * M, l0, M, wxs[l] * wys[m], wzs);
         }
 #endif
     }

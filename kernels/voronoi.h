@@ -2,6 +2,9 @@
  * (voronoi.cl), Lloyd (lloyd.cl) and CCVT (ccvt*.cl).
  * NumPy twins: clsamp/geometry/integer_torus.py (the torus, the grid).
  *
+ * VOR_DIM (default 2, CCVT's) is the dimension of the sites and of their grid; a site is
+ * VOR_DIM consecutive coordinates, a cell index sum_a cell_a G^a (x fastest).
+ *
  * Positions live on an integer torus: a coordinate is an integer in [0, 2^VOR_BITS)
  * (point x in [0, 1) is floor(x * 2^VOR_BITS)). Toroidal differences, squared
  * distances, centroid sums and energies are then exact 64-bit integers: every device
@@ -18,6 +21,9 @@
 #define VOR_SIZE (1u << VOR_BITS)
 #define VOR_MASK (VOR_SIZE - 1u)
 #define VOR_HALF (1 << (VOR_BITS - 1))
+#ifndef VOR_DIM
+#define VOR_DIM 2
+#endif
 
 /* a - b on the torus, in [-2^(B-1), 2^(B-1)). */
 inline long vor_delta(const uint a, const uint b)
@@ -53,24 +59,40 @@ inline long vor_round_mean(const long s, const long c)
     return q;
 }
 
-/* Background grid of the sites of one realization: a counting sort into G x G cells,
+/* G^VOR_DIM: the cells of the site grid. */
+inline uint vor_cells(const uint G)
+{
+    uint cells = 1;
+    for (int a = 0; a < VOR_DIM; ++a)
+        cells *= G;
+    return cells;
+}
+
+/* The cell of site i of s: sum_a cell(s_a) G^a (in 2-D cy G + cx). */
+inline uint vor_site_cell(__global const uint *s, const uint i, const uint G)
+{
+    uint c = 0;
+    for (int a = VOR_DIM - 1; a >= 0; --a)
+        c = c * G + vor_cell(s[VOR_DIM * i + a], G);
+    return c;
+}
+
+/* Background grid of the sites of one realization: a counting sort into G^VOR_DIM cells,
  * sites in index order inside each cell (deterministic). Sequential: n is small next to
  * the density points, and a sequential sort needs no atomics. */
 inline void vor_build_grid_one(__global const uint *s, const uint n, const uint G,
                                __global uint *start, __global uint *list)
 {
-    const uint cells = G * G;
+    const uint cells = vor_cells(G);
     for (uint c = 0; c <= cells; ++c)
         start[c] = 0;
     for (uint i = 0; i < n; ++i)
-        start[vor_cell(s[2 * i + 1], G) * G + vor_cell(s[2 * i], G) + 1] += 1;
+        start[vor_site_cell(s, i, G) + 1] += 1;
     for (uint c = 0; c < cells; ++c)
         start[c + 1] += start[c];
     /* start[c] is used as the cursor of cell c, which leaves it at start[c + 1] */
-    for (uint i = 0; i < n; ++i) {
-        const uint c = vor_cell(s[2 * i + 1], G) * G + vor_cell(s[2 * i], G);
-        list[start[c]++] = i;
-    }
+    for (uint i = 0; i < n; ++i)
+        list[start[vor_site_cell(s, i, G)]++] = i;
     for (uint c = cells; c > 0; --c)
         start[c] = start[c - 1];
     start[0] = 0;
@@ -84,8 +106,8 @@ __kernel void voronoi_build_grid(__global const uint *sites, const uint n, const
     const uint r = get_global_id(0);
     if (r >= realizations)
         return;
-    vor_build_grid_one(sites + (size_t)r * n * 2, n, G, cell_start + (size_t)r * (G * G + 1),
-                       cell_sites + (size_t)r * n);
+    vor_build_grid_one(sites + (size_t)r * n * VOR_DIM, n, G,
+                       cell_start + (size_t)r * (vor_cells(G) + 1), cell_sites + (size_t)r * n);
 }
 
 #endif

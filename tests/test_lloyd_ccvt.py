@@ -91,6 +91,67 @@ def test_lloyd_degenerate_starts_recover():
     assert np.all(metrics.min_distance(points) > 0)
 
 
+# -- Lloyd in 1, 3 and 4 dimensions (issue 37) ---------------------------------------------
+@pytest.mark.parametrize("d, n, density", [(1, 30, 12), (3, 40, 16), (4, 24, 12)])
+def test_lloyd_kernel_equals_reference_in_other_dimensions(d, n, density):
+    sites = initial_sites(6, np.arange(2), n, d=d)
+    g = voronoi.density_side(n, density, d)
+    assert g**d >= n * density > (g - 1) ** d
+    a = lloyd.lloyd_device(sites, g, 5)
+    b = lloyd.lloyd_reference(sites, g, 5)
+    assert a[0].shape == (2, n, d)
+    assert np.array_equal(a[0], b[0])
+    assert a[1] == b[1]                      # exact integer energies, every pass
+    assert np.array_equal(a[2], b[2])
+    assert all(e[-1] < e[0] and np.all(np.diff(e) <= 0) for e in a[1])
+    assert np.all(a[2].sum(axis=1) == g**d)  # every density point in one cell
+
+
+@pytest.mark.parametrize("d", [3, 4])
+def test_lloyd_sampler_in_3d_and_4d(d):
+    kw = dict(d=d, seed=4, iterations=6, density=16)
+    pts, info = clsamp.make_sampler("lloyd", **kw).sample(32, realizations=2, return_info=True)
+    ref, ref_info = clsamp.make_sampler("lloyd", backend="numpy", **kw).sample(
+        32, realizations=2, return_info=True)
+    assert pts.shape == (2, 32, d) and np.array_equal(pts, ref)
+    assert np.array_equal(info.energy_history, ref_info.energy_history)
+    assert np.all(np.diff(info.energy_history, axis=1) <= 0)
+    assert np.all(info.energy_history[:, 0] <= info.initial_energy)
+    # the energy is what it says: the mean squared toroidal distance of the g^d grid of
+    # cell centres to the nearest returned site, here in floating point by brute force
+    g = voronoi.density_side(32, 16, d)
+    centres = voronoi.density_point(np.arange(g**d), g, d) * it.UNIT
+    diff = np.abs(centres[:, None, :] - pts[0][None, :, :])
+    diff = np.minimum(diff, 1 - diff)
+    E = (diff**2).sum(axis=-1).min(axis=1).mean()
+    assert abs(E - info.energy_history[0, -1]) <= 1e-9 * E
+
+
+def test_lloyd_spreads_points_in_3d():
+    # relaxed sites are farther apart than their random start: the mean nearest-neighbour
+    # distance grows, the smallest one far more
+    start = initial_sites(2, np.arange(1), 64, d=3)[0]
+    s = clsamp.make_sampler("lloyd", d=3, seed=2, iterations=20, density=64)
+    pts = s.sample(64)
+    before = cKDTree(it.to_unit(start), boxsize=1.0).query(it.to_unit(start), k=2)[0][:, 1]
+    after = cKDTree(pts, boxsize=1.0).query(pts, k=2)[0][:, 1]
+    assert after.mean() > 1.3 * before.mean() and after.min() > 2 * before.min()
+
+
+@pytest.mark.parametrize("d", [3, 4])
+def test_lloyd_degenerate_starts_recover_in_3d_and_4d(d):
+    rng = np.random.default_rng(7)
+    n = 16
+    starts = np.stack([np.full((n, d), 0.3), 0.5 + 1e-4 * rng.random((n, d))])
+    points, a = lloyd.lloyd_relax(starts, density=8, iterations=8)
+    ref, b = lloyd.lloyd_relax(starts, density=8, iterations=8, backend="numpy")
+    assert np.array_equal(points, ref)
+    assert np.array_equal(a.energy_history, b.energy_history)
+    assert np.all(a.counts > 0)                            # re-seeded: no empty cell left
+    assert np.all(np.diff(a.energy_history, axis=1) <= 0)
+    assert np.all(a.energy_history[:, 0] <= a.initial_energy)
+
+
 # -- CCVT --------------------------------------------------------------------------------
 def _start(seed, r, n, p):
     sites = initial_sites(seed, np.arange(r), n)
@@ -474,7 +535,7 @@ def test_ccvt_degenerate_starts():
 @pytest.mark.parametrize("name, params, word", [
     ("lloyd", {"iterations": 0}, "iterations"),
     ("lloyd", {"density": 0}, "density"),
-    ("lloyd", {"d": 3}, "'d'"),
+    ("lloyd", {"d": 5}, "'d'"),
     ("ccvt", {"points_per_site": 0}, "points_per_site"),
     ("ccvt", {"iterations": 0}, "iterations"),
     ("ccvt", {"points_per_site": 2.5}, "points_per_site"),

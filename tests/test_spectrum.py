@@ -349,12 +349,67 @@ def test_3d_spectra_of_known_patterns_and_their_radial_statistics():
     E = clsamp.expected_spectrum(clsamp.make_sampler("jittered", d=3, seed=1), 512, 2, resolution=8,
                                  progress=False)
     assert E.shape == (8, 8, 8) and E[4, 4, 4] == pytest.approx(512)
-    with pytest.raises(InvalidArgumentError, match="'method' 'fast'.*3-D spectrum is 'direct'"):
-        clsamp.power_spectrum(g, 16, method="fast")
     with pytest.raises(InvalidArgumentError, match="equal sides"):
         clsamp.radial_mean(np.ones((8, 8, 4)))
     with pytest.raises(InvalidArgumentError, match="2-D or 3-D"):
         clsamp.anisotropy(np.ones(8))
+
+
+@pytest.mark.parametrize("tol", [1e-3, 1e-6, 1e-10, 1e-12])
+def test_3d_fast_within_tol_of_the_direct_sum(tol):
+    pts = white(2, 700, d=3, seed=11)
+    exact = clsamp.power_spectrum(pts, 16, method="direct")
+    P = clsamp.power_spectrum(pts, 16, method="fast", tol=tol)
+    assert P.shape == (16, 16, 16) and np.abs(P - exact).max() <= tol * 700
+    # coincident points: |S| = N everywhere, the worst case of the bound
+    dup = np.full((1, 50, 3), 0.7182818284590452)
+    assert np.abs(clsamp.power_spectrum(dup, 16, method="fast", tol=tol) - 50).max() <= tol * 50
+
+
+def test_3d_spread_kernel_and_fast_path_equal_their_references():
+    import pyopencl.array as cla
+
+    from clsamp import runtime
+    pts = white(2, 500, 3, seed=12)
+    sigma, width, beta = spectrum.nufft_parameters(1e-6, 3)
+    M = 24
+    kernel = runtime.kernel("nufft.cl", "spectrum_spread", {"DIM": 3, "WIDTH": width}, ("-cl-mad-enable",))
+    out = cla.empty(runtime.queue(), (2, M, M, M), np.float64)
+    kernel(runtime.queue(), (1, 2), (1, 1), cla.to_device(runtime.queue(), pts).data, out.data,
+           np.uint32(500), np.uint32(M), np.uint32(1), np.float64(beta))
+    ref = spectrum.spread_reference(pts, M, width, beta)
+    assert np.abs(out.get() - ref).max() <= 1e-13 * np.abs(ref).max()
+    # a realization split over several work-items' grid copies (n >= 2048), against NumPy
+    pts = white(1, 4096, 3, seed=13)
+    cl = clsamp.power_spectrum(pts, 16, method="fast", tol=1e-6)
+    ref = clsamp.power_spectrum(pts, 16, method="fast", tol=1e-6, backend="numpy")
+    assert np.abs(cl - ref).max() <= 1e-12 * 4096
+
+
+def test_3d_jittered_spectrum_follows_its_expectation():
+    # jittered, k³ strata: E P(ω) = 1 - Π_i sinc²(ω_i / k) for ω ≠ 0 (1 at k·Z³ \ {0}: no
+    # grid's spike there). A periodogram of a sum of independent strata is about exponential with that
+    # mean, so a shell's mean of r periodograms over its c/2 independent frequencies (P(-ω) =
+    # P(ω)) has a standard error E/√(rc/2): within 4.5 of them, every shell
+    k, R, r = 12, 32, 12
+    pts = clsamp.make_sampler("jittered", d=3, seed=3).sample(k**3, realizations=r)
+    P = clsamp.power_spectrum(pts, R, method="fast", tol=1e-6)
+    f = np.arange(-R // 2, R // 2)
+    s = np.sinc(f / k)
+    expected = 1 - (s[:, None, None] * s[None, :, None] * s[None, None, :]) ** 2
+    shell = np.rint(np.sqrt(f[:, None, None] ** 2 + f[None, :, None] ** 2 + f[None, None, :] ** 2))
+    shell = shell.astype(int)
+    for b in range(1, R // 2):
+        inside = shell == b
+        mean, want = P[inside].mean(), expected[inside].mean()
+        assert abs(mean - want) <= 4.5 * want / math.sqrt(r * inside.sum() / 2), b
+    _, mean = clsamp.radial_mean(P)
+    assert P[R // 2 + k, R // 2, R // 2] < 10                   # no grid's peak (N = 1728) there
+    assert mean[0] < 0.1 and mean[-1] > 0.8                      # blue: low power at low frequency
+    # white noise in 3-D, for contrast, has no such hole
+    _, white_mean = clsamp.radial_mean(clsamp.power_spectrum(white(4, k**3, 3), R, method="fast",
+                                                              tol=1e-6))
+    assert white_mean[0] > 0.5
 
 
 # -- bad input ------------------------------------------------------------------------------

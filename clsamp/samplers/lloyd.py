@@ -1,4 +1,5 @@
-"""The ``lloyd`` sampler: periodic Lloyd relaxation towards a centroidal Voronoi tessellation.
+"""The ``lloyd`` sampler: periodic Lloyd relaxation towards a centroidal Voronoi tessellation,
+in d = 1 .. 4 dimensions.
 
 OpenCL: the assignment pass of :mod:`clsamp.geometry.voronoi` and ``lloyd_move``
 (``kernels/lloyd.cl``), all realizations in one launch per step; NumPy reference:
@@ -51,10 +52,8 @@ def _reseed(sites, counts, far_d2, far_index, g):
         return
     order = np.lexsort((far_index, -far_d2))
     order = order[far_d2[order] > 0][:empty.size]
-    coords = voronoi.density_coordinates(g)
     for site, seg in zip(empty, order, strict=False):
-        m = int(far_index[seg])
-        sites[site] = (coords[m % g], coords[m // g])
+        sites[site] = voronoi.density_point(int(far_index[seg]), g, sites.shape[1])
 
 
 def lloyd_reference(sites, g, iterations):
@@ -63,39 +62,38 @@ def lloyd_reference(sites, g, iterations):
     Parameters
     ----------
     sites : ndarray
-        (r, n, 2) integer coordinates.
+        (r, n, d) integer coordinates, d = 1 .. 4.
     g : int
-        Side of the density grid.
+        Side of the g^d density grid.
     iterations : int
 
     Returns
     -------
     sites : ndarray of uint32
-        (r, n, 2), after the iterations.
+        (r, n, d), after the iterations.
     energies : list of list of int
         Per realization, the exact energy sums of passes 0 .. iterations.
     counts : ndarray of int64
         (r, n): density points per site in the last pass.
     """
     sites = np.array(sites, dtype=np.int64)
-    r, n, _ = sites.shape
+    r, n, d = sites.shape
     energies = [[0] * (iterations + 1) for _ in range(r)]
     counts = np.zeros((r, n), dtype=np.int64)
     for k in range(r):
         s = sites[k]
         for t in range(iterations + 1):
-            label, d2, dx, dy = voronoi.assign_reference(s, g)
+            label, d2, offsets = voronoi.assign_reference(s, g)
             energies[k][t] = it.split_total(d2)
             c = np.bincount(label, minlength=n).astype(np.int64)
             if t == iterations:
                 counts[k] = c
                 break
-            # exact: |sums| < 2^53, which float64 bincount holds exactly
-            sumx = np.bincount(label, weights=dx, minlength=n).astype(np.int64)
-            sumy = np.bincount(label, weights=dy, minlength=n).astype(np.int64)
             full = c > 0
-            s[full, 0] = (s[full, 0] + it.round_mean(sumx[full], c[full])) & it.MASK
-            s[full, 1] = (s[full, 1] + it.round_mean(sumy[full], c[full])) & it.MASK
+            for a in range(d):
+                # exact: |sums| < 2^53, which float64 bincount holds exactly
+                sums = np.bincount(label, weights=offsets[:, a], minlength=n).astype(np.int64)
+                s[full, a] = (s[full, a] + it.round_mean(sums[full], c[full])) & it.MASK
             if not full.all():
                 far_d2, far_index = voronoi.segment_far(d2, g)
                 _reseed(s, c, far_d2, far_index, g)
@@ -123,12 +121,12 @@ def lloyd_device(sites, g, iterations):
     import pyopencl.array as cla
     voronoi.require_device("lloyd")
     q = runtime.queue()
-    r, n, _ = sites.shape
+    r, n, d = sites.shape
     d_sites = cla.to_device(q, np.ascontiguousarray(sites, dtype=np.uint32))
-    assign = voronoi.DeviceAssignment(r, n, g, iterations + 1)
+    assign = voronoi.DeviceAssignment(r, n, g, iterations + 1, d)
     counts = cla.empty(q, (r, n), np.uint32)
     empty = cla.zeros(q, (r,), np.uint32)
-    move = runtime.kernel("lloyd.cl", "lloyd_move", it.DEFINES)
+    move = runtime.kernel("lloyd.cl", "lloyd_move", voronoi.defines(d))
     u32 = np.uint32
     for t in range(iterations + 1):
         assign(d_sites, t)
@@ -143,29 +141,30 @@ def lloyd_device(sites, g, iterations):
                 _reseed(host_sites[k], c[k], fd[k], fi[k], g)
             d_sites.set(host_sites.astype(np.uint32))
             empty.fill(0)
-    final_counts = assign.acc.get()[:, :, 2]
+    final_counts = assign.acc.get()[:, :, d]
     return d_sites.get(), assign.energies(), final_counts
 
 
 def _run(sites, realizations, density, iterations, backend):
-    n = sites.shape[1]
-    g = voronoi.density_side(n, density)
+    _, n, d = sites.shape
+    g = voronoi.density_side(n, density, d)
     if backend == "numpy":
         final, energies, counts = lloyd_reference(sites, g, iterations)
     else:
         final, energies, counts = lloyd_device(sites, g, iterations)
-    e = np.array([[float(v) for v in row] for row in energies]) / voronoi.energy_scale(g)
+    e = np.array([[float(v) for v in row] for row in energies]) / voronoi.energy_scale(g, d)
     info = LloydInfo(realizations=np.asarray(realizations, dtype=np.int64),
                      energy_history=e[:, 1:], initial_energy=e[:, 0],
                      counts=np.asarray(counts, dtype=np.int64))
     return it.to_unit(final), info
 
 
-def _check_density(density, n):
+def _check_density(density, n, d=2):
     density = check_positive_int(density, "density")
-    if n * density > 2**32 - 1:
+    if n * density > 2**32 - 1 or voronoi.density_side(n, density, d) ** d > 2**32:
         raise InvalidArgumentError(
-            f"'density' * n must stay below 2^32 density points, got {density} * {n}")
+            f"'density' * n must stay below 2^32 density points (the grid g^{d} with g^{d} >= "
+            f"n * density), got {density} * {n}")
     return density
 
 
@@ -174,18 +173,18 @@ def lloyd_relax(sites, density=256, iterations=50, backend="opencl"):
 
     Parameters
     ----------
-    sites : ndarray (n, 2) or (r, n, 2)
+    sites : ndarray (n, d) or (r, n, d), d = 1 .. 4
         Starting sites in [0, 1) (duplicates and clusters are fine).
     density : int
-        Density points per site: the density is the regular g x g grid of cell centres
-        with g = ceil(sqrt(n * density)).
+        Density points per site: the density is the regular g^d grid of cell centres
+        with g the smallest side with g^d >= n * density.
     iterations : int
         Lloyd steps (assign, then move every site to its cell's centroid).
     backend : {"opencl", "numpy"}
 
     Returns
     -------
-    points : ndarray (r, n, 2)
+    points : ndarray (r, n, d)
         The relaxed sites, float64 in [0, 1) (batch-shaped even for one set).
     info : LloydInfo
         Realizations 0..r-1 standing for the given sets.
@@ -199,9 +198,9 @@ def lloyd_relax(sites, density=256, iterations=50, backend="opencl"):
     >>> points.shape, bool(info.energy_history[0, -1] < info.initial_energy[0])
     ((1, 32, 2), True)
     """
-    batch, _ = check_sites(sites)
-    n = batch.shape[1]
-    density = _check_density(density, n)
+    batch, _ = check_sites(sites, d=voronoi.DIMENSIONS)
+    _, n, d = batch.shape
+    density = _check_density(density, n, d)
     iterations = check_positive_int(iterations, "iterations")
     return _run(batch, np.arange(batch.shape[0]), density, iterations, backend)
 
@@ -213,15 +212,15 @@ class LloydSampler(OptimizerSampler):
     Parameters
     ----------
     d : int
-        Must be 2 (the unit torus [0, 1)^2; distances wrap).
+        1, 2, 3 or 4 (the unit torus [0, 1)^d; distances wrap).
     seed : int
         Seeds the starting sites (Philox, ``Stream.INIT``; realization k's start does not
         depend on how many realizations are drawn).
     iterations : int
         Lloyd steps (default 50).
     density : int
-        Density points per site (default 256): a regular g x g grid of cell centres,
-        g = ceil(sqrt(n * density)).
+        Density points per site (default 256): a regular g^d grid of cell centres, g the
+        smallest side with g^d >= n * density (in 2-D ceil(sqrt(n * density))).
     backend : {"opencl", "numpy"}
 
     Notes
@@ -236,7 +235,9 @@ class LloydSampler(OptimizerSampler):
     :mod:`clsamp.geometry.voronoi` (exact, through a grid of the sites), per-site
     centroid sums with integer atomics, then the move. Positions are integers on a 2^22
     torus (:mod:`clsamp.geometry.integer_torus`), so the result is the same on every
-    device and in the NumPy reference.
+    device and in the NumPy reference. The same holds in 1-D, 3-D and 4-D (the
+    depth-of-field case of a renderer): the density grid has g^d points, the sites' grid
+    2^(kd) cells, and each density point searches rings of cells around its own.
 
     ``sample(..., return_info=True)`` also returns a :class:`LloydInfo`: E after every
     iteration, measured by a fresh assignment, which never rises -- exactly: moving a site
@@ -266,6 +267,7 @@ class LloydSampler(OptimizerSampler):
     """
 
     info = LloydInfo
+    dimensions = voronoi.DIMENSIONS
     needs_fp64 = False        # exact integers on the torus: 64-bit atomics, no double
 
     def __init__(self, d=2, seed=0, iterations=50, density=256, backend="opencl"):
@@ -274,6 +276,6 @@ class LloydSampler(OptimizerSampler):
         self.density = check_positive_int(density, "density")
 
     def _optimize(self, sites, realizations, backend):
-        density = _check_density(self.density, sites.shape[1])
+        density = _check_density(self.density, sites.shape[1], self.d)
         return _run(sites, np.arange(realizations.start, realizations.stop), density,
                     self.iterations, backend)

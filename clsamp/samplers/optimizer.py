@@ -14,8 +14,8 @@ from ..validation import check_points
 from .base import Sampler
 
 
-def initial_sites(seed, realizations, n, start=0):
-    """Initial sites: words 0 and 1 of Philox (seed, Stream.INIT, r, start + i), top BITS
+def initial_sites(seed, realizations, n, start=0, d=2):
+    """Initial sites: words 0 .. d - 1 of Philox (seed, Stream.INIT, r, start + i), top BITS
     bits each. The optimizers' density points use other words of the stream.
 
     Parameters
@@ -26,32 +26,36 @@ def initial_sites(seed, realizations, n, start=0):
         Sites.
     start : int
         The index of the first site.
+    d : int
+        Coordinates a site, 1 .. 4 (the words of one Philox block).
 
     Returns
     -------
     ndarray of uint32
-        (len(realizations), n, 2), integer torus coordinates.
+        (len(realizations), n, d), integer torus coordinates.
     """
     r = np.asarray(realizations, dtype=np.uint32)[:, None, None]
     i = (np.uint64(start) + np.arange(n, dtype=np.uint64)).astype(np.uint32)[None, :, None]
-    w = np.arange(2, dtype=np.uint32)[None, None, :]
+    w = np.arange(d, dtype=np.uint32)[None, None, :]
     return philox.random_words(seed, philox.Stream.INIT, r, i, w) >> np.uint32(32 - it.BITS)
 
 
-def check_sites(sites, name="sites"):
+def check_sites(sites, name="sites", d=2):
     """Starting sites given by a user, as integer torus coordinates.
 
     Parameters
     ----------
     sites : array_like
-        (n, 2) or (r, n, 2) points in [0, 1).
+        (n, d) or (r, n, d) points in [0, 1).
     name : str
         The argument's name, for messages.
+    d : int or tuple of int
+        The dimensions accepted.
 
     Returns
     -------
     sites : ndarray of uint32
-        (r, n, 2).
+        (r, n, d).
     single : bool
         Whether one (n, 2) set was given.
 
@@ -60,7 +64,7 @@ def check_sites(sites, name="sites"):
     InvalidArgumentError
         Points :func:`clsamp.validation.check_points` refuses.
     """
-    batch, single = check_points(sites, name, d=2)
+    batch, single = check_points(sites, name, d=d)
     return it.to_torus(batch), single
 
 
@@ -77,7 +81,8 @@ class OptimizerSampler(Sampler):
     accepts_start = False
 
     def _sites(self, n, realizations):
-        return initial_sites(self.seed, np.arange(realizations.start, realizations.stop), n)
+        return initial_sites(self.seed, np.arange(realizations.start, realizations.stop), n,
+                             d=self.d)
 
     def _reference(self, n, realizations, start):
         return self._optimize(self._sites(n, realizations), realizations, "numpy")
