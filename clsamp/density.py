@@ -44,7 +44,15 @@ class Density:
         self._scale, self.bound, self._name = scale, bound, name
 
     def __call__(self, x):
-        """The normalized density at points x (m, d) -> (m,).
+        """The normalized density at points.
+
+        Parameters
+        ----------
+        x : ndarray (m, d)
+
+        Returns
+        -------
+        ndarray (m,)
 
         Raises
         ------
@@ -57,9 +65,18 @@ class Density:
         return _call(self._function, x, self._name) * self._scale
 
     def gradient(self, x):
-        """The gradient of the normalized density at points x (m, d) -> (m, d): exact for
-        an array (the multilinear pieces'), central differences of step 2^-20 (one-sided
-        at the faces) for a callable."""
+        """The gradient of the normalized density at points: exact for an array (the
+        multilinear pieces'), central differences of step 2^-20 (one-sided at the faces)
+        for a callable.
+
+        Parameters
+        ----------
+        x : ndarray (m, d)
+
+        Returns
+        -------
+        ndarray (m, d)
+        """
         x = np.asarray(x, dtype=np.float64)
         if self.image is not None:
             return self._interpolate(x, gradient=True)[1]
@@ -96,12 +113,23 @@ class Density:
         return value, grad
 
     def sample(self, seed, realizations, n):
-        """n points per realization drawn from the density by rejection, (r, n, d).
+        """Points drawn from the density by rejection.
 
         Candidate k of realization r is Philox's uniform point (seed, Stream.INIT, r, k)
         in dimensions 0..d-1 and is kept when its dimension d, times :attr:`bound`, falls
         below the density there; the first n kept in candidate order are the set, so a
         realization does not depend on which others are drawn.
+
+        Parameters
+        ----------
+        seed : int
+        realizations : iterable of int
+        n : int
+            Points a set.
+
+        Returns
+        -------
+        ndarray (len(realizations), n, d)
         """
         sets = []
         for r in realizations:

@@ -78,7 +78,7 @@ def test_a_linear_ramp_is_followed_evenly_and_the_energy_never_rises():
     history = np.column_stack([info.initial_energy, info.energy_history])
     assert np.all(np.diff(history, axis=1) <= 0) and np.all(info.converged)
     assert np.all((pts >= 0) & (pts < 1))
-    for p, s in zip(pts, start):
+    for p, s in zip(pts, start, strict=True):
         # chi-square with 9 degrees of freedom: about 9 for points drawn from the ramp
         assert chi_square(p, n) < 3.0
         assert kstest(p[:, 0], ramp_cdf).statistic < 0.025
