@@ -198,7 +198,7 @@ def as_density(density, d, name="density"):
     >>> ramp = as_density(lambda x: 0.2 + 1.6 * x[:, 0], d=2)
     >>> [round(float(v), 6) for v in ramp(np.array([[0.0, 0.5], [1.0, 0.5]]))]
     [0.2, 1.8]
-    >>> as_density(np.ones((4, 4)), d=2).image.mean()
+    >>> float(as_density(np.ones((4, 4)), d=2).image.mean())
     1.0
     """
     if callable(density):
