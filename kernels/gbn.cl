@@ -25,6 +25,9 @@
  * [-1/2, 1/2]; 0: the unit cube), ADAPTIVE (1: per-point widths t, as above; 0: none),
  * GBN_INV_LN2, GBN_LN2_HI, GBN_LN2_LO and GBN_C0 .. GBN_C13 (the exponential's constants,
  * from clsamp.samplers.gbn.EXP_DEFINES).
+ * From 3-D on, a neighbouring cell whose box lies beyond skip2 (the squared reach the grid
+ * was made for) is skipped whole: it holds no partner within the cutoff, so the sums,
+ * their order and the bits are those of the full stencil.
  * Launch: one work-item per sorted point, grid (total,).
  */
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
@@ -65,7 +68,8 @@ __kernel void gbn_pairs(__global const double *pts,
 #endif
                         __global const uint *start, const uint n,
                         const uint total, const int G, const uint noff, const double R2,
-                        const double inv2s2, const double gR, __global double *out)
+                        const double inv2s2, const double gR, const double skip2,
+                        __global double *out)
 {
     const uint gi = get_global_id(0);
     if (gi >= total)
@@ -89,7 +93,30 @@ __kernel void gbn_pairs(__global const double *pts,
         const int v = (int)(x[k] * (double)G);
         c[k] = v < G - 1 ? v : G - 1;
     }
+    const double inv_G = 1.0 / (double)G;
     for (uint o = 0; o < noff; ++o) {
+#if D >= 3
+        if (G > 1) {
+            /* a neighbouring cell wholly beyond the reach holds no partner: skip it (from 3-D
+             * on, where most of the 3^D cells' corners lie beyond the reach). A lower
+             * bound of the squared distance from x to the cell's box, each axis's gap less
+             * a margin far above the rounding of x G and of r2 (on the torus too: with
+             * G >= 3 the cell's nearest image is the one next to c) */
+            double lb = 0.0;
+            uint digits = o;
+            for (int k = D - 1; k >= 0; --k) {
+                const int digit = (int)(digits % 3) - 1;
+                digits /= 3;
+                double gap = digit > 0 ? (double)(c[k] + 1) * inv_G - x[k]
+                           : digit < 0 ? x[k] - (double)c[k] * inv_G : 0.0;
+                gap = gap - 1e-12;
+                gap = gap > 0.0 ? gap : 0.0;
+                lb = lb + gap * gap;
+            }
+            if (lb > skip2 * 1.000001)
+                continue;
+        }
+#endif
         const size_t slot = (size_t)r * total_cells + neighbour(c, o, G);
         const uint s1 = start[slot + 1];
         for (uint j = start[slot]; j < s1; ++j) {

@@ -268,7 +268,7 @@ def pair_pass_device(pts, cell, start, n, kernel, t=None):
     pairs(runtime.queue(), (-(-total // local) * local,), (local,), runtime.to_device(pts).data,
           *widths, runtime.to_device(start).data, np.uint32(n), np.uint32(total),
           np.int32(kernel.cells), np.uint32(kernel.stencil), np.float64(R2),
-          np.float64(kernel.inv2s2), np.float64(gR), out.buffer)
+          np.float64(kernel.inv2s2), np.float64(gR), np.float64(kernel.reach ** 2), out.buffer)
     result = out.finish()
     if adaptive:
         return result[:, 0].copy(), result[:, 1:d + 1], result[:, d + 1].copy()
