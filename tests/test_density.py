@@ -73,3 +73,12 @@ def test_a_bad_density_gets_one_line_naming_it(density, message):
     assert "'density'" in str(raised.value) and "\n" not in str(raised.value)
     with pytest.raises(InvalidArgumentError, match="density"):
         clsamp.make_sampler("gbn", density=density)
+
+
+@pytest.mark.parametrize("d", [1, 8, 20])
+def test_a_callable_is_probed_in_any_dimension(d):
+    # a grid of about 4096 cells up to d = 13, fixed uniform points beyond
+    density = as_density(lambda x: 1.0 + x[:, 0], d=d)
+    x = np.full((1, d), 0.5)
+    assert density(x)[0] == pytest.approx(1.5 / 1.5, rel=0.02)
+    assert density.sample(1, range(1), 50).shape == (1, 50, d)
