@@ -586,7 +586,12 @@ class GBNSampler(Sampler):
     domain's pull is that of the cube filled at the point's own density,
     rho(x_i) A_{s_i}(x_i). The points then spread with local spacing proportional to
     s_i, that is with density proportional to rho; with a constant density the
-    optimization is the uniform one.
+    optimization is the uniform one. Where this differs from the paper: its kernels
+    are normalized (amplitude s_i^-d) and the energy holds the density's attraction,
+    the image convolved with each kernel; a callable in d dimensions has no closed form
+    for that term, and without it normalized kernels let the dense side push harder, so
+    the set would not follow rho. The pair kernels here keep amplitude 1, which makes
+    the spacing follow s_i with repulsion alone.
 
     References
     ----------
