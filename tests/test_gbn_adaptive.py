@@ -123,3 +123,16 @@ def test_realizations_stand_alone_and_the_start_needs_no_init():
     assert s.valid_n(201) == 201
     with pytest.raises(InvalidArgumentError, match="init"):
         clsamp.make_sampler("gbn", density=wave, init="jittered")
+
+
+def test_points_stay_where_an_image_is_not_empty():
+    # a disk of radius 0.3 in a 64 x 64 image, zero outside: the points spread over the
+    # disk and never leave it (beyond the half pixel where the interpolation falls to 0)
+    g = 64
+    centres = (np.arange(g) + 0.5) / g
+    X, Y = np.meshgrid(centres, centres, indexing="ij")
+    disk = ((X - 0.5) ** 2 + (Y - 0.5) ** 2 < 0.09).astype(float)
+    pts = clsamp.make_sampler("gbn", seed=1, periodic=False, density=disk).sample(512)
+    r = np.sqrt(((pts - 0.5) ** 2).sum(axis=1))
+    assert r.max() < 0.3 + 0.5 / g
+    assert (r < 0.15).mean() == pytest.approx(0.25, abs=0.03)      # a quarter of the area
