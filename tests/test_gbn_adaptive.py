@@ -50,16 +50,17 @@ def test_the_kernel_gives_the_twins_bits(d, periodic):
     assert np.array_equal(info_d.energy_history, info_h.energy_history)
 
 
-@pytest.mark.parametrize("periodic, density", [(True, wave), (False, ramp),
-                                               (False, np.arange(1.0, 17.0).reshape(4, 4))])
-def test_the_force_is_the_energys_whole_gradient(periodic, density):
+@pytest.mark.parametrize("d, periodic, density", [(2, True, wave), (2, False, ramp),
+                                                  (2, False, np.arange(1.0, 17.0).reshape(4, 4)),
+                                                  (3, True, wave), (4, False, ramp)])
+def test_the_force_is_the_energys_whole_gradient(d, periodic, density):
     # F = -(s^2 / 2) grad(n E), the widths' change with the points included
-    n, d = 64, 2
+    n = 64
     kernel = Kernel(n=n, d=d, sigma=0.5, periodic=periodic)
-    pts = clsamp.make_sampler("jittered", d=d, seed=3).sample(n)[None]
+    pts = clsamp.make_sampler("random", d=d, seed=3).sample(n)[None]
     _, force = gbn_energy(pts, kernel, backend="numpy", density=density)
     h = 1e-7
-    for i, k in [(0, 0), (5, 1), (17, 0), (40, 1), (63, 1)]:
+    for i, k in [(0, 0), (5, 1), (17, 0), (40, 1), (63, d - 1)]:
         up, down = pts.copy(), pts.copy()
         up[0, i, k] += h
         down[0, i, k] -= h
