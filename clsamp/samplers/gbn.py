@@ -264,9 +264,9 @@ def pair_pass_device(pts, cell, start, n, kernel, t=None):
     out = runtime.Output((total, cols), np.float64, host=np.empty((total, cols)))
     local = runtime.local_size(64)
     R2, gR = (kernel.Rc2, kernel.gc) if adaptive else (kernel.R2, kernel.gR)
-    widths = (runtime.to_device(np.ascontiguousarray(t, dtype=np.float64)).data,) if adaptive else ()
-    pairs(runtime.queue(), (-(-total // local) * local,), (local,), runtime.to_device(pts).data,
-          *widths, runtime.to_device(start).data, np.uint32(n), np.uint32(total),
+    widths = (runtime.input_buffer(np.asarray(t, dtype=np.float64)),) if adaptive else ()
+    pairs(runtime.queue(), (-(-total // local) * local,), (local,), runtime.input_buffer(pts),
+          *widths, runtime.input_buffer(start), np.uint32(n), np.uint32(total),
           np.int32(kernel.cells), np.uint32(kernel.stencil), np.float64(R2),
           np.float64(kernel.inv2s2), np.float64(gR), np.float64(kernel.reach ** 2), out.buffer)
     result = out.finish()
