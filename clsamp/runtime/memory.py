@@ -137,7 +137,7 @@ def input_buffer(array):
     """A read-only buffer holding a copy of ``array``, made in one call: for the inputs of
     a launch repeated many times a second (an optimizer's pass), where building a
     ``pyopencl.array.Array`` costs more than the copy (docs/performance.md, "Gaussian blue
-    noise").
+    noise (issue 37)").
 
     Parameters
     ----------
