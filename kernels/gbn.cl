@@ -14,10 +14,20 @@
  *     e = exp(-r2 inv2s2),  energy += e - gR,  force[k] += (x_i - x_j)[k] e,
  * gR = exp(-R2 inv2s2), so that the kernel cut at the cutoff stays continuous; row i of
  * out (total, D + 1) is (energy, force).
+ * ADAPTIVE (adaptive sampling): t (total) holds each sorted point's variance relative to
+ * s^2; a pair's is tau = (t_i + t_j) / 2, it interacts while r2 < R2 tau, and adds
+ *     q = r2 inv2s2 / tau,  e = exp(-q),  energy += e - gR,  force[k] += (x_i - x_j)[k] (e / tau),
+ *     width += q (e / tau),
+ * with R2 = (cut s)^2 and gR = exp(-cut^2 / 2); row i of out (total, D + 2) is
+ * (energy, force, width).
  *
  * Build options: D (dimensions), PERIODIC (1: the unit torus, differences wrapped into
- * [-1/2, 1/2]; 0: the unit cube), GBN_INV_LN2, GBN_LN2_HI, GBN_LN2_LO and GBN_C0 ..
- * GBN_C13 (the exponential's constants, from clsamp.samplers.gbn.EXP_DEFINES).
+ * [-1/2, 1/2]; 0: the unit cube), ADAPTIVE (1: per-point widths t, as above; 0: none),
+ * GBN_INV_LN2, GBN_LN2_HI, GBN_LN2_LO and GBN_C0 .. GBN_C13 (the exponential's constants,
+ * from clsamp.samplers.gbn.EXP_DEFINES).
+ * From 3-D on, a neighbouring cell whose box lies beyond skip2 (the squared reach the grid
+ * was made for) is skipped whole: it holds no partner within the cutoff, so the sums,
+ * their order and the bits are those of the full stencil.
  * Launch: one work-item per sorted point, grid (total,).
  */
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
@@ -52,9 +62,14 @@ inline double gbn_exp_neg(const double t)
     return p * as_double((ulong)(1023 - k) << 52);
 }
 
-__kernel void gbn_pairs(__global const double *pts, __global const uint *start, const uint n,
+__kernel void gbn_pairs(__global const double *pts,
+#if ADAPTIVE
+                        __global const double *t,
+#endif
+                        __global const uint *start, const uint n,
                         const uint total, const int G, const uint noff, const double R2,
-                        const double inv2s2, const double gR, __global double *out)
+                        const double inv2s2, const double gR, const double skip2,
+                        __global double *out)
 {
     const uint gi = get_global_id(0);
     if (gi >= total)
@@ -69,12 +84,39 @@ __kernel void gbn_pairs(__global const double *pts, __global const uint *start, 
         f[k] = 0.0;
     }
     double e_sum = 0.0;
+#if ADAPTIVE
+    const double ti = t[gi];
+    double width = 0.0;
+#endif
     int c[D];                   /* the cell, as clsamp.geometry.cells.sorted_by_cell finds it */
     for (int k = 0; k < D; ++k) {
         const int v = (int)(x[k] * (double)G);
         c[k] = v < G - 1 ? v : G - 1;
     }
+    const double inv_G = 1.0 / (double)G;
     for (uint o = 0; o < noff; ++o) {
+#if D >= 3
+        if (G > 1) {
+            /* a neighbouring cell wholly beyond the reach holds no partner: skip it (from 3-D
+             * on, where most of the 3^D cells' corners lie beyond the reach). A lower
+             * bound of the squared distance from x to the cell's box, each axis's gap less
+             * a margin far above the rounding of x G and of r2 (on the torus too: with
+             * G >= 3 the cell's nearest image is the one next to c) */
+            double lb = 0.0;
+            uint digits = o;
+            for (int k = D - 1; k >= 0; --k) {
+                const int digit = (int)(digits % 3) - 1;
+                digits /= 3;
+                double gap = digit > 0 ? (double)(c[k] + 1) * inv_G - x[k]
+                           : digit < 0 ? x[k] - (double)c[k] * inv_G : 0.0;
+                gap = gap - 1e-12;
+                gap = gap > 0.0 ? gap : 0.0;
+                lb = lb + gap * gap;
+            }
+            if (lb > skip2 * 1.000001)
+                continue;
+        }
+#endif
         const size_t slot = (size_t)r * total_cells + neighbour(c, o, G);
         const uint s1 = start[slot + 1];
         for (uint j = start[slot]; j < s1; ++j) {
@@ -91,16 +133,30 @@ __kernel void gbn_pairs(__global const double *pts, __global const uint *start, 
                 w[k] = v;
                 r2 = k == 0 ? v * v : r2 + v * v;
             }
+#if ADAPTIVE
+            const double tau = (ti + t[j]) * 0.5;
+            if (r2 >= R2 * tau)
+                continue;
+            const double q = r2 * inv2s2 / tau;
+            const double e = gbn_exp_neg(q);
+            const double ce = e / tau;
+            width = width + q * ce;
+#else
             if (r2 >= R2)
                 continue;
             const double e = gbn_exp_neg(r2 * inv2s2);
+            const double ce = e;
+#endif
             e_sum = e_sum + (e - gR);
             for (int k = 0; k < D; ++k)
-                f[k] = f[k] + w[k] * e;
+                f[k] = f[k] + w[k] * ce;
         }
     }
-    __global double *row = out + (size_t)gi * (D + 1);
+    __global double *row = out + (size_t)gi * (D + 1 + ADAPTIVE);
     row[0] = e_sum;
     for (int k = 0; k < D; ++k)
         row[1 + k] = f[k];
+#if ADAPTIVE
+    row[D + 1] = width;
+#endif
 }

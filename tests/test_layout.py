@@ -16,7 +16,7 @@ PACKAGE = ROOT / "clsamp"
 # docs/design.md, "Layers": a module may import its own layer and the layers before it.
 LAYERS = [
     ("core", {"errors", "validation", "runtime", "host_memory", "philox", "number_theory",
-              "generating_matrices", "permutation", "files", "parallel", "transforms"}),
+              "generating_matrices", "permutation", "files", "parallel", "transforms", "density"}),
     ("geometry", {"geometry"}),
     ("samplers", {"samplers"}),
     ("analysis", {"nufft", "spectral_stats", "spectrum", "metrics"}),

@@ -136,6 +136,15 @@ def _points(n=128, r=2, seed=1):
     return np.random.default_rng(seed).random((r, n, 2))
 
 
+@check("gbn-adaptive")
+def _gbn_adaptive():
+    # the pair pass's ADAPTIVE variant (per-point widths), which the registry's run skips
+    params = {"iterations": 2, "periodic": False, "density": lambda x: 0.2 + 1.6 * x[:, 0]}
+    made = clsamp.make_sampler("gbn", seed=3, **params).sample(64, realizations=range(1, 3))
+    _same_bits(made, clsamp.make_sampler("gbn", seed=3, backend="numpy", **params).sample(
+        64, realizations=range(1, 3)))
+
+
 @check("spectrum-direct")
 def _spectrum_direct():
     pts = _points()

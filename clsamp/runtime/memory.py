@@ -17,7 +17,7 @@ from . import discovery, programs
 __all__ = [
     'table', 'Output', 'is_device_array', 'to_device', 'to_host', 'bounds', 'device_block',
     'concatenate', 'host_memory_available', 'check_host_bytes', 'gib', 'work_budget', 'fit',
-    'chunk_ranges', 'wait']
+    'chunk_ranges', 'wait', 'input_buffer']
 
 
 _tables = {}            # (device index, key) -> pyopencl.array.Array, least recently used first
@@ -131,6 +131,25 @@ def to_device(array):
         return array
     import pyopencl.array as cla
     return cla.to_device(discovery.queue(), np.ascontiguousarray(array))
+
+
+def input_buffer(array):
+    """A read-only buffer holding a copy of ``array``, made in one call: for the inputs of
+    a launch repeated many times a second (an optimizer's pass), where building a
+    ``pyopencl.array.Array`` costs more than the copy (docs/performance.md, "Gaussian blue
+    noise (issue 37)").
+
+    Parameters
+    ----------
+    array : ndarray
+
+    Returns
+    -------
+    pyopencl.Buffer
+    """
+    cl = discovery._cl()
+    flags = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
+    return cl.Buffer(discovery.context(), flags, hostbuf=np.ascontiguousarray(array))
 
 
 def wait(event=None):

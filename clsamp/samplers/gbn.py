@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from .. import runtime
+from ..density import Density, as_density
 from ..errors import InvalidArgumentError
 from ..geometry.cells import cells_for, neighbour_cells, sorted_by_cell
 from ..validation import check_bool, check_positive_int, check_real
@@ -28,6 +29,7 @@ ITERATIONS = 200
 TOL = 1e-4
 HALVINGS = 40        # a set whose step has been halved this often has converged
 MAX_D = 64
+RHO_FLOOR = 1e-3     # adaptive widths stop growing where the density is below this (mean 1)
 
 # e^-t by range reduction and the Taylor polynomial of degree 13 (kernels/gbn.cl): the
 # constants of fdlibm's exp (ln 2 split so that k ln2_hi is exact) and 1/k!.
@@ -82,6 +84,9 @@ class Kernel:
     periodic : bool
     cut : float
         Cutoff in sigmas; on the torus at most 1/2 (a pair meets through its nearest image).
+    widen : float
+        The widest pair's standard deviation in s (adaptive sampling: sqrt of the largest
+        relative variance t_i); the grid's cells are ``cut`` s ``widen`` wide.
     """
 
     n: int
@@ -89,6 +94,7 @@ class Kernel:
     sigma: float
     periodic: bool
     cut: float = CUT
+    widen: float = 1.0
 
     @property
     def s(self):
@@ -97,8 +103,8 @@ class Kernel:
 
     @property
     def reach(self):
-        """The cutoff R: ``cut`` s, at most 1/2 on the torus."""
-        reach = self.cut * self.s
+        """The cutoff R: ``cut`` s ``widen``, at most 1/2 on the torus."""
+        reach = self.cut * self.s * self.widen
         return min(reach, 0.5) if self.periodic else reach
 
     @property
@@ -115,6 +121,16 @@ class Kernel:
     def gR(self):
         """exp(-R^2 / 2 s^2), by :func:`exp_neg`: the kernel's value at the cutoff."""
         return float(exp_neg(np.float64(self.R2 * self.inv2s2)))
+
+    @property
+    def Rc2(self):
+        """(``cut`` s)^2: an adaptive pair interacts while r^2 < Rc2 tau."""
+        return (self.cut * self.s) ** 2
+
+    @property
+    def gc(self):
+        """exp(-cut^2 / 2) by :func:`exp_neg`: an adaptive pair's kernel at its cutoff."""
+        return float(exp_neg(np.float64(self.cut * self.cut * 0.5)))
 
     @property
     def cells(self):
@@ -135,7 +151,7 @@ class Kernel:
         return (2.0 * math.pi) ** (self.d / 2.0) * self.sigma ** self.d
 
 
-def pair_pass_reference(pts, cell, start, n, kernel):
+def pair_pass_reference(pts, cell, start, n, kernel, t=None):
     """NumPy twin of ``gbn_pairs``: per sorted point, its energy and force from the
     neighbours within the cutoff, summed in the kernel's order.
 
@@ -148,13 +164,20 @@ def pair_pass_reference(pts, cell, start, n, kernel):
     n : int
         Points per set.
     kernel : Kernel
+    t : ndarray (total,), optional
+        Adaptive sampling: each sorted point's variance relative to s^2; a pair's kernel
+        has the variance s^2 tau, tau = (t_i + t_j) / 2, and is cut at ``cut`` s sqrt(tau).
 
     Returns
     -------
     energy : ndarray (total,)
-        sum_j (e_ij - gR), e_ij = exp(-r_ij^2 / 2 s^2), over partners within the cutoff.
+        sum_j (e_ij - gR), e_ij = exp(-r_ij^2 / 2 s^2 tau), over partners within the cutoff
+        (tau = 1 without ``t``).
     force : ndarray (total, d)
-        sum_j (x_i - x_j) e_ij.
+        sum_j (x_i - x_j) e_ij / tau.
+    width : ndarray (total,)
+        Only with ``t``: sum_j e_ij (r_ij^2 / 2 s^2) / tau^2, the energy's change with the
+        point's width.
     """
     total, d = pts.shape
     G = kernel.cells
@@ -162,8 +185,11 @@ def pair_pass_reference(pts, cell, start, n, kernel):
     slot_base = (own // n) * G ** d
     start = start.astype(np.int64)
     energy = np.zeros(total)
+    width = np.zeros(total)
     force = [np.zeros(total) for _ in range(d)]
-    R2, inv2s2, gR = kernel.R2, kernel.inv2s2, kernel.gR
+    adaptive = t is not None
+    R2, inv2s2, gR = (kernel.Rc2, kernel.inv2s2, kernel.gc) if adaptive else \
+        (kernel.R2, kernel.inv2s2, kernel.gR)
     for o in range(kernel.stencil):
         slot = slot_base + neighbour_cells(cell, o, G, d)
         first, stop = start[slot], start[slot + 1]
@@ -180,12 +206,24 @@ def pair_pass_reference(pts, cell, start, n, kernel):
             r2 = w[0] * w[0]
             for a in range(1, d):
                 r2 = r2 + w[a] * w[a]
-            near = r2 < R2
-            i, r2 = i[near], r2[near]
-            e = exp_neg(r2 * inv2s2)
+            if adaptive:
+                tau = (t[i] + t[jj]) * 0.5
+                near = r2 < R2 * tau
+                i, r2, tau = i[near], r2[near], tau[near]
+                q = r2 * inv2s2 / tau
+                e = exp_neg(q)
+                c = e / tau
+                width[i] = width[i] + q * c
+            else:
+                near = r2 < R2
+                i, r2 = i[near], r2[near]
+                e = exp_neg(r2 * inv2s2)
+                c = e
             energy[i] = energy[i] + (e - gR)
             for a in range(d):
-                force[a][i] = force[a][i] + w[a][near] * e
+                force[a][i] = force[a][i] + w[a][near] * c
+    if adaptive:
+        return energy, np.stack(force, axis=1), width
     return energy, np.stack(force, axis=1)
 
 
@@ -195,18 +233,18 @@ def _loop_bound(kernel, start):
     return kernel.stencil * (2 * kernel.d + 1) * (most + 1)
 
 
-def pair_pass_device(pts, cell, start, n, kernel):
+def pair_pass_device(pts, cell, start, n, kernel, t=None):
     """``gbn_pairs`` on the current device: :func:`pair_pass_reference`'s result, the same
     bits.
 
     Parameters
     ----------
-    pts, cell, start, n, kernel
+    pts, cell, start, n, kernel, t
         As :func:`pair_pass_reference` takes them.
 
     Returns
     -------
-    energy, force
+    energy, force[, width]
         As :func:`pair_pass_reference` returns them.
 
     Raises
@@ -219,15 +257,21 @@ def pair_pass_device(pts, cell, start, n, kernel):
     if limit is not None and _loop_bound(kernel, start) > limit:
         runtime.require_short_loops("gbn's pair pass")
     total, d = pts.shape
-    defines = {"D": d, "PERIODIC": int(kernel.periodic), **EXP_DEFINES}
+    adaptive = t is not None
+    defines = {"D": d, "PERIODIC": int(kernel.periodic), "ADAPTIVE": int(adaptive), **EXP_DEFINES}
     pairs = runtime.kernel("gbn.cl", "gbn_pairs", defines)
-    out = runtime.Output((total, d + 1), np.float64, host=np.empty((total, d + 1)))
+    cols = d + 1 + adaptive
+    out = runtime.Output((total, cols), np.float64, host=np.empty((total, cols)))
     local = runtime.local_size(64)
-    pairs(runtime.queue(), (-(-total // local) * local,), (local,), runtime.to_device(pts).data,
-          runtime.to_device(start).data, np.uint32(n), np.uint32(total), np.int32(kernel.cells),
-          np.uint32(kernel.stencil), np.float64(kernel.R2), np.float64(kernel.inv2s2),
-          np.float64(kernel.gR), out.buffer)
+    R2, gR = (kernel.Rc2, kernel.gc) if adaptive else (kernel.R2, kernel.gR)
+    widths = (runtime.input_buffer(np.asarray(t, dtype=np.float64)),) if adaptive else ()
+    pairs(runtime.queue(), (-(-total // local) * local,), (local,), runtime.input_buffer(pts),
+          *widths, runtime.input_buffer(start), np.uint32(n), np.uint32(total),
+          np.int32(kernel.cells), np.uint32(kernel.stencil), np.float64(R2),
+          np.float64(kernel.inv2s2), np.float64(gR), np.float64(kernel.reach ** 2), out.buffer)
     result = out.finish()
+    if adaptive:
+        return result[:, 0].copy(), result[:, 1:d + 1], result[:, d + 1].copy()
     return result[:, 0].copy(), result[:, 1:]
 
 
@@ -248,7 +292,7 @@ def _attraction(x, kernel):
     return total, grad
 
 
-def gbn_energy(points, kernel, backend="opencl"):
+def gbn_energy(points, kernel, backend="opencl", density=None):
     """The energy and the descent direction of sets, as the optimizer sees them.
 
     Parameters
@@ -258,6 +302,8 @@ def gbn_energy(points, kernel, backend="opencl"):
     kernel : Kernel
     backend : {"opencl", "numpy"}
         Where the pair pass runs (the same bits either way).
+    density : callable or array_like, optional
+        Adaptive sampling (:class:`GBNSampler`); None: uniform.
 
     Returns
     -------
@@ -279,25 +325,77 @@ def gbn_energy(points, kernel, backend="opencl"):
     """
     if backend != "numpy":
         runtime.require_fp64()
+    density = None if density is None else as_density(density, kernel.d)
     return _evaluate(np.asarray(points, dtype=np.float64), kernel,
-                     pair_pass_reference if backend == "numpy" else pair_pass_device)
+                     pair_pass_reference if backend == "numpy" else pair_pass_device, density)
 
 
-def _evaluate(x, kernel, pair_pass):
+def _adaptive_attraction(x, kernel, t, slope):
+    """The cube's pull with per-point widths s_i = s sqrt(t_i): the domain filled at the
+    point's own density, rho_i A_{s_i}(x_i) = (sqrt(2 pi) s)^d prod_k P(x_k; s_i),
+    P(u; w) = (erf(u / w sqrt 2) + erf((1 - u) / w sqrt 2)) / 2 (rho_i s_i^d = s^d), and
+    its gradient, through x directly and through s_i (slope: d s_i / d x_i, (m, d))."""
+    from scipy.special import erf
+    w = kernel.s * np.sqrt(t)[:, None]
+    u = 1.0 / (w * math.sqrt(2.0))
+    lo, hi = np.exp(-(x * u) ** 2), np.exp(-((1.0 - x) * u) ** 2)
+    P = 0.5 * (erf(x * u) + erf((1.0 - x) * u))
+    dP = (lo - hi) / (w * math.sqrt(2.0 * math.pi))
+    dW = -(x * lo + (1.0 - x) * hi) / (w * w * math.sqrt(2.0 * math.pi))
+    d = x.shape[-1]
+    scale = (math.sqrt(2.0 * math.pi) * kernel.s) ** d
+    others = np.stack([np.prod(np.delete(P, k, axis=-1), axis=-1) for k in range(d)], axis=-1) \
+        if d > 1 else np.ones_like(P)
+    through_w = np.sum(others * dW, axis=-1)
+    return scale * np.prod(P, axis=-1), scale * (others * dP + slope * through_w[:, None])
+
+
+def _widths(x, density):
+    """Each point's variance relative to s^2, t = rho^(-2/d) (rho at least
+    :data:`RHO_FLOOR`), and the slope d s_i / d x_i / s = -(sqrt t / (d rho)) grad rho (0
+    where rho is floored)."""
+    m, d = x.shape
+    rho = density(x)
+    floored = rho < RHO_FLOOR
+    rho = np.where(floored, RHO_FLOOR, rho)
+    t = rho ** (-2.0 / d)
+    grad = density.gradient(x)
+    slope = np.where(floored[:, None], 0.0, -(np.sqrt(t) / (d * rho))[:, None] * grad)
+    return t, slope
+
+
+def _evaluate(x, kernel, pair_pass, density=None):
     """Energy per point (sets,) and force (sets, n, d) of sets x (sets, n, d)."""
     sets, n, d = x.shape
-    pts, cell, start, order = sorted_by_cell(x, kernel.cells)
-    e_sorted, f_sorted = pair_pass(pts, cell, start, n, kernel)
+    if density is None:
+        pts, cell, start, order = sorted_by_cell(x, kernel.cells)
+        e_sorted, f_sorted = pair_pass(pts, cell, start, n, kernel)
+    else:
+        t, slope = _widths(x.reshape(-1, d), density)
+        kernel = dataclasses.replace(kernel, widen=math.sqrt(float(t.max())))
+        pts, cell, start, order = sorted_by_cell(x, kernel.cells)
+        e_sorted, f_sorted, q_sorted = pair_pass(pts, cell, start, n, kernel, t[order])
     e = np.empty(sets * n)
     f = np.empty((sets * n, d))
     e[order] = e_sorted
     f[order] = f_sorted
+    ss = kernel.s * kernel.s
+    if density is not None:
+        # the widths follow the points: the pair terms' change with s_i, which
+        # d s_i / d x_i = s slope carries to the force (see GBNSampler)
+        q = np.empty(sets * n)
+        q[order] = q_sorted
+        f = f - (ss * np.sqrt(t) * q)[:, None] * slope
+        if not kernel.periodic:
+            pull, grad = _adaptive_attraction(x.reshape(-1, d), kernel, t, kernel.s * slope)
+            e = e - 2.0 * n * pull
+            f = f + (n * ss) * grad
     e = e.reshape(sets, n)
     f = f.reshape(sets, n, d)
-    if not kernel.periodic:
+    if density is None and not kernel.periodic:
         pull, grad = _attraction(x, kernel)
         e = e - 2.0 * n * pull
-        f = f + (n * kernel.s * kernel.s) * grad
+        f = f + (n * ss) * grad
     energy = np.array([math.fsum(row) / n for row in e])
     return energy, f
 
@@ -340,7 +438,7 @@ class GBNInfo(SampleInfo):
 
 
 def gbn_optimize(start_points, kernel, step=STEP, iterations=ITERATIONS, tol=TOL,
-                 backend="opencl", realizations=None):
+                 backend="opencl", realizations=None, density=None):
     """Gradient descent on the Gaussian energy from given starting sets.
 
     Parameters
@@ -359,18 +457,22 @@ def gbn_optimize(start_points, kernel, step=STEP, iterations=ITERATIONS, tol=TOL
         Where the pair pass runs; the rest is shared host code.
     realizations : array_like of int, optional
         The indices the info names (default 0..r-1).
+    density : callable, array_like or Density, optional
+        Adaptive sampling (:class:`GBNSampler`); None: uniform.
 
     Returns
     -------
     points : ndarray (r, n, d)
     info : GBNInfo
     """
+    if density is not None and not isinstance(density, Density):
+        density = as_density(density, kernel.d)
     pair_pass = pair_pass_reference if backend == "numpy" else pair_pass_device
     if backend != "numpy":
         runtime.require_fp64()
     x = np.array(start_points, dtype=np.float64)
     r = x.shape[0]
-    energy, force = _evaluate(x, kernel, pair_pass)
+    energy, force = _evaluate(x, kernel, pair_pass, density)
     initial = energy.copy()
     tau0 = step / kernel.mass
     tau = np.full(r, tau0)
@@ -383,7 +485,7 @@ def gbn_optimize(start_points, kernel, step=STEP, iterations=ITERATIONS, tol=TOL
         if idx.size == 0:
             break
         y = _move(x[idx], tau[idx], force[idx], kernel.periodic)
-        e_new, f_new = _evaluate(y, kernel, pair_pass)
+        e_new, f_new = _evaluate(y, kernel, pair_pass, density)
         ran[idx] += 1
         ok = e_new <= energy[idx]
         good, bad = idx[ok], idx[~ok]
@@ -433,6 +535,13 @@ class GBNSampler(Sampler):
         and any other registered sampler that makes n points in d dimensions).
     cut : float
         Pairs farther apart than ``cut`` sigmas do not interact (default 4).
+    density : callable or array_like, optional
+        Adaptive sampling: the density the points should follow, a callable on points
+        (m, d) in [0, 1)^d returning m non-negative values, or an array with d axes (an
+        image in 2-D; entry [i, j] at the cell centre ((i + 1/2) / shape[0],
+        (j + 1/2) / shape[1]), multilinear between centres); its scale does not matter
+        (:func:`clsamp.density.as_density`). The starting points are drawn from it
+        (``init`` is then not used). None (default): uniform.
     backend : {"opencl", "numpy"}
 
     Notes
@@ -466,6 +575,24 @@ class GBNSampler(Sampler):
     most ``tol`` of it. The pair pass runs on the device (``kernels/gbn.cl``); its NumPy
     twin gives the same bits, and so does every device.
 
+    *Adaptive sampling* ([1], section on adaptive sampling): each point's kernel width
+    follows the density rho (normalized to mean 1) where the point is,
+    s_i = s rho(x_i)^(-1/d), and a pair interacts through its combined width, the
+    Gaussian of variance s_ij^2 = (s_i^2 + s_j^2) / 2, g_ij = exp(-r^2 / 2 s_ij^2), cut
+    at ``cut`` s_ij. Because the widths move with the points, the force is the energy's
+    whole gradient: besides sum_j (x_i - x_j) g_ij s^2 / s_ij^2 it holds the pair terms'
+    change with s_i, through grad rho (exact for an array, central differences for a
+    callable). Where rho is below 1e-3 the widths stop growing. In the cube the
+    domain's pull is that of the cube filled at the point's own density,
+    rho(x_i) A_{s_i}(x_i). The points then spread with local spacing proportional to
+    s_i, that is with density proportional to rho; with a constant density the
+    optimization is the uniform one. Where this differs from the paper: its kernels
+    are normalized (amplitude s_i^-d) and the energy holds the density's attraction,
+    the image convolved with each kernel; a callable in d dimensions has no closed form
+    for that term, and without it normalized kernels let the dense side push harder, so
+    the set would not follow rho. The pair kernels here keep amplitude 1, which makes
+    the spacing follow s_i with repulsion alone.
+
     References
     ----------
     .. [1] A. G. M. Ahmed, J. Ren, P. Wonka, "Gaussian Blue Noise", ACM Trans. Graph.
@@ -480,6 +607,13 @@ class GBNSampler(Sampler):
     ((256, 2), True)
     >>> bool(clsamp.metrics.relative_radius(pts) > 0.6)
     True
+
+    A linear ramp in x, in the unit square:
+
+    >>> ramp = clsamp.make_sampler("gbn", seed=1, periodic=False, iterations=30,
+    ...                            density=lambda x: 0.2 + 1.6 * x[:, 0])
+    >>> bool((ramp.sample(512)[:, 0] > 0.5).mean() > 0.6)
+    True
     """
 
     max_d = MAX_D
@@ -490,8 +624,13 @@ class GBNSampler(Sampler):
     info = GBNInfo
 
     def __init__(self, d=2, seed=0, sigma=SIGMA, step=STEP, iterations=ITERATIONS, tol=TOL,
-                 periodic=True, init="random", cut=CUT, backend="opencl"):
+                 periodic=True, init="random", cut=CUT, density=None, backend="opencl"):
         super().__init__(d=d, seed=seed, backend=backend)
+        self.density = None if density is None else as_density(density, d)
+        if self.density is not None and init != "random":
+            raise InvalidArgumentError(
+                f"'init' cannot be combined with 'density' (the start is drawn from the "
+                f"density), got init={init!r}")
         self.sigma = check_real(sigma, "sigma", minimum=0.0, open_minimum=True, maximum=64.0)
         self.step = check_real(step, "step", minimum=0.0, open_minimum=True)
         self.iterations = check_positive_int(iterations, "iterations")
@@ -520,16 +659,19 @@ class GBNSampler(Sampler):
         -------
         int
         """
-        return self._start_sampler().valid_n(n)
+        return n if self.density is not None else self._start_sampler().valid_n(n)
 
     def _start_sampler(self):
         return make_sampler(self.init, d=self.d, seed=self.seed, backend=self.backend)
 
     def _run(self, n, realizations, backend):
-        start = self._start_sampler().sample(n, realizations=realizations)
+        if self.density is None:
+            start = self._start_sampler().sample(n, realizations=realizations)
+        else:
+            start = self.density.sample(self.seed, realizations, n)
         kernel = Kernel(n=n, d=self.d, sigma=self.sigma, periodic=self.periodic, cut=self.cut)
         return gbn_optimize(start, kernel, self.step, self.iterations, self.tol, backend,
-                            np.arange(realizations.start, realizations.stop))
+                            np.arange(realizations.start, realizations.stop), self.density)
 
     def _reference(self, n, realizations, start):
         return self._run(n, realizations, "numpy")
