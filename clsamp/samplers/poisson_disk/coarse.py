@@ -44,7 +44,9 @@ class CoarseGeometry:
     ----------
     G : int
         Cells per axis: the most cells at least r wide, at most n^(1/d), and 1 (every pair)
-        where fewer than 3 fit (:func:`clsamp.geometry.cells.cells_for`).
+        where fewer than 3 fit (:func:`clsamp.geometry.cells.cells_for`) or where the 3^d
+        cells around a dart would cost more to visit than the n points, 3^d (4 + n / G^d)
+        >= n (8-D below about 32 000 points).
     cells : int
         G^d.
     stencil : int
@@ -58,7 +60,9 @@ class CoarseGeometry:
     def __init__(self, d, radius, r2, n):
         self.d, self.radius, self.r2 = d, radius, r2
         G = min(cells_for(radius), int(n ** (1.0 / d)))
-        self.G = G if G >= 3 else 1
+        # the cells pay only where the 3^d around a dart hold far fewer than the n points:
+        # a cell visited costs about four distances (docs/performance.md)
+        self.G = G if G >= 3 and 3 ** d * (4 + n / G ** d) < n else 1
         self.cells = self.G ** d
         self.stencil = 3 ** d if self.G > 1 else 1
         self.darts = int(n)
