@@ -17,6 +17,10 @@ Cases:
 * fixed n at rho = 0.75: 256 x 8 and 1024 x 128 realizations (the tour's sizes) and the
   convergence sweep n = 16, 64, 256, 1024 with 128 realizations each, against the NumPy
   reference for the smallest (which gives the same bits).
+* other dimensions (:func:`run_dimensions`): one set of n = 1024 and 4096 (1024 only with
+  ``--quick``) in 4-D (the void-tracking grid, rho = 0.75) and 8-D (darts into the whole
+  torus, the default rho = 0.65), and a maximal 4-D set at r = 0.15 with the fraction of
+  200k random probes farther than r from every point.
 """
 
 import random
@@ -113,6 +117,33 @@ def run(devices, quick):
                                 quality))
         rows.append(Row("poisson_disk rho=0.75", "sweep 16..1024 x128", dev, sweep, "", None,
                         "sum of the four sizes above"))
+    return rows + run_dimensions(devices, quick)
+
+
+def run_dimensions(devices, quick):
+    """The 4-D and 8-D cases of the module docstring, one row each per device."""
+    rows = []
+    ns = (1024,) if quick else (1024, 4096)
+    for device in devices:
+        on_device(device)
+        dev = short_name(device)
+        for d in (4, 8):
+            sampler = clsamp.make_sampler("poisson_disk", d=d, seed=1)
+            for n in ns:
+                t_cl, (pts, info) = timed(lambda: sampler.sample(n, return_info=True),  # noqa: B023
+                                          repeats=3)
+                assert min_distance(pts) >= info.radius
+                rows.append(Row(f"poisson_disk rho={sampler.rho}", f"1x{n}x{d}D", dev, t_cl, "",
+                                None, f"rho {relative_radius(pts):.4f}, {info.rounds} rounds, "
+                                f"{info.darts} darts"))
+        radius = 0.15
+        sampler = clsamp.make_sampler("poisson_disk", d=4, radius=radius, seed=1)
+        t_cl, (pts, info) = timed(lambda: sampler.sample(return_info=True), repeats=3)
+        probes = np.random.default_rng(0).random((200_000, 4))
+        void = float(np.mean(cKDTree(pts, boxsize=1.0).query(probes, k=1)[0] >= radius))
+        rows.append(Row("poisson_disk", f"maximal 4D r={radius}", dev, t_cl, "", None,
+                        f"{len(pts)} pts, rho {relative_radius(pts):.4f}, void {void:.2%} of "
+                        f"200k probes, {info.rounds} rounds, {info.darts} darts"))
     return rows
 
 

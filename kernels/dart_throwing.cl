@@ -16,16 +16,42 @@
  * (DIM doubles). Active entry i is (rel[i], base[i], sub[i * DIM + k]); entries of one
  * grid cell are contiguous and first[i] is the index of the first of them.
  *
+ * The grid of side r / sqrt(DIM) serves DIM <= 4 (its windows grow as (2 sqrt(DIM) + 3)^DIM
+ * cells); for a fixed n in DIM 5..8, coarse_throw and coarse_resolve at the end throw darts
+ * into the whole torus and find neighbours through cells at least r wide (kernels/cells.h).
+ *
  * Exactly rounded double operations only (no contraction), in the order of
  * clsamp.geometry.torus.distance2 (kernels/torus.h), so the NumPy reference gives the same bits.
- * Build option: DIM. */
+ * Build options: DIM, and D = DIM for cells.h. */
 #pragma OPENCL FP_CONTRACT OFF
 #include "torus.h"
+#include "cells.h"
 
 #ifndef DIM
 #error "DIM must be defined"
 #endif
 #define NBLOCKS (DIM / 2 + 1)   /* Philox blocks per dart: DIM coordinates + a priority word */
+
+/* A dart's DIM uniforms in [0, 1) and its priority word: Philox blocks block0 ..
+ * block0 + NBLOCKS - 1 of (index, realization), coordinates two a block, the priority the
+ * first word left over (clsamp.samplers.poisson_disk.reference.draw_darts). */
+inline uint dart_draw(const uint2 key, const uint stream, const uint realization,
+                      const uint index, const uint block0, double *u)
+{
+    uint priority = 0u;
+    for (uint b = 0; b < NBLOCKS; ++b) {
+        const uint4 w = clsamp_block(key, stream, realization, index, block0 + b);
+        if (2 * b < DIM)
+            u[2 * b] = clsamp_unit(w.x, w.y);
+        else
+            priority = w.x;
+        if (2 * b + 1 < DIM)
+            u[2 * b + 1] = clsamp_unit(w.z, w.w);
+        else if (2 * b < DIM)
+            priority = w.z;
+    }
+    return priority;
+}
 
 inline void cell_coords(uint flat, const uint G, int *bc)
 {
@@ -122,18 +148,7 @@ __kernel void dart_throw(__global const uint *rel, __global const uint *base,
     const uint index = bi | (attempt << 26);
     const uint2 key = (uint2)(key_lo, key_hi);
     double u[DIM];
-    uint priority = 0u;
-    for (uint b = 0; b < NBLOCKS; ++b) {
-        const uint4 w = clsamp_block(key, stream, ids[ri], index, tag * NBLOCKS + b);
-        if (2 * b < DIM)
-            u[2 * b] = clsamp_unit(w.x, w.y);
-        else
-            priority = w.x;
-        if (2 * b + 1 < DIM)
-            u[2 * b + 1] = clsamp_unit(w.z, w.w);
-        else if (2 * b < DIM)
-            priority = w.z;
-    }
+    const uint priority = dart_draw(key, stream, ids[ri], index, tag * NBLOCKS, u);
     const double M = (double)((ulong)G << level);
     double x[DIM];
     for (int k = 0; k < DIM; ++k) {
@@ -160,6 +175,44 @@ __kernel void dart_throw(__global const uint *rel, __global const uint *base,
 #define DART_OPEN 1         /* valid, undecided */
 #define DART_IN 2           /* accepted */
 
+/* Whether dart i is still open in this step of dart_resolve, its position then in x; a
+ * decided dart keeps its state. */
+inline bool dart_open(const uint i, __global const uchar *in, __global uchar *out,
+                      __global const double *cand, double *x)
+{
+    const uchar state = in[i];
+    if (state != DART_OPEN) {
+        out[i] = state;
+        return false;
+    }
+    for (int k = 0; k < DIM; ++k)
+        x[k] = cand[(size_t)i * DIM + k];
+    return true;
+}
+
+/* The rule of dart_resolve for dart j seen from open dart i (priority pi, at x): only a
+ * higher dart (random priority, then lower index) still in play and closer than r counts;
+ * an accepted one beats i, an open one blocks it. True when the scan may stop: i is beaten,
+ * or blocked at step 0 (no dart is in yet, so the first blocker decides, exactly). */
+inline bool dart_rival(const double *x, const uint i, const uint pi, const uint j,
+                       __global const uint *prio, __global const uchar *in,
+                       __global const double *cand, const double r2, const uint step,
+                       bool *beaten, bool *blocked)
+{
+    const uint pj = prio[j];
+    if (!(pj > pi || (pj == pi && j < i)))
+        return false;           /* not higher (this also skips j == i) */
+    const uchar sj = in[j];
+    if (sj == DART_OUT || !(torus_distance2(x, cand + (size_t)j * DIM, DIM) < r2))
+        return false;
+    if (sj == DART_IN) {
+        *beaten = true;
+        return true;
+    }
+    *blocked = true;
+    return step == 0;
+}
+
 /* One step of the greedy independent set among this round's valid darts (Luby 1986 with
  * fixed priorities): dart i goes out when a conflicting (closer than r) dart of a higher
  * key (random priority, then lower index) is in, waits while such a dart is open, and goes
@@ -182,17 +235,10 @@ __kernel void dart_resolve(__global const uint *rel, __global const uint *base,
                            const uint round, const uint step, const double r2)
 {
     const uint i = get_global_id(0);
-    if (i >= m)
-        return;
-    const uchar state = in[i];
-    if (state != DART_OPEN) {
-        out[i] = state;
-        return;
-    }
-    const uint ri = rel[i], bi = base[i], pi = prio[i];
     double x[DIM];
-    for (int k = 0; k < DIM; ++k)
-        x[k] = cand[(size_t)i * DIM + k];
+    if (i >= m || !dart_open(i, in, out, cand, x))
+        return;
+    const uint ri = rel[i], bi = base[i], pi = prio[i];
     int bc[DIM];
     cell_coords(bi, G, bc);
     const bool inner = inside(bc, reach, G);
@@ -202,21 +248,9 @@ __kernel void dart_resolve(__global const uint *rel, __global const uint *base,
         const size_t nslot = (size_t)ri * cells + nb;
         if (cand_round[nslot] != round)
             continue;
-        for (uint j = cand_first[nslot]; j < m && rel[j] == ri && base[j] == nb; ++j) {
-            const uint pj = prio[j];
-            if (!(pj > pi || (pj == pi && j < i)))
-                continue;       /* not higher (this also skips j == i) */
-            const uchar sj = in[j];
-            if (sj != DART_OUT && torus_distance2(x, cand + (size_t)j * DIM, DIM) < r2) {
-                if (sj == DART_IN) {
-                    beaten = true;
-                    break;
-                }
-                blocked = true;
-                if (step == 0)
-                    break;  /* no dart is in yet: the first blocker decides (exactly) */
-            }
-        }
+        for (uint j = cand_first[nslot]; j < m && rel[j] == ri && base[j] == nb; ++j)
+            if (dart_rival(x, i, pi, j, prio, in, cand, r2, step, &beaten, &blocked))
+                break;
     }
     const uchar next = beaten ? DART_OUT : blocked ? DART_OPEN : DART_IN;
     out[i] = next;
@@ -238,7 +272,8 @@ inline double far_end(const double lo, const double hi, const double tl, const d
     return f > 0.5 - (hi - lo) ? 0.5 : f;
 }
 
-/* Which children (split = 1: the 2^DIM halves; split = 0: the cell itself) of active
+/* Which children (split = 1: the 2^DIM halves, at most 16: DIM <= 4; split = 0: the cell
+ * itself) of active
  * entry i are still uncovered. A box is covered when all its corners lie closer than r
  * to one point (a box lies in a disk iff its corners do; the farthest corner is, per axis,
  * the farther end); a child also counts as covered when its whole parent is, which is
@@ -248,7 +283,7 @@ inline double far_end(const double lo, const double hi, const double tl, const d
 __kernel void dart_refine(__global const uint *rel, __global const uint *base,
                           __global const uint *sub, __global const uchar *occ,
                           __global const double *pts, __global const uchar *done,
-                          __global uchar *mask, __global uchar *count,
+                          __global ushort *mask, __global uchar *count,
                           __global uint *remaining, const uint m, const uint G,
                           __global const int *window, const uint nwindow, const int reach,
                           const uint cells, const uint level, const uint split,
@@ -314,7 +349,7 @@ __kernel void dart_refine(__global const uint *rel, __global const uint *base,
                 open &= ~(1u << t);
         }
     }
-    mask[i] = (uchar)open;
+    mask[i] = (ushort)open;
     count[i] = (uchar)popcount(open);
     if (open)
         atomic_add(remaining + ri, (uint)popcount(open));
@@ -324,7 +359,7 @@ __kernel void dart_refine(__global const uint *rel, __global const uint *base,
  * their grid cell's run starts at offs[first[i]]. */
 __kernel void dart_emit(__global const uint *rel, __global const uint *base,
                         __global const uint *sub, __global const uint *first,
-                        __global const uchar *mask, __global const uint *offs,
+                        __global const ushort *mask, __global const uint *offs,
                         __global uint *out_rel, __global uint *out_base, __global uint *out_sub,
                         __global uint *out_first, const uint m, const uint split)
 {
@@ -379,4 +414,82 @@ __kernel void dart_gather(__global const uchar *occ, __global const double *pts,
             ++o;
         }
     }
+}
+
+/* -- DIM 5..8, a fixed n: darts into the whole torus (clsamp/samplers/poisson_disk/coarse.py;
+ * NumPy twin NumpyCoarse in reference.py). No voids are tracked: every round throws
+ * `darts` darts into each unfinished realization, a dart is valid when no accepted point
+ * is closer than r, and valid darts are settled among themselves as dart_resolve settles
+ * them. The accepted points and the darts are sorted by (set, cell) on the host
+ * (cells of side 1/G >= r, G >= 3, or G == 1: the 3^DIM cells around a cell, or the one
+ * cell, hold every neighbour closer than r); `start` is the first sorted index of each
+ * (set, cell). Set a of the round holds darts a * darts .. (a + 1) * darts - 1. */
+
+inline void coarse_cell(const double *x, const int G, int *c)
+{
+    for (int k = 0; k < DIM; ++k) {     /* as clsamp.geometry.cells.sorted_by_cell */
+        const int v = (int)(x[k] * (double)G);
+        c[k] = v < G - 1 ? v : G - 1;
+    }
+}
+
+/* Dart i = a * darts + j of set a (realization ids[a]): Philox counter (j | attempt << 26,
+ * realization, round * NBLOCKS + block, stream); valid when no accepted point of its set in
+ * the cells around it is closer than r. */
+__kernel void coarse_throw(__global const uint *ids, const uint darts, const uint m,
+                           __global const double *pts, __global const uint *start,
+                           const int G, const uint stencil, const uint cells,
+                           const double r2, const uint round, const uint attempt,
+                           const uint key_lo, const uint key_hi, const uint stream,
+                           __global double *cand, __global uint *prio, __global uchar *valid)
+{
+    const uint i = get_global_id(0);
+    if (i >= m)
+        return;
+    const uint a = i / darts, j = i % darts;
+    double x[DIM];
+    const uint priority = dart_draw((uint2)(key_lo, key_hi), stream, ids[a],
+                                    j | (attempt << 26), round * NBLOCKS, x);
+    int c[DIM];
+    coarse_cell(x, G, c);
+    uchar ok = 1;
+    for (uint o = 0; ok && o < stencil; ++o) {
+        const size_t slot = (size_t)a * cells + neighbour(c, o, G);
+        const uint s1 = start[slot + 1];
+        for (uint q = start[slot]; q < s1; ++q)
+            if (torus_distance2(x, pts + (size_t)q * DIM, DIM) < r2) {
+                ok = 0;
+                break;
+            }
+    }
+    for (int k = 0; k < DIM; ++k)
+        cand[(size_t)i * DIM + k] = x[k];
+    prio[i] = priority;
+    valid[i] = ok;
+}
+
+/* One step of dart_resolve's greedy independent set among the round's darts, sorted by
+ * (set, cell): the same rule, the tie of equal priorities broken by the lower sorted index. */
+__kernel void coarse_resolve(__global const double *cand, __global const uint *prio,
+                             __global const uint *start, __global const uchar *in,
+                             __global uchar *out, const uint darts, const uint m, const int G,
+                             const uint stencil, const uint cells, const uint step,
+                             const double r2)
+{
+    const uint i = get_global_id(0);
+    double x[DIM];
+    if (i >= m || !dart_open(i, in, out, cand, x))
+        return;
+    const uint a = i / darts, pi = prio[i];
+    int c[DIM];
+    coarse_cell(x, G, c);
+    bool blocked = false, beaten = false;
+    for (uint o = 0; !beaten && !(blocked && step == 0) && o < stencil; ++o) {
+        const size_t slot = (size_t)a * cells + neighbour(c, o, G);
+        const uint s1 = start[slot + 1];
+        for (uint j = start[slot]; j < s1; ++j)
+            if (dart_rival(x, i, pi, j, prio, in, cand, r2, step, &beaten, &blocked))
+                break;
+    }
+    out[i] = beaten ? DART_OUT : blocked ? DART_OPEN : DART_IN;
 }

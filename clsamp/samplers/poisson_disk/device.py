@@ -6,7 +6,8 @@ import pyopencl as cl
 import pyopencl.array as cla
 
 from ... import philox, runtime
-from .grid import IN, rank_overflow, resolve_steps
+from .coarse import COARSE_STEPS
+from .grid import IN, OPEN, OUT, rank_overflow, resolve_steps
 
 
 class DeviceDarts:
@@ -38,7 +39,7 @@ class DeviceDarts:
         self.B = len(ids)
         q = self.q = runtime.queue()
         self.ls = runtime.local_size(64)
-        self.defines = {"DIM": geo.d}
+        self.defines = {"DIM": geo.d, "D": geo.d}   # D: cells.h
         slots = self.B * geo.cells
         self.ids = cla.to_device(q, np.asarray(ids, dtype=np.uint32))
         self.window = self._table(geo.window)
@@ -82,7 +83,7 @@ class DeviceDarts:
             self.prio = cla.empty(q, m, np.uint32)
             self.valid = cla.empty(q, m, np.uint8)
             self.state = cla.empty(q, m, np.uint8)
-            self.mask = cla.empty(q, m, np.uint8)
+            self.mask = cla.empty(q, m, np.uint16)   # 2^d <= 16 children
             self.count = cla.empty(q, m, np.uint8)
 
     def _run(self, name, items, *args):
@@ -276,3 +277,64 @@ class DeviceDarts:
         self._run("dart_gather", self.B, self.occ.data, self.pts.data,
                   cla.to_device(self.q, np.asarray(dst, dtype=np.uint32)).data, out.data,
                   np.uint32(self.geo.cells), np.uint32(self.B))
+
+
+class DeviceCoarse:
+    """The coarse kernels (``coarse_throw``, ``coarse_resolve``) for d = 5..8, with
+    :class:`~clsamp.samplers.poisson_disk.reference.NumpyCoarse`'s methods and results bit
+    for bit, made with the same arguments (a ``CoarseGeometry``, the realizations, the
+    attempt, the seed); the round loop and the sorts by cell are the host's
+    (:func:`~clsamp.samplers.poisson_disk.coarse.throw_coarse`). Like :class:`DeviceDarts`
+    it raises ``NoDeviceError`` on a device without fp64.
+    """
+
+    def __init__(self, geo, ids, attempt, seed):
+        runtime.require_fp64()
+        self.geo, self.attempt, self.seed = geo, attempt, seed
+        self.ids = np.asarray(ids, dtype=np.uint32)
+        self.B = len(ids)
+        self.q = runtime.queue()
+        self.ls = runtime.local_size(64)
+        self.defines = {"DIM": geo.d, "D": geo.d}
+
+    def _run(self, name, items, *args):
+        k = runtime.kernel("dart_throwing.cl", name, defines=self.defines)
+        size = max(self.ls, -(-items // self.ls) * self.ls)
+        k(self.q, (size,), (self.ls,), *args)
+
+    def _grid(self):
+        g = self.geo
+        return np.int32(g.G), np.uint32(g.stencil), np.uint32(g.cells)
+
+    def throw(self, active, pts, start, round_):
+        """As :meth:`~clsamp.samplers.poisson_disk.reference.NumpyCoarse.throw`."""
+        q, g = self.q, self.geo
+        m = len(active) * g.darts
+        cand = cla.empty(q, (m, g.d), np.float64)
+        prio = cla.empty(q, m, np.uint32)
+        valid = cla.empty(q, m, np.uint8)
+        ids = cla.to_device(q, self.ids[active])
+        dpts = cla.to_device(q, np.ascontiguousarray(pts).reshape(-1) if len(pts) else
+                             np.zeros(1))
+        dstart = cla.to_device(q, start)
+        self._run("coarse_throw", m, ids.data, np.uint32(g.darts), np.uint32(m), dpts.data,
+                  dstart.data, *self._grid(), np.float64(g.r2), np.uint32(round_),
+                  np.uint32(self.attempt), *philox.seed_key(self.seed),
+                  np.uint32(philox.Stream.CANDIDATES), cand.data, prio.data, valid.data)
+        return cand.get(), prio.get(), valid.get().astype(bool)
+
+    def resolve(self, cand, prio, valid, start):
+        """As :meth:`~clsamp.samplers.poisson_disk.reference.NumpyCoarse.resolve`."""
+        q, g = self.q, self.geo
+        m = len(prio)
+        dcand = cla.to_device(q, np.ascontiguousarray(cand))
+        dprio = cla.to_device(q, np.ascontiguousarray(prio, dtype=np.uint32))
+        dstart = cla.to_device(q, start)
+        state = cla.to_device(q, np.where(valid, OPEN, OUT).astype(np.uint8))
+        other = cla.empty(q, m, np.uint8)
+        for step in range(COARSE_STEPS):
+            self._run("coarse_resolve", m, dcand.data, dprio.data, dstart.data, state.data,
+                      other.data, np.uint32(g.darts), np.uint32(m), *self._grid(),
+                      np.uint32(step), np.float64(g.r2))
+            state, other = other, state
+        return state.get()

@@ -307,6 +307,8 @@ class Geometry:
         :func:`window_offsets`.
     nblocks : int
         Philox blocks a dart draws: d coordinates and a priority word.
+    footprint : int
+        What one realization holds, in grid-cell slots, for the batch size (``cells``).
     """
 
     def __init__(self, d, radius, r2):
@@ -319,6 +321,7 @@ class Geometry:
         # the kernels wrap a neighbour's coordinate with one correction
         assert np.abs(self.window).max() <= self.G
         self.nblocks = d // 2 + 1
+        self.footprint = self.cells
         self._cover = {}
 
     def cover(self, level):

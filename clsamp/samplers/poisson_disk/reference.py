@@ -5,6 +5,8 @@ import numpy as np
 
 from ... import philox
 from ...geometry import torus
+from ...geometry.cells import neighbour_cells
+from .coarse import COARSE_STEPS
 from .grid import (
     IN,
     MAX_RANK,
@@ -19,6 +21,44 @@ from .grid import (
     rank_overflow,
     resolve_steps,
 )
+
+
+def draw_darts(seed, index, realization, block0, d):
+    """The darts' uniforms and priorities, as ``dart_draw`` in the kernel: Philox blocks
+    ``block0 .. block0 + d // 2`` of (index, realization) in ``Stream.CANDIDATES``, two
+    coordinates a block, the priority the first word left over.
+
+    Parameters
+    ----------
+    seed : int
+    index, realization, block0 : ndarray of uint32
+        Per dart, broadcast together.
+    d : int
+
+    Returns
+    -------
+    u : ndarray (m, d) of float64 in [0, 1)
+    priority : ndarray (m,) of uint32
+    """
+    index, realization, block0 = np.broadcast_arrays(
+        *(np.asarray(a, dtype=np.uint32) for a in (index, realization, block0)))
+    m = index.size
+    key = np.stack(philox.seed_key(seed))
+    u = np.empty((m, d))
+    prio = np.zeros(m, dtype=np.uint32)
+    for b in range(d // 2 + 1):
+        counter = np.stack([index, realization, block0 + np.uint32(b),
+                            np.full(m, philox.Stream.CANDIDATES, dtype=np.uint32)], axis=-1)
+        w = philox.philox4x32(counter, key)
+        if 2 * b < d:
+            u[:, 2 * b] = philox.words_to_unit(w[:, 0], w[:, 1])
+        else:
+            prio = w[:, 0]
+        if 2 * b + 1 < d:
+            u[:, 2 * b + 1] = philox.words_to_unit(w[:, 2], w[:, 3])
+        elif 2 * b < d:
+            prio = w[:, 2]
+    return u, prio
 
 
 class NumpyDarts:
@@ -80,22 +120,8 @@ class NumpyDarts:
         self.cand_first[slot[heads]] = heads
         tag = (np.uint32(round_) << np.uint32(20)) | (np.arange(m) - self.first).astype(np.uint32)
         index = self.base.astype(np.uint32) | np.uint32(self.attempt << 26)
-        key = np.stack(philox.seed_key(self.seed))
-        u = np.empty((m, g.d))
-        prio = np.zeros(m, dtype=np.uint32)
-        for b in range(g.nblocks):
-            counter = np.stack([index, self.ids[self.rel].astype(np.uint32),
-                                tag * np.uint32(g.nblocks) + np.uint32(b),
-                                np.full(m, philox.Stream.CANDIDATES, dtype=np.uint32)], axis=-1)
-            w = philox.philox4x32(counter, key)
-            if 2 * b < g.d:
-                u[:, 2 * b] = philox.words_to_unit(w[:, 0], w[:, 1])
-            else:
-                prio = w[:, 0]
-            if 2 * b + 1 < g.d:
-                u[:, 2 * b + 1] = philox.words_to_unit(w[:, 2], w[:, 3])
-            elif 2 * b < g.d:
-                prio = w[:, 2]
+        u, prio = draw_darts(self.seed, index, self.ids[self.rel], tag * np.uint32(g.nblocks),
+                             g.d)
         bc = cell_coords(self.base, g.G, g.d)
         c = (bc << level) | self.sub
         x = (c.astype(np.float64) + u) / float(g.G << level)
@@ -283,3 +309,110 @@ class NumpyDarts:
             if dst[r] != SKIP:
                 got = pts[r][occ[r] == 1]
                 out[dst[r]:dst[r] + len(got)] = got
+
+
+class NumpyCoarse:
+    """Reference backend of the coarse kernels (``coarse_throw``, ``coarse_resolve``) for
+    d = 5..8: the same arithmetic in the same order, the same darts bit for bit. Made as
+    :class:`NumpyDarts` is, from a ``CoarseGeometry``, the batch's (global) realization
+    numbers, the redraw number and the seed.
+
+    The round loop is :func:`~clsamp.samplers.poisson_disk.coarse.throw_coarse`;
+    :class:`~clsamp.samplers.poisson_disk.device.DeviceCoarse` has the same methods.
+    """
+
+    def __init__(self, geo, ids, attempt, seed):
+        self.geo, self.ids, self.attempt, self.seed = geo, np.asarray(ids), attempt, seed
+        self.B = len(ids)
+
+    def _near(self, x, sets, others, start, live, visit):
+        """Walk the points of ``others`` (sorted by (set, cell), ``start``) in the stencil
+        of each ``x``'s cell while ``live``; ``visit(h, q)`` gets the rows and the other
+        points' indices, one rank within a cell at a time."""
+        g = self.geo
+        flat = flat_index(np.minimum((x * g.G).astype(np.int64), g.G - 1), g.G)
+        for o in range(g.stencil):
+            slot = sets * g.cells + neighbour_cells(flat, o, g.G, g.d)
+            q, end = start[slot].astype(np.int64), start[slot + 1].astype(np.int64)
+            while True:
+                h = np.flatnonzero(live() & (q < end))
+                if not h.size:
+                    break
+                visit(h, q[h])
+                q = q + 1
+
+    def throw(self, active, pts, start, round_):
+        """Throw ``geo.darts`` darts into each set of ``active`` (``coarse_throw``).
+
+        Parameters
+        ----------
+        active : ndarray of int
+            The batch's realizations still short of n, in order: set a of the round.
+        pts : ndarray (p, d)
+            Their accepted points, sorted by (set, cell).
+        start : ndarray of uint32
+            The first sorted point of each (set, cell).
+        round_ : int
+
+        Returns
+        -------
+        cand : ndarray (A darts, d)
+            Dart a * darts + j of set a.
+        prio : ndarray of uint32
+        valid : ndarray of bool
+            No accepted point of its set closer than r.
+        """
+        g = self.geo
+        A, D = len(active), g.darts
+        sets = np.repeat(np.arange(A), D)
+        j = np.tile(np.arange(D, dtype=np.uint32), A)
+        x, prio = draw_darts(self.seed, j | np.uint32(self.attempt << 26),
+                             self.ids[active][sets], np.uint32(round_ * g.nblocks), g.d)
+        ok = np.ones(A * D, dtype=bool)
+
+        def visit(h, q):
+            ok[h[torus.distance2(x[h], pts[q]) < g.r2]] = False
+        self._near(x, sets, pts, start, lambda: ok, visit)
+        return x, prio, ok
+
+    def resolve(self, cand, prio, valid, start):
+        """``COARSE_STEPS`` greedy steps among the round's darts (``coarse_resolve``).
+
+        Parameters
+        ----------
+        cand : ndarray (m, d)
+            The darts sorted by (set, cell).
+        prio : ndarray of uint32
+        valid : ndarray of bool
+        start : ndarray of uint32
+            The first sorted dart of each (set, cell).
+
+        Returns
+        -------
+        ndarray of uint8
+            Each dart's state: ``IN`` for the accepted ones.
+        """
+        state = np.where(valid, OPEN, OUT).astype(np.uint8)
+        for _ in range(COARSE_STEPS):
+            state = self._resolve_step(cand, prio, state, start)
+        return state
+
+    def _resolve_step(self, cand, prio, state, start):
+        """One step of ``coarse_resolve``: the states after it."""
+        g = self.geo
+        idx = np.flatnonzero(state == OPEN)
+        beaten = np.zeros(idx.size, dtype=bool)
+        blocked = np.zeros(idx.size, dtype=bool)
+
+        def visit(h, j):
+            i, sj = idx[h], state[j]
+            pj, pi = prio[j], prio[i]
+            ask = ((pj > pi) | ((pj == pi) & (j < i))) & (sj != OUT)
+            q = np.flatnonzero(ask)
+            close = torus.distance2(cand[i[q]], cand[j[q]]) < g.r2
+            beaten[h[q[close & (sj[q] == IN)]]] = True
+            blocked[h[q[close & (sj[q] == OPEN)]]] = True
+        self._near(cand[idx], idx // g.darts, cand, start, lambda: ~beaten, visit)
+        out = state.copy()
+        out[idx] = np.where(beaten, OUT, np.where(blocked, OPEN, IN))
+        return out

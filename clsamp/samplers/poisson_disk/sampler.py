@@ -10,7 +10,8 @@ from ...errors import InvalidArgumentError, SamplingError
 from ...geometry import torus
 from ...validation import check_positive_int, check_real
 from ..base import PILLEBOUE, Rate, SampleInfo, Sampler, info_field, register
-from .device import DeviceDarts
+from .coarse import COARSE_MIN_D, COARSE_RHO, COARSE_ROUNDS, CoarseGeometry, gather_coarse, throw_coarse
+from .device import DeviceCoarse, DeviceDarts
 from .grid import (
     BATCH_CELLS,
     HEXAGONAL_DENSITY,
@@ -25,7 +26,7 @@ from .grid import (
     grid_size,
     level_of,
 )
-from .reference import NumpyDarts
+from .reference import NumpyCoarse, NumpyDarts
 
 
 # -- the round loop -------------------------------------------------------------------------
@@ -148,16 +149,16 @@ class PoissonDiskSampler(Sampler):
     Parameters
     ----------
     d : int
-        Dimension, 1 to 3.
+        Dimension, 1 to 8; maximal sets (``radius`` with n left out) 1 to 4.
     seed : int
         Seed of the darts (``Stream.CANDIDATES``).
     rho : float, optional
         Relative radius in (0, 0.9069] for a fixed n (default 0.75 when ``radius`` is not
-        given): the points are at least ``rho * d_max(n)`` apart, d_max from
+        given, 0.65 in d >= 5): the points are at least ``rho * d_max(n)`` apart, d_max from
         :func:`clsamp.metrics.max_min_distance` (2-D: sqrt(2 / (sqrt(3) n))).
-        Saturated (maximal) dart throwing reaches about 0.77 in 2-D (0.80 in 3-D, 0.75 in
-        1-D), so values close to that may need redraws and values above it fail: the
-        error says so.
+        Saturated (maximal) dart throwing reaches about 0.77 in 2-D (0.80 in 3-D and 4-D,
+        0.75 in 1-D), so values close to that may need redraws and values above it fail:
+        the error says so.
     radius : float, optional
         Absolute radius in (0, 0.5]. With ``sample()`` (n left out) the set is maximal:
         no point of the torus is r or more from every point. With ``sample(n)`` exactly n
@@ -190,15 +191,32 @@ class PoissonDiskSampler(Sampler):
     (small n fluctuates) is drawn again from the next of ``MAX_ATTEMPTS`` independent Philox
     streams, so realization k still depends on k alone; if all fail, n points cannot be
     placed at that rho and ``InvalidArgumentError`` says so. Saturated dart throwing reaches
-    rho of about 0.75 in 1-D (Renyi's parking constant 0.7476), 0.77 in 2-D and 0.80 in 3-D,
-    so at the default 0.75 large 1-D sets fail: use a smaller rho there.
+    rho of about 0.75 in 1-D (Renyi's parking constant 0.7476), 0.77 in 2-D and 0.80 in 3-D
+    and 4-D (random sequential addition saturates at a density of about 0.256 in 4-D by the
+    fit (0.202 + 0.974 d) / 2^d of Torquato et al. 2006, of the D4 lattice's 0.6169:
+    rho = 0.80; maximal sets here reach 0.804-0.806), so at the default 0.75 large 1-D sets
+    fail: use a smaller rho there.
+
+    In d = 5..8 the grid of side r / sqrt(d) would hold about 100 (5-D) to 5600 (8-D) cells
+    a point at rho = 0.75, a dart searching thousands to hundreds of thousands of them, so
+    there (fixed n only) the darts go into the whole torus, ``n`` a round into each
+    unfinished set, as plain dart throwing (Cook 1986), settled by the same greedy steps, and
+    the points near a dart are found through cells of side >= r (3^d of them around it, or
+    one cell holding every point when fewer than 3 fit an axis): memory linear in n.
+    Without voids no set is known to be maximal; one still short of n after
+    ``COARSE_ROUNDS`` (64) rounds is drawn again, as a maximal one is. Dart throwing's slow
+    approach to saturation (the uncovered space shrinks as a power of the darts thrown,
+    Torquato et al. 2006) makes 0.75 out of reach in 64 rounds; 0.7 takes 11-36 rounds and the
+    default 0.65 takes 4-6 (docs/performance.md). The points of a set come in the order
+    they were accepted (each round's in cell order).
 
     In radius mode the count differs between realizations, so ``sample()`` accepts
     ``realizations`` of None (shape (m, d)) or 1 (shape (1, m, d)) only;
     :meth:`sample_sets` returns a list of k maximal sets (made in one batch). ``start``
     must be 0 (a set, not a sequence).
 
-    Points are returned in grid-cell order (row-major), not in the order of acceptance.
+    Points are returned in grid-cell order (row-major), not in the order of acceptance
+    (d <= 4).
 
     References
     ----------
@@ -208,10 +226,13 @@ class PoissonDiskSampler(Sampler):
     algorithm for maximal Poisson-disk sampling in high dimensions", Comput. Graph.
     Forum 31(2), 2012.
     L.-Y. Wei, "Parallel Poisson disk sampling", ACM Trans. Graph. 27(3), 2008.
+    R. L. Cook, "Stochastic sampling in computer graphics", ACM Trans. Graph. 5(1), 1986.
     M. Luby, "A simple parallel algorithm for the maximal independent set problem",
     SIAM J. Comput. 15(4), 1986.
     A. Lagae, P. Dutre, "A comparison of methods for generating Poisson disk
     distributions", Comput. Graph. Forum 27(1), 2008.
+    S. Torquato, O. U. Uche, F. H. Stillinger, "Random sequential addition of hard spheres
+    in high Euclidean dimensions", Phys. Rev. E 74, 061308, 2006.
 
     Examples
     --------
@@ -226,7 +247,7 @@ class PoissonDiskSampler(Sampler):
     True
     """
 
-    dimensions = (1, 2, 3)
+    dimensions = tuple(range(1, 9))
     accepts_start = False
     expensive = True
     needs_fp64 = True
@@ -247,15 +268,16 @@ class PoissonDiskSampler(Sampler):
                     "wider disk around a point overlaps its own periodic image, so it is no "
                     "longer a disk on the torus")
             G = grid_size(self.radius, self.d)
-            if G ** self.d > MAX_CELLS:
+            if self.d < COARSE_MIN_D and G ** self.d > MAX_CELLS:
                 raise InvalidArgumentError(
                     f"'radius'={self.radius} is too small for d={self.d}: its background grid "
                     f"would have {G ** self.d} cells, more than {MAX_CELLS}")
             self.rho = None
-            self.needs_n = False
+            self.needs_n = self.d >= COARSE_MIN_D    # maximal sets for d <= 4 only
         else:
             self.radius = None
-            self.rho = 0.75 if rho is None else check_real(rho, "rho", minimum=0.0,
+            default = 0.75 if self.d < COARSE_MIN_D else COARSE_RHO
+            self.rho = default if rho is None else check_real(rho, "rho", minimum=0.0,
                                                            open_minimum=True)
             if self.rho > HEXAGONAL_DENSITY:
                 raise InvalidArgumentError(
@@ -299,6 +321,7 @@ class PoissonDiskSampler(Sampler):
         """
         if self.radius is None or n is not None:
             return super().sample_sets(realizations, n=n, return_info=return_info)
+        _check_maximal_d(self.d)
         if isinstance(realizations, range):
             if len(realizations) == 0 or realizations.step != 1 or realizations.start < 0:
                 raise InvalidArgumentError(
@@ -328,6 +351,8 @@ class PoissonDiskSampler(Sampler):
 
     # -- what the base calls ------------------------------------------------------------
     def _check_call(self, n, realizations, start, return_info=False):
+        if n is None and self.radius is not None:
+            _check_maximal_d(self.d)
         checked = super()._check_call(n, realizations, start, return_info)
         runs = checked[1]
         if checked[0] is None and sum(len(run) for run in runs) != 1:
@@ -346,9 +371,15 @@ class PoissonDiskSampler(Sampler):
     # -- the work -------------------------------------------------------------------------
     def _geometry(self, n):
         if self.radius is not None:
-            return Geometry(self.d, self.radius, acceptance_threshold(self.radius))
+            r2 = acceptance_threshold(self.radius)
+            if self.d >= COARSE_MIN_D:
+                return CoarseGeometry(self.d, self.radius, r2, n)
+            return Geometry(self.d, self.radius, r2)
         d_max = torus.max_min_distance(n, self.d)
         radius = self.rho * d_max
+        if self.d >= COARSE_MIN_D:
+            return CoarseGeometry(self.d, radius,
+                                  acceptance_threshold(radius, d_max, self.rho), n)
         G = grid_size(radius, self.d)
         if G ** self.d > MAX_CELLS:
             raise InvalidArgumentError(
@@ -384,6 +415,15 @@ class PoissonDiskSampler(Sampler):
         return out.reshape(shape), info
 
 
+def _check_maximal_d(d):
+    """Refuse a maximal set beyond d = 4, naming 'd'."""
+    if d >= COARSE_MIN_D:
+        raise InvalidArgumentError(
+            f"'d'={d}: maximal sets (radius mode, n left out) are made for d <= "
+            f"{COARSE_MIN_D - 1} (their grid of side r / sqrt(d) grows as (sqrt(d) / r)^d); "
+            "give n for exactly n points at least 'radius' apart")
+
+
 def _draw(geo, ids, n, seed, device, what):
     """Draw realizations ``ids`` in batches of at most BATCH_CELLS grid cells.
 
@@ -395,10 +435,14 @@ def _draw(geo, ids, n, seed, device, what):
 
     Maximal (n None): returns ``([(out, counts) per batch], counts, stats)``.
     """
-    make = DeviceDarts if device else NumpyDarts
-    per_batch = max(1, BATCH_CELLS // geo.cells)
+    coarse = isinstance(geo, CoarseGeometry)
+    if coarse:
+        make = DeviceCoarse if device else NumpyCoarse
+    else:
+        make = DeviceDarts if device else NumpyDarts
+    per_batch = max(1, BATCH_CELLS // geo.footprint)
     if device:  # the point grid, the largest buffer, within one launch's budget
-        per_batch = min(per_batch, runtime.fit(8 * geo.d * geo.cells))
+        per_batch = min(per_batch, runtime.fit(8 * geo.d * geo.footprint))
     stats = {"rounds": 0, "darts": 0, "redraws": 0}
 
     def alloc(rows):
@@ -435,17 +479,28 @@ def _draw(geo, ids, n, seed, device, what):
         for lo in range(0, pending.size, per_batch):
             batch = pending[lo:lo + per_batch]
             backend = make(geo, ids[batch], attempt, seed)
-            counts, short, st = _throw_darts(backend, n)
+            counts, short, st = (throw_coarse if coarse else _throw_darts)(backend, n)
             account(st)
-            backend.gather(np.where(short, SKIP, batch * n).astype(np.int64), out)
+            dst = np.where(short, SKIP, batch * n).astype(np.int64)
+            if coarse:
+                gather_coarse(backend.points, dst, out, SKIP)
+            else:
+                backend.gather(dst, out)
             if short.any():
                 best = max(best, int(counts[short].max()))
             still.append(batch[short])
         pending = np.concatenate(still)
+    if pending.size and coarse:
+        raise InvalidArgumentError(
+            f"n={n} points cannot be placed at {what} in d={geo.d}: realization "
+            f"{int(ids[pending[0]])} stayed below n after {COARSE_ROUNDS} rounds of n darts in "
+            f"{MAX_ATTEMPTS} attempts (at most {best} points). Use a smaller 'rho' (dart "
+            f"throwing in d >= {COARSE_MIN_D} reaches about 0.7 in that many rounds) or a "
+            "smaller 'radius'")
     if pending.size:
         raise InvalidArgumentError(
             f"n={n} points cannot be placed at {what} in d={geo.d}: realization "
             f"{int(ids[pending[0]])} became maximal below n in {MAX_ATTEMPTS} attempts (at most "
             f"{best} points). Use a smaller 'rho' (saturated dart throwing reaches about 0.75 "
-            "in 1-D, 0.77 in 2-D, 0.80 in 3-D) or a smaller 'radius'")
+            "in 1-D, 0.77 in 2-D, 0.80 in 3-D and 4-D) or a smaller 'radius'")
     return out, np.full(len(ids), n, dtype=np.int64), stats
