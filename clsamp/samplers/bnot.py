@@ -97,7 +97,7 @@ def _hessian(owner, second, margin, n, tau, diagonal):
     return (sp.diags(degree) - edge).tocsc()
 
 
-def solve_weights(points, sites, w, p, power, newton=NEWTON):
+def solve_weights(points, sites, w, p, power, newton=NEWTON, slack=None):
     """Newton's method on the dual of the semi-discrete transport problem of one
     realization: weights whose power cells hold p density points each, as far as the
     points allow (de Goes et al. 2012, section 4).
@@ -109,7 +109,7 @@ def solve_weights(points, sites, w, p, power, newton=NEWTON):
     integers) is accepted for the largest alpha in 1, 1/2, ... (``HALVINGS`` tries) that
     lowers the gradient's norm sum |p - c| (the damped Newton method of Kitagawa,
     Merigot and Thibert); the solve stops when no step does, or when every count is
-    within ``SLACK`` p of p (the few points left over are passed on by the exact
+    within ``slack`` of p (the few points left over are passed on by the exact
     assignment that follows). It starts from ``w`` or from zero weights (Voronoi cells),
     whichever has the smaller gradient: sites that moved far leave the last weights
     worse than none.
@@ -126,6 +126,8 @@ def solve_weights(points, sites, w, p, power, newton=NEWTON):
         (:class:`~clsamp.samplers.ccvt.power.PowerPass`) over the sites.
     newton : int
         Cap on the steps.
+    slack : int, optional
+        Stop once every count is within ``slack`` of p (default ``SLACK`` p, at least 1).
 
     Returns
     -------
@@ -142,7 +144,7 @@ def solve_weights(points, sites, w, p, power, newton=NEWTON):
     spacing2 = float(it.SIZE) ** 2 / n
     tau = BAND * spacing2
     diagonal = REGULAR * p / spacing2
-    slack = max(1, int(SLACK * p))
+    slack = max(1, int(SLACK * p)) if slack is None else slack
 
     def evaluate(weights):
         owner, second, margin = power(weights)
@@ -162,6 +164,7 @@ def solve_weights(points, sites, w, p, power, newton=NEWTON):
             break
         delta = spsolve(_hessian(owner, second, margin, n, tau, diagonal),
                         grad.astype(np.float64))
+        delta -= delta.mean()       # a constant moves no boundary
         alpha, taken = 1.0, None
         for _ in range(HALVINGS):
             trial = w + np.rint(alpha * delta).astype(np.int64)
@@ -261,16 +264,23 @@ def bnot_optimize(sites, points, p, iterations=ITERATIONS, tol=TOL, backend="ope
             def cells(weights, power=power, pts32=pts32):
                 return tuple(a[0] for a in power(pts32, weights[None]))
 
-            w, owner, dual, used = solve_weights(pts, s, w, p, cells, newton)
-            taken += used
-            fresh = _exact_cells(s, pts, owner, p)
-            fresh_cost, moved, cost = _cost_and_centroids(s, pts, fresh, n)
-            if label is not None:
-                # the previous cells cost less for these sites: keep them, so that the
-                # cost never rises
-                old_cost, old_moved, old_after = _cost_and_centroids(s, pts, label, n)
-                if old_cost < fresh_cost:
+            slack = max(1, int(SLACK * p))
+            while True:
+                w, owner, dual, used = solve_weights(pts, s, w, p, cells, newton, slack)
+                taken += used
+                fresh = _exact_cells(s, pts, owner, p)
+                _, moved, cost = _cost_and_centroids(s, pts, fresh, n)
+                if label is None:
+                    break
+                # the previous cells end cheaper: solve the weights more closely, or keep
+                # those cells when that cannot be done, so that the cost never rises
+                _, old_moved, old_after = _cost_and_centroids(s, pts, label, n)
+                if cost <= old_after:
+                    break
+                if slack == 1:
                     fresh, moved, cost = label, old_moved, old_after
+                    break
+                slack = max(1, slack // 2)
             label, s = fresh, moved
             history.append(cost / scale)
             dual_history.append(dual / scale)
