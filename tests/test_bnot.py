@@ -142,3 +142,37 @@ def test_quality_against_poisson_disk():
 def test_bad_arguments_are_refused_by_name(kw, name):
     with pytest.raises(InvalidArgumentError, match=name):
         clsamp.make_sampler("bnot", **kw)
+
+
+def test_an_image_density_places_the_sites_by_its_mass():
+    # a bump four times the background in a disk of radius 0.15: the share of sites in
+    # it equals the share of the density's mass (the cells hold equal masses)
+    def bump(x, y):
+        return 1.0 + 4.0 * (np.hypot(x - 0.5, y - 0.5) < 0.15)
+
+    n = 400
+    kw = dict(seed=1, density=bump, points_per_site=64, iterations=12)
+    pts, info = clsamp.make_sampler("bnot", **kw).sample(n, return_info=True)
+    assert np.all(info.capacities == 64)
+    image = bnot.check_density(bump)
+    c = (np.arange(image.shape[0]) + 0.5) / image.shape[0]
+    x, y = np.meshgrid(c, c)
+    share = (image * (np.hypot(x - 0.5, y - 0.5) < 0.15)).sum() / image.sum()
+    inside = (np.hypot(pts[:, 0] - 0.5, pts[:, 1] - 0.5) < 0.15).mean()
+    assert abs(inside - share) < 0.03
+    assert np.array_equal(pts, clsamp.make_sampler("bnot", backend="numpy", **kw).sample(n))
+
+
+def test_the_warp_follows_the_image():
+    # the warped jittered points fall in each pixel of a 2 x 4 image by its mass
+    image = np.array([[1.0, 0.0, 2.0, 1.0], [0.5, 0.5, 3.0, 0.0]])
+    pts = it.to_unit(bnot.warp_to_image(density_points(1, [0], 80000)[0], image))
+    counts = np.histogram2d(pts[:, 1], pts[:, 0], bins=(2, 4), range=((0, 1), (0, 1)))[0]
+    assert np.allclose(counts / counts.sum(), image / image.sum(), atol=2e-3)
+
+
+@pytest.mark.parametrize("density", [np.zeros((4, 4)), np.full((2, 2), np.nan), -np.ones((3, 3)),
+                                     np.ones(5), "blue", lambda x, y: -x])
+def test_bad_densities_are_refused(density):
+    with pytest.raises(InvalidArgumentError, match="density"):
+        clsamp.make_sampler("bnot", density=density)

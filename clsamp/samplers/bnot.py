@@ -16,6 +16,7 @@ import dataclasses
 import numpy as np
 
 from .. import runtime
+from ..errors import InvalidArgumentError
 from ..geometry import integer_torus as it
 from ..validation import check_choice, check_int, check_positive_int, check_real
 from .base import SampleInfo, info_field, register
@@ -309,6 +310,87 @@ def bnot_optimize(sites, points, p, iterations=ITERATIONS, tol=TOL, backend="ope
     return out, info
 
 
+IMAGE_SIDE = 256        # a callable density is sampled on this many pixels a side
+
+
+def check_density(density, name="density"):
+    """A density as ``bnot`` takes it: one of CCVT's names, or an image or a callable.
+
+    Parameters
+    ----------
+    density : str, array_like (h, w) or callable
+        ``"jittered"`` or ``"random"`` (:func:`clsamp.samplers.ccvt.density.density_points`),
+        or a non-negative density on the unit torus: an image (row i covers
+        y in [i / h, (i + 1) / h), column j x in [j / w, (j + 1) / w)), or a callable
+        ``f(x, y)`` on arrays, sampled at the centres of ``IMAGE_SIDE`` x ``IMAGE_SIDE``
+        pixels.
+    name : str
+        The argument's name, for messages.
+
+    Returns
+    -------
+    str or ndarray (h, w) of float64
+
+    Raises
+    ------
+    InvalidArgumentError
+        Another name, an image that is not 2-D, finite, non-negative with a positive sum.
+    """
+    if isinstance(density, str):
+        return check_choice(density, name, DENSITIES)
+    if callable(density):
+        c = (np.arange(IMAGE_SIDE) + 0.5) / IMAGE_SIDE
+        x, y = np.meshgrid(c, c)
+        density = np.broadcast_to(np.asarray(density(x, y), dtype=np.float64), x.shape)
+    image = np.asarray(density, dtype=np.float64) if not isinstance(density, np.ndarray) \
+        or density.dtype != object else None
+    if image is None or image.ndim != 2 or not image.size:
+        raise InvalidArgumentError(
+            f"'{name}' must be 'jittered', 'random', a 2-D image or a callable f(x, y)")
+    if not np.all(np.isfinite(image)) or image.min() < 0 or not image.sum() > 0:
+        raise InvalidArgumentError(
+            f"'{name}' must be finite and non-negative with a positive sum")
+    return np.array(image)
+
+
+def warp_to_image(points, image):
+    """Points of the integer torus warped to an image's density: the row by the inverse
+    of the rows' cumulative masses, then the column by the inverse of that row's, each
+    inside its pixel linearly (the density is constant over a pixel). Monotone in each
+    coordinate, so a stratified set stays stratified (Pharr, Jakob, Humphreys, *Physically
+    Based Rendering*, the piecewise-constant 2-D distribution).
+
+    Parameters
+    ----------
+    points : ndarray (..., 2) of uint32
+        Integer torus coordinates of points uniform on the torus.
+    image : ndarray (h, w)
+        From :func:`check_density`.
+
+    Returns
+    -------
+    ndarray (..., 2) of uint32
+    """
+    h, w = image.shape
+    u = it.to_unit(points)
+    rows = image.sum(axis=1)
+    cdf = np.concatenate([[0.0], np.cumsum(rows)]) / rows.sum()
+    uy = u[..., 1]
+    i = np.clip(np.searchsorted(cdf, uy, side="right") - 1, 0, h - 1)
+    mass = np.maximum(cdf[i + 1] - cdf[i], np.finfo(float).tiny)
+    y = (i + np.clip((uy - cdf[i]) / mass, 0.0, 1.0)) / h
+    # each row's own cumulative masses, row-major
+    cols = np.concatenate([np.zeros((h, 1)), np.cumsum(image, axis=1)], axis=1)
+    cols /= np.maximum(cols[:, -1:], np.finfo(float).tiny)
+    ux = u[..., 0]
+    row_cdf = cols[i]                                      # (..., w + 1)
+    j = np.clip((row_cdf <= ux[..., None]).sum(axis=-1) - 1, 0, w - 1)
+    lo = np.take_along_axis(row_cdf, j[..., None], -1)[..., 0]
+    hi = np.take_along_axis(row_cdf, j[..., None] + 1, -1)[..., 0]
+    x = (j + np.clip((ux - lo) / np.maximum(hi - lo, np.finfo(float).tiny), 0.0, 1.0)) / w
+    return it.to_torus(np.stack([x, y], axis=-1) % 1.0)
+
+
 @register("bnot")
 class BNOTSampler(OptimizerSampler):
     """Blue noise through optimal transport: sites at the centroids of power cells of
@@ -329,10 +411,13 @@ class BNOTSampler(OptimizerSampler):
     tol : float
         Stop once an iteration lowers the transport cost by at most this fraction of it
         (default 1e-5; 0 runs every iteration).
-    density : {"jittered", "random"}
+    density : {"jittered", "random"}, image or callable
         The density points, as ``ccvt`` draws them (:func:`clsamp.samplers.ccvt.density.
         density_points`): one per cell of an equal-area partition of the torus, shifted
-        at random per realization (default), or i.i.d. uniform.
+        at random per realization (default), or i.i.d. uniform. An image (h, w) or a
+        callable ``f(x, y)`` (:func:`check_density`) gives adaptive sampling: the
+        jittered points warped to that density (:func:`warp_to_image`), so that every
+        cell holds an equal share of its mass and the sites crowd where it is high.
     newton : int
         Cap on the Newton steps of one weight solve (default 8).
     backend : {"opencl", "numpy"}
@@ -395,18 +480,21 @@ class BNOTSampler(OptimizerSampler):
                                                   maximum=MAX_POINTS_PER_SITE)
         self.iterations = check_positive_int(iterations, "iterations")
         self.tol = check_real(tol, "tol", minimum=0.0, maximum=1.0)
-        self.density = check_choice(density, "density", DENSITIES)
+        self.density = check_density(density)
         self.newton = check_int(newton, "newton", minimum=0, maximum=64)
 
     def _optimize(self, sites, realizations, backend):
         n, p = sites.shape[1], self.points_per_site
         index = np.arange(realizations.start, realizations.stop, dtype=np.int64)
+        name = self.density if isinstance(self.density, str) else "jittered"
         if backend == "numpy":
-            points = density_points(self.seed, index, n * p, self.density)
+            points = density_points(self.seed, index, n * p, name)
         else:
-            points = density_points_device(self.seed, index, n * p, self.density)
+            points = density_points_device(self.seed, index, n * p, name)
             runtime.wait()
             points = points.get()
+        if not isinstance(self.density, str):
+            points = warp_to_image(points, self.density)
         out, info = bnot_optimize(sites, points, p, self.iterations, self.tol, backend, index,
                                   self.newton)
         return it.to_unit(out), info
