@@ -107,13 +107,13 @@ def solve_weights(points, sites, w, p, power, newton=NEWTON, slack=None):
     gradient is p - c(w) (c: the points in each power cell), and its Hessian the
     negative of the counts' Jacobian, a graph Laplacian over neighbouring cells measured
     from the margins (:func:`_hessian`). A step w + alpha delta (rounded: the weights are
-    integers) is accepted for the largest alpha in 1, 1/2, ... (``HALVINGS`` tries) that
-    lowers the gradient's norm sum |p - c| (the damped Newton method of Kitagawa,
-    Merigot and Thibert); the solve stops when no step does, or when every count is
-    within ``slack`` of p (the few points left over are passed on by the exact
-    assignment that follows). It starts from ``w`` or from zero weights (Voronoi cells),
-    whichever has the smaller gradient: sites that moved far leave the last weights
-    worse than none.
+    integers) is accepted for the largest alpha in a0, a0/2, ... (``HALVINGS`` tries; a0 = 1
+    for the first step, then the last accepted alpha) that lowers the gradient's norm
+    sum |p - c| (the damped Newton method of Kitagawa, Merigot and Thibert); the solve
+    stops when no step does, or when every count is within ``slack`` of p (the few
+    points left over are passed on by the exact assignment that follows). It starts
+    from ``w`` or from zero weights (Voronoi cells), whichever has the smaller gradient:
+    sites that moved far leave the last weights worse than none.
 
     Parameters
     ----------
@@ -158,7 +158,7 @@ def solve_weights(points, sites, w, p, power, newton=NEWTON, slack=None):
         if int(np.abs(zero[3]).sum()) < int(np.abs(grad).sum()):
             w = np.zeros_like(w)
             owner, second, margin, grad = zero
-    steps = 0
+    steps, start = 0, 1.0
     for _ in range(newton):
         error = int(np.abs(grad).sum())
         if n == 1 or int(np.abs(grad).max()) <= slack:
@@ -166,7 +166,7 @@ def solve_weights(points, sites, w, p, power, newton=NEWTON, slack=None):
         delta = spsolve(_hessian(owner, second, margin, n, tau, diagonal),
                         grad.astype(np.float64))
         delta -= delta.mean()       # a constant moves no boundary
-        alpha, taken = 1.0, None
+        alpha, taken = start, None
         for _ in range(HALVINGS):
             trial = w + np.rint(alpha * delta).astype(np.int64)
             out = evaluate(trial)
@@ -177,6 +177,7 @@ def solve_weights(points, sites, w, p, power, newton=NEWTON, slack=None):
         if taken is None:
             break
         w, (owner, second, margin, grad) = taken[0], taken[1]
+        start = alpha                   # the next step starts from this one
         steps += 1
     return w, owner, _dual(points, sites, owner, w, p), steps
 
