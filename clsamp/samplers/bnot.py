@@ -18,7 +18,7 @@ import numpy as np
 from .. import runtime
 from ..errors import InvalidArgumentError
 from ..geometry import integer_torus as it
-from ..validation import check_choice, check_int, check_positive_int, check_real
+from ..validation import check_bool, check_choice, check_int, check_positive_int, check_real
 from .base import SampleInfo, info_field, register
 from .ccvt.density import DENSITIES, density_points, density_points_device
 from .ccvt.pairs import MAX_POINTS_PER_SITE, NO_OWNER
@@ -216,7 +216,7 @@ def _cost_and_centroids(sites, points, label, n):
 
 
 def bnot_optimize(sites, points, p, iterations=ITERATIONS, tol=TOL, backend="opencl",
-                  realizations=None, newton=NEWTON):
+                  realizations=None, newton=NEWTON, progress=False):
     """BNOT from given integer sites over given density points (both backends: the same
     bits).
 
@@ -238,6 +238,8 @@ def bnot_optimize(sites, points, p, iterations=ITERATIONS, tol=TOL, backend="ope
         The realizations' indices, for the info (default 0..r-1).
     newton : int
         Cap on the Newton steps of each weight solve.
+    progress : bool
+        Show a bar over the iterations (after 2 s).
 
     Returns
     -------
@@ -250,6 +252,9 @@ def bnot_optimize(sites, points, p, iterations=ITERATIONS, tol=TOL, backend="ope
     G = start_grid_size(n)
     out = np.array(sites, dtype=np.int64)
     histories, duals, steps, counts, capacities, converged = [], [], [], [], [], []
+    from tqdm import tqdm
+    bar = tqdm(total=r * iterations, desc=f"bnot {r} x {n} sites", unit="it",
+               disable=not progress, delay=2)
     for k in range(r):
         pts = points[k].astype(np.int64)
         pts32 = np.ascontiguousarray(points[k:k + 1], dtype=np.uint32)   # uploaded once a pass set
@@ -286,9 +291,11 @@ def bnot_optimize(sites, points, p, iterations=ITERATIONS, tol=TOL, backend="ope
             label, s = fresh, moved
             history.append(cost / scale)
             dual_history.append(dual / scale)
+            bar.update()
             if len(history) > 1 and history[-2] - history[-1] <= tol * history[-1]:
                 done = True
                 break
+        bar.update(iterations - len(history))      # a converged run has done its work
         out[k] = s
         histories.append(history)
         duals.append(dual_history)
@@ -297,6 +304,7 @@ def bnot_optimize(sites, points, p, iterations=ITERATIONS, tol=TOL, backend="ope
         capacities.append(np.bincount(label, minlength=n) if label is not None
                           else np.zeros(n, dtype=np.int64))
         converged.append(done)
+    bar.close()
     length = max((len(h) for h in histories), default=0)
 
     def padded(rows):
@@ -420,8 +428,10 @@ class BNOTSampler(OptimizerSampler):
         jittered points warped to that density (:func:`warp_to_image`), so that every
         cell holds an equal share of its mass and the sites crowd where it is high.
     newton : int
-        Cap on the Newton steps of one weight solve (default 8).
+        Cap on the Newton steps of one weight solve (default 16).
     backend : {"opencl", "numpy"}
+    progress : bool
+        Show a progress bar over the iterations (after 2 s; default True).
 
     Notes
     -----
@@ -475,8 +485,9 @@ class BNOTSampler(OptimizerSampler):
     info = BNOTInfo
 
     def __init__(self, d=2, seed=0, points_per_site=POINTS_PER_SITE, iterations=ITERATIONS,
-                 tol=TOL, density="jittered", newton=NEWTON, backend="opencl"):
+                 tol=TOL, density="jittered", newton=NEWTON, backend="opencl", progress=True):
         super().__init__(d=d, seed=seed, backend=backend)
+        self.progress = check_bool(progress, "progress")
         self.points_per_site = check_positive_int(points_per_site, "points_per_site",
                                                   maximum=MAX_POINTS_PER_SITE)
         self.iterations = check_positive_int(iterations, "iterations")
@@ -497,5 +508,5 @@ class BNOTSampler(OptimizerSampler):
         if not isinstance(self.density, str):
             points = warp_to_image(points, self.density)
         out, info = bnot_optimize(sites, points, p, self.iterations, self.tol, backend, index,
-                                  self.newton)
+                                  self.newton, self.progress)
         return it.to_unit(out), info
