@@ -120,6 +120,7 @@ def test_the_cost_never_rises():
     assert np.all(info.energy_history[:, -1] < info.energy_history[:, 0])
 
 
+@pytest.mark.slow
 def test_quality_against_poisson_disk():
     # the figure: rho >= 0.75 and low-frequency power at most a seventh of
     # Poisson disk's, n = 1024, three seeds, Poisson disk measured here too
