@@ -75,7 +75,7 @@ class BNOTInfo(SampleInfo):
 
 def _dual(points, sites, owner, w, p):
     """The dual sum_m (|y_m - s_owner|^2 - w_owner) + p sum_i w_i of one realization,
-    exact (Python int), and the counts; points with no candidate count nowhere."""
+    exact (Python int); points with no candidate count nowhere."""
     ok = owner != NO_OWNER
     o = owner[ok].astype(np.int64)
     d2 = it.distance2(points[ok, 0], points[ok, 1], sites[o, 0], sites[o, 1])
