@@ -43,6 +43,7 @@ MODULES = (
     "bench_render",
     "bench_voronoi",
     "bench_gbn",
+    "bench_bnot",
     "bench_sample_elimination",
     "bench_sot",
 )

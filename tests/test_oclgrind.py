@@ -50,8 +50,9 @@ ENVIRONMENT = {"OCLGRIND_DATA_RACES": "1", "OCLGRIND_MAX_ERRORS": "20"}
 
 # Parameters that keep the iterating samplers small on an interpreter.
 SMALL = {"lloyd": {"iterations": 2, "density": 8}, "ccvt": {"points_per_site": 8, "iterations": 2},
-         "gbn": {"iterations": 2}, "sot": {"iterations": 2, "directions": 4}}
-SAMPLER_N = {"lloyd": 64, "ccvt": 64, "poisson_disk": 64, "gbn": 64, "sot": 64,
+         "gbn": {"iterations": 2}, "sot": {"iterations": 2, "directions": 4},
+         "bnot": {"points_per_site": 8, "iterations": 2}}
+SAMPLER_N = {"lloyd": 64, "ccvt": 64, "bnot": 64, "poisson_disk": 64, "gbn": 64, "sot": 64,
              "sample_elimination": 64}
 
 # Checks that cannot run on Oclgrind, with why; they are skipped by name.

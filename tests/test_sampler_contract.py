@@ -24,7 +24,8 @@ from clsamp.errors import InvalidArgumentError
 from clsamp.samplers import Rate, SampleInfo, Sampler, sampler_class
 
 # Parameters that keep the slowest samplers small here (their defaults are run elsewhere).
-SMALL = {"ccvt": {"points_per_site": 32}, "lloyd": {"iterations": 8, "density": 32},
+SMALL = {"ccvt": {"points_per_site": 32}, "bnot": {"points_per_site": 16, "iterations": 4},
+         "lloyd": {"iterations": 8, "density": 32},
          "sot": {"iterations": 6}}
 NAMES = clsamp.sampler_names()
 HIGH_D = 64         # the high dimension of samplers that take any d

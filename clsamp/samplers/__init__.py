@@ -2,6 +2,7 @@
 
 # Importing a module registers its samplers.
 from . import (  # noqa: F401
+    bnot,  # bnot (blue noise through optimal transport)
     ccvt,  # ccvt
     digital_net,  # digital_net (user matrices), faure, niederreiter
     gbn,  # gbn (Gaussian blue noise)
