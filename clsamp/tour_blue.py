@@ -21,7 +21,7 @@ BLUE_NOISE = (
     ("poisson_disk", {"rho": 0.75}),
     ("lloyd", {"iterations": 100}),
     ("ccvt", {"points_per_site": 128}),
-    ("bnot", {}),
+    ("bnot", {"points_per_site": 128, "iterations": 16}),
     ("sample_elimination", {}),
     ("sot", {}),
     ("gbn", {}),
