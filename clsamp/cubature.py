@@ -17,7 +17,8 @@ The algorithm, its constants and the wavenumber ordering are those of the author
 ``cubSobol_g`` / ``cubLattice_g`` and of qmcpy's ``CubQMCNetG`` / ``CubQMCLatticeG``.
 
 The transforms run in NumPy (a butterfly loop for Walsh, ``np.fft`` for Fourier) on the
-host, on the values of f; the points come from the samplers (on the device).
+host, on the values of f; the points come from the samplers (on the device), or, for an
+integrand with a kernel, are made in the kernel that evaluates it (:mod:`clsamp.fused`).
 
 References
 ----------
@@ -160,6 +161,10 @@ class Cubature:
     periodization : {"none", "baker", "sidi"}
         Lattice only: f is integrated as f(ψ(x)) prod ψ'(x_j) with Baker's tent or
         Sidi's sin^2 transform (:func:`clsamp.transforms.sidi`, k = 2).
+    block : callable, optional
+        (start, count) -> the (periodized) values at points start .. start + count - 1 in
+        natural order, made without the sampler: :meth:`clsamp.fused.FusedRule.values`,
+        whose kernel makes the same points. ``values`` is not called then.
 
     Notes
     -----
@@ -169,12 +174,13 @@ class Cubature:
     returns (mean, bound). See the module's references.
     """
 
-    def __init__(self, values, d, method, seed, periodization="none"):
+    def __init__(self, values, d, method, seed, periodization="none", block=None):
         if method == "digital":
             self.sampler = make_sampler("sobol", d=d, seed=seed, randomize="xor")
         else:
             self.sampler = make_sampler("lattice", d=d, seed=seed, randomize="shift")
         self.values, self.method, self.periodization = values, method, periodization
+        self.fused = block
         self.n, self.total = 0, 0.0
         self.coefficients = self.kappa = None
 
@@ -188,6 +194,8 @@ class Cubature:
     def _block(self, start, count):
         """f at the points start .. start + count - 1, in natural order for the transform,
         CHUNK points at a time (count and start are multiples of a power of 2 >= the chunk)."""
+        if self.fused is not None:
+            return self.fused(start, count)
         chunk = min(count, CHUNK)
         return np.concatenate([self._chunk(base, chunk) for base in range(start, start + count, chunk)])
 

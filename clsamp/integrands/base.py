@@ -71,12 +71,60 @@ class Integrand:
 
     name = None
     kernel_code = None
+    opencl_source = None    # OpenCL C appended to the integrand kernels (from_opencl's)
     smooth = False
     periodic = False
     edges = "none"
 
     def __init__(self, d):
         self.d = d
+
+    @staticmethod
+    def from_opencl(source, d, integral=None, name="opencl"):
+        """An integrand written in OpenCL C, evaluated on the device wherever clsamp
+        integrates it (:class:`clsamp.integrands.device.OpenCLIntegrand`).
+
+        Parameters
+        ----------
+        source : str
+            An expression in ``x[0] .. x[d-1]`` (``"exp(-x[0] * x[1])"``), a function body
+            with a ``return``, or a function ``double f(const double *x) { ... }``; it may
+            call OpenCL's math built-ins and ``to_normal(u)``
+            (:func:`clsamp.transforms.to_normal` on the device).
+        d : int
+            The dimension.
+        integral : float, optional
+            The exact integral where known (:func:`clsamp.convergence` needs it).
+        name : str
+            For reports.
+
+        Returns
+        -------
+        OpenCLIntegrand
+
+        Raises
+        ------
+        InvalidArgumentError
+            Bad arguments, or ``source`` that does not compile (with the compiler's first
+            error, its line numbered within ``source``).
+
+        Notes
+        -----
+        :func:`clsamp.integrate` fuses point generation, evaluation and reduction into one
+        kernel for it (:mod:`clsamp.fused`), so no point is ever stored.
+
+        Examples
+        --------
+        >>> import clsamp
+        >>> f = clsamp.Integrand.from_opencl("x[0] * x[1] * x[2]", 3, integral=0.125)
+        >>> float(f([[0.5, 0.5, 0.5]])[0])
+        0.125
+        >>> res = clsamp.integrate(f, 3, abs_tol=1e-8, method="digital")
+        >>> bool(abs(res.estimate - 0.125) < 1e-8)
+        True
+        """
+        from .device import OpenCLIntegrand
+        return OpenCLIntegrand(source, d, integral=integral, name=name)
 
     def __call__(self, points):
         """Evaluate at points (the NumPy reference).
