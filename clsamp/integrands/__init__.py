@@ -46,6 +46,7 @@ from .base import (  # noqa: F401  (the package's names)
     Gaussian,
     Heaviside,
     Integrand,
+    OpenCLIntegrand,
     PMJBilinear,
     PMJDisk,
     PMJGaussian,
@@ -53,7 +54,6 @@ from .base import (  # noqa: F401  (the package's names)
     PMJTriangle,
     halfspace_volume,
 )
-from .device import OpenCLIntegrand  # noqa: F401
 from .qmc import GENZ_DIFFICULTY, GENZ_KINDS, MAX_GENZ_D, Genz, Keister, genz, keister  # noqa: F401
 
 _FACTORIES = {
