@@ -143,8 +143,7 @@ inline vec integrand(const vec *x, __global const double *p)
 #elif INTEGRAND == KEISTER
     vec s = (vec)(0.0);
     for (int j = 0; j < DIM; ++j) {
-        const vec y = (vec)(clsamp_to_normal(x[j].s0), clsamp_to_normal(x[j].s1),
-                            clsamp_to_normal(x[j].s2), clsamp_to_normal(x[j].s3)) * p[1];
+        const vec y = clsamp_to_normal4(x[j]) * p[1];
         s = s + y * y;
     }
     return p[0] * cos(sqrt(s));
