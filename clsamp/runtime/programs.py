@@ -36,7 +36,7 @@ CAPABILITIES = {
     "distance samplers": ("dart_throwing.cl", "ccvt.cl"),
     "spectra": ("spectrum.cl", "nufft.cl"),
     "metrics": ("discrepancy.cl", "star_discrepancy.cl", "anchored_counts.cl", "neighbors.cl"),
-    "experiments": ("integrands.cl", "families.cl"),
+    "experiments": ("integrands.cl", "fused_integrals.cl", "families.cl"),
     "render": ("render.cl",),
 }
 
