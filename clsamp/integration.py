@@ -173,8 +173,12 @@ def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**2
     ----------
     f : callable, Integrand or str
         A vectorised function taking an (m, d) float64 array and returning m values
-        (float64 of shape (m,)); or a :mod:`clsamp.integrands` integrand (or its name),
-        evaluated by its OpenCL kernel.
+        (float64 of shape (m,)); or a :mod:`clsamp.integrands` integrand (or its name, or
+        one written in OpenCL C: ``clsamp.Integrand.from_opencl``), evaluated on the
+        device in the kernel that makes the points (:mod:`clsamp.fused`: no point is
+        stored) for ``method="digital" | "lattice"`` and for ``sampler`` given as
+        ``"sobol:owen"``, ``"sobol:xor"`` or ``"sobol:shift"``; at a sampler's points on
+        the device otherwise.
     d : int
         The dimension.
     sampler : str or Sampler
