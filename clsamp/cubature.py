@@ -248,7 +248,12 @@ class Cubature:
             new = self._transform(y)
             if self.method == "lattice":
                 new = new * np.exp(-1j * np.pi * np.arange(n) / n)
-            self.coefficients = np.concatenate([self.coefficients + new, self.coefficients - new]) / 2
+            # the doubling's butterfly, (c + new, c - new) / 2, written into one new array
+            both = np.empty(2 * n, dtype=np.result_type(self.coefficients, new))
+            np.add(self.coefficients, new, out=both[:n])
+            np.subtract(self.coefficients, new, out=both[n:])
+            both *= 0.5
+            self.coefficients = both
             m = (2 * n).bit_length() - 1
             self.kappa = _order_wavenumbers(np.concatenate([self.kappa, n + self.kappa]),
                                             np.abs(self.coefficients), m - 1, m - R_LAG - 1, m)
