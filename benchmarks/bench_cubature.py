@@ -14,6 +14,10 @@
   each side in the same run, one after the other; quality:
   the points each used and the error each reached. qmcpy is optional (``pip install
   clsamp[bench]``); without it the rows have no peer.
+- The same cases with the integrand on the device (rows "device integrand"): the
+  :mod:`clsamp.integrands` object itself handed to ``integrate``, whose kernel makes the
+  points and evaluates f in one launch (:mod:`clsamp.fused`), against the same qmcpy
+  timing (qmcpy has no device path: its integrand is the NumPy one).
 - ``--genz N``: the reliability study. N random members of each of Genz's six families
   (``genz(kind, d, seed)``, d = 2 + seed mod 7, so 2..8), each integrated by both methods
   to max(abs_tol, rel_tol |I|); per family and method the share of members whose estimate
@@ -80,19 +84,19 @@ def run(devices, quick):
             g = f.__call__                          # the NumPy integrand, the same for both
             for method, peer_name in METHODS.items():
                 for tol in tolerances:
-                    t, res = _timed(lambda g=g, f=f, tol=tol, m=method: clsamp.integrate(
-                        g, f.d, abs_tol=tol, method=m, max_n=2**26, progress=False), quick)
-                    quality = (f"clsamp {res.n} points, error {abs(res.estimate - f.integral):.1e}, "
-                               f"bound {res.half_width:.1e}")
-                    peer, t_peer = "", None
+                    peer, t_peer, peer_quality = "", None, ""
                     if have_qmcpy:
                         t_peer, (estimate, n) = _timed(
                             lambda g=g, f=f, tol=tol, m=method: _qmcpy(g, f.d, tol, m), quick)
                         peer = f"qmcpy {peer_name}"
-                        quality += (f"; qmcpy {n} points ({n / res.n:.2g}x), "
-                                    f"error {abs(estimate - f.integral):.1e}")
-                    rows.append(Row(f"integrate {method} {label}, abs_tol {tol:g}", "one sequence",
-                                    dev, t, peer, t_peer, quality))
+                        peer_quality = f"; qmcpy {n} points, error {abs(estimate - f.integral):.1e}"
+                    for integrand, kind in ((g, "NumPy integrand"), (f, "device integrand")):
+                        t, res = _timed(lambda h=integrand, f=f, tol=tol, m=method: clsamp.integrate(
+                            h, f.d, abs_tol=tol, method=m, max_n=2**26, progress=False), quick)
+                        quality = (f"clsamp {res.n} points, error {abs(res.estimate - f.integral):.1e}, "
+                                   f"bound {res.half_width:.1e}{peer_quality}")
+                        rows.append(Row(f"integrate {method} {label}, abs_tol {tol:g}", kind,
+                                        dev, t, peer, t_peer, quality))
     return rows
 
 

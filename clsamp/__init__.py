@@ -22,6 +22,7 @@ from .errors import (
                      SamplingError,
 )
 from .families import family_names, make_family
+from .integrands import Integrand
 from .integration import IntegrationResult, integrate
 from .metrics import StarBounds, discrepancy, nearest_neighbor_distances, pair_correlation, star_discrepancy
 from .runtime import current_device, devices, use_device
@@ -38,7 +39,7 @@ _sys.modules[__name__ + ".io"] = files
 
 __all__ = [
     "BuildError", "ClsampError", "DeviceMemoryError", "IntegrationResult",
-    "InvalidArgumentError", "NoDeviceError", "Rate", "SampleInfo", "Sampler", "SamplingError",
+    "Integrand", "InvalidArgumentError", "NoDeviceError", "Rate", "SampleInfo", "Sampler", "SamplingError",
     "StarBounds", "anisotropy", "as_qmc_engine", "convergence", "current_device", "devices",
     "discrepancy", "dither_mask", "expected_spectrum", "families", "family_names", "files", "integrands",
     "integrate", "make_family",

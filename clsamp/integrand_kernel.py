@@ -23,7 +23,8 @@ class IntegrandKernel:
         self.seed = seed
         self.kernel = runtime.kernel("integrands.cl", "integrand_error_sums",
                                      defines={"DIM": f.d, "INTEGRAND": f.kernel_code,
-                                              "HOMOGENIZE": int(bool(homogenize))})
+                                              "HOMOGENIZE": int(bool(homogenize))},
+                                     appendix=f.opencl_source)
         self.params = cla.to_device(runtime.queue(), np.ascontiguousarray(f.kernel_params(),
                                                                           dtype=np.float64))
 
@@ -61,8 +62,23 @@ class IntegrandKernel:
         self.kernel(queue, (groups * local, r), (local, 1), points.data, np.uint32(n),
                     np.uint32(SLICE), np.uint32(realization0), *philox.seed_key(self.seed),
                     np.uint32(philox.Stream.EXPERIMENT), self.params.data,
-                    np.float64(self.f.integral), out.data, cl.LocalMemory(16 * local))
+                    np.float64(offset(self.f)), out.data, cl.LocalMemory(16 * local))
         return out.get()
+
+
+def offset(f):
+    """What the kernels subtract from every value: the exact integral, or 0 where it is
+    not known (an integrand from ``Integrand.from_opencl`` without one).
+
+    Parameters
+    ----------
+    f : Integrand
+
+    Returns
+    -------
+    float
+    """
+    return 0.0 if f.integral is None else float(f.integral)
 
 
 def _two_sum(a, b):

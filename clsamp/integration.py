@@ -26,7 +26,8 @@ import numpy as np
 from . import runtime
 from .cubature import M_MIN, Cubature, check_periodization, combine
 from .errors import InvalidArgumentError
-from .integrand_kernel import IntegrandKernel, combine_sums
+from .fused import FusedRule, fused_randomization
+from .integrand_kernel import IntegrandKernel, combine_sums, offset
 from .integrands import Integrand, make_integrand
 from .samplers import Sampler, make_sampler
 from .validation import check_choice, check_int, check_real, check_seed
@@ -134,7 +135,9 @@ def _guaranteed(f, d, method, periodization, abs_tol, rel_tol, max_n, seed, prog
             f"'f' must be a callable, an Integrand or an integrand name, got {f!r}")
     if max_n < 2**M_MIN:
         raise InvalidArgumentError(f"'max_n' must be at least {2**M_MIN} for method={method!r}, got {max_n}")
-    rule = Cubature(lambda x: _blocked_values(f, x), d, method, seed, periodization)
+    block = (FusedRule(f, method, seed, periodization=periodization).values
+             if isinstance(f, Integrand) else None)
+    rule = Cubature(lambda x: _blocked_values(f, x), d, method, seed, periodization, block)
     from tqdm import tqdm
     bar = tqdm(desc=f"integrate ({method})", unit="round", disable=not progress, delay=2)
     history = []
@@ -170,8 +173,12 @@ def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**2
     ----------
     f : callable, Integrand or str
         A vectorised function taking an (m, d) float64 array and returning m values
-        (float64 of shape (m,)); or a :mod:`clsamp.integrands` integrand (or its name),
-        evaluated by its OpenCL kernel.
+        (float64 of shape (m,)); or a :mod:`clsamp.integrands` integrand (or its name, or
+        one written in OpenCL C: ``clsamp.Integrand.from_opencl``), evaluated on the
+        device in the kernel that makes the points (:mod:`clsamp.fused`: no point is
+        stored) for ``method="digital" | "lattice"`` and for ``sampler`` given as
+        ``"sobol:owen"``, ``"sobol:xor"`` or ``"sobol:shift"``; at a sampler's points on
+        the device otherwise.
     d : int
         The dimension.
     sampler : str or Sampler
@@ -272,7 +279,11 @@ def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**2
         if integrand.d != d:
             raise InvalidArgumentError(
                 f"integrand {integrand.name!r} is {integrand.d}-dimensional, 'd' is {d}")
-        kernel = IntegrandKernel(integrand, False, seed)
+        fused = fused_randomization(sampler) if isinstance(sampler, str) else None
+        if fused is not None:           # its points made in the kernel that evaluates f
+            kernel = FusedRule(integrand, "sobol", seed, fused)
+        else:
+            kernel = IntegrandKernel(integrand, False, seed)
     elif not callable(f):
         raise InvalidArgumentError(
             f"'f' must be a callable, an Integrand or an integrand name, got {f!r}")
@@ -283,11 +294,13 @@ def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**2
 
     def sums(count, start):
         """Per replication, the sum of f over points start .. start + count - 1."""
+        if isinstance(kernel, FusedRule):
+            return kernel.sums(count, start, range(r)) + count * offset(kernel.f)
         if kernel is not None:
             out = np.zeros(r)
             for lo, hi in runtime.chunk_ranges(r, 8 * count * d, 2**27):
                 pts = s.sample_device(count, realizations=range(lo, hi), start=start)
-                out[lo:hi] = combine_sums(kernel.error_sums(pts, count, lo)) + count * kernel.f.integral
+                out[lo:hi] = combine_sums(kernel.error_sums(pts, count, lo)) + count * offset(kernel.f)
             return out
         return _python_sums(f, s.sample(count, realizations=r, start=start), count)
 

@@ -36,7 +36,8 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
     integrand : Integrand, Family or str
         An :mod:`clsamp.integrands` object or a name: ``"gaussian"``, ``"disk"``,
         ``"heaviside"``, ``"pmj_disk"``, ``"pmj_gaussian"``, ``"pmj_bilinear"``,
-        ``"pmj_step"``, ``"pmj_triangle"`` (default parameters); or a family of random
+        ``"pmj_step"``, ``"pmj_triangle"`` (default parameters), or one written in OpenCL C
+        (``clsamp.Integrand.from_opencl(source, d, integral=...)``); or a family of random
         integrands (:mod:`clsamp.families`): ``"random_gaussians"``,
         ``"random_heavisides"``, ``"random_disks"``, ``"random_boxes"``,
         ``"random_clipped_gaussians"`` (drawn from ``seed``, in the sampler's dimension),
@@ -159,6 +160,10 @@ def _estimator(sampler, integrand, seed, backend, members, homogenize):
             s, label = _sampler(sampler, None, seed, backend)
             target = integrand if given else make_integrand(integrand, d=s.d)
         kind, make = repr(target.name), IntegrandErrors
+        if target.integral is None:
+            raise InvalidArgumentError(
+                f"'integrand' {kind} has no exact integral, which the errors need: give "
+                "Integrand.from_opencl(..., integral=...)")
     if target.d != s.d:
         raise InvalidArgumentError(
             f"'integrand' {kind} is {target.d}-dimensional but 'sampler' {label!r} makes "

@@ -21,7 +21,7 @@ LAYERS = [
     ("samplers", {"samplers"}),
     ("analysis", {"nufft", "spectral_stats", "spectrum", "metrics"}),
     ("experiments", {"integrands", "integrand_kernel", "families", "estimates", "sweep", "results", "theory",
-                     "integration", "cubature"}),
+                     "integration", "cubature", "fused"}),
     ("render", {"scene", "pixel_sampling", "render_numpy", "render"}),
     ("report", {"plot_axes", "plot_points", "plots", "report", "tour_blue", "tour_cost", "tour_qmc",
                 "tour", "cli", "__main__", "__init__"}),

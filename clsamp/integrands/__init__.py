@@ -46,6 +46,7 @@ from .base import (  # noqa: F401  (the package's names)
     Gaussian,
     Heaviside,
     Integrand,
+    OpenCLIntegrand,
     PMJBilinear,
     PMJDisk,
     PMJGaussian,

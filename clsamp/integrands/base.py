@@ -9,7 +9,8 @@ import numpy as np
 
 from ..errors import InvalidArgumentError
 from ..geometry.torus import ball_volume
-from ..validation import check_real, plain
+from ..validation import check_positive_int, check_real, plain
+from . import device
 
 # Kernel codes (INTEGRAND in kernels/integrands.cl).
 GAUSSIAN, DISK, HEAVISIDE, PMJ_DISK, PMJ_GAUSSIAN, PMJ_BILINEAR, PMJ_STEP, PMJ_TRIANGLE = range(8)
@@ -71,12 +72,59 @@ class Integrand:
 
     name = None
     kernel_code = None
+    opencl_source = None    # OpenCL C appended to the integrand kernels (from_opencl's)
     smooth = False
     periodic = False
     edges = "none"
 
     def __init__(self, d):
         self.d = d
+
+    @staticmethod
+    def from_opencl(source, d, integral=None, name="opencl"):
+        """An integrand written in OpenCL C, evaluated on the device wherever clsamp
+        integrates it (:class:`clsamp.integrands.device.OpenCLIntegrand`).
+
+        Parameters
+        ----------
+        source : str
+            An expression in ``x[0] .. x[d-1]`` (``"exp(-x[0] * x[1])"``), a function body
+            with a ``return``, or a function ``double f(const double *x) { ... }``; it may
+            call OpenCL's math built-ins and ``to_normal(u)``
+            (:func:`clsamp.transforms.to_normal` on the device).
+        d : int
+            The dimension.
+        integral : float, optional
+            The exact integral where known (:func:`clsamp.convergence` needs it).
+        name : str
+            For reports.
+
+        Returns
+        -------
+        OpenCLIntegrand
+
+        Raises
+        ------
+        InvalidArgumentError
+            Bad arguments, or ``source`` that does not compile (with the compiler's first
+            error, its line numbered within ``source``).
+
+        Notes
+        -----
+        :func:`clsamp.integrate` fuses point generation, evaluation and reduction into one
+        kernel for it (:mod:`clsamp.fused`), so no point is ever stored.
+
+        Examples
+        --------
+        >>> import clsamp
+        >>> f = clsamp.Integrand.from_opencl("x[0] * x[1] * x[2]", 3, integral=0.125)
+        >>> float(f([[0.5, 0.5, 0.5]])[0])
+        0.125
+        >>> res = clsamp.integrate(f, 3, abs_tol=1e-6, progress=False)
+        >>> bool(abs(res.estimate - 0.125) < 1e-5), res.converged
+        (True, True)
+        """
+        return OpenCLIntegrand(source, d, integral=integral, name=name)
 
     def __call__(self, points):
         """Evaluate at points (the NumPy reference).
@@ -141,6 +189,96 @@ class Integrand:
         str
         """
         return f"{self.name}: {self._describe()}, integral {float(self.integral)!r}"
+
+
+class OpenCLIntegrand(Integrand):
+    """An integrand given as OpenCL C: made by :meth:`clsamp.Integrand.from_opencl`.
+
+    Parameters
+    ----------
+    source : str
+        See :func:`clsamp.integrands.device.assemble`. The code may call OpenCL's math
+        built-ins (in double) and ``to_normal(u)``, the standard normal quantile of
+        :func:`clsamp.transforms.to_normal` (``kernels/normal.h``).
+    d : int
+        The dimension, 1 to 1024.
+    integral : float, optional
+        The exact integral, where known: :func:`clsamp.convergence` needs it (the errors
+        are estimates minus it); :func:`clsamp.integrate` does not.
+    name : str
+        For reports.
+
+    Attributes
+    ----------
+    source : str
+        The code as given.
+    opencl_source : str
+        The code appended to the integrand kernels
+        (:func:`clsamp.integrands.device.assemble`).
+
+    Raises
+    ------
+    InvalidArgumentError
+        ``source`` not a non-empty string, or not compiling (the message holds the
+        compiler's first error, its line numbered within ``source``); a bad ``d``,
+        ``integral`` or ``name``.
+    NoDeviceError
+        The current device has no fp64.
+    """
+
+    kernel_code = device.USER_SOURCE
+
+    def __init__(self, source, d, integral=None, name="opencl"):
+        super().__init__(check_positive_int(d, "d", maximum=device.MAX_D))
+        if integral is not None:
+            try:
+                integral = float(integral)
+            except (TypeError, ValueError):
+                integral = math.nan
+            if not math.isfinite(integral):
+                raise InvalidArgumentError(
+                    f"'integral' must be a finite real number or None, got {plain(integral)}")
+        if not isinstance(name, str) or not name:
+            raise InvalidArgumentError(f"'name' must be a non-empty string, got {plain(name)}")
+        self.source, self.integral, self.name = source, integral, name
+        self.opencl_source = device.compile_source(source, self.d)
+
+    def _describe(self):
+        text = " ".join(self.source.split())
+        return f"d={self.d}, source={text if len(text) <= 60 else text[:57] + '...'!r}"
+
+    def describe(self):
+        """A one-line description (for reports).
+
+        Returns
+        -------
+        str
+        """
+        known = "unknown" if self.integral is None else repr(float(self.integral))
+        return f"{self.name}: {self._describe()}, integral {known}"
+
+    def __call__(self, points):
+        """Evaluate at points on the current device (the same code as every kernel runs).
+
+        Parameters
+        ----------
+        points : array_like
+            (n, d) or (r, n, d) points.
+
+        Returns
+        -------
+        ndarray
+            float64 of shape (n,) or (r, n).
+
+        Raises
+        ------
+        InvalidArgumentError
+            Points of the wrong shape.
+        """
+        return self._evaluate(_points(points, self.d))
+
+    def _evaluate(self, x):
+        return device.device_values(self, x)
 
 
 class Gaussian(Integrand):

@@ -36,7 +36,7 @@ CAPABILITIES = {
     "distance samplers": ("dart_throwing.cl", "ccvt.cl"),
     "spectra": ("spectrum.cl", "nufft.cl"),
     "metrics": ("discrepancy.cl", "star_discrepancy.cl", "anchored_counts.cl", "neighbors.cl"),
-    "experiments": ("integrands.cl", "families.cl"),
+    "experiments": ("integrands.cl", "fused_integrals.cl", "families.cl"),
     "render": ("render.cl",),
 }
 
@@ -232,9 +232,9 @@ def device_defines(device):
     return {"CLSAMP_FP64": int(device.fp64), "CLSAMP_OCLGRIND": device.simulator}
 
 
-def program(file, defines=None, options=()):
+def program(file, defines=None, options=(), appendix=None):
     """The built program of ``kernels/<file>`` for the current device, built once per
-    (device, file, options).
+    (device, file, options, appendix).
 
     Parameters
     ----------
@@ -247,6 +247,9 @@ def program(file, defines=None, options=()):
     options : sequence of str
         Other compiler options (``-cl-mad-enable``: only where results need not be
         bit-identical across devices).
+    appendix : str, optional
+        OpenCL C appended to the file's source (a user's function that the file declares:
+        ``clsamp.Integrand.from_opencl``); its ``#line`` directives name it in the log.
 
     Returns
     -------
@@ -264,13 +267,13 @@ def program(file, defines=None, options=()):
     cl = discovery._cl()
     device = discovery.current_device()
     defines = {**device_defines(device), **(defines or {})}
-    key = (device.index, file, _options(defines, options))
+    key = (device.index, file, _options(defines, options), appendix)
     with discovery._lock:
         built = _programs.get(key)
         if built is not None:
             return built
         ctx = discovery._state(device.index)[0]
-        source = kernel_source(file)
+        source = kernel_source(file) + ("\n" + appendix if appendix else "")
         if not device.fp64 and _DOUBLE.search(active_source(source, fp64=False)):
             raise NoDeviceError(
                 f"kernels/{file} computes in double precision and device {device.name} "
@@ -294,7 +297,7 @@ def program(file, defines=None, options=()):
         return built
 
 
-def kernel(file, name, defines=None, options=(), instance=None):
+def kernel(file, name, defines=None, options=(), instance=None, appendix=None):
     """A kernel object from :func:`program`, fetched once per program and thread.
 
     Callers in one thread share the object, so each launch sets all its arguments. Each
@@ -303,7 +306,7 @@ def kernel(file, name, defines=None, options=(), instance=None):
 
     Parameters
     ----------
-    file, defines, options
+    file, defines, options, appendix
         As :func:`program` takes them.
     name : str
         The kernel's name in the file.
@@ -320,7 +323,7 @@ def kernel(file, name, defines=None, options=(), instance=None):
     NoDeviceError, BuildError
         As :func:`program` raises them.
     """
-    prog = program(file, defines, options)
+    prog = program(file, defines, options, appendix)
     key = (id(prog), name, instance, threading.get_ident())
     with discovery._lock:
         k = _kernels.get(key)

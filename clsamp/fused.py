@@ -1,0 +1,171 @@
+"""Integrands at points made inside the kernel that evaluates them (``kernels/fused_integrals.cl``):
+what :func:`clsamp.integrate` runs for an :class:`~clsamp.integrands.Integrand` (a shipped one
+or :meth:`~clsamp.integrands.Integrand.from_opencl`'s), so that no point is ever stored.
+
+A :class:`FusedRule` makes the points of one sequence of the samplers, bit for bit:
+
+* ``"sobol"``: Sobol' (Joe-Kuo) in the sampler's Gray-code order with ``randomize``
+  ``"owen"``, ``"xor"`` or ``"shift"`` (``make_sampler("sobol", randomize=...)``), for
+  replicated RQMC: :meth:`FusedRule.sums` gives each realization's double-double sum of
+  f - integral, one pair per work-group read back;
+* ``"digital"``: the same digitally shifted Sobol' points in natural order (point i = C i),
+  realization 0, for :class:`clsamp.cubature.Cubature`;
+* ``"lattice"``: the shifted rank-1 lattice (Kuo's vector) in radical-inverse order with
+  a periodization.
+
+The last two give the values :meth:`FusedRule.values` (the Walsh and Fourier transforms need
+every value; they run on the host, docs/performance.md). Device memory is O(1) in n: a
+launch covers at most :data:`CHUNK` points of a realization, and its output (sums or values)
+is read back before the next.
+"""
+
+import numpy as np
+
+from . import number_theory as nt
+from . import philox, runtime
+from .integrand_kernel import combine_sums, offset
+from .samplers.lattice import kuo_vector
+
+CHUNK = 2**20            # points of one realization a launch makes at most
+KINDS = ("sobol", "digital", "lattice")
+RANDOMIZE = {"shift": 1, "xor": 2, "owen": 3}     # LD_* of kernels/lowdiscrepancy.h
+PERIODIZE = {"none": 0, "baker": 1, "sidi": 2}
+
+__all__ = ["FusedRule", "fused_randomization", "CHUNK"]
+
+
+def fused_randomization(name):
+    """The randomization of a sampler name that :class:`FusedRule` makes, or None.
+
+    Parameters
+    ----------
+    name : str
+        A sampler spec as :func:`clsamp.make_sampler` takes it (``"sobol:owen"``).
+
+    Returns
+    -------
+    str or None
+        ``"owen"``, ``"xor"`` or ``"shift"`` for a 32-bit order-1 Sobol' sampler so named.
+    """
+    base, _, variant = name.strip().lower().partition(":")
+    return variant if base == "sobol" and variant in RANDOMIZE else None
+
+
+class FusedRule:
+    """One integrand and one sequence, fused in one kernel.
+
+    Parameters
+    ----------
+    f : Integrand
+        With ``kernel_code`` (every :mod:`clsamp.integrands` integrand).
+    kind : {"sobol", "digital", "lattice"}
+        See the module's description.
+    seed : int
+        The sampler's seed.
+    randomize : {"owen", "xor", "shift"}
+        ``kind="sobol"`` only (``"digital"`` is xor, ``"lattice"`` shift).
+    periodization : {"none", "baker", "sidi"}
+        ``kind="lattice"`` only.
+
+    Examples
+    --------
+    >>> import numpy as np, clsamp
+    >>> from clsamp.fused import FusedRule
+    >>> f = clsamp.integrands.keister(4)
+    >>> x = clsamp.make_sampler("sobol", d=4, randomize="owen", seed=3).sample(512, realizations=2)
+    >>> sums = FusedRule(f, "sobol", 3, "owen").sums(512, 0, range(2)) + 512 * f.integral
+    >>> bool(np.allclose(sums, f(x).sum(axis=1), rtol=1e-12))
+    True
+    """
+
+    def __init__(self, f, kind, seed, randomize="xor", periodization="none"):
+        runtime.require_fp64()
+        self.f, self.kind, self.seed = f, kind, seed
+        self.randomize = {"digital": "xor", "lattice": "shift"}.get(kind, randomize)
+        d = f.d
+        if kind == "lattice":
+            self.columns = runtime.table(("fused lattice", d), lambda: kuo_vector(d))
+            self.steps = self.columns
+        else:
+            owen = self.randomize == "owen"
+            gray = kind == "sobol"
+
+            def columns():
+                v = nt.sobol_matrices(d).T            # (32, d)
+                return nt.reverse_bits32(v) if owen else v
+
+            self.columns = runtime.table(("fused sobol", d, owen), columns)
+            self.steps = (self.columns if gray else runtime.table(
+                ("fused sobol steps", d, owen), lambda: np.bitwise_xor.accumulate(columns(), axis=0)))
+        self.params = runtime.to_device(np.ascontiguousarray(f.kernel_params(), dtype=np.float64))
+        cpu = runtime.current_device().type == "cpu" and runtime.loop_limit() is None
+        # a work-item's block: long on a CPU (its start, a Gray-code walk over the index's
+        # bits, is paid once), short on a GPU (more items in flight) and where loops are capped
+        self.block = 256 if cpu else 16
+        self.local = runtime.local_size(64)
+        self.defines = {"DIM": d, "INTEGRAND": f.kernel_code, "POINTS": int(kind == "lattice"),
+                        "GRAY": int(kind == "sobol"), "RANDOMIZE": RANDOMIZE[self.randomize],
+                        "PERIODIZE": PERIODIZE[periodization], "FUSED_BLOCK": self.block}
+
+    def _kernel(self, sums):
+        return runtime.kernel("fused_integrals.cl", "fused_integrals",
+                              defines={**self.defines, "FUSED_SUMS": int(sums)},
+                              appendix=self.f.opencl_source)
+
+    def _launch(self, kernel, count, start, realizations, out):
+        import pyopencl as cl
+        groups = -(-count // (self.block * self.local))
+        kernel(runtime.queue(), (groups * self.local, len(realizations)), (self.local, 1),
+               np.uint32(count), np.uint32(start), np.uint32(realizations.start),
+               *philox.seed_key(self.seed), np.uint32(philox.Stream.SCRAMBLE),
+               np.uint32(philox.Stream.SHIFT), self.columns.data, self.steps.data, self.params.data,
+               np.float64(offset(self.f)), out.data, cl.LocalMemory(16 * self.local))
+        return groups
+
+    def sums(self, count, start, realizations):
+        """Per realization, the sum of f - integral over points start .. start + count - 1.
+
+        Parameters
+        ----------
+        count, start : int
+            The points, as ``sample(count, start=start)`` gives them.
+        realizations : range
+
+        Returns
+        -------
+        ndarray, shape (len(realizations),)
+            Added in double-double on the device, in order on the host.
+        """
+        import pyopencl.array as cla
+        kernel = self._kernel(True)
+        total = np.zeros(len(realizations))
+        span = self.block * self.local
+        for lo, hi in runtime.chunk_ranges(len(realizations), 16 * -(-min(count, CHUNK) // span), 2**24):
+            run = range(realizations.start + lo, realizations.start + hi)
+            for a in range(0, count, CHUNK):
+                part = min(CHUNK, count - a)
+                out = cla.empty(runtime.queue(), (hi - lo, -(-part // span), 2), np.float64)
+                self._launch(kernel, part, start + a, run, out)
+                total[lo:hi] += combine_sums(out.get())
+        return total
+
+    def values(self, start, count):
+        """f at points start .. start + count - 1 of realization 0, periodized for a lattice.
+
+        Parameters
+        ----------
+        start, count : int
+
+        Returns
+        -------
+        ndarray of float64, shape (count,)
+        """
+        import pyopencl.array as cla
+        kernel = self._kernel(False)
+        out = np.empty(count)
+        buffer = cla.empty(runtime.queue(), (min(count, CHUNK),), np.float64)
+        for a in range(0, count, CHUNK):
+            part = min(CHUNK, count - a)
+            self._launch(kernel, part, start + a, range(0, 1), buffer)
+            buffer[:part].get(ary=out[a:a + part])
+        return out
