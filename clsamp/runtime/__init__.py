@@ -16,9 +16,9 @@ resolves to its home module when it is read, so a test that patches
 ``runtime.memory.work_budget`` changes it for every caller.
 """
 
-from . import discovery, memory, programs
+from . import discovery, memory, programs, shapes
 
-_HOMES = {name: module for module in (discovery, programs, memory) for name in module.__all__}
+_HOMES = {name: module for module in (discovery, programs, memory, shapes) for name in module.__all__}
 __all__ = sorted(_HOMES)
 
 
