@@ -231,7 +231,8 @@ def machine_gauge():
 def select_devices(spec):
     """``None`` -> the default device; ``"all"`` -> every device whose compiler works (those
     without fp64 included: run.py reports what they refuse), but a simulator (Oclgrind:
-    its times say nothing of a device; tests/test_oclgrind.py runs it); else one index/name."""
+    its times say nothing of a device; tests/test_oclgrind.py runs it); else one index/name,
+    or several separated by commas (``"0,3"``: PoCL and Intel's runtime side by side)."""
     if spec == "all":
         usable = []
         for device in runtime.devices():
@@ -244,7 +245,7 @@ def select_devices(spec):
         return usable
     if spec is None:
         return [runtime.current_device()]
-    return [runtime.use_device(spec)]
+    return [runtime.use_device(part.strip()) for part in spec.split(",")]
 
 
 def on_device(device):
@@ -429,7 +430,8 @@ def write_json(path, rows):
 
 def parser(description):
     p = argparse.ArgumentParser(description=description)
-    p.add_argument("--device", default=None, help="'all', an index or a name substring")
+    p.add_argument("--device", default=None,
+                   help="'all', an index or a name substring, or several separated by commas")
     p.add_argument("--quick", action="store_true", help="CI-sized problems")
     p.add_argument("--out", default=None, help="write the rows as JSON here")
     p.add_argument("--profile", action="store_true",

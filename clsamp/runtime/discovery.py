@@ -61,7 +61,7 @@ class Device:
     vendor: str = ""           # the device's vendor string
     driver: str = ""           # the driver's version string (keys the launch-shape cache)
     host_memory: bool = False  # whether it reads and writes host memory in place
-    float_width: int = 1       # its preferred float vector width (lanes)
+    float_width: int = 1       # float lanes of its vector instructions (native width)
 
     @property
     def simulator(self):
@@ -143,7 +143,7 @@ def _discover():
             vendor=device.vendor.strip(),
             driver=device.driver_version.strip(),
             host_memory=bool(device.host_unified_memory),
-            float_width=int(device.preferred_vector_width_float)))
+            float_width=int(device.native_vector_width_float)))
     _cl_devices, _records = found, records
 
 

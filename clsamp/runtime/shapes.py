@@ -278,16 +278,19 @@ def forced_shape(forced):
             _forced = before
 
 
-def _seconds(launch, repeats=5):
+def _fastest_times(launches, rounds=7):
+    """The least seconds of each launch over ``rounds`` rounds that run every launch once in
+    turn (after one untimed round): a busy machine only ever adds time, and taking turns
+    spreads its bursts over the candidates alike."""
     queue = discovery.queue()
-    launch()
-    queue.finish()
-    best = float("inf")
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        launch()
-        queue.finish()
-        best = min(best, time.perf_counter() - t0)
+    best = {key: float("inf") for key in launches}
+    for round_ in range(rounds + 1):
+        for key, launch in launches.items():
+            t0 = time.perf_counter()
+            launch()
+            queue.finish()
+            if round_:
+                best[key] = min(best[key], time.perf_counter() - t0)
     return best
 
 
@@ -327,22 +330,20 @@ def measure(device=None, n=2**19):
     Returns
     -------
     dict
-        ``{"points_per_item": {p: s}, "local": {size: s}, "block": {b: s}}``, each the best
-        of five launches after one.
+        ``{"points_per_item": {p: s}, "local": {size: s}, "block": {b: s}}``, each the least
+        of seven launches, the candidates taking turns.
     """
     import pyopencl.array as cla
     device = device or discovery.current_device()
     out = cla.empty(discovery.queue(), n * 4, np.uint64)
     table = cla.zeros(discovery.queue(), 32 * 4, np.uint32)   # the zero net: the same work
-    times = {"points_per_item": {}, "local": {}, "block": {}}
     base = _group(device, 64)
-    for per_item in (1, 4, 16):
-        times["points_per_item"][per_item] = _seconds(_random_launch(out, n, per_item, base))
+    times = {"points_per_item": _fastest_times(
+        {p: _random_launch(out, n, p, base) for p in (1, 4, 16)})}
     best = min(times["points_per_item"], key=times["points_per_item"].get)
-    for local in sorted({_group(device, size) for size in (16, 64, 256)}):
-        times["local"][local] = _seconds(_random_launch(out, n, best, local))
-    for block in (1, 16, 256):
-        times["block"][block] = _seconds(_sobol_launch(out, table, n, block, base))
+    times["local"] = _fastest_times({size: _random_launch(out, n, best, size)
+                                     for size in sorted({_group(device, s) for s in (16, 64, 256)})})
+    times["block"] = _fastest_times({b: _sobol_launch(out, table, n, b, base) for b in (1, 16, 256)})
     return times
 
 
