@@ -270,17 +270,10 @@ def print_tables(rows, file=sys.stdout):
     for device in devices:
         print(f"\n{device}:", file=file)
         print_table([r for r in rows if r.device == device], file)
-    cases = list(dict.fromkeys((r.case, r.size, r.peer) for r in rows))
-    seconds = {(r.case, r.size, r.peer, r.device): r.seconds for r in rows}
     headers = ("case", "size", *devices, f"vs {devices[0]}")
-    lines = []
-    for case, size, peer in cases:
-        times = [seconds.get((case, size, peer, d)) for d in devices]
-        if None in times:
-            continue
-        lines.append((case, size, *(f"{t:.4g}" for t in times),
-                      " ".join(f"{times[0] / t:.2f}x" for t in times[1:])))
-    lines = list(dict.fromkeys(lines))
+    lines = [(case, size, *(f"{t:.4g}" for t in times),
+              " ".join(f"{times[0] / t:.2f}x" for t in times[1:]))
+             for case, size, times in across_devices(rows, devices)]
     widths = [max(len(h), *(len(line[i]) for line in lines)) if lines else len(h)
               for i, h in enumerate(headers)]
     fmt = "  ".join(f"{{:<{w}}}" for w in widths)
@@ -290,6 +283,61 @@ def print_tables(rows, file=sys.stdout):
     print(fmt.format(*("-" * w for w in widths)), file=file)
     for line in lines:
         print(fmt.format(*line), file=file)
+
+
+def across_devices(rows, devices):
+    """(case, size, clsamp seconds on each of ``devices``) for every case all of them ran,
+    once each (the rows of one case's several peers usually repeat its clsamp time)."""
+    cases = list(dict.fromkeys((r.case, r.size, r.peer) for r in rows))
+    seconds = {(r.case, r.size, r.peer, r.device): r.seconds for r in rows}
+    out = {}
+    for case, size, peer in cases:
+        times = tuple(seconds.get((case, size, peer, d)) for d in devices)
+        if None not in times:
+            out.setdefault((case, size, times), None)
+    return [(case, size, list(times)) for case, size, times in out]
+
+
+def cross_device_markdown(rows):
+    """The run's cases side by side on every device it timed (docs/benchmarks.md), each with
+    the first device's seconds over each other's and which device is fastest; "" with one
+    device."""
+    devices = list(dict.fromkeys(r.device for r in rows))
+    if len(devices) <= 1:
+        return ""
+    headers = ("case", "size", *(f"{d} s" for d in devices),
+               *(f"{devices[0]} s / {d} s" for d in devices[1:]), "fastest")
+    lines = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]
+    for case, size, times in across_devices(rows, devices):
+        fastest = devices[min(range(len(times)), key=times.__getitem__)]
+        cells = (case, size, *(f"{t:.3g}" for t in times),
+                 *(f"{times[0] / t:.2f}×" for t in times[1:]), fastest)
+        lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def implementation_summary(rows):
+    """The README's side-by-side line per capability: on how many cases each device was the
+    fastest, and the range of the first device's seconds over the second's; "" with one
+    device."""
+    devices = list(dict.fromkeys(r.device for r in rows))
+    if len(devices) <= 1:
+        return ""
+    groups = {}
+    capability = {(r.case, r.size): r.capability or "-" for r in rows}
+    for case, size, times in across_devices(rows, devices):
+        groups.setdefault(capability[(case, size)], []).append(times)
+    head = ("| capability | cases | " + " | ".join(f"fastest on {d}" for d in devices)
+            + f" | {devices[0]} s / {devices[1]} s |")
+    lines = [head, "|" + "---|" * (3 + len(devices))]
+    for name, cases in groups.items():
+        wins = [sum(1 for t in cases if min(range(len(t)), key=t.__getitem__) == k)
+                for k in range(len(devices))]
+        ratios = [t[0] / t[1] for t in cases]
+        low, high = min(ratios), max(ratios)
+        span = f"{low:.3g}×" if len(ratios) == 1 else f"{low:.3g}× – {high:.3g}×"
+        lines.append(f"| {name} | {len(cases)} | " + " | ".join(map(str, wins)) + f" | {span} |")
+    return "\n".join(lines) + "\n"
 
 
 def _bandwidth_cells(r):
@@ -374,6 +422,10 @@ def markdown_table(rows):
                  "-" if r.ratio is None else f"{r.ratio:.2f}×",
                  *(_bandwidth_cells(r) if bandwidth else ()), r.quality)
         lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |")
+    side_by_side = cross_device_markdown(rows)
+    if side_by_side:
+        lines += ["", "## Side by side: clsamp's seconds on each device of the run", "",
+                  side_by_side.rstrip("\n")]
     return "\n".join(lines) + "\n"
 
 
@@ -406,6 +458,11 @@ def summary_table(rows, measured):
         low, high = min(ratios), max(ratios)
         span = f"{low:.3g}×" if len(ratios) == 1 else f"{low:.3g}× – {high:.3g}×"
         lines.append(f"| {capability} | {peer.replace('|', chr(92) + '|')} | {len(ratios)} | {span} |")
+    side_by_side = implementation_summary(rows)
+    if side_by_side:
+        lines += ["", "The same run's cases on each OpenCL implementation (cases where each was "
+                  "the fastest; seconds of the first over the second, > 1: the second is faster):",
+                  "", side_by_side.rstrip("\n")]
     lines += ["", "Every row of the run, with sizes, devices, times and quality figures: "
               "[docs/benchmarks.md](docs/benchmarks.md)."]
     return "\n".join(lines) + "\n"

@@ -45,6 +45,7 @@ MODULES = (
     "bench_gbn",
     "bench_sample_elimination",
     "bench_sot",
+    "bench_shapes",
 )
 
 

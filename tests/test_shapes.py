@@ -158,3 +158,19 @@ def test_a_row_of_another_measurement_version_is_measured_again(table):
                                                        "block": 1, "local": 16}}))
     assert runtime.shape().source == "measured"
     assert json.loads(table.read_text())[shapes._key(device)]["version"] == shapes.VERSION
+
+
+def test_the_cli_shows_and_measures_the_shapes(table, monkeypatch, capsys):
+    from clsamp import cli
+    measured = []
+
+    def calibrate(index):           # the measurement itself is tested above; this, the wiring
+        measured.append(index)
+        return dataclasses.replace(shapes.host_shape(runtime.devices()[index]), source="measured")
+
+    monkeypatch.setattr(shapes, "calibrate", calibrate)
+    assert cli.main(["devices"]) == 0 and not measured
+    assert "launch shape: not measured yet" in capsys.readouterr().out
+    assert cli.main(["devices", "--calibrate"]) == 0
+    assert runtime.current_device().index in measured
+    assert "launch shape: measured: 16 points a work-item" in capsys.readouterr().out

@@ -34,7 +34,7 @@ import numpy as np
 from . import discovery, programs
 
 __all__ = ['Shape', 'shape', 'gpu_shape', 'host_shape', 'calibrate', 'forced_shape',
-           'shapes_file', 'local_size']
+           'shapes_file', 'local_size', 'known_shape', 'describe']
 
 VERSION = 1             # of the measurement: a row written by another is measured again
 
@@ -244,6 +244,42 @@ def shape(device=None):
                 found = calibrate(device)
         _table[key] = found
         return found
+
+
+def known_shape(device):
+    """``device``'s shape where it is known without measuring (this process's row, the
+    cached row, a GPU's default), else None.
+
+    Parameters
+    ----------
+    device : Device
+
+    Returns
+    -------
+    Shape or None
+    """
+    with _lock:
+        found = _table.get(_key(device))
+    if found is None and device.type == "gpu":
+        found = gpu_shape(device)
+    return found or _from_row(device, _read().get(_key(device)))
+
+
+def describe(found):
+    """One line saying what a shape is.
+
+    Parameters
+    ----------
+    found : Shape
+
+    Returns
+    -------
+    str
+    """
+    where = ("host's sort, BLAS and outputs" if found.host_sort and found.host_gemm
+             else "outputs in host memory" if found.host_output else "everything on the device")
+    return (f"{found.source}: {found.points_per_item} points a work-item, Sobol' blocks of "
+            f"{found.block}, groups of {found.local}, render width {found.vector_width}, {where}")
 
 
 @contextlib.contextmanager
