@@ -114,7 +114,7 @@ def test_a_device_is_measured_once_and_the_row_is_kept(table):
     rows = json.loads(table.read_text())
     row = rows[shapes._key(device)]
     assert device.driver in shapes._key(device) and row["version"] == shapes.VERSION
-    assert set(row["times"]) == {"points_per_item", "local", "block"}
+    assert set(row["relative"]) == set(row["least"]) == {"points_per_item", "local", "block"}
     assert row["points_per_item"] in (1, 4, 16) and row["block"] in (1, 16, 256)
     # a new process reads it instead of measuring
     code = ("import clsamp.runtime.shapes as s, clsamp.runtime as r; s.measure = None; "

@@ -36,7 +36,7 @@ from . import discovery, programs
 __all__ = ['Shape', 'shape', 'gpu_shape', 'host_shape', 'calibrate', 'forced_shape',
            'shapes_file', 'local_size', 'known_shape', 'describe']
 
-VERSION = 1             # of the measurement: a row written by another is measured again
+VERSION = 2             # of the measurement: a row written by another is measured again
 
 
 @dataclasses.dataclass(frozen=True)
@@ -314,28 +314,52 @@ def forced_shape(forced):
             _forced = before
 
 
-def _fastest_times(launches, rounds=7):
-    """The least seconds of each launch over ``rounds`` rounds that run every launch once in
-    turn (after one untimed round): a busy machine only ever adds time, and taking turns
-    spreads its bursts over the candidates alike."""
+def _rounds(launches, default, rounds=9):
+    """Seconds of each launch in each of ``rounds`` rounds that run every launch once in
+    turn, each round starting one further along (after one untimed round, which builds),
+    so that a busy machine's bursts, and whatever a launch leaves the next, fall on the
+    candidates alike. A candidate more than three times slower than ``default`` and
+    over 20 ms in the first timed round is out after it (a slow shape on a slow device costs
+    one launch, not nine); ``default`` always runs."""
     queue = discovery.queue()
-    best = {key: float("inf") for key in launches}
+    times = {key: [] for key in launches}
+    running = dict(launches)
     for round_ in range(rounds + 1):
-        for key, launch in launches.items():
+        order = list(running.items())
+        for key, launch in order[round_ % len(order):] + order[:round_ % len(order)]:
             t0 = time.perf_counter()
             launch()
             queue.finish()
             if round_:
-                best[key] = min(best[key], time.perf_counter() - t0)
-    return best
+                times[key].append(time.perf_counter() - t0)
+        if round_ == 1:
+            limit = max(3 * times[default][0], 0.02)
+            running = {k: f for k, f in running.items() if k == default or times[k][0] <= limit}
+    return times
+
+
+def _relative(times, default):
+    """Each candidate's time over the default's, the larger of two estimates: the median,
+    over the rounds it ran, of its seconds over the default's in the same round (pairs
+    taken moments apart cancel a shared machine's drift, the median ignores the rounds a
+    burst hit) and the ratio of their least seconds (a busy machine only adds time; and an
+    implementation that pays for switching shapes, as Intel's does for group sizes, shows
+    its steady state there)."""
+    least = min(times[default])
+    return {key: float(max(np.median(np.array(t) / np.array(times[default][:len(t)])),
+                           min(t) / least))
+            for key, t in times.items()}
 
 
 def _random_launch(out, n, per_item, local):
     items = -(-n // per_item)
     items = -(-items // local) * local
     defines, grid, group = discovery.dimension_split(2, 256, (items, 1), (local, 1))
+    # a kernel object of its own per group size: PoCL specializes a kernel for its group
+    # size, and an object launched at sizes in turn would pay for that at every launch
     kernel = programs.kernel("random.cl", "random_points",
-                             defines={**defines, "POINTS_PER_ITEM": per_item})
+                             defines={**defines, "POINTS_PER_ITEM": per_item},
+                             instance=f"shape-{local}")
     return lambda: kernel(discovery.queue(), grid, group, out.data, np.uint32(n), np.uint32(2),
                           np.uint32(0), np.uint32(0), np.uint32(1), np.uint32(0), np.uint32(0))
 
@@ -366,37 +390,44 @@ def measure(device=None, n=2**19):
     Returns
     -------
     dict
-        ``{"points_per_item": {p: s}, "local": {size: s}, "block": {b: s}}``, each the least
-        of seven launches, the candidates taking turns.
+        ``{"points_per_item": {p: [s, ...]}, "local": {size: [...]}, "block": {b: [...]}}``:
+        each candidate's seconds in nine rounds of launches taking turns (one, for a slow
+        candidate; :func:`_rounds`), the defaults those of :func:`host_shape`.
     """
     import pyopencl.array as cla
     device = device or discovery.current_device()
     out = cla.empty(discovery.queue(), n * 4, np.uint64)
     table = cla.zeros(discovery.queue(), 32 * 4, np.uint32)   # the zero net: the same work
-    base = _group(device, 64)
-    times = {"points_per_item": _fastest_times(
-        {p: _random_launch(out, n, p, base) for p in (1, 4, 16)})}
-    best = min(times["points_per_item"], key=times["points_per_item"].get)
-    times["local"] = _fastest_times({size: _random_launch(out, n, best, size)
-                                     for size in sorted({_group(device, s) for s in (16, 64, 256)})})
-    times["block"] = _fastest_times({b: _sobol_launch(out, table, n, b, base) for b in (1, 16, 256)})
+    start = host_shape(device)
+    times = {"points_per_item": _rounds({p: _random_launch(out, n, p, start.local)
+                                         for p in (1, 4, 16)}, start.points_per_item)}
+    best = _fastest(_relative(times["points_per_item"], start.points_per_item),
+                    start.points_per_item)
+    times["local"] = _rounds({size: _random_launch(out, n, best, size)
+                              for size in sorted({_group(device, s) for s in (16, 64, 256)})},
+                             start.local)
+    times["block"] = _rounds({b: _sobol_launch(out, table, n, b, start.local)
+                              for b in (1, 16, 256)}, start.block)
     return times
 
 
-def _fastest(candidates, default):
-    """The fastest candidate, but the default unless another beats it by 10%: launches of a
-    millisecond vary by a few percent, and a row should not flip on noise."""
-    best = min(candidates, key=candidates.get)
-    if default in candidates and candidates[best] > 0.9 * candidates[default]:
-        return default
-    return best
+MARGIN = 0.75           # a candidate replaces the default only below this share of its time
+
+
+def _fastest(ratios, default):
+    """The candidate of least relative time (:func:`_relative`), but the default unless
+    another takes less than MARGIN of its time: on a shared machine launches of
+    milliseconds vary by tens of percent, and a row should not follow the noise (the shapes
+    that matter differ by 2-15x on CPUs)."""
+    best = min(ratios, key=ratios.get)
+    return best if ratios[best] < MARGIN else default
 
 
 def calibrate(device=None):
     """Measure ``device``'s launch shape (:func:`measure`), keep it on disk and return it.
 
     The points a work-item, the work-group size and the block are the fastest candidates
-    (:func:`host_shape`'s unless another is 10% faster);
+    (:func:`host_shape`'s unless another takes less than ``MARGIN``, 3/4, of its time);
     the other fields are :func:`host_shape`'s, decided by what the device reports (whether
     it shares host memory, its vector width, its platform).
 
@@ -418,10 +449,13 @@ def calibrate(device=None):
         t0 = time.perf_counter()
         times = measure(device)
         start = host_shape(device)
-        fastest = {field: _fastest(candidates, getattr(start, field))
-                   for field, candidates in times.items()}
+        ratios = {field: _relative(t, getattr(start, field)) for field, t in times.items()}
+        fastest = {field: _fastest(r, getattr(start, field)) for field, r in ratios.items()}
         row = {"version": VERSION, **fastest, "seconds": round(time.perf_counter() - t0, 3),
-               "times": {field: {str(k): v for k, v in c.items()} for field, c in times.items()}}
+               "relative": {field: {str(k): round(v, 3) for k, v in r.items()}
+                            for field, r in ratios.items()},
+               "least": {field: {str(k): min(v) for k, v in t.items()}
+                         for field, t in times.items()}}
     finally:
         discovery.use_device(previous)
     _write(_key(device), row)
