@@ -47,6 +47,14 @@ def test_every_shape_gives_the_same_bits(name, params, n):
         assert np.array_equal(got, want), f"{name} {params} at the {label} shape"
 
 
+@pytest.mark.parametrize("name, params", [("random", {"d": 3}), ("sobol", {"randomize": "owen"})])
+def test_the_gpu_shape_gives_the_same_bits_without_fp64(name, params):
+    want = clsamp.make_sampler(name, seed=3, backend="numpy", **params).sample(301, realizations=2)
+    with runtime.without_fp64(), runtime.forced_shape(_shapes()["gpu"]):
+        got = clsamp.make_sampler(name, seed=3, **params).sample(301, realizations=2)
+    assert np.array_equal(got, want)
+
+
 def test_a_forced_shape_reaches_the_launches(monkeypatch):
     # the random sampler's points per work-item is a build option: each shape builds its own
     seen = []
