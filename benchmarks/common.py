@@ -271,8 +271,8 @@ def print_tables(rows, file=sys.stdout):
         print(f"\n{device}:", file=file)
         print_table([r for r in rows if r.device == device], file)
     headers = ("case", "size", *devices, f"vs {devices[0]}")
-    lines = [(case, size, *(f"{t:.4g}" for t in times),
-              " ".join(f"{times[0] / t:.2f}x" for t in times[1:]))
+    lines = [(case, size, *("-" if t is None else f"{t:.4g}" for t in times),
+              " ".join("-" if None in (times[0], t) else f"{times[0] / t:.2f}x" for t in times[1:]))
              for case, size, times in across_devices(rows, devices)]
     widths = [max(len(h), *(len(line[i]) for line in lines)) if lines else len(h)
               for i, h in enumerate(headers)]
@@ -286,16 +286,22 @@ def print_tables(rows, file=sys.stdout):
 
 
 def across_devices(rows, devices):
-    """(case, size, clsamp seconds on each of ``devices``) for every case all of them ran,
-    once each (the rows of one case's several peers usually repeat its clsamp time)."""
-    cases = list(dict.fromkeys((r.case, r.size, r.peer) for r in rows))
-    seconds = {(r.case, r.size, r.peer, r.device): r.seconds for r in rows}
-    out = {}
-    for case, size, peer in cases:
-        times = tuple(seconds.get((case, size, peer, d)) for d in devices)
-        if None not in times:
-            out.setdefault((case, size, times), None)
-    return [(case, size, list(times)) for case, size, times in out]
+    """(case, size, clsamp seconds on each of ``devices``, None where it did not run) for
+    every case two or more of them ran (a device without fp64 refuses the analyses), once
+    each: a case's several peers repeat its clsamp time, and the first row's is taken."""
+    seconds = {}
+    for r in rows:
+        seconds.setdefault((r.case, r.size, r.device), r.seconds)
+    out = []
+    for case, size in dict.fromkeys((r.case, r.size) for r in rows):
+        times = [seconds.get((case, size, d)) for d in devices]
+        if sum(t is not None for t in times) >= 2:
+            out.append((case, size, times))
+    return out
+
+
+def _fastest_index(times):
+    return min((k for k, t in enumerate(times) if t is not None), key=times.__getitem__)
 
 
 def cross_device_markdown(rows):
@@ -309,17 +315,17 @@ def cross_device_markdown(rows):
                *(f"{devices[0]} s / {d} s" for d in devices[1:]), "fastest")
     lines = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]
     for case, size, times in across_devices(rows, devices):
-        fastest = devices[min(range(len(times)), key=times.__getitem__)]
-        cells = (case, size, *(f"{t:.3g}" for t in times),
-                 *(f"{times[0] / t:.2f}×" for t in times[1:]), fastest)
+        cells = (case, size, *("-" if t is None else f"{t:.3g}" for t in times),
+                 *("-" if None in (times[0], t) else f"{times[0] / t:.2f}×" for t in times[1:]),
+                 devices[_fastest_index(times)])
         lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |")
     return "\n".join(lines) + "\n"
 
 
 def implementation_summary(rows):
     """The README's side-by-side line per capability: on how many cases each device was the
-    fastest, and the range of the first device's seconds over the second's; "" with one
-    device."""
+    fastest (of those that ran the case), and the range of the first device's seconds over
+    each other's; "" with one device."""
     devices = list(dict.fromkeys(r.device for r in rows))
     if len(devices) <= 1:
         return ""
@@ -327,16 +333,18 @@ def implementation_summary(rows):
     capability = {(r.case, r.size): r.capability or "-" for r in rows}
     for case, size, times in across_devices(rows, devices):
         groups.setdefault(capability[(case, size)], []).append(times)
-    head = ("| capability | cases | " + " | ".join(f"fastest on {d}" for d in devices)
-            + f" | {devices[0]} s / {devices[1]} s |")
-    lines = [head, "|" + "---|" * (3 + len(devices))]
+    head = ("| capability | cases | " + " | ".join(f"fastest on {d}" for d in devices) + " | "
+            + " | ".join(f"{devices[0]} s / {d} s" for d in devices[1:]) + " |")
+    lines = [head, "|" + "---|" * (1 + 2 * len(devices))]
     for name, cases in groups.items():
-        wins = [sum(1 for t in cases if min(range(len(t)), key=t.__getitem__) == k)
-                for k in range(len(devices))]
-        ratios = [t[0] / t[1] for t in cases]
-        low, high = min(ratios), max(ratios)
-        span = f"{low:.3g}×" if len(ratios) == 1 else f"{low:.3g}× – {high:.3g}×"
-        lines.append(f"| {name} | {len(cases)} | " + " | ".join(map(str, wins)) + f" | {span} |")
+        wins = [sum(1 for t in cases if _fastest_index(t) == k) for k in range(len(devices))]
+        spans = []
+        for k in range(1, len(devices)):
+            ratios = [t[0] / t[k] for t in cases if None not in (t[0], t[k])]
+            spans.append("-" if not ratios else f"{ratios[0]:.3g}×" if len(ratios) == 1
+                         else f"{min(ratios):.3g}× – {max(ratios):.3g}×")
+        lines.append(f"| {name} | {len(cases)} | " + " | ".join(map(str, wins)) + " | "
+                     + " | ".join(spans) + " |")
     return "\n".join(lines) + "\n"
 
 

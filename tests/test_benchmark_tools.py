@@ -131,14 +131,22 @@ def test_several_devices_are_put_side_by_side(tmp_path):
     rows = [row("a", "[0] PoCL", 0.2), row("a", "[0] PoCL", 0.2, peer="scipy"),
             row("b", "[0] PoCL", 0.1, capability="sobol"), row("a", "[3] Intel", 0.1),
             row("a", "[3] Intel", 0.1, peer="scipy"), row("b", "[3] Intel", 0.4, capability="sobol"),
-            row("c", "[0] PoCL", 0.3)]                      # on one device only: left out
-    assert common.across_devices(rows, ["[0] PoCL", "[3] Intel"]) == [
-        ("a", "64x2D", [0.2, 0.1]), ("b", "64x2D", [0.1, 0.4])]
+            row("c", "[0] PoCL", 0.3),                      # on one device only: left out
+            row("d", "[0] PoCL", 0.5, capability="metrics"),
+            row("d", "[1] rusticl", 0.1, capability="metrics"),   # Intel refused it
+            row("a", "[1] rusticl", 0.4)]
+    devices = ["[0] PoCL", "[3] Intel", "[1] rusticl"]
+    assert common.across_devices(rows, devices) == [
+        ("a", "64x2D", [0.2, 0.1, 0.4]), ("b", "64x2D", [0.1, 0.4, None]),
+        ("d", "64x2D", [0.5, None, 0.1])]
     full = common.cross_device_markdown(rows)
-    assert "| a | 64x2D | 0.2 | 0.1 | 2.00× | [3] Intel |" in full
-    assert "| b | 64x2D | 0.1 | 0.4 | 0.25× | [0] PoCL |" in full
+    assert "| a | 64x2D | 0.2 | 0.1 | 0.4 | 2.00× | 0.50× | [3] Intel |" in full
+    assert "| b | 64x2D | 0.1 | 0.4 | - | 0.25× | - | [0] PoCL |" in full
+    assert "| d | 64x2D | 0.5 | - | 0.1 | - | 5.00× | [1] rusticl |" in full
     summary = common.implementation_summary(rows)
-    assert "| random | 1 | 0 | 1 | 2× |" in summary and "| sobol | 1 | 1 | 0 | 0.25× |" in summary
+    assert "| random | 1 | 0 | 1 | 0 | 2× | 0.5× |" in summary
+    assert "| sobol | 1 | 1 | 0 | 0 | 0.25× | - |" in summary
+    assert "| metrics | 1 | 0 | 0 | 1 | - | 5× |" in summary
     assert common.implementation_summary(rows[:3]) == "" == common.cross_device_markdown(rows[:3])
     readme = tmp_path / "README.md"
     readme.write_text(f"{common.TABLE_BEGIN}\n{common.TABLE_END}\n")
