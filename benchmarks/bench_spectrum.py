@@ -15,7 +15,7 @@ the half u <= 0.
 import numpy as np
 from common import Row, main, on_device, short_name, timed
 
-from clsamp import philox, spectrum
+from clsamp import philox, runtime, spectrum
 from clsamp.spectrum import nufft_parameters, power_spectrum
 
 
@@ -135,7 +135,7 @@ def run(devices, quick):
         t_direct, exact = timed(lambda: power_spectrum(pts, R, method="direct", progress=False),
                                 repeats=1 if not quick else 3)
         t_gemm, ref = timed(lambda: gemm_peer(pts, R), repeats=1 if not quick else 3, warmup=0)
-        if spectrum.HOST_GEMM and device.type == "cpu":     # one real GEMM (2c x n)(n x 2c)
+        if spectrum.HOST_GEMM and runtime.shape().host_gemm:   # one real GEMM (2c x n)(n x 2c)
             rate = 8.0 * r * n * (R // 2 + 1) ** 2 / t_direct / 1e9
         else:                                               # complex products over u <= 0
             half_rows = (R // 2 + 1 + 3) // 4 * 4

@@ -231,7 +231,8 @@ def machine_gauge():
 def select_devices(spec):
     """``None`` -> the default device; ``"all"`` -> every device whose compiler works (those
     without fp64 included: run.py reports what they refuse), but a simulator (Oclgrind:
-    its times say nothing of a device; tests/test_oclgrind.py runs it); else one index/name."""
+    its times say nothing of a device; tests/test_oclgrind.py runs it); else one index/name,
+    or several separated by commas (``"0,3"``: PoCL and Intel's runtime side by side)."""
     if spec == "all":
         usable = []
         for device in runtime.devices():
@@ -244,7 +245,7 @@ def select_devices(spec):
         return usable
     if spec is None:
         return [runtime.current_device()]
-    return [runtime.use_device(spec)]
+    return [runtime.use_device(part.strip()) for part in spec.split(",")]
 
 
 def on_device(device):
@@ -269,17 +270,10 @@ def print_tables(rows, file=sys.stdout):
     for device in devices:
         print(f"\n{device}:", file=file)
         print_table([r for r in rows if r.device == device], file)
-    cases = list(dict.fromkeys((r.case, r.size, r.peer) for r in rows))
-    seconds = {(r.case, r.size, r.peer, r.device): r.seconds for r in rows}
     headers = ("case", "size", *devices, f"vs {devices[0]}")
-    lines = []
-    for case, size, peer in cases:
-        times = [seconds.get((case, size, peer, d)) for d in devices]
-        if None in times:
-            continue
-        lines.append((case, size, *(f"{t:.4g}" for t in times),
-                      " ".join(f"{times[0] / t:.2f}x" for t in times[1:])))
-    lines = list(dict.fromkeys(lines))
+    lines = [(case, size, *("-" if t is None else f"{t:.4g}" for t in times),
+              " ".join("-" if None in (times[0], t) else f"{times[0] / t:.2f}x" for t in times[1:]))
+             for case, size, times in across_devices(rows, devices)]
     widths = [max(len(h), *(len(line[i]) for line in lines)) if lines else len(h)
               for i, h in enumerate(headers)]
     fmt = "  ".join(f"{{:<{w}}}" for w in widths)
@@ -289,6 +283,69 @@ def print_tables(rows, file=sys.stdout):
     print(fmt.format(*("-" * w for w in widths)), file=file)
     for line in lines:
         print(fmt.format(*line), file=file)
+
+
+def across_devices(rows, devices):
+    """(case, size, clsamp seconds on each of ``devices``, None where it did not run) for
+    every case two or more of them ran (a device without fp64 refuses the analyses), once
+    each: a case's several peers repeat its clsamp time, and the first row's is taken."""
+    seconds = {}
+    for r in rows:
+        seconds.setdefault((r.case, r.size, r.device), r.seconds)
+    out = []
+    for case, size in dict.fromkeys((r.case, r.size) for r in rows):
+        times = [seconds.get((case, size, d)) for d in devices]
+        if sum(t is not None for t in times) >= 2:
+            out.append((case, size, times))
+    return out
+
+
+def _fastest_index(times):
+    return min((k for k, t in enumerate(times) if t is not None), key=times.__getitem__)
+
+
+def cross_device_markdown(rows):
+    """The run's cases side by side on every device it timed (docs/benchmarks.md), each with
+    the first device's seconds over each other's and which device is fastest; "" with one
+    device."""
+    devices = list(dict.fromkeys(r.device for r in rows))
+    if len(devices) <= 1:
+        return ""
+    headers = ("case", "size", *(f"{d} s" for d in devices),
+               *(f"{devices[0]} s / {d} s" for d in devices[1:]), "fastest")
+    lines = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]
+    for case, size, times in across_devices(rows, devices):
+        cells = (case, size, *("-" if t is None else f"{t:.3g}" for t in times),
+                 *("-" if None in (times[0], t) else f"{times[0] / t:.2f}×" for t in times[1:]),
+                 devices[_fastest_index(times)])
+        lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def implementation_summary(rows):
+    """The README's side-by-side line per capability: on how many cases each device was the
+    fastest (of those that ran the case), and the range of the first device's seconds over
+    each other's; "" with one device."""
+    devices = list(dict.fromkeys(r.device for r in rows))
+    if len(devices) <= 1:
+        return ""
+    groups = {}
+    capability = {(r.case, r.size): r.capability or "-" for r in rows}
+    for case, size, times in across_devices(rows, devices):
+        groups.setdefault(capability[(case, size)], []).append(times)
+    head = ("| capability | cases | " + " | ".join(f"fastest on {d}" for d in devices) + " | "
+            + " | ".join(f"{devices[0]} s / {d} s" for d in devices[1:]) + " |")
+    lines = [head, "|" + "---|" * (1 + 2 * len(devices))]
+    for name, cases in groups.items():
+        wins = [sum(1 for t in cases if _fastest_index(t) == k) for k in range(len(devices))]
+        spans = []
+        for k in range(1, len(devices)):
+            ratios = [t[0] / t[k] for t in cases if None not in (t[0], t[k])]
+            spans.append("-" if not ratios else f"{ratios[0]:.3g}×" if len(ratios) == 1
+                         else f"{min(ratios):.3g}× – {max(ratios):.3g}×")
+        lines.append(f"| {name} | {len(cases)} | " + " | ".join(map(str, wins)) + " | "
+                     + " | ".join(spans) + " |")
+    return "\n".join(lines) + "\n"
 
 
 def _bandwidth_cells(r):
@@ -373,6 +430,10 @@ def markdown_table(rows):
                  "-" if r.ratio is None else f"{r.ratio:.2f}×",
                  *(_bandwidth_cells(r) if bandwidth else ()), r.quality)
         lines.append("| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |")
+    side_by_side = cross_device_markdown(rows)
+    if side_by_side:
+        lines += ["", "## Side by side: clsamp's seconds on each device of the run", "",
+                  side_by_side.rstrip("\n")]
     return "\n".join(lines) + "\n"
 
 
@@ -405,6 +466,11 @@ def summary_table(rows, measured):
         low, high = min(ratios), max(ratios)
         span = f"{low:.3g}×" if len(ratios) == 1 else f"{low:.3g}× – {high:.3g}×"
         lines.append(f"| {capability} | {peer.replace('|', chr(92) + '|')} | {len(ratios)} | {span} |")
+    side_by_side = implementation_summary(rows)
+    if side_by_side:
+        lines += ["", "The same run's cases on each OpenCL implementation (cases where each was "
+                  "the fastest; seconds of the first over the second, > 1: the second is faster):",
+                  "", side_by_side.rstrip("\n")]
     lines += ["", "Every row of the run, with sizes, devices, times and quality figures: "
               "[docs/benchmarks.md](docs/benchmarks.md)."]
     return "\n".join(lines) + "\n"
@@ -429,7 +495,8 @@ def write_json(path, rows):
 
 def parser(description):
     p = argparse.ArgumentParser(description=description)
-    p.add_argument("--device", default=None, help="'all', an index or a name substring")
+    p.add_argument("--device", default=None,
+                   help="'all', an index or a name substring, or several separated by commas")
     p.add_argument("--quick", action="store_true", help="CI-sized problems")
     p.add_argument("--out", default=None, help="write the rows as JSON here")
     p.add_argument("--profile", action="store_true",

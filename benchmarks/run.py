@@ -46,6 +46,7 @@ MODULES = (
     "bench_bnot",
     "bench_sample_elimination",
     "bench_sot",
+    "bench_shapes",
 )
 
 

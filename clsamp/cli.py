@@ -103,6 +103,9 @@ def _parse_params(items):
 # -- devices -------------------------------------------------------------------
 def _add_devices(sub):
     p = sub.add_parser("devices", help="list the OpenCL devices clsamp can use")
+    p.add_argument("--calibrate", action="store_true",
+                   help="measure each usable device's launch shape again (a second or so "
+                        "each, after its builds) and keep it beside pyopencl's cache")
     p.set_defaults(run=_run_devices)
 
 
@@ -118,6 +121,13 @@ def _run_devices(args):
         runs = runtime.capabilities(device.index)
         print("    runs: " + ", ".join(
             name if why is None else f"{name} (no: {why})" for name, why in runs.items()))
+        if args.calibrate and not broken and not device.simulator:
+            shape = runtime.calibrate(device.index)
+        else:
+            shape = runtime.known_shape(device)
+        print("    launch shape: " + ("not measured yet (measured on first use; "
+                                      "--calibrate measures now)" if shape is None
+                                      else runtime.describe(shape)))
     return 0
 
 

@@ -30,11 +30,10 @@ from .geometry import torus
 from .integrand_kernel import IntegrandKernel, combine_sums
 
 HOST_CHUNK = 2**22      # doubles per chunk of the NumPy path (32 MB)
-# Doubles of points generated per launch: on a CPU 16 MB, so the points the sampler just
-# wrote are still in the caches when the integrand kernel reads them (which matters most
-# when the integrand is cheap; docs/performance.md); on a GPU larger launches keep more
-# items in flight.
-DEVICE_CHUNK = {"cpu": 2**21, "gpu": 2**25, "other": 2**23}
+# Doubles of points generated per launch: the device's shape's chunk (runtime.shape): on a
+# CPU 16 MB, so the points the sampler just wrote are still in the caches when the
+# integrand kernel reads them (which matters most when the integrand is cheap;
+# docs/performance.md); on a GPU larger launches keep more items in flight.
 
 __all__ = ["IntegrandErrors", "FamilyErrors", "errors_block"]
 
@@ -179,7 +178,7 @@ def _errors_numpy(sampler, f, n, r, homogenize, seed, r0=0):
 
 
 def _errors_opencl(kernel, sampler, n, r, r0=0):
-    limit = 8 * DEVICE_CHUNK[runtime.current_device().type]
+    limit = 8 * runtime.shape().chunk
     out = np.empty(r)
     for lo, hi in runtime.chunk_ranges(r, 8 * n * sampler.d, limit):
         points = sampler.sample_device(n, realizations=range(r0 + lo, r0 + hi))

@@ -70,9 +70,10 @@ def _scene_arrays(scene, size):
 
 
 def vector_width():
-    """Samples per vector lane group in render.cl: 8 on CPU devices (PoCL vectorizes explicit
-    vectors only), 1 on GPUs (one sample per lane of a warp is the natural width there)."""
-    return 8 if runtime.current_device().type == "cpu" else 1
+    """Samples per vector lane group in render.cl, the device's shape's
+    (``runtime.shape().vector_width``): 8 on CPU devices with 8 float lanes (PoCL vectorizes
+    explicit vectors only), 1 on GPUs (one sample per lane of a warp is the natural width)."""
+    return runtime.shape().vector_width
 
 
 def render_samples(scene, samples, resolution, pixel0=0, backend="opencl", width=None):

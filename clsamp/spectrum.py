@@ -501,7 +501,7 @@ def _direct(batch, resolution, backend, progress):
     runtime.require_fp64()
     if batch.shape[-1] == 3:
         return _direct3(batch, resolution, progress)
-    if HOST_GEMM and batch.shape[-1] == 2 and runtime.current_device().type == "cpu":
+    if HOST_GEMM and batch.shape[-1] == 2 and runtime.shape().host_gemm:
         return _direct_host_gemm(batch, resolution, progress)
     queue = runtime.queue()
     r, n, d = batch.shape
@@ -518,7 +518,7 @@ def _direct(batch, resolution, backend, progress):
     product = runtime.kernel("spectrum.cl", "spectrum_direct2" if d == 2 else "spectrum_direct1",
                              defines, _MAD)
     power_kernel = runtime.kernel("spectrum.cl", "spectrum_power", defines, _MAD)
-    cpu = runtime.current_device().type == "cpu"
+    tile_group = runtime.shape().tile_group
     power = cla.zeros(queue, plane, np.float64)
     chunks = [(a, min(r, a + reals_per_chunk)) for a in range(0, r, reals_per_chunk)]
     point_chunks = [(a, min(n, a + points_per_chunk)) for a in range(0, n, points_per_chunk)]
@@ -547,7 +547,7 @@ def _direct(batch, resolution, backend, progress):
                 grid = (-(-tiles_v // _SUPER), -(-tiles_u // _SUPER))
                 # PoCL's implicit vectorization across work-items fights the explicit double4
                 # code: one work-item per group on the CPU, a row of them elsewhere
-                group = (1, 1) if cpu else (min(16, local), 1)
+                group = (min(tile_group, local), 1)
                 product(queue, (_pad(grid[0], group[0]), grid[1]), group, A.data, B.data, S.data,
                         np.uint32(nc), np.uint32(tiles_u), np.uint32(tiles_v), np.uint32(rc))
             if bar is not None:

@@ -7,12 +7,16 @@
 #define POINTS_PER_ITEM 8
 #endif
 #define SETS (POINTS_PER_ITEM / 4)
+#if POINTS_PER_ITEM != 1 && POINTS_PER_ITEM % 4 != 0
+#error "POINTS_PER_ITEM must be 1 or a multiple of 4"
+#endif
 
 /* Grid (ceil(n / POINTS_PER_ITEM), realizations): work-item q makes points
  * q POINTS_PER_ITEM .. (q + 1) POINTS_PER_ITEM - 1 of its realization, their Philox blocks
  * in SETS sets of four vector lanes, inlined side by side so that their chains of
- * dependent multiplies overlap. out has shape (realizations, n, d), float64 written as its
- * bit patterns (f64bits.h), so no device needs fp64. */
+ * dependent multiplies overlap; with POINTS_PER_ITEM 1 (a GPU's shape) one scalar block a
+ * dimension pair, the same words. out has shape (realizations, n, d), float64 written as
+ * its bit patterns (f64bits.h), so no device needs fp64. */
 __kernel void random_points(__global ulong *out, const uint n, const uint d,
                             const uint start, const uint realization0,
                             const uint key_lo, const uint key_hi, const uint stream)
@@ -23,6 +27,15 @@ __kernel void random_points(__global ulong *out, const uint n, const uint d,
         return;
     const uint2 key = (uint2)(key_lo, key_hi);
     const uint4 realization = (uint4)(realization0 + r);
+#if POINTS_PER_ITEM == 1
+    __global ulong *q = out + ((size_t)r * n + i) * d;
+    for (uint pair = CLSAMP_DIM0 / 2; 2 * pair < CLSAMP_DIM_END(d); ++pair) {
+        const ulong2 u = clsamp_uniform2_bits(key, stream, realization0 + r, start + i, pair);
+        q[2 * pair] = u.x;
+        if (2 * pair + 1 < d)
+            q[2 * pair + 1] = u.y;
+    }
+#else
     const uint lanes = n - i < POINTS_PER_ITEM ? n - i : POINTS_PER_ITEM;
     /* dimension pairs: DIMS_PER_ITEM is even where it is defined */
     for (uint pair = CLSAMP_DIM0 / 2; 2 * pair < CLSAMP_DIM_END(d); ++pair) {
@@ -65,4 +78,5 @@ __kernel void random_points(__global ulong *out, const uint n, const uint d,
             }
         }
     }
+#endif
 }

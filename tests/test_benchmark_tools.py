@@ -104,7 +104,7 @@ def test_the_readme_summary_and_the_full_table_are_one_run():
     assert len(re.findall(when, summary)) == 1 and len(re.findall(when, full)) == 1
     assert re.search(when + ".*", summary).group(0) == re.search(when + ".*", full).group(0)
     assert summary.count("| capability | peer | cases |") == 1 and full.count("| case | size | device |") == 1
-    assert len(summary.splitlines()) < 40
+    assert len(summary.splitlines()) < 70      # with several devices, a side-by-side table too
 
 
 def test_markdown_writes_the_summary_and_the_full_table_beside(tmp_path):
@@ -123,3 +123,33 @@ def test_markdown_writes_the_summary_and_the_full_table_beside(tmp_path):
     assert "numpy reference" not in text                  # the NumPy twin is not an outside peer
     full = (tmp_path / common.FULL_TABLE).read_text()
     assert full.count("| sobol |") == 2 and "| halton |" in full
+
+
+def test_several_devices_are_put_side_by_side(tmp_path):
+    def row(case, device, seconds, peer="numpy reference", capability="random"):
+        return common.Row(case, "64x2D", device, seconds, peer, 1.0, capability=capability)
+    rows = [row("a", "[0] PoCL", 0.2), row("a", "[0] PoCL", 0.2, peer="scipy"),
+            row("b", "[0] PoCL", 0.1, capability="sobol"), row("a", "[3] Intel", 0.1),
+            row("a", "[3] Intel", 0.1, peer="scipy"), row("b", "[3] Intel", 0.4, capability="sobol"),
+            row("c", "[0] PoCL", 0.3),                      # on one device only: left out
+            row("d", "[0] PoCL", 0.5, capability="metrics"),
+            row("d", "[1] rusticl", 0.1, capability="metrics"),   # Intel refused it
+            row("a", "[1] rusticl", 0.4)]
+    devices = ["[0] PoCL", "[3] Intel", "[1] rusticl"]
+    assert common.across_devices(rows, devices) == [
+        ("a", "64x2D", [0.2, 0.1, 0.4]), ("b", "64x2D", [0.1, 0.4, None]),
+        ("d", "64x2D", [0.5, None, 0.1])]
+    full = common.cross_device_markdown(rows)
+    assert "| a | 64x2D | 0.2 | 0.1 | 0.4 | 2.00× | 0.50× | [3] Intel |" in full
+    assert "| b | 64x2D | 0.1 | 0.4 | - | 0.25× | - | [0] PoCL |" in full
+    assert "| d | 64x2D | 0.5 | - | 0.1 | - | 5.00× | [1] rusticl |" in full
+    summary = common.implementation_summary(rows)
+    assert "| random | 1 | 0 | 1 | 0 | 2× | 0.5× |" in summary
+    assert "| sobol | 1 | 1 | 0 | 0 | 0.25× | - |" in summary
+    assert "| metrics | 1 | 0 | 0 | 1 | - | 5× |" in summary
+    assert common.implementation_summary(rows[:3]) == "" == common.cross_device_markdown(rows[:3])
+    readme = tmp_path / "README.md"
+    readme.write_text(f"{common.TABLE_BEGIN}\n{common.TABLE_END}\n")
+    common.write_markdown(str(readme), rows)
+    assert "fastest on [3] Intel" in readme.read_text()
+    assert "## Side by side" in (tmp_path / common.FULL_TABLE).read_text()

@@ -10,6 +10,7 @@ five of those, plus what the theory says about pre-asymptotic terms. Seeds are f
 test is deterministic; the margins say why it is not brittle.
 """
 
+import dataclasses
 import json
 import math
 import os
@@ -21,7 +22,7 @@ import numpy as np
 import pytest
 
 import clsamp
-from clsamp import philox, theory
+from clsamp import philox, runtime, theory
 from clsamp.errors import InvalidArgumentError
 from clsamp.geometry.torus import homogenization_shifts, shift
 from clsamp.integrands import Gaussian, make_integrand
@@ -164,9 +165,9 @@ def test_chunks_give_the_same_errors(monkeypatch):
     from clsamp import estimates as module
     whole = run("jittered", "disk", [64], 10, seed=9)
     whole_np = run("jittered", "disk", [64], 10, seed=9, backend="numpy")
-    monkeypatch.setattr(module, "DEVICE_CHUNK", {"cpu": 3 * 64 * 2, "gpu": 3 * 64 * 2, "other": 3 * 64 * 2})
     monkeypatch.setattr(module, "HOST_CHUNK", 4 * 64 * 2)
-    parts = run("jittered", "disk", [64], 10, seed=9)
+    with runtime.forced_shape(dataclasses.replace(runtime.shape(), chunk=3 * 64 * 2)):
+        parts = run("jittered", "disk", [64], 10, seed=9)
     parts_np = run("jittered", "disk", [64], 10, seed=9, backend="numpy")
     np.testing.assert_array_equal(whole.errors[0], parts.errors[0])
     np.testing.assert_array_equal(whole_np.errors[0], parts_np.errors[0])

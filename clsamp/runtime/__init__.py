@@ -2,23 +2,25 @@
 
 Nothing else creates contexts, queues, programs, kernel objects or buffers over host
 memory, and every module asks :func:`chunk_ranges` / :func:`fit` how much work one launch
-may hold. Three modules, one concern each:
+may hold. Four modules, one concern each:
 
 * :mod:`~clsamp.runtime.discovery`: devices, the current device, contexts and queues, and
   what a device can do (fp64, extensions, loop limits);
 * :mod:`~clsamp.runtime.programs`: kernel sources with their headers inlined, programs
   built once per (device, file, options), kernel objects;
 * :mod:`~clsamp.runtime.memory`: outputs over host memory, copies, tables, and the sizing
-  rule of every launch.
+  rule of every launch;
+* :mod:`~clsamp.runtime.shapes`: each device's launch shape (points a work-item, group
+  sizes, what runs on the host), measured once and kept beside pyopencl's cache.
 
 Their public names are this package's (``runtime.queue()``, ``runtime.kernel(...)``): each
 resolves to its home module when it is read, so a test that patches
 ``runtime.memory.work_budget`` changes it for every caller.
 """
 
-from . import discovery, memory, programs
+from . import discovery, memory, programs, shapes
 
-_HOMES = {name: module for module in (discovery, programs, memory) for name in module.__all__}
+_HOMES = {name: module for module in (discovery, programs, memory, shapes) for name in module.__all__}
 __all__ = sorted(_HOMES)
 
 

@@ -21,7 +21,7 @@ from ..errors import InvalidArgumentError, NoDeviceError
 __all__ = [
     'Device', 'devices', 'use_device', 'current_device', 'without_fp64', 'compiles',
     'enable_profiling', 'context', 'queue', 'LLVMPIPE_LOOP_LIMIT', 'loop_limit', 'dimension_split',
-    'require_fp64', 'require_extension', 'require_short_loops', 'local_size']
+    'require_fp64', 'require_extension', 'require_short_loops']
 
 
 _INSTALL_HINT = (
@@ -58,6 +58,10 @@ class Device:
     local_memory: int    # bytes
     implementation: str = ""   # the platform's version string ("OpenCL 3.0 PoCL 3.1 ...")
     extensions: tuple = ()     # the device's OpenCL extensions ("cl_khr_fp64", ...)
+    vendor: str = ""           # the device's vendor string
+    driver: str = ""           # the driver's version string (keys the launch-shape cache)
+    host_memory: bool = False  # whether it reads and writes host memory in place
+    float_width: int = 1       # float lanes of its vector instructions (native width)
 
     @property
     def simulator(self):
@@ -135,7 +139,11 @@ def _discover():
             max_allocation=device.max_mem_alloc_size,
             local_memory=device.local_mem_size,
             implementation=" ".join(device.platform.version.split()),
-            extensions=tuple(device.extensions.split())))
+            extensions=tuple(device.extensions.split()),
+            vendor=device.vendor.strip(),
+            driver=device.driver_version.strip(),
+            host_memory=bool(device.host_unified_memory),
+            float_width=int(device.native_vector_width_float)))
     _cl_devices, _records = found, records
 
 
@@ -493,23 +501,3 @@ def require_short_loops(what):
             f"{what} does not run on {device.name}: it ends a work-item's loops after {limit} "
             "iterations, and this kernel's work-items loop longer; choose another device with "
             "clsamp.use_device or CLSAMP_DEVICE, or backend='numpy'")
-
-
-def local_size(preferred=64):
-    """A work-group size the current device allows.
-
-    Parameters
-    ----------
-    preferred : int, optional
-        The size wanted.
-
-    Returns
-    -------
-    int
-        The largest power of two no larger than ``preferred`` and the device's limit.
-    """
-    limit = current_device().max_work_group_size
-    size = 1
-    while size * 2 <= min(preferred, limit):
-        size *= 2
-    return size

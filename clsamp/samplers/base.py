@@ -664,7 +664,7 @@ class Sampler(abc.ABC):
         """Host points (total, n, d) of every run, and the infos of their chunks."""
         total = sum(len(run) for run in runs)
         host = (self.host_output and self.backend == "opencl" and n is not None
-                and runtime.current_device().type == "cpu")
+                and runtime.shape().host_output)
         out = host_memory.host_empty((total, n, self.d)) if n is not None else None
         infos, row, single_set = [], 0, None
         pieces = self._pieces(n) if n is not None else [(0, None)]

@@ -187,12 +187,12 @@ class LowDiscrepancySampler(Sampler):
     def _block():
         # A work-item makes `block` consecutive points by cheap increments, after a start
         # that costs about as much as a few dozen of them (the index's digits: m dependent
-        # divisions per dimension); 256 points of 16 dimensions still fit a CPU's L1 while
-        # the item fills them column by column. On a GPU fewer per item keep more items in
-        # flight, and so where the device stops long loops (runtime.loop_limit). The bits
-        # do not depend on it.
-        cpu = runtime.current_device().type == "cpu" and runtime.loop_limit() is None
-        return 256 if cpu else 4
+        # divisions per dimension); on a CPU 256 points of 16 dimensions still fit its L1
+        # while the item fills them column by column; on a GPU one point an item keeps the
+        # most items in flight (runtime.shape). At most 4 where the device stops long loops
+        # (runtime.loop_limit). The bits do not depend on it.
+        block = runtime.shape().block
+        return block if runtime.loop_limit() is None else min(block, 4)
 
     def _launch(self, kernel_name, table, n, realizations, start, defines, out=None, extra=()):
         """Run a kernel into a new device array, or into the host array ``out`` (returned);

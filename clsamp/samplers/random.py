@@ -57,10 +57,10 @@ class RandomSampler(Sampler):
     def _device(self, n, realizations, start, out=None):
         r = len(realizations)
         target = runtime.Output((r, n, self.d), host=out)
-        # points per work-item: 16 keep a CPU core's multipliers busy (4 overlapping Philox
-        # chains); a GPU wants the work-items. The bits do not depend on it.
-        per_item = 16 if runtime.current_device().type == "cpu" else 4
-        local = runtime.local_size(64)
+        # points per work-item (runtime.shape): on a CPU 16 keep a core's multipliers busy
+        # (4 overlapping Philox chains); a GPU wants the work-items. The bits do not depend on it.
+        per_item = runtime.shape().points_per_item
+        local = runtime.local_size()
         items = -(-n // per_item)
         items = -(-items // local) * local                     # a multiple of the group size
         defines, grid, group = runtime.dimension_split(self.d, 256, (items, r), (local, 1))

@@ -333,7 +333,7 @@ def batch_reference(x, theta, sl, scale):
 
 def _batch_device(x, theta, sl, scale):
     q = _quantiles_device(sl, x.shape[1], host=False)
-    if runtime.current_device().type == "cpu":
+    if runtime.shape().host_sort:
         # on a CPU device NumPy's sort beats the bitonic network (docs/performance.md);
         # both give the stable sort's ranks
         proj = _project_device(x, theta)

@@ -67,15 +67,12 @@ def ccvt_defines():
     -------
     dict
         The constants the kernels share with Python, and CCVT_PREFETCH: software prefetch
-        of the records and points a pair reads, on under PoCL on a CPU, whose scans of
-        pairs wait on memory (other implementations may lower ``prefetch`` differently, or
-        not at all). It never changes a result.
+        of the records and points a pair reads, where the device's launch shape says
+        (``runtime.shape().prefetch``: under PoCL, whose scans of pairs wait on memory;
+        other implementations may lower ``prefetch`` differently, or not at all). It never
+        changes a result.
     """
     return {**it.DEFINES, "CCVT_TOP": CCVT_TOP, "CCVT_SECTORS": CCVT_SECTORS,
             "CCVT_BANDS": CCVT_BANDS, "CCVT_META": CCVT_META, "CCVT_NO_OWNER": f"{NO_OWNER}u",
             "CCVT_NO_SECOND": f"{NO_SECOND}L",
-            "CCVT_PREFETCH": _pocl_cpu(runtime.current_device())}
-
-
-def _pocl_cpu(device):
-    return device.type == "cpu" and device.platform == "Portable Computing Language"
+            "CCVT_PREFETCH": runtime.shape().prefetch}
