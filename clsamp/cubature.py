@@ -163,8 +163,9 @@ class Cubature:
     d : int
         The dimension.
     method : {"digital", "lattice"}
-        A digitally shifted Sobol' sequence (Joe-Kuo, ``make_sampler("sobol",
-        randomize="xor")``) and Walsh coefficients, or a shifted rank-1 lattice in
+        A Sobol' sequence (Joe-Kuo) with Matoušek's linear matrix scrambling and a digital
+        shift (``make_sampler("sobol", randomize="lms+shift")``, qmcpy's default) and Walsh
+        coefficients, or a shifted rank-1 lattice in
         radical-inverse order (``make_sampler("lattice", randomize="shift")``, Kuo's
         vector) and Fourier coefficients.
     seed : int
@@ -187,7 +188,7 @@ class Cubature:
 
     def __init__(self, values, d, method, seed, periodization="none", block=None):
         if method == "digital":
-            self.sampler = make_sampler("sobol", d=d, seed=seed, randomize="xor")
+            self.sampler = make_sampler("sobol", d=d, seed=seed, randomize="lms+shift")
         else:
             self.sampler = make_sampler("lattice", d=d, seed=seed, randomize="shift")
         self.values, self.method, self.periodization = values, method, periodization

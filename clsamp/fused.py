@@ -8,8 +8,9 @@ A :class:`FusedRule` makes the points of one sequence of the samplers, bit for b
   ``"owen"``, ``"xor"`` or ``"shift"`` (``make_sampler("sobol", randomize=...)``), for
   replicated RQMC: :meth:`FusedRule.sums` gives each realization's double-double sum of
   f - integral, one pair per work-group read back;
-* ``"digital"``: the same digitally shifted Sobol' points in natural order (point i = C i),
-  realization 0, for :class:`clsamp.cubature.Cubature`;
+* ``"digital"``: Sobol' with Matoušek's linear matrix scrambling and a digital shift
+  (``randomize="lms+shift"``) in natural order (point i = L C i xor the shift), realization 0,
+  for :class:`clsamp.cubature.Cubature`;
 * ``"lattice"``: the shifted rank-1 lattice (Kuo's vector) in radical-inverse order with
   a periodization.
 
@@ -21,6 +22,7 @@ is read back before the next.
 
 import numpy as np
 
+from . import generating_matrices as gm
 from . import number_theory as nt
 from . import philox, runtime
 from .integrand_kernel import combine_sums, offset
@@ -63,7 +65,7 @@ class FusedRule:
     seed : int
         The sampler's seed.
     randomize : {"owen", "xor", "shift"}
-        ``kind="sobol"`` only (``"digital"`` is xor, ``"lattice"`` shift).
+        ``kind="sobol"`` only (``"digital"`` is LMS + the xor shift, ``"lattice"`` shift).
     periodization : {"none", "baker", "sidi"}
         ``kind="lattice"`` only.
 
@@ -89,14 +91,18 @@ class FusedRule:
         else:
             owen = self.randomize == "owen"
             gray = kind == "sobol"
+            # "digital": LMS + digital shift, realization 0's matrices L_j C_j (as the sampler's)
+            lms = seed if kind == "digital" else None
 
             def columns():
-                v = nt.sobol_matrices(d).T            # (32, d)
-                return nt.reverse_bits32(v) if owen else v
+                v = nt.sobol_matrices(d)              # (d, 32)
+                if lms is not None:
+                    v = gm.lms_apply(gm.lms_row_masks(lms, [0], d), v[None])[0]
+                return nt.reverse_bits32(v.T) if owen else v.T
 
-            self.columns = runtime.table(("fused sobol", d, owen), columns)
+            self.columns = runtime.table(("fused sobol", d, owen, lms), columns)
             self.steps = (self.columns if gray else runtime.table(
-                ("fused sobol steps", d, owen), lambda: np.bitwise_xor.accumulate(columns(), axis=0)))
+                ("fused sobol steps", d, owen, lms), lambda: np.bitwise_xor.accumulate(columns(), axis=0)))
         self.params = runtime.to_device(np.ascontiguousarray(f.kernel_params(), dtype=np.float64))
         cpu = runtime.current_device().type == "cpu" and runtime.loop_limit() is None
         # a work-item's block: long on a CPU (its start, a Gray-code walk over the index's

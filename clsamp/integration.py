@@ -205,8 +205,8 @@ def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**2
         the call has run 2 s.
     method : {"replications", "digital", "lattice"}
         ``"replications"`` (the default): the replicated Student-t interval above.
-        ``"digital"`` and ``"lattice"``: one randomized sequence (a digitally shifted
-        Sobol' sequence, a shifted rank-1 lattice), n = 2^10, 2^11, ..., stopping when the
+        ``"digital"`` and ``"lattice"``: one randomized sequence (Sobol' with LMS and a
+        digital shift, as qmcpy's default; a shifted rank-1 lattice), n = 2^10, 2^11, ..., stopping when the
         cone-based bound of Hickernell and Jiménez Rugama (:mod:`clsamp.cubature`) meets
         the tolerance; the bound is guaranteed for integrands whose Walsh (Fourier)
         coefficients decay steadily, and may fail for others (discontinuities, spikes
