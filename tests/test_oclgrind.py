@@ -144,6 +144,15 @@ def _spectrum_direct():
     assert np.max(np.abs(got - want)) <= 4e-15 * pts.shape[1] * 4
 
 
+@check("spectrum-direct-float-float")
+def _spectrum_direct_ff():
+    from clsamp.spectrum_ff import error_bound
+    pts = _points()
+    got = clsamp.power_spectrum(pts, 32, method="direct", precision="float-float", progress=False)
+    want = clsamp.power_spectrum(pts, 32, method="direct", backend="numpy", progress=False)
+    assert np.max(np.abs(got - want)) <= error_bound(pts.shape[1])
+
+
 @check("spectrum-fast")
 def _spectrum_fast():
     pts = _points()

@@ -1,0 +1,162 @@
+"""The direct power spectrum in float-float, for devices without fp64: the kernels of
+``kernels/spectrum_ff.cl`` and the error bound they keep.
+
+:func:`clsamp.spectrum.power_spectrum` runs these with ``precision="float-float"`` (the
+default on a device without fp64). Phases are exact integers (the coordinate as the 64-bit
+fixed-point fraction X = ⌊x·2^64⌋, the phase f·X modulo 2^64), each twiddle comes from two
+tables of float-float sines and cosines and a two-term series, and the products and sums are
+float-float (``kernels/float_float.h``); the host squares the sums in float64.
+
+Error bound (u = 2^-24; the float-float operations' relative errors are at most 3u² for
+an addition and 5u² for a product, Joldes, Muller & Popescu 2017). A table entry is within
+u² + 2^-53 of e(t) and the two-term series within 4e-17; the two complex products that make
+a twiddle and the one of a_k(u)·b_k(v) keep every term within 128u² of its value (256u²
+is taken). The kernel sums blocks of 64 terms apart and then the M block sums (M <=
+⌈N/64⌉ + the chunks of points, one below millions of points): each addition errs by at
+most 3u² times the partial sum, <= 1.5u²·64·N over the blocks and 3u²·N·M over their sums,
+times √2 for a complex sum. So |ΔS| <= u²·N·(400 + 5M) and, with |S| <= N and the float64
+squaring on the host,
+
+    |ΔP(ω)| <= (2|S||ΔS| + |ΔS|²) / N <= 2.01·u²·N·(400 + 5M),
+
+3.5e-12·N at N = 1024 and 1.2e-11·N at N = 16384 (:func:`error_bound`). A batch's mean
+keeps the bound. Measured errors are random-signed and far below it (docs/performance.md).
+
+References
+----------
+.. [1] M. Joldes, J.-M. Muller, V. Popescu, "Tight and rigorous error bounds for basic
+   building blocks of double-word arithmetic", ACM TOMS 44(2), 2017.
+"""
+
+import numpy as np
+
+from . import runtime
+from .float_float import U2, split
+
+__all__ = ["sincos_tables", "error_bound", "twiddles", "accumulate", "power", "to_complex"]
+
+BLOCK = 64             # terms per partial sum, as BLOCK in spectrum_ff.cl
+
+
+def sincos_tables():
+    """The two tables of the kernel's twiddles: e(i/2^10) and e(j/2^20), i, j < 1024.
+
+    Returns
+    -------
+    ndarray of float32, shape (2, 1024, 4)
+        (cos hi, cos lo, sin hi, sin lo) of 2π·i/2^10 (first table) and 2π·j/2^20 (second),
+        from float64 ``cos``/``sin`` split into float-float pairs.
+    """
+    t = np.arange(1024, dtype=np.float64)
+    angles = 2.0 * np.pi * np.stack([t / 2.0**10, t / 2.0**20])
+    return np.concatenate([split(np.cos(angles)), split(np.sin(angles))], axis=-1)
+
+
+def error_bound(n):
+    """The largest difference between the float-float and the exact periodogram of a set
+    of ``n`` points (or the mean over sets of ``n``), at any frequency.
+
+    Parameters
+    ----------
+    n : int
+
+    Returns
+    -------
+    float
+        2.01·u²·n·(400 + 5M), u = 2^-24 and M = ⌈n/64⌉ + 1 (the module's docstring
+        derives it).
+
+    Examples
+    --------
+    >>> f"{error_bound(1024) / 1024:.2g}"
+    '3.5e-12'
+    """
+    blocks = -(-n // BLOCK) + 1
+    return 2.01 * U2 * n * (400.0 + 5.0 * blocks)
+
+
+def _defines():
+    delta = split(2.0 * np.pi * 2.0**-20)
+    return {"DELTA_HI": _literal(delta[0]), "DELTA_LO": _literal(delta[1]), "BLOCK": BLOCK}
+
+
+def _literal(value):
+    return f"{float(value).hex()}f"
+
+
+def twiddles(points, f0, count, axis):
+    """Twiddles e^{-2πi f x_k} of one axis of a block of points, on the device.
+
+    Parameters
+    ----------
+    points : pyopencl.array.Array
+        (r, n, d) float64 points in [0, 1), contiguous (read as bit patterns).
+    f0, count : int
+        The frequencies f0 .. f0 + count - 1.
+    axis : int
+        The coordinate.
+
+    Returns
+    -------
+    pyopencl.array.Array
+        (r, count, n, 4) float32: (re hi, re lo, im hi, im lo).
+    """
+    import pyopencl.array as cla
+    r, n, d = points.shape
+    coarse, fine = (runtime.table(("spectrum_ff_sincos", level), lambda level=level: sincos_tables()[level],
+                                  np.float32) for level in (0, 1))
+    kernel = runtime.kernel("spectrum_ff.cl", "spectrum_ff_twiddles", _defines())
+    out = cla.empty(runtime.queue(), (r, count, n, 4), np.float32)
+    local = runtime.local_size(64)
+    kernel(runtime.queue(), (-(-n // local) * local, r), (local, 1), points.data, out.data,
+           coarse.data, fine.data, np.uint32(n), np.uint32(d), np.uint32(axis), np.int64(f0),
+           np.uint32(count))
+    return out
+
+
+def accumulate(A, B, S):
+    """S[r, u, v] += Σ_k A[r, u, k]·B[r, v, k] in complex float-float, on the device.
+
+    Parameters
+    ----------
+    A, B : pyopencl.array.Array
+        Twiddle panels from :func:`twiddles`: (r, count_u, n, 4) and (r, count_v, n, 4).
+    S : pyopencl.array.Array
+        (r, count_u, count_v, 4) float32, added to in place.
+    """
+    r, count_u, n, _ = A.shape
+    count_v = B.shape[1]
+    kernel = runtime.kernel("spectrum_ff.cl", "spectrum_ff_product", _defines())
+    local = runtime.local_size(64)
+    kernel(runtime.queue(), (-(-count_v // local) * local, count_u, r), (local, 1, 1), A.data, B.data,
+           S.data, np.uint32(n), np.uint32(count_u), np.uint32(count_v))
+
+
+def to_complex(pairs):
+    """Complex float-float values (last axis (re hi, re lo, im hi, im lo)) as complex128.
+
+    Parameters
+    ----------
+    pairs : ndarray of float32, shape (..., 4)
+
+    Returns
+    -------
+    ndarray of complex128
+    """
+    w = pairs.astype(np.float64)
+    return (w[..., 0] + w[..., 1]) + 1j * (w[..., 2] + w[..., 3])
+
+
+def power(S):
+    """Σ_r |S_r|² in float64 of the sums :func:`accumulate` made (read back to the host).
+
+    Parameters
+    ----------
+    S : ndarray of float32, shape (r, count_u, count_v, 4)
+
+    Returns
+    -------
+    ndarray of float64, shape (count_u, count_v)
+    """
+    z = to_complex(S)
+    return np.sum(z.real**2 + z.imag**2, axis=0)

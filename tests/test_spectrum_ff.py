@@ -1,0 +1,160 @@
+"""Float-float analyses (kernels/float_float.h, clsamp.spectrum_ff): the arithmetic within
+its published bounds against exact fractions, and the direct power spectrum within its
+stated bound of the float64 result, with fp64 on PoCL, under ``runtime.without_fp64()``
+(what a device without fp64 runs) and on a real device without fp64 where one is installed
+(Mesa's rusticl on llvmpipe)."""
+
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+import clsamp
+from clsamp import runtime
+from clsamp.errors import InvalidArgumentError, NoDeviceError
+from clsamp.float_float import U2, check_precision, join, split
+from clsamp.spectrum import direct_reference, power_spectrum, twiddles_reference
+from clsamp.spectrum_ff import error_bound, sincos_tables, twiddles
+
+DEFAULT = runtime.current_device()
+WITHOUT_FP64 = [d for d in runtime.devices()
+                if not d.fp64 and not d.simulator and runtime.compiles(d.index)]
+
+
+def _pairs(rng, count, scale):
+    x = rng.uniform(-1.0, 1.0, count) * scale
+    return split(x * (1.0 + rng.uniform(-1e-9, 1e-9, count)))
+
+
+def _exact(pair):
+    return Fraction(float(pair[0])) + Fraction(float(pair[1]))
+
+
+def test_float_float_operations_keep_their_bounds():
+    """ff_add within 3u² + 13u³ and ff_mul within 5u², ff_mul_f within 2u² of the exact
+    result (Joldes, Muller & Popescu 2017), on operands of mixed signs and magnitudes."""
+    import pyopencl.array as cla
+    rng = np.random.default_rng(4)
+    count = 3000
+    x = _pairs(rng, count, 10.0 ** rng.integers(-6, 7, count))
+    y = _pairs(rng, count, 10.0 ** rng.integers(-6, 7, count))
+    y[:200] = -x[:200] * np.float32(rng.uniform(0.5, 2.0, (200, 1)))      # near cancellations
+    f = rng.uniform(-3.0, 3.0, count).astype(np.float32)
+    q = runtime.queue()
+    out = cla.empty(q, (count, 3, 2), np.float32)
+    args = [cla.to_device(q, np.ascontiguousarray(v)) for v in (x, y, f)]
+    runtime.kernel("float_float_probe.cl", "float_float_ops")(
+        q, (count,), None, *(a.data for a in args), out.data, np.uint32(count))
+    got = out.get()
+    u = Fraction(1, 2**24)
+    for i in range(count):
+        a, b = _exact(x[i]), _exact(y[i])
+        for k, (want, bound) in enumerate(((a + b, 3 * u**2 + 13 * u**3), (a * b, 5 * u**2),
+                                           (a * Fraction(float(f[i])), 2 * u**2))):
+            assert abs(_exact(got[i, k]) - want) <= bound * abs(want), (i, k)
+
+
+def test_split_and_join():
+    x = np.random.default_rng(1).random(1000)
+    pairs = split(x)
+    assert pairs.dtype == np.float32 and pairs.shape == (1000, 2)
+    assert np.all(np.abs(join(pairs) - x) <= U2 * x)
+
+
+def test_the_sincos_tables_are_within_u2():
+    t = sincos_tables().astype(np.float64)
+    i = np.arange(1024)
+    for level, scale in ((0, 2.0**-10), (1, 2.0**-20)):
+        angle = 2 * np.pi * i * scale
+        assert np.all(np.abs(t[level, :, 0] + t[level, :, 1] - np.cos(angle)) <= 1.1 * U2)
+        assert np.all(np.abs(t[level, :, 2] + t[level, :, 3] - np.sin(angle)) <= 1.1 * U2)
+
+
+def test_twiddles_match_the_float64_reference():
+    """Exact integer phases for any frequency, then the tables: each twiddle within 64u²
+    (the bound's budget for a factor of a term), at frequencies up to 2^40."""
+    rng = np.random.default_rng(2)
+    x = rng.random((2, 300, 2))
+    x[0, :4, 0] = [0.0, 0.5, 2.0**-60, np.nextafter(1.0, 0.0)]         # zero, exact, tiny, largest
+    for f0, count in ((-64, 129), (2**40, 16), (-(2**33) - 5, 8)):
+        got = twiddles(runtime.to_device(x), f0, count, 0).get()
+        w = got.astype(np.float64)
+        z = (w[..., 0] + w[..., 1]) + 1j * (w[..., 2] + w[..., 3])
+        want = twiddles_reference(x[:, :, 0], np.arange(f0, f0 + count))
+        assert np.max(np.abs(np.swapaxes(z, 1, 2) - want)) <= 64 * U2, f0
+
+
+def _sets(d, n=700, r=3, seed=5):
+    return np.random.default_rng(seed).random((r, n, d))
+
+
+@pytest.mark.parametrize("d, resolution", [(1, 64), (2, 48), (3, 12)])
+def test_the_float_float_spectrum_is_within_its_bound(d, resolution):
+    pts = _sets(d)
+    want = direct_reference(pts, resolution)
+    got = power_spectrum(pts, resolution, method="direct", precision="float-float", progress=False)
+    assert got.shape == want.shape
+    error = np.max(np.abs(got - want))
+    assert error <= error_bound(pts.shape[1])
+    assert error <= 1e-12 * pts.shape[1]            # typical errors: random signs, far below
+    assert got[(resolution // 2,) * d] == pytest.approx(pts.shape[1], rel=1e-13)
+
+
+def test_without_fp64_the_default_is_float_float():
+    pts = _sets(2, n=500, r=2)
+    explicit = power_spectrum(pts, 32, method="direct", precision="float-float", progress=False)
+    with runtime.without_fp64():
+        assert check_precision(None) == "float-float"
+        for method in ("auto", "direct"):
+            got = power_spectrum(pts, 32, method=method, progress=False)
+            assert np.array_equal(got, explicit)
+        with pytest.raises(NoDeviceError, match="'precision' 'double' needs fp64"):
+            power_spectrum(pts, 32, precision="double", progress=False)
+        with pytest.raises(NoDeviceError, match="fp64|double"):
+            power_spectrum(pts, 32, method="fast", tol=1e-6, precision=None, progress=False)
+    assert check_precision(None) == "double"
+
+
+def test_precision_is_checked_in_one_line():
+    pts = _sets(2, n=16, r=1)
+    with pytest.raises(InvalidArgumentError, match="'precision' must be one of 'double', 'float-float'"):
+        power_spectrum(pts, 16, precision="single")
+    with pytest.raises(InvalidArgumentError, match="'method' 'fast'.*float-float"):
+        power_spectrum(pts, 16, method="fast", tol=1e-6, precision="float-float")
+
+
+def test_a_grid_in_float_float():
+    """The k x k grid: P = N at multiples of k, 0 elsewhere (up to the bound)."""
+    k, R = 8, 32
+    g = (np.stack(np.meshgrid(np.arange(k), np.arange(k), indexing="ij"), -1).reshape(-1, 2) + 0.5) / k
+    P = power_spectrum(g, R, precision="float-float", progress=False)
+    f = np.arange(-R // 2, R // 2)
+    peak = (f[:, None] % k == 0) & (f[None, :] % k == 0)
+    assert np.allclose(P[peak], k * k, rtol=0, atol=error_bound(k * k))
+    assert np.max(np.abs(P[~peak])) <= error_bound(k * k)
+
+
+def test_sets_of_different_sizes_and_expected_spectrum():
+    rng = np.random.default_rng(3)
+    sets = [rng.random((n, 2)) for n in (100, 130, 100)]
+    got = power_spectrum(sets, 16, precision="float-float", progress=False)
+    want = power_spectrum(sets, 16, backend="numpy", progress=False)
+    assert np.max(np.abs(got - want)) <= error_bound(130)
+    s = clsamp.make_sampler("jittered", seed=1)
+    got = clsamp.expected_spectrum(s, 256, 4, resolution=16, precision="float-float", progress=False)
+    want = clsamp.expected_spectrum(s, 256, 4, resolution=16, method="direct", progress=False)
+    assert np.max(np.abs(got - want)) <= error_bound(256)
+
+
+@pytest.mark.parametrize("device", WITHOUT_FP64, ids=lambda d: f"{d.index}-{d.platform[:12]}")
+def test_a_device_without_fp64_computes_spectra_in_float_float(device):
+    pts = _sets(2, n=600, r=2)
+    want = direct_reference(pts, 32)
+    runtime.use_device(device.index)
+    try:
+        got = power_spectrum(pts, 32, progress=False)
+        got1 = power_spectrum(pts[..., :1], 32, progress=False)
+    finally:
+        runtime.use_device(DEFAULT.index)
+    assert np.max(np.abs(got - want)) <= error_bound(600)
+    assert np.max(np.abs(got1 - direct_reference(pts[..., :1], 32))) <= error_bound(600)
