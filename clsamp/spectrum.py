@@ -487,8 +487,8 @@ def _direct3(batch, resolution, progress, precision):
             nc = k1 - k0
             pts = _block(batch, k, k + 1, k0, k1)
             if precision == "float-float":
-                S += _sum3(*(spectrum_ff.to_complex(spectrum_ff.twiddles(pts, -(R // 2), R, axis).get()[0]).T
-                             for axis in range(3)))
+                panels = (spectrum_ff.twiddles(pts, -(R // 2), R, axis).get()[0, ..., 0] for axis in range(3))
+                S += _sum3(*(spectrum_ff.to_complex(panel).T for panel in panels))
                 if bar is not None:
                     bar.update(1)
                 continue
@@ -591,13 +591,14 @@ def _direct(batch, resolution, backend, progress, precision):
 
 def _direct_ff(batch, resolution, progress):
     """The 1-D and 2-D direct sums in float-float (:mod:`clsamp.spectrum_ff`): S(u, v) over
-    the half plane u <= 0 on the device (a 1-D set as a 2-D one with v = 0 only), squared
+    the half plane u <= 0 on the device (a 1-D set as a 2-D one with u = 0 only), squared
     and summed over realizations on the host."""
     import pyopencl.array as cla
     (r, n, d), half = batch.shape, resolution // 2
-    count_u, count_v = (half + 1, resolution + 1) if d == 2 else (resolution, 1)
+    count_u, count_v = (half + 1, _pad(resolution + 1, spectrum_ff.LANES)) if d == 2 else (1, resolution)
     per_point = (count_u + count_v) * 16 + d * 8
-    points_per_chunk = min(n, runtime.fit(per_point, WORKING_SET))
+    # (a work-item of the product loops ~1.02 times per point: llvmpipe's limit caps a chunk)
+    points_per_chunk = min(n, runtime.fit(per_point, WORKING_SET), (runtime.loop_limit() or 2**62) // 2)
     reals_per_chunk = min(r, runtime.fit(per_point * points_per_chunk + count_u * count_v * 16, WORKING_SET))
     chunks = [(a, min(r, a + reals_per_chunk)) for a in range(0, r, reals_per_chunk)]
     point_chunks = [(a, min(n, a + points_per_chunk)) for a in range(0, n, points_per_chunk)]
@@ -605,18 +606,20 @@ def _direct_ff(batch, resolution, progress):
                     "spectrum (direct, float-float)")
     H = np.zeros((count_u, count_v))
     for r0, r1 in chunks:
-        S = cla.zeros(runtime.queue(), (r1 - r0, count_u, count_v, 4), np.float32)
+        lanes = spectrum_ff.LANES
+        S = cla.zeros(runtime.queue(), (r1 - r0, count_u, count_v // lanes, 4, lanes), np.float32)
         for k0, k1 in point_chunks:
             pts = _block(batch, r0, r1, k0, k1)
-            B = spectrum_ff.twiddles(pts, -half, count_v, 1) if d == 2 else spectrum_ff.twiddles(pts, 0, 1, 0)
-            spectrum_ff.accumulate(spectrum_ff.twiddles(pts, -half, count_u, 0), B, S)
+            # (1-D: u = 0 only, a panel of ones; the frequencies along v)
+            A = spectrum_ff.twiddles(pts, -half if d == 2 else 0, count_u, 0)
+            spectrum_ff.accumulate(A, spectrum_ff.twiddles(pts, -half, count_v, d - 1, lanes), S)
             if bar is not None:
                 bar.update(1)
         H += spectrum_ff.power(S.get())
     if bar is not None:
         bar.close()
     H /= r * n
-    return H[:, 0] if d == 1 else _unfold(H, resolution)
+    return H[0] if d == 1 else _unfold(H, resolution)
 
 
 def _unfold(H, resolution):

@@ -36,6 +36,7 @@ from .float_float import U2, split
 __all__ = ["sincos_tables", "error_bound", "twiddles", "accumulate", "power", "to_complex"]
 
 BLOCK = 64             # terms per partial sum, as BLOCK in spectrum_ff.cl
+LANES = 8              # frequencies v a work-item of spectrum_ff_product (float8)
 
 
 def sincos_tables():
@@ -84,7 +85,7 @@ def _literal(value):
     return f"{float(value).hex()}f"
 
 
-def twiddles(points, f0, count, axis):
+def twiddles(points, f0, count, axis, tile=1):
     """Twiddles e^{-2πi f x_k} of one axis of a block of points, on the device.
 
     Parameters
@@ -92,25 +93,27 @@ def twiddles(points, f0, count, axis):
     points : pyopencl.array.Array
         (r, n, d) float64 points in [0, 1), contiguous (read as bit patterns).
     f0, count : int
-        The frequencies f0 .. f0 + count - 1.
+        The frequencies f0 .. f0 + count - 1 (count a multiple of ``tile``).
     axis : int
         The coordinate.
+    tile : int, optional
+        Frequencies a panel (8 for the B side of :func:`accumulate`).
 
     Returns
     -------
     pyopencl.array.Array
-        (r, count, n, 4) float32: (re hi, re lo, im hi, im lo).
+        (r, count / tile, n, 4, tile) float32, the parts (re hi, re lo, im hi, im lo).
     """
     import pyopencl.array as cla
     r, n, d = points.shape
     coarse, fine = (runtime.table(("spectrum_ff_sincos", level), lambda level=level: sincos_tables()[level],
                                   np.float32) for level in (0, 1))
     kernel = runtime.kernel("spectrum_ff.cl", "spectrum_ff_twiddles", _defines())
-    out = cla.empty(runtime.queue(), (r, count, n, 4), np.float32)
+    out = cla.empty(runtime.queue(), (r, count // tile, n, 4, tile), np.float32)
     local = runtime.local_size(64)
     kernel(runtime.queue(), (-(-n // local) * local, r), (local, 1), points.data, out.data,
            coarse.data, fine.data, np.uint32(n), np.uint32(d), np.uint32(axis), np.int64(f0),
-           np.uint32(count))
+           np.uint32(count), np.uint32(tile))
     return out
 
 
@@ -120,16 +123,17 @@ def accumulate(A, B, S):
     Parameters
     ----------
     A, B : pyopencl.array.Array
-        Twiddle panels from :func:`twiddles`: (r, count_u, n, 4) and (r, count_v, n, 4).
+        Twiddle panels from :func:`twiddles`: (r, count_u, n, 4, 1) and
+        (r, count_v / 8, n, 4, 8).
     S : pyopencl.array.Array
-        (r, count_u, count_v, 4) float32, added to in place.
+        (r, count_u, count_v / 8, 4, 8) float32, added to in place (:func:`power` reads it).
     """
-    r, count_u, n, _ = A.shape
-    count_v = B.shape[1]
+    r, count_u, n = A.shape[:3]
+    tiles_v = B.shape[1]
     kernel = runtime.kernel("spectrum_ff.cl", "spectrum_ff_product", _defines())
     local = runtime.local_size(64)
-    kernel(runtime.queue(), (-(-count_v // local) * local, count_u, r), (local, 1, 1), A.data, B.data,
-           S.data, np.uint32(n), np.uint32(count_u), np.uint32(count_v))
+    kernel(runtime.queue(), (-(-tiles_v // local) * local, count_u, r), (local, 1, 1), A.data, B.data,
+           S.data, np.uint32(n), np.uint32(count_u), np.uint32(tiles_v))
 
 
 def to_complex(pairs):
@@ -152,11 +156,12 @@ def power(S):
 
     Parameters
     ----------
-    S : ndarray of float32, shape (r, count_u, count_v, 4)
+    S : ndarray of float32, shape (r, count_u, tiles, 4, lanes)
 
     Returns
     -------
-    ndarray of float64, shape (count_u, count_v)
+    ndarray of float64, shape (count_u, tiles·lanes)
     """
-    z = to_complex(S)
+    r, count_u, tiles, _, lanes = S.shape
+    z = to_complex(np.swapaxes(S, -1, -2).reshape(r, count_u, tiles * lanes, 4))
     return np.sum(z.real**2 + z.imag**2, axis=0)

@@ -1,54 +1,65 @@
 /* Float-float (double-single) arithmetic: a value is the unevaluated sum hi + lo of two
- * floats (a float2, .x = hi, .y = lo, |lo| <= ulp(hi) / 2), about 48 significant bits with
- * float's exponent range, for devices without fp64 (and for GPUs, whose fp64 runs at 1/32
- * to 1/64 of their float rate). Error bounds, with u = 2^-24 (Joldes, Muller & Popescu,
- * "Tight and rigorous error bounds for basic building blocks of double-word arithmetic",
- * ACM TOMS 44(2), 2017):
- *     ff_add (their Algorithm 6, "AccurateDWPlusDW")   relative error <= 3u^2 + 13u^3
- *     ff_mul (their Algorithm 12, DWTimesDW with FMA)  relative error <= 5u^2
- *     ff_mul_f (their Algorithm 9, DWTimesFP with FMA) relative error <= 2u^2
- * Exact only with FP_CONTRACT OFF (the includer's pragma) and correctly rounded float
- * operations, which OpenCL requires of +, -, * and fma. The host twin is
- * clsamp.float_float (splitting float64 into pairs and back). */
+ * floats (|lo| <= ulp(hi) / 2), about 48 significant bits with float's exponent range, for
+ * devices without fp64 (and for GPUs, whose fp64 runs at 1/32 to 1/64 of their float rate).
+ * Error bounds, with u = 2^-24 (Joldes, Muller & Popescu, "Tight and rigorous error bounds
+ * for basic building blocks of double-word arithmetic", ACM TOMS 44(2), 2017):
+ *     FF_ADD (their Algorithm 6, AccurateDWPlusDW)   relative error <= 3u^2 + 13u^3
+ *     FF_MUL (their Algorithm 12, DWTimesDW with FMA) relative error <= 5u^2
+ *     FF_MUL_F (their Algorithm 9, DWTimesFP with FMA) relative error <= 2u^2
+ * Each is a macro over the type T (float, or a float vector: one float-float a lane), its
+ * operands and results hi/lo variables, as TWO_SUM is. Exact only with FP_CONTRACT OFF (the
+ * includer's pragma) and correctly rounded float operations, which OpenCL requires of +, -,
+ * * and fma. The host twin is clsamp.float_float (float64 into pairs and back). */
 #ifndef CLSAMP_FLOAT_FLOAT_H
 #define CLSAMP_FLOAT_FLOAT_H
 
 #include "two_sum.h"
 
-/* a + b = s + e exactly, given |a| >= |b| or a = 0 (Dekker's Fast2Sum). */
-inline float2 ff_fast_two_sum(const float a, const float b)
-{
-    const float s = a + b;
-    return (float2)(s, b - (s - a));
-}
+/* a + b = s + e exactly, given |a| >= |b| or a = 0 (Dekker's Fast2Sum); s and e may be
+ * the variables a and b are computed from. */
+#define FF_FAST_TWO_SUM(T, a, b, s, e) do {           \
+        const T fa_ = (a), fb_ = (b);                 \
+        s = fa_ + fb_;                                \
+        e = fb_ - (s - fa_);                          \
+    } while (0)
 
-/* a * b = p + e exactly (the FMA gives the product's rounding error). */
-inline float2 ff_two_prod(const float a, const float b)
-{
-    const float p = a * b;
-    return (float2)(p, fma(a, b, -p));
-}
+/* a b = p + e exactly (the FMA gives the product's rounding error). */
+#define FF_TWO_PROD(T, a, b, p, e) do {               \
+        p = (a) * (b);                                \
+        e = fma((a), (b), -p);                        \
+    } while (0)
 
-inline float2 ff_add(const float2 x, const float2 y)
-{
-    float sh, sl, th, tl;
-    TWO_SUM(float, x.x, y.x, sh, sl);
-    TWO_SUM(float, x.y, y.y, th, tl);
-    const float2 v = ff_fast_two_sum(sh, sl + th);
-    return ff_fast_two_sum(v.x, tl + v.y);
-}
+#define FF_ADD(T, xh, xl, yh, yl, zh, zl) do {                          \
+        T sh_, sl_, th_, tl_, vh_, vl_;                                 \
+        TWO_SUM(T, xh, yh, sh_, sl_);                                   \
+        TWO_SUM(T, xl, yl, th_, tl_);                                   \
+        FF_FAST_TWO_SUM(T, sh_, sl_ + th_, vh_, vl_);                   \
+        FF_FAST_TWO_SUM(T, vh_, tl_ + vl_, zh, zl);                     \
+    } while (0)
 
-inline float2 ff_mul(const float2 x, const float2 y)
-{
-    const float2 c = ff_two_prod(x.x, y.x);
-    const float t = fma(x.x, y.y, x.y * y.y);
-    return ff_fast_two_sum(c.x, c.y + fma(x.y, y.x, t));
-}
+#define FF_MUL(T, xh, xl, yh, yl, zh, zl) do {                          \
+        T ch_, cl_;                                                     \
+        FF_TWO_PROD(T, xh, yh, ch_, cl_);                               \
+        const T t_ = fma((xh), (yl), (xl) * (yl));                      \
+        FF_FAST_TWO_SUM(T, ch_, cl_ + fma((xl), (yh), t_), zh, zl);     \
+    } while (0)
 
-inline float2 ff_mul_f(const float2 x, const float y)
-{
-    const float2 c = ff_two_prod(x.x, y);
-    return ff_fast_two_sum(c.x, fma(x.y, y, c.y));
-}
+#define FF_MUL_F(T, xh, xl, y, zh, zl) do {                             \
+        T ch_, cl_;                                                     \
+        FF_TWO_PROD(T, xh, y, ch_, cl_);                                \
+        FF_FAST_TWO_SUM(T, ch_, fma((xl), (y), cl_), zh, zl);           \
+    } while (0)
+
+/* Complex float-float z = x y and z = x + y, each part a float-float (re h, re l, im h,
+ * im l): four products and two sums, each rounded as above. */
+#define CFF_MUL(T, xrh, xrl, xih, xil, yrh, yrl, yih, yil, zrh, zrl, zih, zil) do { \
+        T p1h_, p1l_, p2h_, p2l_, p3h_, p3l_, p4h_, p4l_;                         \
+        FF_MUL(T, xrh, xrl, yrh, yrl, p1h_, p1l_);                                \
+        FF_MUL(T, xih, xil, yih, yil, p2h_, p2l_);                                \
+        FF_MUL(T, xrh, xrl, yih, yil, p3h_, p3l_);                                \
+        FF_MUL(T, xih, xil, yrh, yrl, p4h_, p4l_);                                \
+        FF_ADD(T, p1h_, p1l_, -p2h_, -p2l_, zrh, zrl);                            \
+        FF_ADD(T, p3h_, p3l_, p4h_, p4l_, zih, zil);                              \
+    } while (0)
 
 #endif

@@ -11,7 +11,8 @@
  *    clsamp.spectrum_ff.sincos_tables) and delta = 2 pi (theta mod 2^44) 2^-64 < 6.0e-6, for
  *    which cos = 1 - delta^2 / 2 and sin = delta leave less than 4e-17;
  *  - the products and the sums are float-float (float_float.h), in blocks of BLOCK terms
- *    whose sums are added to S in place (a launch per chunk of points).
+ *    whose sums are added to S in place (a launch per chunk of points), eight frequencies
+ *    v a work-item in float8 lanes (PoCL does not vectorize across work-items that loop).
  * The host squares S in float64 (O(R^2) work; the O(N R^2) sum is here). The error bound
  * is derived in clsamp.spectrum_ff.direct_ff's docstring; tests/test_spectrum_ff.py holds
  * the result to the float64 reference (clsamp.spectrum.direct_reference) within it.
@@ -35,84 +36,86 @@ inline ulong fixed64_from_bits(const ulong bits)
     return -shift >= 64 ? 0 : m >> -shift;
 }
 
-/* A complex float-float: (re hi, re lo, im hi, im lo). */
-inline float4 cff_mul(const float4 a, const float4 b)
-{
-    const float2 re = ff_add(ff_mul(a.s01, b.s01), -ff_mul(a.s23, b.s23));
-    const float2 im = ff_add(ff_mul(a.s01, b.s23), ff_mul(a.s23, b.s01));
-    return (float4)(re, im);
-}
-
-inline float4 cff_add(const float4 a, const float4 b)
-{
-    return (float4)(ff_add(a.s01, b.s01), ff_add(a.s23, b.s23));
-}
-
-/* e^{-2 pi i theta / 2^64}: the conjugate of T1 T2 e(delta). */
+/* e^{-2 pi i theta / 2^64}: the conjugate of T1 T2 e(delta), as (re h, re l, im h, im l). */
 inline float4 twiddle_ff(const ulong theta, __global const float4 *coarse, __global const float4 *fine)
 {
-    const float4 t = cff_mul(coarse[theta >> 54], fine[(theta >> 44) & 1023]);
+    const float4 a = coarse[theta >> 54], b = fine[(theta >> 44) & 1023];
+    float4 t;
+    CFF_MUL(float, a.s0, a.s1, a.s2, a.s3, b.s0, b.s1, b.s2, b.s3, t.s0, t.s1, t.s2, t.s3);
     /* theta mod 2^44 = rh 2^20 + rl: (rh 2^-24 + rl 2^-44) is exact in float-float, times
      * 2 pi 2^-20 (DELTA_HI + DELTA_LO, the host's split of that constant) */
     const ulong rest = theta & 0xFFFFFFFFFFFUL;
-    const float2 frac = ff_fast_two_sum((float)(uint)(rest >> 20) * 0x1p-24f,
-                                        (float)(uint)(rest & 0xFFFFF) * 0x1p-44f);
-    const float2 delta = ff_mul(frac, (float2)(DELTA_HI, DELTA_LO));
-    const float4 e = (float4)(1.0f, -0.5f * delta.x * delta.x, delta);
-    const float4 w = cff_mul(t, e);
+    float fh, fl, dh, dl;
+    FF_FAST_TWO_SUM(float, (float)(uint)(rest >> 20) * 0x1p-24f, (float)(uint)(rest & 0xFFFFF) * 0x1p-44f,
+                    fh, fl);
+    FF_MUL(float, fh, fl, DELTA_HI, DELTA_LO, dh, dl);
+    float4 w;
+    CFF_MUL(float, t.s0, t.s1, t.s2, t.s3, 1.0f, -0.5f * dh * dh, dh, dl, w.s0, w.s1, w.s2, w.s3);
     return (float4)(w.s01, -w.s23);
 }
 
-/* Twiddles e^{-2 pi i f x_k} of one coordinate (axis) for f = f0 + m, m in [0, count):
- *     out[(r * count + m) * n + k]
+/* Twiddles e^{-2 pi i f x_k} of one coordinate (axis) for f = f0 + m, m in [0, count), count
+ * a multiple of `tile`, in panels of `tile` frequencies, the four parts of each point's
+ * twiddles `tile` apart (re h, re l, im h, im l):
+ *     out[(((r * (count / tile) + m / tile) * n + k) * 4 + part) * tile + m % tile]
  * Grid (n, realizations). */
-__kernel void spectrum_ff_twiddles(__global const ulong *points, __global float4 *out,
+__kernel void spectrum_ff_twiddles(__global const ulong *points, __global float *out,
                                    __global const float4 *coarse, __global const float4 *fine,
                                    const uint n, const uint d, const uint axis, const long f0,
-                                   const uint count)
+                                   const uint count, const uint tile)
 {
     const uint k = get_global_id(0);
     const uint r = get_global_id(1);
     if (k >= n)
         return;
     const ulong X = fixed64_from_bits(points[((size_t)r * n + k) * d + axis]);
-    __global float4 *o = out + (size_t)r * count * n + k;
     ulong theta = (ulong)f0 * X;             /* wraps modulo 2^64: exact phase reduction */
     for (uint m = 0; m < count; ++m) {
-        o[(size_t)m * n] = twiddle_ff(theta, coarse, fine);
+        const float4 w = twiddle_ff(theta, coarse, fine);
+        __global float *o = out + (((size_t)r * (count / tile) + m / tile) * n + k) * 4 * tile + m % tile;
+        o[0] = w.s0;
+        o[tile] = w.s1;
+        o[2 * tile] = w.s2;
+        o[3 * tile] = w.s3;
         theta += X;
     }
 }
 
-#ifndef BLOCK
-#error "BLOCK (terms per partial sum) comes from clsamp/spectrum_ff.py"
-#endif
-
-/* S_r(u, v) += sum_k A_r[u, k] B_r[v, k] over this chunk's n points, in float-float.
- * S is (realizations, count_u, count_v) complex float-float. Grid (count_v, count_u,
- * realizations): work-items next to each other read the same a_k(u) and neighbouring panels
- * of b. */
-__kernel void spectrum_ff_product(__global const float4 *A, __global const float4 *B,
-                                  __global float4 *S, const uint n, const uint count_u,
-                                  const uint count_v)
+/* S_r(u, v) += sum_k A_r[u, k] B_r[v, k] over this chunk's n points, in float-float, eight
+ * v a work-item. A from spectrum_ff_twiddles with tile 1, B with tile 8; S is (realizations,
+ * count_u, tiles_v, 4 parts, 8 lanes). Grid (tiles_v, count_u, realizations). */
+__kernel void spectrum_ff_product(__global const float4 *A, __global const float8 *B,
+                                  __global float8 *S, const uint n, const uint count_u,
+                                  const uint tiles_v)
 {
-    const uint v = get_global_id(0);
+    const uint tv = get_global_id(0);
     const uint u = get_global_id(1);
     const uint r = get_global_id(2);
-    if (v >= count_v)
+    if (tv >= tiles_v)
         return;
     __global const float4 *a = A + ((size_t)r * count_u + u) * n;
-    __global const float4 *b = B + ((size_t)r * count_v + v) * n;
-    __global float4 *s = S + ((size_t)r * count_u + u) * count_v + v;
-    float4 total = *s;
+    __global const float8 *b = B + ((size_t)r * tiles_v + tv) * n * 4;
+    __global float8 *s = S + (((size_t)r * count_u + u) * tiles_v + tv) * 4;
+    float8 rh = s[0], rl = s[1], ih = s[2], il = s[3];
     for (uint k0 = 0; k0 < n; k0 += BLOCK) {
         /* blocks of BLOCK terms summed apart: the rounding errors grow with the block's
          * partial sums, not the whole sum's (the bound in clsamp.spectrum_ff) */
         const uint k1 = min(n, k0 + BLOCK);
-        float4 acc = (float4)(0.0f);
-        for (uint k = k0; k < k1; ++k)
-            acc = cff_add(acc, cff_mul(a[k], b[k]));
-        total = cff_add(total, acc);
+        float8 brh = (float8)(0.0f), brl = brh, bih = brh, bil = brh;
+        for (uint k = k0; k < k1; ++k) {
+            const float4 x = a[k];
+            __global const float8 *y = b + 4 * k;
+            float8 ph, pl, qh, ql;
+            CFF_MUL(float8, (float8)(x.s0), (float8)(x.s1), (float8)(x.s2), (float8)(x.s3),
+                    y[0], y[1], y[2], y[3], ph, pl, qh, ql);
+            FF_ADD(float8, brh, brl, ph, pl, brh, brl);
+            FF_ADD(float8, bih, bil, qh, ql, bih, bil);
+        }
+        FF_ADD(float8, rh, rl, brh, brl, rh, rl);
+        FF_ADD(float8, ih, il, bih, bil, ih, il);
     }
-    *s = total;
+    s[0] = rh;
+    s[1] = rl;
+    s[2] = ih;
+    s[3] = il;
 }

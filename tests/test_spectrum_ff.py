@@ -46,6 +46,9 @@ def test_float_float_operations_keep_their_bounds():
     runtime.kernel("float_float_probe.cl", "float_float_ops")(
         q, (count,), None, *(a.data for a in args), out.data, np.uint32(count))
     got = out.get()
+    runtime.kernel("float_float_probe.cl", "float_float_ops8")(
+        q, (count // 8,), None, *(a.data for a in args), out.data, np.uint32(count))
+    assert np.array_equal(out.get(), got)                  # the float8 lanes: the same bits
     u = Fraction(1, 2**24)
     for i in range(count):
         a, b = _exact(x[i]), _exact(y[i])
@@ -78,7 +81,7 @@ def test_twiddles_match_the_float64_reference():
     x[0, :4, 0] = [0.0, 0.5, 2.0**-60, np.nextafter(1.0, 0.0)]         # zero, exact, tiny, largest
     for f0, count in ((-64, 129), (2**40, 16), (-(2**33) - 5, 8)):
         got = twiddles(runtime.to_device(x), f0, count, 0).get()
-        w = got.astype(np.float64)
+        w = got[..., 0].astype(np.float64)
         z = (w[..., 0] + w[..., 1]) + 1j * (w[..., 2] + w[..., 3])
         want = twiddles_reference(x[:, :, 0], np.arange(f0, f0 + count))
         assert np.max(np.abs(np.swapaxes(z, 1, 2) - want)) <= 64 * U2, f0
