@@ -1,4 +1,4 @@
-/* A probe that exposes kernels/float_float.h to the tests (tests/test_spectrum_ff.py): per
+/* A probe that exposes kernels/float_float.h to the tests (tests/test_float_float.py): per
  * i, x and y float-float pairs and a float f; FF_ADD(x, y), FF_MUL(x, y), FF_MUL_F(x, f),
  * in float and in float8 lanes (the second half of the output). */
 #include "float_float.h"

@@ -14,7 +14,7 @@
  *    whose sums are added to S in place (a launch per chunk of points), eight frequencies
  *    v a work-item in float8 lanes (PoCL does not vectorize across work-items that loop).
  * The host squares S in float64 (O(R^2) work; the O(N R^2) sum is here). The error bound
- * is derived in clsamp.spectrum_ff.direct_ff's docstring; tests/test_spectrum_ff.py holds
+ * is derived in clsamp.spectrum_ff's docstring; tests/test_float_float.py holds
  * the result to the float64 reference (clsamp.spectrum.direct_reference) within it.
  * Built without -cl-mad-enable, FP_CONTRACT OFF: the error-free transformations need every
  * operation rounded as written. */

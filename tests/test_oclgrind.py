@@ -168,6 +168,15 @@ for _method in ("CD", "WD", "MD", "L2-star", "symmetric", "L2"):
                                    clsamp.discrepancy(pts, method, backend="numpy"), rtol=1e-12)
     check(f"discrepancy-{_method}")(_discrepancy)
 
+    def _discrepancy_ff(method=_method):
+        from clsamp.metrics.l2 import ROOTED, float_float_bound
+        pts = _points()
+        got, want = (clsamp.discrepancy(pts, method, precision=p) for p in ("float-float", "double"))
+        if method in ROOTED:
+            got, want = got * got, want * want
+        assert np.all(np.abs(got - want) <= float_float_bound(method, 2))
+    check(f"discrepancy-{_method}-float-float")(_discrepancy_ff)
+
 
 @check("star-discrepancy")
 def _star():

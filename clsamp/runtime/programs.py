@@ -35,8 +35,9 @@ CAPABILITIES = {
     # kernels need 64-bit atomics instead, which runtime.require_extension checks)
     "distance samplers": ("dart_throwing.cl", "ccvt.cl"),
     "spectra": ("spectrum.cl", "nufft.cl"),
-    # the direct sum without double precision (precision="float-float")
+    # without double precision (precision="float-float")
     "direct spectra in float-float": ("spectrum_ff.cl",),
+    "discrepancies in float-float": ("discrepancy_ff.cl",),
     "metrics": ("discrepancy.cl", "star_discrepancy.cl", "anchored_counts.cl", "neighbors.cl"),
     "experiments": ("integrands.cl", "families.cl"),
     "render": ("render.cl",),

@@ -1,6 +1,7 @@
-"""Float-float analyses (kernels/float_float.h, clsamp.spectrum_ff): the arithmetic within
-its published bounds against exact fractions, and the direct power spectrum within its
-stated bound of the float64 result, with fp64 on PoCL, under ``runtime.without_fp64()``
+"""Float-float analyses (kernels/float_float.h, clsamp.spectrum_ff, the discrepancies of
+clsamp.metrics.l2): the arithmetic within its published bounds against exact fractions, and
+the direct power spectrum and the L2-type discrepancies within their stated bounds of the
+float64 results, with fp64 on PoCL, under ``runtime.without_fp64()``
 (what a device without fp64 runs) and on a real device without fp64 where one is installed
 (Mesa's rusticl on llvmpipe)."""
 
@@ -13,6 +14,8 @@ import clsamp
 from clsamp import runtime
 from clsamp.errors import InvalidArgumentError, NoDeviceError
 from clsamp.float_float import U2, check_precision, join, split
+from clsamp.metrics import discrepancy
+from clsamp.metrics.l2 import METHODS, ROOTED, float_float_bound
 from clsamp.spectrum import direct_reference, power_spectrum, twiddles_reference
 from clsamp.spectrum_ff import error_bound, sincos_tables, twiddles
 
@@ -161,3 +164,49 @@ def test_a_device_without_fp64_computes_spectra_in_float_float(device):
         runtime.use_device(DEFAULT.index)
     assert np.max(np.abs(got - want)) <= error_bound(600)
     assert np.max(np.abs(got1 - direct_reference(pts[..., :1], 32))) <= error_bound(600)
+
+
+def _squared(method, value):
+    return value * value if method in ROOTED else value
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("d", [1, 3, 8])
+def test_float_float_discrepancies_are_within_their_bound(method, d):
+    pts = _sets(d, n=301, r=2, seed=d)
+    pts[0, 0] = 0.5                                     # the CD's side of 1/2 at its edge
+    want = _squared(method, discrepancy(pts, method, precision="double"))
+    got = _squared(method, discrepancy(pts, method, precision="float-float"))
+    assert np.all(np.abs(got - want) <= float_float_bound(method, d)), (got - want)
+    with runtime.without_fp64():
+        assert np.array_equal(_squared(method, discrepancy(pts, method)), got)
+
+
+def test_discrepancy_precision_is_checked():
+    pts = _sets(2, n=16, r=1)[0]
+    with pytest.raises(InvalidArgumentError, match="'precision' must be one of"):
+        discrepancy(pts, "CD", precision="half")
+    with runtime.without_fp64(), pytest.raises(NoDeviceError, match="'precision' 'double' needs fp64"):
+        discrepancy(pts, "CD", precision="double")
+
+
+def test_float_float_discrepancy_of_a_larger_set_ranks_as_double():
+    """Sobol' against random at n = 4096 in 4-D: both paths agree to the bound and order."""
+    sob = clsamp.make_sampler("sobol", d=4).sample(4096)
+    rnd = clsamp.make_sampler("random", d=4, seed=2).sample(4096)
+    for pts in (sob, rnd):
+        assert abs(discrepancy(pts, precision="float-float") - discrepancy(pts)) <= float_float_bound("CD", 4)
+    assert discrepancy(sob, precision="float-float") < discrepancy(rnd, precision="float-float")
+
+
+@pytest.mark.parametrize("device", WITHOUT_FP64, ids=lambda d: f"{d.index}-{d.platform[:12]}")
+def test_a_device_without_fp64_computes_discrepancies_in_float_float(device):
+    pts = _sets(3, n=200, r=2)
+    want = {m: _squared(m, discrepancy(pts, m)) for m in METHODS}
+    runtime.use_device(device.index)
+    try:
+        got = {m: _squared(m, discrepancy(pts, m)) for m in METHODS}
+    finally:
+        runtime.use_device(DEFAULT.index)
+    for m in METHODS:
+        assert np.all(np.abs(got[m] - want[m]) <= float_float_bound(m, 3)), m
