@@ -3,7 +3,8 @@ bits (every sampler and randomization, a convergence experiment), the stated tol
 it says so (spectra, metrics, the float32 renderer). A device without fp64 gives every
 sampler's bits too, but poisson_disk and ccvt, and refuses those and the analyses with
 NoDeviceError, never a BuildError, but for what it computes in float-float (the direct
-spectrum and the discrepancies, tests/test_float_float.py); so does a device that lacks what a kernel needs
+spectrum and the discrepancies) or exactly (the star discrepancy's certified bounds),
+tests/test_float_float.py; so does a device that lacks what a kernel needs
 (lloyd's 64-bit atomics) or stops long loops (llvmpipe: pmj02bn, lloyd). CI installs Debian's PoCL and Mesa's
 rusticl beside PyPI's PoCL, and Intel's CPU runtime from PyPI (.ci/run; registered by
 scripts/ensure-opencl.sh), so four implementations meet here; with one device the module is
@@ -176,7 +177,8 @@ def test_a_device_without_fp64_refuses_what_needs_it_by_name(device):
         with pytest.raises(NoDeviceError, match="fp64|double"):
             on(device, call)
     runs = runtime.capabilities(device.index)
-    float_float = [name for name in runs if name.endswith("in float-float")]
-    assert len(float_float) >= 2
-    assert all(runs[name] is None for name in ["samplers"] + float_float)
-    assert {why for name, why in runs.items() if name not in ["samplers"] + float_float} == {"needs fp64"}
+    running = ["samplers", "certified star-discrepancy bounds"] + [
+        name for name in runs if name.endswith("in float-float")]
+    assert len(running) >= 4
+    assert all(runs[name] is None for name in running)
+    assert {why for name, why in runs.items() if name not in running} == {"needs fp64"}

@@ -1,7 +1,8 @@
 """Float-float analyses (kernels/float_float.h, clsamp.spectrum_ff, the discrepancies of
 clsamp.metrics.l2): the arithmetic within its published bounds against exact fractions, and
 the direct power spectrum and the L2-type discrepancies within their stated bounds of the
-float64 results, with fp64 on PoCL, under ``runtime.without_fp64()``
+float64 results, and the star discrepancy's certified bounds (comparisons of bit patterns)
+exactly equal to them, with fp64 on PoCL, under ``runtime.without_fp64()``
 (what a device without fp64 runs) and on a real device without fp64 where one is installed
 (Mesa's rusticl on llvmpipe)."""
 
@@ -16,6 +17,7 @@ from clsamp.errors import InvalidArgumentError, NoDeviceError
 from clsamp.float_float import U2, check_precision, join, split
 from clsamp.metrics import discrepancy
 from clsamp.metrics.l2 import METHODS, ROOTED, float_float_bound
+from clsamp.metrics.star import anchored_counts, star_bounds
 from clsamp.spectrum import direct_reference, power_spectrum, twiddles_reference
 from clsamp.spectrum_ff import error_bound, sincos_tables, twiddles
 
@@ -210,3 +212,32 @@ def test_a_device_without_fp64_computes_discrepancies_in_float_float(device):
         runtime.use_device(DEFAULT.index)
     for m in METHODS:
         assert np.all(np.abs(got[m] - want[m]) <= float_float_bound(m, 3)), m
+
+
+@pytest.mark.parametrize("strict", [True, False])
+def test_anchored_counts_without_fp64_are_the_same(strict):
+    """Bit patterns compared as integers: the same counts, corners on points, 0 and 1 included."""
+    rng = np.random.default_rng(6)
+    pts = rng.random((400, 3))
+    corners = rng.random((1001, 3))
+    corners[:20] = pts[:20]
+    corners[20], corners[21] = 1.0, 0.0
+    corners[22] = [pts[0, 0], 1.0, 0.0]
+    want = anchored_counts(pts, corners, strict)
+    with runtime.without_fp64():
+        assert np.array_equal(anchored_counts(pts, corners, strict), want)
+    assert np.array_equal(want, anchored_counts(pts, corners, strict, backend="numpy"))
+
+
+def test_star_bounds_without_fp64_are_the_same():
+    pts = _sets(3, n=150, r=1)[0]
+    want = star_bounds(pts, delta=0.1)
+    with runtime.without_fp64():
+        assert star_bounds(pts, delta=0.1) == want
+        assert clsamp.star_discrepancy(pts, bounds=True, delta=0.1) == want
+    for device in WITHOUT_FP64:
+        runtime.use_device(device.index)
+        try:
+            assert star_bounds(pts, delta=0.1) == want, str(device)
+        finally:
+            runtime.use_device(DEFAULT.index)
