@@ -1,10 +1,10 @@
-"""Float-float analyses (kernels/float_float.h, clsamp.spectrum_ff, the discrepancies of
-clsamp.metrics.l2): the arithmetic within its published bounds against exact fractions, and
-the direct power spectrum and the L2-type discrepancies within their stated bounds of the
-float64 results, and the star discrepancy's certified bounds (comparisons of bit patterns)
-exactly equal to them, with fp64 on PoCL, under ``runtime.without_fp64()``
-(what a device without fp64 runs) and on a real device without fp64 where one is installed
-(Mesa's rusticl on llvmpipe)."""
+"""Analyses without fp64 (kernels/float_float.h, clsamp.spectrum_ff, the float-float paths
+of clsamp.metrics.l2 and .neighbors): the arithmetic within its published bounds against
+exact fractions; the direct power spectrum, the L2-type discrepancies and the
+nearest-neighbour distances within their stated bounds of the float64 results; the star
+discrepancy's certified bounds (comparisons of bit patterns) equal to them. With fp64 on
+PoCL, under ``runtime.without_fp64()`` (what a device without fp64 runs) and on a real
+device without fp64 where one is installed (Mesa's rusticl on llvmpipe)."""
 
 from fractions import Fraction
 
@@ -15,7 +15,7 @@ import clsamp
 from clsamp import runtime
 from clsamp.errors import InvalidArgumentError, NoDeviceError
 from clsamp.float_float import U2, check_precision, join, split
-from clsamp.metrics import discrepancy
+from clsamp.metrics import discrepancy, nearest_neighbor_distances, neighbors
 from clsamp.metrics.l2 import METHODS, ROOTED, float_float_bound
 from clsamp.metrics.star import anchored_counts, star_bounds
 from clsamp.spectrum import direct_reference, power_spectrum, twiddles_reference
@@ -241,3 +241,39 @@ def test_star_bounds_without_fp64_are_the_same():
             assert star_bounds(pts, delta=0.1) == want, str(device)
         finally:
             runtime.use_device(DEFAULT.index)
+
+
+@pytest.mark.parametrize("periodic", [True, False])
+@pytest.mark.parametrize("d", [1, 2, 4])
+def test_float_float_nearest_neighbours_are_within_their_bound(d, periodic):
+    pts = _sets(d, n=1500, r=2, seed=10 + d)
+    pts[0, 1] = pts[0, 0] + 1e-12                         # a pair closer than float's ulp
+    want = nearest_neighbor_distances(pts, periodic=periodic, precision="double")
+    got = nearest_neighbor_distances(pts, periodic=periodic, precision="float-float")
+    assert np.all(np.abs(got - want) <= neighbors.float_float_bound(want, d))
+    assert np.mean(got == want) > 0.999                   # the double path's bits, but near ties
+    with runtime.without_fp64():
+        assert np.array_equal(nearest_neighbor_distances(pts, periodic=periodic), got)
+        with pytest.raises(NoDeviceError, match="'precision' 'double' needs fp64"):
+            nearest_neighbor_distances(pts, precision="double")
+
+
+def test_float_float_nearest_neighbours_of_a_grid_and_of_sets():
+    g = (np.stack(np.meshgrid(np.arange(8), np.arange(8)), -1).reshape(-1, 2) + 0.5) / 8
+    assert set(nearest_neighbor_distances(g, precision="float-float").tolist()) == {0.125}
+    sets = [np.random.default_rng(k).random((n, 2)) for k, n in enumerate((50, 80))]
+    got = nearest_neighbor_distances(sets, precision="float-float")
+    for a, b in zip(got, nearest_neighbor_distances(sets, backend="numpy"), strict=True):
+        assert np.all(np.abs(a - b) <= neighbors.float_float_bound(b, 2))
+
+
+@pytest.mark.parametrize("device", WITHOUT_FP64, ids=lambda d: f"{d.index}-{d.platform[:12]}")
+def test_a_device_without_fp64_computes_nearest_neighbours(device):
+    pts = _sets(2, n=500, r=2)
+    want = nearest_neighbor_distances(pts)
+    runtime.use_device(device.index)
+    try:
+        got = nearest_neighbor_distances(pts)
+    finally:
+        runtime.use_device(DEFAULT.index)
+    assert np.all(np.abs(got - want) <= neighbors.float_float_bound(want, 2))

@@ -206,6 +206,15 @@ def _neighbours():
                                clsamp.nearest_neighbor_distances(pts, backend="numpy"), rtol=1e-12)
 
 
+@check("nearest-neighbours-float-float")
+def _neighbours_ff():
+    from clsamp.metrics.neighbors import float_float_bound
+    pts = _points()
+    want = clsamp.nearest_neighbor_distances(pts, backend="numpy")
+    got = clsamp.nearest_neighbor_distances(pts, precision="float-float")
+    assert np.all(np.abs(got - want) <= float_float_bound(want, 2))
+
+
 @check("normalized-energy")
 def _energy():
     from clsamp.metrics.point_sets import normalized_energy

@@ -15,6 +15,7 @@ import numpy as np
 
 from .. import runtime
 from ..errors import InvalidArgumentError
+from ..float_float import U2, check_precision, split
 from ..geometry.cells import cells_for, sorted_by_cell
 from ..geometry.torus import distance2
 from ..validation import check_bool, check_choice, check_points, point_sets
@@ -287,20 +288,63 @@ def nearest_neighbor_reference(points, periodic=True):
     return np.sqrt(best)
 
 
-def _nearest_device(batch, periodic=True):
+def float_float_bound(distances, d):
+    """How far a float-float nearest-neighbour distance may be from the double one.
+
+    Parameters
+    ----------
+    distances : ndarray
+        Nearest-neighbour distances s (either path's).
+    d : int
+
+    Returns
+    -------
+    ndarray
+        2u²·(8√d + (4 + 2d)·s), u = 2^-24, per distance; 0 difference in practice.
+
+    Notes
+    -----
+    The kernel chooses the nearest neighbour by float-float squared distances and the
+    host computes the chosen pair's distance in float64, so the result is the double
+    path's bits unless another candidate lies within the float-float error. Each
+    coordinate difference is within 8u² of its value (the split of the two points into
+    pairs, 2^-49 each, a subtraction and the wrap, 3u² relative each, Joldes, Muller &
+    Popescu 2017), so a float-float distance is within 8√d·u² + (3 + 2d)u²·s of the
+    exact one (the squares and the sum, 5u² and 3u² relative), and the chosen
+    neighbour's distance within twice that of the nearest; the float64 rounding of the
+    two paths adds less than u²·s.
+    """
+    s = np.asarray(distances, dtype=np.float64)
+    return 2.0 * U2 * (8.0 * math.sqrt(d) + (4.0 + 2.0 * d) * s)
+
+
+def _nearest_device(batch, periodic=True, precision="double"):
     """Squared nearest-neighbour distances (r, n) of sets of one size, in their order."""
     r, n, d = batch.shape
     cells = int(math.floor(1.0 / (NN_CELL_SPACINGS * mean_spacing(n, d))))
     cells = cells if cells >= 3 and cells ** d * r < 2**31 else 1
     pts, cell, start, order = sorted_by_cell(batch, cells)
     total = r * n
-    kernel = runtime.kernel("neighbors.cl", "nearest_neighbor", {"D": d, "PERIODIC": int(periodic)})
-    out = runtime.Output((total,), np.float64, host=np.empty(total))
     local = runtime.local_size(64)
-    kernel(runtime.queue(), (-(-total // local) * local,), (local,),
-           *(runtime.to_device(a).data for a in (pts, cell, start)), np.uint32(n),
-           np.uint32(total), np.int32(cells), np.uint32(3 ** d if cells > 1 else 1), out.buffer)
-    d2_sorted = out.finish()
+    grid = (np.uint32(n), np.uint32(total), np.int32(cells), np.uint32(3 ** d if cells > 1 else 1))
+    defines = {"D": d, "PERIODIC": int(periodic)}
+    if precision == "float-float":
+        # the nearest by float-float distances, its distance in float64 here
+        best = runtime.Output((total,), np.uint32, host=np.empty(total, np.uint32))
+        runtime.kernel("neighbors_ff.cl", "nearest_neighbor_ff", defines)(
+            runtime.queue(), (-(-total // local) * local,), (local,),
+            *(runtime.to_device(a).data for a in (split(pts), cell, start)), *grid, best.buffer)
+        best = best.finish().astype(np.int64)
+        flat = pts.reshape(total, d)
+        d2_sorted = np.full(total, np.inf)
+        some = best != 0xFFFFFFFF
+        d2_sorted[some] = distance2(flat[some], flat[best[some]], periodic)
+    else:
+        out = runtime.Output((total,), np.float64, host=np.empty(total))
+        runtime.kernel("neighbors.cl", "nearest_neighbor", defines)(
+            runtime.queue(), (-(-total // local) * local,), (local,),
+            *(runtime.to_device(a).data for a in (pts, cell, start)), *grid, out.buffer)
+        d2_sorted = out.finish()
     d2 = np.empty(total)
     d2[order] = d2_sorted
     d2 = d2.reshape(r, n)
@@ -315,7 +359,7 @@ def _nearest_device(batch, periodic=True):
     return d2
 
 
-def nearest_neighbor_distances(points, backend="opencl", periodic=True):
+def nearest_neighbor_distances(points, backend="opencl", periodic=True, precision=None):
     """The distance from each point to its nearest neighbour on the torus (or in the cube).
 
     Parameters
@@ -325,6 +369,12 @@ def nearest_neighbor_distances(points, backend="opencl", periodic=True):
     backend : {"opencl", "numpy"}
     periodic : bool
         True: distances on the torus; False: in the unit cube (no wrapping).
+    precision : {"double", "float-float"}, optional
+        What the device compares distances in; default ``"double"`` where the device has
+        fp64, ``"float-float"`` where it has not: the nearest neighbour is chosen in
+        float-float and its distance computed in float64 on the host, the double path's
+        bits unless two candidates lie within :func:`float_float_bound` (about 1e-13 of a
+        unit) of each other.
 
     Returns
     -------
@@ -350,18 +400,18 @@ def nearest_neighbor_distances(points, backend="opencl", periodic=True):
     """
     check_choice(backend, "backend", BACKENDS)
     periodic = check_bool(periodic, "periodic")
+    precision = check_precision(precision, backend)
     listed = point_sets(points) is not None
     sets, single = _check_sets(points, "points")
     if backend == "numpy":
         out = [nearest_neighbor_reference(s, periodic) for s in sets]
     else:
-        runtime.require_fp64()
         out = [None] * len(sets)
         for size in sorted({len(s) for s in sets}):
             idx = [k for k, s in enumerate(sets) if len(s) == size]
             for lo, hi in runtime.chunk_ranges(len(idx), 8 * size * (sets[0].shape[1] + 3)):
                 part = idx[lo:hi]
-                d2 = _nearest_device(np.stack([sets[k] for k in part]), periodic)
+                d2 = _nearest_device(np.stack([sets[k] for k in part]), periodic, precision)
                 for row, k in enumerate(part):
                     out[k] = np.sqrt(d2[row])
     if listed:
