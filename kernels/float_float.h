@@ -6,6 +6,7 @@
  *     FF_ADD (their Algorithm 6, AccurateDWPlusDW)   relative error <= 3u^2 + 13u^3
  *     FF_MUL (their Algorithm 12, DWTimesDW with FMA) relative error <= 5u^2
  *     FF_MUL_F (their Algorithm 9, DWTimesFP with FMA) relative error <= 2u^2
+ *     FF_DIV (their Algorithm 17, DWDivDW2)           relative error <= 15u^2 + 56u^3
  * Each is a macro over the type T (float, or a float vector: one float-float a lane), its
  * operands and results hi/lo variables, as TWO_SUM is. Exact only with FP_CONTRACT OFF (the
  * includer's pragma) and correctly rounded float operations, which OpenCL requires of +, -,
@@ -48,6 +49,17 @@
         T ch_, cl_;                                                     \
         FF_TWO_PROD(T, xh, y, ch_, cl_);                                \
         FF_FAST_TWO_SUM(T, ch_, fma((xl), (y), cl_), zh, zl);           \
+    } while (0)
+
+/* z = x / y (their Algorithm 17, DWDivDW2), relative error <= 15u^2 + 56u^3 with correctly
+ * rounded float division; OpenCL allows its float division 2.5 ulps, where the bound is not
+ * proved (tests/test_float_float.py holds each device tested to it). */
+#define FF_DIV(T, xh, xl, yh, yl, zh, zl) do {                          \
+        const T th_ = (xh) / (yh);                                      \
+        T rh_, rl_;                                                     \
+        FF_MUL_F(T, yh, yl, th_, rh_, rl_);                             \
+        const T tl_ = (((xh) - rh_) + ((xl) - rl_)) / (yh);             \
+        FF_FAST_TWO_SUM(T, th_, tl_, zh, zl);                           \
     } while (0)
 
 /* Complex float-float z = x y and z = x + y, each part a float-float (re h, re l, im h,

@@ -1,6 +1,6 @@
 /* A probe that exposes kernels/float_float.h to the tests (tests/test_float_float.py): per
  * i, x and y float-float pairs and a float f; FF_ADD(x, y), FF_MUL(x, y), FF_MUL_F(x, f),
- * in float and in float8 lanes (the second half of the output). */
+ * in float and in float8 lanes; FF_DIV(x, y) in float (float_float_div). */
 #include "float_float.h"
 
 #pragma OPENCL FP_CONTRACT OFF
@@ -44,4 +44,15 @@ __kernel void float_float_ops8(__global const float2 *x, __global const float2 *
     FF_MUL_F(float8, xh, xl, fv, h, l);
     for (uint j = 0; j < 8; ++j)
         out[3 * (i0 + j) + 2] = (float2)(ph[j], pl[j]);
+}
+
+__kernel void float_float_div(__global const float2 *x, __global const float2 *y,
+                              __global float2 *out, const uint n)
+{
+    const uint i = get_global_id(0);
+    if (i >= n)
+        return;
+    float h, l;
+    FF_DIV(float, x[i].x, x[i].y, y[i].x, y[i].y, h, l);
+    out[i] = (float2)(h, l);
 }

@@ -8,9 +8,12 @@
  * of the double path unless two candidates' distances lie within the float-float error of
  * each other (clsamp.metrics.neighbors.float_float_bound).
  *
- * Build options: D, PERIODIC. FP_CONTRACT OFF: the error-free transformations need every
- * operation rounded as written. Grid (total points): best[i] = the sorted index of the
- * nearest other point of its realization in the 3^D neighbouring cells, or 0xFFFFFFFF. */
+ * pcf_sums_ff (below) is the pair correlation's pair sums in float-float, as pcf_sums.
+ *
+ * Build options: D, PERIODIC; NR and PPI for pcf_sums_ff. FP_CONTRACT OFF: the error-free
+ * transformations need every operation rounded as written. nearest_neighbor_ff's grid
+ * (total points): best[i] = the sorted index of the nearest other point of its
+ * realization in the 3^D neighbouring cells, or 0xFFFFFFFF. */
 #include "float_float.h"
 #include "cells.h"
 
@@ -85,3 +88,114 @@ __kernel void nearest_neighbor_ff(__global const float2 *pts, __global const uin
     }
     best[gi] = found;
 }
+
+#ifdef NR
+/* sqrt(a) for a >= 0: the float square root, then one Newton correction from the exact
+ * remainder a - s^2 (relative error below 32u^2 with OpenCL's 3-ulp sqrt and 2.5-ulp
+ * division; clsamp.metrics.neighbors.pcf_float_float_bound counts it so). */
+inline float2 ff_sqrt(const float2 a)
+{
+    if (a.x <= 0.0f)
+        return (float2)(0.0f);
+    const float s = sqrt(a.x);
+    float ph, pl, h, l;
+    FF_TWO_PROD(float, s, s, ph, pl);
+    const float c = (((a.x - ph) - pl) + a.y) / (2.0f * s);
+    FF_FAST_TWO_SUM(float, s, c, h, l);
+    return (float2)(h, l);
+}
+
+/* exp(x) for -14 <= x <= 0: x = k ln 2 + r with |r| <= 0.35, the degree-12 Taylor
+ * polynomial of exp(r) in Horner form (its remainder below 2u^2), times 2^k exactly. The
+ * coefficients 1/i! and ln 2 come split from the host (coef[0..12], coef[13] = ln 2). */
+inline float2 ff_exp(const float2 x, __global const float2 *coef)
+{
+    const float v = x.x * 1.44269504f;
+    const int k = (int)(v - 0.5f);                    /* v <= 0: the nearest integer */
+    float h, l;
+    FF_MUL_F(float, coef[13].x, coef[13].y, (float)k, h, l);
+    const float2 r = ff_sum(x, (float2)(-h, -l));
+    float2 p = coef[12];
+#pragma unroll
+    for (int i = 11; i >= 0; --i) {
+        FF_MUL(float, p.x, p.y, r.x, r.y, h, l);
+        p = ff_sum((float2)(h, l), coef[i]);
+    }
+    return p * as_float((k + 127) << 23);
+}
+
+/* Grid (items, realizations): as pcf_sums in neighbors.cl (every unordered pair within
+ * reach once, through the forward half of the 3^D stencil), in float-float:
+ * out[r][w][k] += weight exp(-(radius_k - s)^2 / (2 sigma^2)) for |radius_k - s| <= cut,
+ * each radius' Gaussian evaluated directly (radii, inv2s2 and cut as float-float pairs
+ * from the host; weight 1 on the torus, the translation edge correction in the cube). */
+__kernel void pcf_sums_ff(__global const float2 *pts, __global const uint *cell,
+                          __global const uint *start, const uint n, const int G, const uint noff,
+                          const float2 reach2, __global const float2 *radii, const float2 inv2s2,
+                          const float2 cut, __global const float2 *coef, const uint items,
+                          __global float2 *out)
+{
+    const uint w = get_global_id(0), r = get_global_id(1);
+    if (w >= items)
+        return;
+    float2 hist[NR];
+    for (int k = 0; k < NR; ++k)
+        hist[k] = (float2)(0.0f);
+    uint total_cells = 1;
+    for (int k = 0; k < D; ++k)
+        total_cells *= (uint)G;
+    const uint centre = (noff - 1) / 2;
+    const size_t base = (size_t)r * n;
+    const uint stop = (w + 1) * PPI < n ? (w + 1) * PPI : n;
+    for (uint i = w * PPI; i < stop; ++i) {
+        const size_t gi = base + i;
+        float2 x[D];
+        for (int k = 0; k < D; ++k)
+            x[k] = pts[gi * D + k];
+        int c[D];
+        cell_coordinates(cell[gi], G, c);
+        for (uint o = centre; o < noff; ++o) {
+            const size_t slot = (size_t)r * total_cells + neighbour(c, o, G);
+            const uint s1 = start[slot + 1];
+            for (uint j = o == centre ? (uint)gi + 1 : start[slot]; j < s1; ++j) {
+                __global const float2 *y = pts + (size_t)j * D;
+                float2 t = ff_delta(x[0], y[0]);
+                float2 d2 = ff_square(t);
+#if !PERIODIC
+                float2 cover = ff_sum((float2)(1.0f, 0.0f), -t);
+#endif
+                for (int k = 1; k < D; ++k) {
+                    t = ff_delta(x[k], y[k]);
+                    d2 = ff_sum(d2, ff_square(t));
+#if !PERIODIC
+                    float h, l;
+                    const float2 side = ff_sum((float2)(1.0f, 0.0f), -t);
+                    FF_MUL(float, cover.x, cover.y, side.x, side.y, h, l);
+                    cover = (float2)(h, l);
+#endif
+                }
+                if (!ff_below(d2, reach2))
+                    continue;
+                const float2 s = ff_sqrt(d2);
+                for (int k = 0; k < NR; ++k) {
+                    const float2 dt = ff_sum(radii[k], -s);
+                    if (ff_below(cut, dt.x < 0.0f ? -dt : dt))
+                        continue;
+                    float h, l;
+                    FF_MUL(float, dt.x, dt.y, dt.x, dt.y, h, l);
+                    FF_MUL(float, h, l, inv2s2.x, inv2s2.y, h, l);
+                    float2 e = ff_exp((float2)(-h, -l), coef);
+#if !PERIODIC
+                    FF_DIV(float, e.x, e.y, cover.x, cover.y, h, l);
+                    e = (float2)(h, l);
+#endif
+                    hist[k] = ff_sum(hist[k], e);
+                }
+            }
+        }
+    }
+    __global float2 *row = out + ((size_t)r * items + w) * NR;
+    for (int k = 0; k < NR; ++k)
+        row[k] = hist[k];
+}
+#endif

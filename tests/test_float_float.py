@@ -1,7 +1,7 @@
 """Analyses without fp64 (kernels/float_float.h, clsamp.spectrum_ff, the float-float paths
 of clsamp.metrics.l2 and .neighbors): the arithmetic within its published bounds against
-exact fractions; the direct power spectrum, the L2-type discrepancies and the
-nearest-neighbour distances within their stated bounds of the float64 results; the star
+exact fractions; the direct power spectrum, the L2-type discrepancies, the pair
+correlation and the nearest-neighbour distances within their stated bounds of the float64 results; the star
 discrepancy's certified bounds (comparisons of bit patterns) equal to them. With fp64 on
 PoCL, under ``runtime.without_fp64()`` (what a device without fp64 runs) and on a real
 device without fp64 where one is installed (Mesa's rusticl on llvmpipe)."""
@@ -15,7 +15,7 @@ import clsamp
 from clsamp import runtime
 from clsamp.errors import InvalidArgumentError, NoDeviceError
 from clsamp.float_float import U2, check_precision, join, split
-from clsamp.metrics import discrepancy, nearest_neighbor_distances, neighbors
+from clsamp.metrics import discrepancy, nearest_neighbor_distances, neighbors, pair_correlation
 from clsamp.metrics.l2 import METHODS, ROOTED, float_float_bound
 from clsamp.metrics.star import anchored_counts, star_bounds
 from clsamp.spectrum import direct_reference, power_spectrum, twiddles_reference
@@ -60,6 +60,36 @@ def test_float_float_operations_keep_their_bounds():
         for k, (want, bound) in enumerate(((a + b, 3 * u**2 + 13 * u**3), (a * b, 5 * u**2),
                                            (a * Fraction(float(f[i])), 2 * u**2))):
             assert abs(_exact(got[i, k]) - want) <= bound * abs(want), (i, k)
+
+
+def test_float_float_division_keeps_its_bound():
+    """FF_DIV within 15u² + 56u³ (their Algorithm 17), here and on every device without fp64."""
+    import pyopencl.array as cla
+    rng = np.random.default_rng(5)
+    count = 2000
+    x = _pairs(rng, count, 10.0 ** rng.integers(-6, 7, count))
+    y = _pairs(rng, count, 10.0 ** rng.integers(-6, 7, count))
+    u = Fraction(1, 2**24)
+
+    def divide():
+        q = runtime.queue()
+        args = [cla.to_device(q, np.ascontiguousarray(v)) for v in (x, y)]
+        out = cla.empty(q, (count, 2), np.float32)
+        runtime.kernel("float_float_probe.cl", "float_float_div")(
+            q, (count,), None, args[0].data, args[1].data, out.data, np.uint32(count))
+        return out.get()
+
+    results = [divide()]
+    for device in WITHOUT_FP64:
+        runtime.use_device(device.index)
+        try:
+            results.append(divide())
+        finally:
+            runtime.use_device(DEFAULT.index)
+    for got in results:
+        for i in range(count):
+            want = _exact(x[i]) / _exact(y[i])
+            assert abs(_exact(got[i]) - want) <= (15 * u**2 + 56 * u**3) * abs(want), i
 
 
 def test_split_and_join():
@@ -277,3 +307,41 @@ def test_a_device_without_fp64_computes_nearest_neighbours(device):
     finally:
         runtime.use_device(DEFAULT.index)
     assert np.all(np.abs(got - want) <= neighbors.float_float_bound(want, 2))
+
+
+@pytest.mark.parametrize("periodic", [True, False])
+@pytest.mark.parametrize("d", [1, 2, 3])
+def test_float_float_pair_correlation_is_within_its_bound(d, periodic):
+    pts = _sets(d, n=600, r=2, seed=20 + d)
+    radii, want = pair_correlation(pts, periodic=periodic, precision="double")
+    _, got = pair_correlation(pts, periodic=periodic, precision="float-float")
+    sigma = neighbors.SIGMA_SPACING * neighbors.mean_spacing(600, d)
+    eps = neighbors.pcf_float_float_bound(600, d, radii, sigma, periodic)
+    assert np.all(np.abs(got - want) <= eps * want)
+    assert np.max(np.abs(got - want)) <= 1e-11                # typical: far below the bound
+    with runtime.without_fp64():
+        assert np.array_equal(pair_correlation(pts, periodic=periodic)[1], got)
+
+
+def test_float_float_pair_correlation_of_white_noise_and_given_radii():
+    pts = clsamp.make_sampler("random", d=2, seed=3).sample(2048, realizations=2)
+    radii = np.linspace(0.002, 0.05, 7)                      # not uniform: each radius apart
+    radii[3] += 1e-4
+    _, got = pair_correlation(pts, radii=radii, sigma=0.002, precision="float-float")
+    _, want = pair_correlation(pts, radii=radii, sigma=0.002)
+    eps = neighbors.pcf_float_float_bound(2048, 2, radii, 0.002)
+    assert np.all(np.abs(got - want) <= eps * want)
+    assert abs(got.mean() - 1) < 0.1
+
+
+@pytest.mark.parametrize("device", WITHOUT_FP64, ids=lambda d: f"{d.index}-{d.platform[:12]}")
+def test_a_device_without_fp64_computes_the_pair_correlation(device):
+    pts = _sets(2, n=300, r=1)
+    radii, want = pair_correlation(pts)
+    runtime.use_device(device.index)
+    try:
+        _, got = pair_correlation(pts)
+    finally:
+        runtime.use_device(DEFAULT.index)
+    sigma = neighbors.SIGMA_SPACING * neighbors.mean_spacing(300, 2)
+    assert np.all(np.abs(got - want) <= neighbors.pcf_float_float_bound(300, 2, radii, sigma) * want)

@@ -206,6 +206,16 @@ def _neighbours():
                                clsamp.nearest_neighbor_distances(pts, backend="numpy"), rtol=1e-12)
 
 
+@check("pair-correlation-float-float")
+def _pcf_ff():
+    from clsamp.metrics.neighbors import SIGMA_SPACING, mean_spacing, pcf_float_float_bound
+    pts = _points()
+    radii, want = clsamp.pair_correlation(pts, backend="numpy")
+    _, got = clsamp.pair_correlation(pts, precision="float-float")
+    eps = pcf_float_float_bound(pts.shape[1], 2, radii, SIGMA_SPACING * mean_spacing(pts.shape[1], 2))
+    assert np.all(np.abs(got - want) <= eps * want + 1e-12)
+
+
 @check("nearest-neighbours-float-float")
 def _neighbours_ff():
     from clsamp.metrics.neighbors import float_float_bound

@@ -21,6 +21,7 @@ from ..geometry.torus import distance2
 from ..validation import check_bool, check_choice, check_points, point_sets
 
 BACKENDS = ("opencl", "numpy")
+_FLOAT2 = np.dtype([("hi", np.float32), ("lo", np.float32)])      # a float2 kernel argument
 RADII = 100                  # default radii: 100, up to RADII_SPAN mean spacings
 RADII_SPAN = 3.0
 SIGMA_SPACING = 0.05         # default sigma: this many mean spacings
@@ -119,13 +120,15 @@ def _pcf_sums_reference(points, radii, sigma, cut, periodic=True):
     return out
 
 
-def _pcf_sums_device(sets, radii, sigma, cut, uniform, periodic=True):
+def _pcf_sums_device(sets, radii, sigma, cut, uniform, periodic=True, precision="double"):
     """pcf_sums for sets of one size: (r, NR) sums over each set's unordered pairs."""
     r, (n, d) = len(sets), sets[0].shape
     batch = np.stack(sets)
     reach = float(radii[-1] + cut * sigma)
     cells = cells_for(reach)
     pts, cell, start, _ = sorted_by_cell(batch, cells)
+    if precision == "float-float":
+        return _pcf_sums_ff(pts, cell, start, r, n, d, cells, radii, sigma, cut, reach, periodic)
     items = -(-n // POINTS_PER_ITEM)
     defines = {"D": d, "NR": len(radii), "UNIFORM": int(uniform), "PPI": POINTS_PER_ITEM,
                "PERIODIC": int(periodic)}
@@ -141,6 +144,70 @@ def _pcf_sums_device(sets, radii, sigma, cut, uniform, periodic=True):
            np.float64(step), np.float64(1.0 / step), np.float64(inv2s2), np.float64(cut * sigma),
            np.float64(math.exp(-2.0 * step * step * inv2s2)), np.uint32(items), out.buffer)
     return out.finish().sum(axis=1)
+
+
+def pcf_float_float_bound(n, d, radii, sigma, periodic=True):
+    """The relative error of a float-float pair correlation (``precision="float-float"``).
+
+    Parameters
+    ----------
+    n, d : int
+        Points per set and dimensions.
+    radii : ndarray
+    sigma : float
+        As :func:`pair_correlation` used them (its returned radii; sigma defaults to 0.05
+        mean spacings, ``SIGMA_SPACING * mean_spacing(n, d)``).
+    periodic : bool
+
+    Returns
+    -------
+    float
+        ε with |g_float-float(r) - g(r)| <= ε·g(r) at every radius: u²·(5·(8√d + (4d +
+        36)·ρ) / σ + 190 + 48n + (30d + 15 in the cube)), u = 2^-24, ρ the reach (largest
+        radius plus 5σ).
+
+    Notes
+    -----
+    Every term is positive, so relative errors of the terms and of their sums bound the
+    result's. With the float-float errors of Joldes, Muller & Popescu 2017: a coordinate
+    difference is within 8u² (the split into pairs, a subtraction, the wrap), the
+    distance s within 8√d·u² + (4d + 32)u²·s (the squares, the sum, the square root),
+    the kernel's argument -(r - s)²/2σ² within 5·Δ(r - s)/σ absolute for |r - s| <= 5σ,
+    its exponential within about 50u² (the reduction by k ln 2 and the Horner steps);
+    the edge correction's product and division add (30d + 15)u²; a work-item adds at most
+    16(n - 1) terms into a radius' sum, 3u² each, relative. Not counted: a pair whose
+    distance lies within that error of the cut (5σ) or of the reach, which one path
+    counts and the other not (a term of e^-12.5 ≈ 3.7e-6).
+    """
+    reach = float(np.max(radii)) + CUT * sigma
+    eps = 5.0 * (8.0 * math.sqrt(d) + (4.0 * d + 36.0) * reach) / sigma + 190.0
+    eps += 3.0 * POINTS_PER_ITEM * (n - 1) + (0.0 if periodic else 30.0 * d + 15.0)
+    return eps * U2
+
+
+def _pcf_sums_ff(pts, cell, start, r, n, d, cells, radii, sigma, cut, reach, periodic):
+    """pcf_sums_ff (kernels/neighbors_ff.cl): the pair sums in float-float, (r, NR)."""
+    limit = runtime.loop_limit()
+    ppi = POINTS_PER_ITEM if limit is None else 1
+    if limit is not None:
+        # a work-item's loops: the stencil's points, each over every radius
+        stencil = (3 ** d if cells > 1 else 1) * n / cells ** d + 1
+        if ppi * stencil * (len(radii) + 2) > limit // 2:
+            runtime.require_short_loops("the float-float pair correlation at these radii")
+    items = -(-n // ppi)
+    coef = np.append(1.0 / np.array([math.factorial(i) for i in range(13)], dtype=np.float64), math.log(2.0))
+    ff = lambda v: split(np.float64(v)).view(_FLOAT2)[()]        # noqa: E731  (a float2 argument)
+    out = runtime.Output((r, items, len(radii), 2), np.float32,
+                         host=np.empty((r, items, len(radii), 2), np.float32))
+    runtime.kernel("neighbors_ff.cl", "pcf_sums_ff", {"D": d, "NR": len(radii), "PPI": ppi,
+                                                      "PERIODIC": int(periodic)})(
+        runtime.queue(), (items, r), None,
+        *(runtime.to_device(a).data for a in (split(pts), cell, start)), np.uint32(n), np.int32(cells),
+        np.uint32(3 ** d if cells > 1 else 1), ff(reach * reach), runtime.to_device(split(radii)).data,
+        ff(1.0 / (2.0 * sigma * sigma)), ff(cut * sigma), runtime.to_device(split(coef)).data,
+        np.uint32(items), out.buffer)
+    pairs = out.finish().astype(np.float64)
+    return (pairs[..., 0] + pairs[..., 1]).sum(axis=1)
 
 
 def _check_radii(radii, sigma, spacing, cut):
@@ -171,7 +238,7 @@ def _check_radii(radii, sigma, spacing, cut):
     return radii, sigma
 
 
-def pair_correlation(points, radii=None, sigma=None, backend="opencl", periodic=True):
+def pair_correlation(points, radii=None, sigma=None, backend="opencl", periodic=True, precision=None):
     """The pair correlation function g(r) of a point set, or its expectation over sets.
 
     Parameters
@@ -191,6 +258,10 @@ def pair_correlation(points, radii=None, sigma=None, backend="opencl", periodic=
         for sets that are not periodic, each pair weighted by the translation edge
         correction 1 / prod_k (1 - |x_k - y_k|) (Ohser 1983), the inverse of the volume
         of the cube and its translate's overlap, so that a Poisson process still gives 1.
+    precision : {"double", "float-float"}, optional
+        What the device computes the pair sums in; default ``"double"`` where the device
+        has fp64, ``"float-float"`` where it has not, within :func:`pcf_float_float_bound`
+        of the double result (each radius' Gaussian evaluated directly, no recurrence).
 
     Returns
     -------
@@ -233,6 +304,7 @@ def pair_correlation(points, radii=None, sigma=None, backend="opencl", periodic=
     """
     check_choice(backend, "backend", BACKENDS)
     periodic = check_bool(periodic, "periodic")
+    precision = check_precision(precision, backend)
     sets, _ = _check_sets(points, "points")
     d = sets[0].shape[1]
     spacing = mean_spacing(min(len(s) for s in sets), d)
@@ -244,7 +316,6 @@ def pair_correlation(points, radii=None, sigma=None, backend="opencl", periodic=
         for k, s in enumerate(sets):
             sums[k] = _pcf_sums_reference(s, radii, sigma, CUT, periodic)
     else:
-        runtime.require_fp64()
         sizes = sorted({len(s) for s in sets})
         for size in sizes:
             idx = [k for k, s in enumerate(sets) if len(s) == size]
@@ -252,7 +323,7 @@ def pair_correlation(points, radii=None, sigma=None, backend="opencl", periodic=
             for lo, hi in runtime.chunk_ranges(len(idx), per_set):
                 part = idx[lo:hi]
                 sums[part] = _pcf_sums_device([sets[k] for k in part], radii, sigma, CUT, uniform,
-                                              periodic)
+                                              periodic, precision)
     norm = pcf_normalisation(radii, sigma, d)
     kernel_scale = 1.0 / (math.sqrt(2.0 * math.pi) * sigma)
     counts = np.array([len(s) * (len(s) - 1) for s in sets], dtype=np.float64)

@@ -38,7 +38,7 @@ CAPABILITIES = {
     # without double precision (precision="float-float")
     "direct spectra in float-float": ("spectrum_ff.cl",),
     "discrepancies in float-float": ("discrepancy_ff.cl",),
-    "nearest neighbours in float-float": ("neighbors_ff.cl",),
+    "pair correlation and nearest neighbours in float-float": ("neighbors_ff.cl",),
     # comparisons only: exact on every device (bit patterns where there is no fp64)
     "certified star-discrepancy bounds": ("anchored_counts.cl",),
     "metrics": ("discrepancy.cl", "star_discrepancy.cl", "anchored_counts.cl", "neighbors.cl"),
