@@ -11,8 +11,11 @@
  * dimension), COLS (columns a work-item sums: a grid axis of column chunks keeps every
  * work-item's loops short, for llvmpipe), BLOCK. FP_CONTRACT OFF: the error-free
  * transformations need every operation rounded as written.
- * Grid (items, chunks, realizations): work-item w takes rows w and n - 1 - w against the
- * columns of its chunk; out (r, chunks, items) float2. */
+ * Rows come eight a work-item in float8 lanes (PoCL does not vectorize across work-items that
+ * loop), the columns one at a time, broadcast. Grid (items, chunks, realizations): work-item
+ * w takes the row tiles w and tiles - 1 - w (tiles = ceil(n / 8), items = ceil(tiles / 2))
+ * against the columns of its chunk; out (r, chunks, items, 8 lanes) float2, every lane's
+ * sum apart (the host adds them exactly). */
 #include "float_float.h"
 
 #pragma OPENCL FP_CONTRACT OFF
@@ -21,90 +24,104 @@
 #error "BLOCK comes from clsamp/metrics/l2.py"
 #endif
 
-inline float2 ffa(const float2 a, const float2 b)
+/* vector float-float comparisons, exact: by hi, then lo (pairs are normalized) */
+#define FF_LESS8(ah, al, bh, bl) (((ah) < (bh)) | (((ah) == (bh)) & ((al) < (bl))))
+#define FF_MIN8(ah, al, bh, bl, zh, zl) do {                       \
+        const int8 m_ = FF_LESS8(bh, bl, ah, al);                   \
+        zh = m_ ? (bh) : (ah);                                      \
+        zl = m_ ? (bl) : (al);                                      \
+    } while (0)
+#define FF_ABS8(ah, al, zh, zl) do {                               \
+        const int8 m_ = (ah) < 0.0f;                                \
+        zh = m_ ? -(ah) : (ah);                                     \
+        zl = m_ ? -(al) : (al);                                     \
+    } while (0)
+
+/* g of eight rows (xh, xl, uh, ul lanes) and one column (yh, yl, vh, vl broadcast), as the
+ * double kernel's formulas */
+inline void g8(const float8 xh, const float8 xl, const float8 uh, const float8 ul,
+               const float8 yh, const float8 yl, const float8 vh, const float8 vl,
+               float8 *gh, float8 *gl)
 {
-    float h, l;
-    FF_ADD(float, a.x, a.y, b.x, b.y, h, l);
-    return (float2)(h, l);
-}
-
-inline float2 ffm(const float2 a, const float2 b)
-{
-    float h, l;
-    FF_MUL(float, a.x, a.y, b.x, b.y, h, l);
-    return (float2)(h, l);
-}
-
-/* comparisons of normalized pairs (|lo| <= ulp(hi) / 2): by hi, then lo; exact */
-inline int ff_less(const float2 a, const float2 b) { return a.x < b.x || (a.x == b.x && a.y < b.y); }
-inline float2 ff_min(const float2 a, const float2 b) { return ff_less(b, a) ? b : a; }
-inline float2 ff_max(const float2 a, const float2 b) { return ff_less(a, b) ? b : a; }
-inline float2 ff_abs(const float2 a) { return a.x < 0.0f ? -a : a; }
-
+    float8 h, l;
 #if METHOD == 0          /* 1 + min(a_i, a_j) on one side of 1/2, else 1 (u: the row's side) */
-inline float2 g(const float2 xi, const float2 ui, const float2 xj, const float2 vj)
-{
-    const float2 c = as_uint(ui.x) >> 31 ? -xj : xj;
-    return ff_max((float2)(1.0f, 0.0f), ff_min(xi, c));
-}
-#elif METHOD == 1        /* 3/2 - t + t^2, t = |x_i - x_j| */
-inline float2 g(const float2 xi, const float2 ui, const float2 xj, const float2 vj)
-{
-    const float2 t = ff_abs(ffa(xi, -xj));
-    return ffa(ffm(t, ffa(t, (float2)(-1.0f, 0.0f))), (float2)(1.5f, 0.0f));
-}
-#elif METHOD == 2        /* (u_i - v_j) + t (t / 2 - 3/4) */
-inline float2 g(const float2 xi, const float2 ui, const float2 xj, const float2 vj)
-{
-    const float2 t = ff_abs(ffa(xi, -xj));
-    return ffa(ffm(t, ffa(0.5f * t, (float2)(-0.75f, 0.0f))), ffa(ui, -vj));
-}
+    const uint8 sign = as_uint8(uh) & (uint8)(0x80000000u);
+    const float8 ch = as_float8(as_uint8(yh) ^ sign), cl = as_float8(as_uint8(yl) ^ sign);
+    FF_MIN8(xh, xl, ch, cl, h, l);
+    const int8 below = FF_LESS8(h, l, (float8)(1.0f), (float8)(0.0f));
+    h = below ? (float8)(1.0f) : h;
+    l = below ? (float8)(0.0f) : l;
+#elif METHOD == 1 || METHOD == 2    /* t = |x_i - x_j|; WD 3/2 - t + t^2, MD (u - v) + t (t/2 - 3/4) */
+    float8 th, tl, sh, sl;
+    FF_ADD(float8, xh, xl, -yh, -yl, th, tl);
+    FF_ABS8(th, tl, th, tl);
+#if METHOD == 1
+    FF_ADD(float8, th, tl, (float8)(-1.0f), (float8)(0.0f), sh, sl);
+    FF_MUL(float8, th, tl, sh, sl, sh, sl);
+    FF_ADD(float8, sh, sl, (float8)(1.5f), (float8)(0.0f), h, l);
+#else
+    FF_ADD(float8, 0.5f * th, 0.5f * tl, (float8)(-0.75f), (float8)(0.0f), sh, sl);
+    FF_MUL(float8, th, tl, sh, sl, sh, sl);
+    FF_ADD(float8, uh, ul, -vh, -vl, h, l);
+    FF_ADD(float8, sh, sl, h, l, h, l);
+#endif
 #elif METHOD == 3        /* min(1 - x_i, 1 - x_j) */
-inline float2 g(const float2 xi, const float2 ui, const float2 xj, const float2 vj)
-{
-    return ff_min(xi, xj);
-}
+    FF_MIN8(xh, xl, yh, yl, h, l);
 #elif METHOD == 4        /* (1 - x_i - x_j) + 2 min(x_i, x_j) */
-inline float2 g(const float2 xi, const float2 ui, const float2 xj, const float2 vj)
-{
-    return ffa(ffa(ui, -vj), 2.0f * ff_min(xi, xj));
-}
+    float8 mh, ml;
+    FF_MIN8(xh, xl, yh, yl, mh, ml);
+    FF_ADD(float8, uh, ul, -vh, -vl, h, l);
+    FF_ADD(float8, h, l, 2.0f * mh, 2.0f * ml, h, l);
 #elif METHOD == 5        /* min(x_i, x_j) min(1 - x_i, 1 - x_j) */
-inline float2 g(const float2 xi, const float2 ui, const float2 xj, const float2 vj)
-{
-    return ffm(ff_min(xi, xj), ff_min(ui, vj));
-}
+    float8 mh, ml;
+    FF_MIN8(xh, xl, yh, yl, mh, ml);
+    FF_MIN8(uh, ul, vh, vl, h, l);
+    FF_MUL(float8, mh, ml, h, l, h, l);
 #else
 #error "METHOD must be 0..5"
 #endif
-
-inline float2 term(__global const float2 *xr, __global const float2 *ur,
-                   __global const float2 *xc, __global const float2 *vc)
-{
-    float2 p = g(xr[0], ur[0], xc[0], vc[0]);
-    for (int k = 1; k < D; ++k)
-        p = ffm(p, g(xr[k], ur[k], xc[k], vc[k]));
-    return p;
+    *gh = h;
+    *gl = l;
 }
 
-/* 2 sum_{j > i, j in [c0, c1)} term(i, j) + term(i, i) where i is in [c0, c1) */
-inline float2 row_sum(const uint i, const uint c0, const uint c1,
-                      __global const float2 *xr, __global const float2 *ur,
-                      __global const float2 *xc, __global const float2 *vc)
+/* Adds, for the eight rows 8q .. 8q + 7 (lanes; rows >= n weigh 0), weight(i, j)
+ * prod_k g(x_ik, x_jk) over the columns j in [max(c0, 8q), c1), weight 2 for i < j and 1
+ * for i = j, in blocks of BLOCK columns, to (sh, sl). */
+inline void tile_sum(const uint q, const uint n, const uint c0, const uint c1,
+                     __global const float2 *xr, __global const float2 *ur,
+                     __global const float2 *xc, __global const float2 *vc, float8 *sh, float8 *sl)
 {
-    __global const float2 *ri = xr + (size_t)i * D, *si = ur + (size_t)i * D;
-    float2 total = (float2)(0.0f);
-    for (uint j0 = max(c0, i + 1); j0 < c1; j0 += BLOCK) {
-        const uint j1 = min(c1, j0 + BLOCK);
-        float2 acc = (float2)(0.0f);
-        for (uint j = j0; j < j1; ++j)
-            acc = ffa(acc, term(ri, si, xc + (size_t)j * D, vc + (size_t)j * D));
-        total = ffa(total, acc);
+    float8 xh[D], xl[D], uh[D], ul[D];
+    const int8 lane = (int8)(0, 1, 2, 3, 4, 5, 6, 7) + (int)(8 * q);
+    for (int k = 0; k < D; ++k) {
+        float *pxh = (float *)&xh[k], *pxl = (float *)&xl[k], *puh = (float *)&uh[k], *pul = (float *)&ul[k];
+        for (int l = 0; l < 8; ++l) {
+            const uint i = min(8 * q + l, n - 1);
+            const float2 x = xr[(size_t)i * D + k], u = ur[(size_t)i * D + k];
+            pxh[l] = x.x; pxl[l] = x.y; puh[l] = u.x; pul[l] = u.y;
+        }
     }
-    total = 2.0f * total;
-    if (c0 <= i && i < c1)
-        total = ffa(total, term(ri, si, xc + (size_t)i * D, vc + (size_t)i * D));
-    return total;
+    for (uint j0 = max(c0, 8 * q); j0 < c1; j0 += BLOCK) {
+        const uint j1 = min(c1, j0 + BLOCK);
+        float8 bh = (float8)(0.0f), bl = bh;
+        for (uint j = j0; j < j1; ++j) {
+            __global const float2 *y = xc + (size_t)j * D, *v = vc + (size_t)j * D;
+            float8 ph, pl;
+            g8(xh[0], xl[0], uh[0], ul[0], (float8)(y[0].x), (float8)(y[0].y), (float8)(v[0].x),
+               (float8)(v[0].y), &ph, &pl);
+            for (int k = 1; k < D; ++k) {
+                float8 gh, gl;
+                g8(xh[k], xl[k], uh[k], ul[k], (float8)(y[k].x), (float8)(y[k].y), (float8)(v[k].x),
+                   (float8)(v[k].y), &gh, &gl);
+                FF_MUL(float8, ph, pl, gh, gl, ph, pl);
+            }
+            const int8 col = (int8)((int)j);
+            const float8 weight = lane >= (int8)((int)n) ? (float8)(0.0f)
+                                  : lane < col ? (float8)(2.0f) : lane == col ? (float8)(1.0f) : (float8)(0.0f);
+            FF_ADD(float8, bh, bl, weight * ph, weight * pl, bh, bl);
+        }
+        FF_ADD(float8, *sh, *sl, bh, bl, *sh, *sl);
+    }
 }
 
 __kernel void discrepancy_ff_pairs(__global const float2 *xr, __global const float2 *ur,
@@ -115,9 +132,14 @@ __kernel void discrepancy_ff_pairs(__global const float2 *xr, __global const flo
     if (w >= items)
         return;
     const size_t set = (size_t)r * n * D;
+    const uint tiles = (n + 7) / 8;
     const uint c0 = chunk * COLS, c1 = min(n, c0 + COLS);
-    float2 s = row_sum(w, c0, c1, xr + set, ur + set, xc + set, vc + set);
-    if (n - 1 - w != w)
-        s = ffa(s, row_sum(n - 1 - w, c0, c1, xr + set, ur + set, xc + set, vc + set));
-    out[((size_t)r * get_global_size(1) + chunk) * items + w] = s;
+    float8 sh = (float8)(0.0f), sl = sh;
+    tile_sum(w, n, c0, c1, xr + set, ur + set, xc + set, vc + set, &sh, &sl);
+    if (tiles - 1 - w != w)
+        tile_sum(tiles - 1 - w, n, c0, c1, xr + set, ur + set, xc + set, vc + set, &sh, &sl);
+    __global float2 *o = out + (((size_t)r * get_global_size(1) + chunk) * items + w) * 8;
+    const float *ph = (const float *)&sh, *pl = (const float *)&sl;
+    for (int l = 0; l < 8; ++l)
+        o[l] = (float2)(ph[l], pl[l]);
 }

@@ -105,7 +105,7 @@ inline float2 ff_sqrt(const float2 a)
     return (float2)(h, l);
 }
 
-/* exp(x) for -14 <= x <= 0: x = k ln 2 + r with |r| <= 0.35, the degree-12 Taylor
+/* exp(x) for -87 <= x <= 0 (here >= -12.5): x = k ln 2 + r with |r| <= 0.35, the degree-12 Taylor
  * polynomial of exp(r) in Horner form (its remainder below 2u^2), times 2^k exactly. The
  * coefficients 1/i! and ln 2 come split from the host (coef[0..12], coef[13] = ln 2). */
 inline float2 ff_exp(const float2 x, __global const float2 *coef)

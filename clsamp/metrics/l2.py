@@ -139,7 +139,7 @@ def float_float_bound(method, d):
     Returns
     -------
     float
-        A bound on |D^2_float-float - D^2|: (17d + 160)·u²·G^d, u = 2^-24, G the largest
+        A bound on |D^2_float-float - D^2|: (17d + 600)·u²·G^d, u = 2^-24, G the largest
         pair factor of the method (3/2 for CD and WD, 15/8 for MD, 1 for L2-star, 2 for
         symmetric, whose c2 is 2^d / n², 1/4 for L2). The rooted methods (L2-star,
         symmetric, L2) return D, off by at most this bound over 2D.
@@ -150,14 +150,15 @@ def float_float_bound(method, d):
     product 5u², relative): the host's split of each float64 layout number errs by u²;
     each factor g (at most two additions, a product and exact min/max/abs) is then within
     12u² of its value relative to G, and the product of d factors within (17d)u² of
-    Π g. The kernel sums blocks of 64 terms, then the block sums of its chunk of at most
-    4096 columns: within 1.5u²·64 + 3u²·64 = 288u² > 96u² + 192u² of the sum of |terms|
-    (160u² is kept after the factor 2 of the pairs, which is exact); the host adds the
-    chunks' sums exactly. Σ|Π g| <= n² G^d and c2 = 1/n² give the bound. The double path's
-    own rounding (a few ulps of the terms) is below 2^-50 G^d, inside the bound's slack.
+    Π g. A lane of the kernel sums one row's terms (weights 0, 1 or 2, exact) in blocks of
+    64 columns, then adds the block sums of its two rows' chunks (at most 2·(4096/64 + 1)
+    = 130): each addition errs by at most 3u² times the partial sum, so the sum is within
+    3u²·(64 + 130) <= 600u² of the sum of |terms|; the host adds the lanes' sums exactly.
+    Σ|Π g| <= n² G^d and c2 = 1/n² give the bound. The double path's own rounding (a few
+    ulps of the terms) is below 2^-50 G^d, inside it.
     """
     check_method(method)
-    return (17.0 * d + 160.0) * U2 * _G_MAX[method] ** d
+    return (17.0 * d + 600.0) * U2 * _G_MAX[method] ** d
 
 
 def _layouts(batch, method):
@@ -189,8 +190,8 @@ def _device_sums_ff(batch, method):
     layouts = [cla.to_device(q, np.ascontiguousarray(split(v))) for v in _layouts(batch, method)]
     limit = runtime.loop_limit()
     cols = 4096 if limit is None else max(1, min(4096, limit // (4 * (d + 2))))
-    chunks, items = -(-n // cols), -(-n // 2)
-    out = cla.empty(q, (r, chunks, items, 2), np.float32)
+    chunks, items = -(-n // cols), -(-(-(-n // 8)) // 2)          # tiles of 8 rows, two an item
+    out = cla.empty(q, (r, chunks, items, 8, 2), np.float32)
     defines = {"METHOD": _CODES[method], "D": d, "COLS": cols, "BLOCK": FF_BLOCK}
     runtime.kernel("discrepancy_ff.cl", "discrepancy_ff_pairs", defines)(
         q, (items, chunks, r), None, *(v.data for v in layouts), np.uint32(n), np.uint32(items), out.data)
@@ -244,7 +245,7 @@ def discrepancy(points, method="CD", backend="opencl", precision=None):
     precision : {"double", "float-float"}, optional
         What the device computes the pair sum in; default ``"double"`` where the device
         has fp64, ``"float-float"`` where it has not: then |ΔD²| <=
-        :func:`float_float_bound` (method, d) = (17d + 160)·2^-48·G^d (G = 3/2 for CD).
+        :func:`float_float_bound` (method, d) = (17d + 600)·2^-48·G^d (G = 3/2 for CD).
 
     Returns
     -------
