@@ -190,7 +190,8 @@ def _device_sums_ff(batch, method):
     layouts = [cla.to_device(q, np.ascontiguousarray(split(v))) for v in _layouts(batch, method)]
     limit = runtime.loop_limit()
     cols = 4096 if limit is None else max(1, min(4096, limit // (4 * (d + 2))))
-    chunks, items = -(-n // cols), -(-(-(-n // 8)) // 2)          # tiles of 8 rows, two an item
+    tiles = -(-n // 8)                                     # tiles of 8 rows, two an item
+    chunks, items = -(-n // cols), -(-tiles // 2)
     out = cla.empty(q, (r, chunks, items, 8, 2), np.float32)
     defines = {"METHOD": _CODES[method], "D": d, "COLS": cols, "BLOCK": FF_BLOCK}
     runtime.kernel("discrepancy_ff.cl", "discrepancy_ff_pairs", defines)(
