@@ -214,6 +214,16 @@ def test_float_float_discrepancies_are_within_their_bound(method, d):
         assert np.array_equal(_squared(method, discrepancy(pts, method)), got)
 
 
+@pytest.mark.parametrize("n", [1, 2, 7, 9, 17])
+def test_float_float_discrepancies_of_small_sets(n):
+    """Sets that fill part of a tile of eight rows, one tile or an odd count of them."""
+    pts = np.random.default_rng(n).random((n, 3))
+    for method in METHODS:
+        want = _squared(method, discrepancy(pts, method, precision="double"))
+        got = _squared(method, discrepancy(pts, method, precision="float-float"))
+        assert abs(got - want) <= float_float_bound(method, 3), method
+
+
 def test_discrepancy_precision_is_checked():
     pts = _sets(2, n=16, r=1)[0]
     with pytest.raises(InvalidArgumentError, match="'precision' must be one of"):
