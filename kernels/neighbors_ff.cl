@@ -10,7 +10,7 @@
  *
  * pcf_sums_ff (below) is the pair correlation's pair sums in float-float, as pcf_sums.
  *
- * Build options: D, PERIODIC; NR and PPI for pcf_sums_ff. FP_CONTRACT OFF: the error-free
+ * Build options: D, PERIODIC; NR, PPI and UNIFORM for pcf_sums_ff. FP_CONTRACT OFF: the error-free
  * transformations need every operation rounded as written. nearest_neighbor_ff's grid
  * (total points): best[i] = the sorted index of the nearest other point of its
  * realization in the 3^D neighbouring cells, or 0xFFFFFFFF. */
@@ -105,13 +105,13 @@ inline float2 ff_sqrt(const float2 a)
     return (float2)(h, l);
 }
 
-/* exp(x) for -87 <= x <= 0 (here >= -12.5): x = k ln 2 + r with |r| <= 0.35, the degree-12 Taylor
+/* exp(x) for -87 <= x <= 87 (here -12.5 .. 12.5): x = k ln 2 + r with |r| <= 0.35, the degree-12 Taylor
  * polynomial of exp(r) in Horner form (its remainder below 2u^2), times 2^k exactly. The
  * coefficients 1/i! and ln 2 come split from the host (coef[0..12], coef[13] = ln 2). */
 inline float2 ff_exp(const float2 x, __global const float2 *coef)
 {
     const float v = x.x * 1.44269504f;
-    const int k = (int)(v - 0.5f);                    /* v <= 0: the nearest integer */
+    const int k = (int)(v < 0.0f ? v - 0.5f : v + 0.5f);      /* the nearest integer */
     float h, l;
     FF_MUL_F(float, coef[13].x, coef[13].y, (float)k, h, l);
     const float2 r = ff_sum(x, (float2)(-h, -l));
@@ -126,14 +126,23 @@ inline float2 ff_exp(const float2 x, __global const float2 *coef)
 
 /* Grid (items, realizations): as pcf_sums in neighbors.cl (every unordered pair within
  * reach once, through the forward half of the 3^D stencil), in float-float:
- * out[r][w][k] += weight exp(-(radius_k - s)^2 / (2 sigma^2)) for |radius_k - s| <= cut,
- * each radius' Gaussian evaluated directly (radii, inv2s2 and cut as float-float pairs
- * from the host; weight 1 on the torus, the translation edge correction in the cube). */
+ * out[r][w][k] += weight exp(-(radius_k - s)^2 / (2 sigma^2)) for |radius_k - s| <= cut
+ * (radii, inv2s2, cut, step, step^2 and b = exp(-2 step^2 / 2 sigma^2) as float-float
+ * pairs from the host; weight 1 on the torus, the translation edge correction in the
+ * cube). UNIFORM radii (r0 + k step) take the Gaussian along k by the double kernel's
+ * recurrence, two exp a pair; others evaluate each radius' Gaussian. */
+inline int within_cut(const float2 radius, const float2 s, const float2 cut)
+{
+    const float2 dt = ff_sum(radius, -s);
+    return !ff_below(cut, dt.x < 0.0f ? -dt : dt);
+}
+
 __kernel void pcf_sums_ff(__global const float2 *pts, __global const uint *cell,
                           __global const uint *start, const uint n, const int G, const uint noff,
                           const float2 reach2, __global const float2 *radii, const float2 inv2s2,
-                          const float2 cut, __global const float2 *coef, const uint items,
-                          __global float2 *out)
+                          const float2 cut, __global const float2 *coef, const float2 step,
+                          const float2 step2, const float2 b, const float inv_step,
+                          const uint items, __global float2 *out)
 {
     const uint w = get_global_id(0), r = get_global_id(1);
     if (w >= items)
@@ -177,6 +186,42 @@ __kernel void pcf_sums_ff(__global const float2 *pts, __global const uint *cell,
                 if (!ff_below(d2, reach2))
                     continue;
                 const float2 s = ff_sqrt(d2);
+#if UNIFORM
+                /* the radii within the cut, a contiguous run k0 .. k1: from a float guess,
+                 * moved by the float-float test |radius_k - s| <= cut */
+                int k0 = clamp((int)((s.x - cut.x - radii[0].x) * inv_step), 0, NR - 1);
+                while (k0 > 0 && within_cut(radii[k0 - 1], s, cut))
+                    --k0;
+                while (k0 < NR && !within_cut(radii[k0], s, cut) && ff_below(radii[k0], s))
+                    ++k0;
+                if (k0 == NR || !within_cut(radii[k0], s, cut))
+                    continue;
+                int k1 = k0;
+                while (k1 + 1 < NR && within_cut(radii[k1 + 1], s, cut))
+                    ++k1;
+                /* e_k = exp(-t_k^2 / 2 sigma^2) along t_k = t_k0 + (k - k0) step:
+                 * e_{k+1} = e_k a_k, a_k = exp(-(2 t_k step + step^2) / 2 sigma^2), a_{k+1} = a_k b */
+                const float2 t0 = ff_sum(radii[k0], -s);
+                float h, l;
+                FF_MUL(float, t0.x, t0.y, t0.x, t0.y, h, l);
+                FF_MUL(float, h, l, inv2s2.x, inv2s2.y, h, l);
+                float2 e = ff_exp((float2)(-h, -l), coef);
+                FF_MUL(float, t0.x, t0.y, step.x, step.y, h, l);
+                const float2 twice = ff_sum((float2)(2.0f * h, 2.0f * l), step2);
+                FF_MUL(float, twice.x, twice.y, inv2s2.x, inv2s2.y, h, l);
+                float2 a = ff_exp((float2)(-h, -l), coef);
+#if !PERIODIC
+                FF_DIV(float, e.x, e.y, cover.x, cover.y, h, l);
+                e = (float2)(h, l);
+#endif
+                for (int k = k0; k <= k1; ++k) {
+                    hist[k] = ff_sum(hist[k], e);
+                    FF_MUL(float, e.x, e.y, a.x, a.y, h, l);
+                    e = (float2)(h, l);
+                    FF_MUL(float, a.x, a.y, b.x, b.y, h, l);
+                    a = (float2)(h, l);
+                }
+#else
                 for (int k = 0; k < NR; ++k) {
                     const float2 dt = ff_sum(radii[k], -s);
                     if (ff_below(cut, dt.x < 0.0f ? -dt : dt))
@@ -191,6 +236,7 @@ __kernel void pcf_sums_ff(__global const float2 *pts, __global const uint *cell,
 #endif
                     hist[k] = ff_sum(hist[k], e);
                 }
+#endif
             }
         }
     }

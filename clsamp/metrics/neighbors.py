@@ -128,7 +128,7 @@ def _pcf_sums_device(sets, radii, sigma, cut, uniform, periodic=True, precision=
     cells = cells_for(reach)
     pts, cell, start, _ = sorted_by_cell(batch, cells)
     if precision == "float-float":
-        return _pcf_sums_ff(pts, cell, start, r, n, d, cells, radii, sigma, cut, reach, periodic)
+        return _pcf_sums_ff(pts, cell, start, r, n, d, cells, radii, sigma, cut, reach, periodic, uniform)
     items = -(-n // POINTS_PER_ITEM)
     defines = {"D": d, "NR": len(radii), "UNIFORM": int(uniform), "PPI": POINTS_PER_ITEM,
                "PERIODIC": int(periodic)}
@@ -162,9 +162,10 @@ def pcf_float_float_bound(n, d, radii, sigma, periodic=True):
     Returns
     -------
     float
-        ε with |g_float-float(r) - g(r)| <= ε·g(r) at every radius: u²·(5·(8√d + (4d +
-        36)·ρ) / σ + 190 + 48n + (30d + 15 in the cube)), u = 2^-24, ρ the reach (largest
-        radius plus 5σ).
+        ε with |g_float-float(r) - g(r)| <= ε·g(r) at every radius: u²·(T + 48(n - 1)),
+        u = 2^-24, T = 5·(8√d + (4d + 36)·ρ) / σ + 190 (+ 30d + 15 in the cube), ρ the
+        reach (largest radius plus 5σ); for uniform radii T·(m + 1) + 3m² instead of T,
+        m = 10σ / step + 1 the radii a pair's Gaussian reaches.
 
     Notes
     -----
@@ -174,18 +175,30 @@ def pcf_float_float_bound(n, d, radii, sigma, periodic=True):
     distance s within 8√d·u² + (4d + 32)u²·s (the squares, the sum, the square root),
     the kernel's argument -(r - s)²/2σ² within 5·Δ(r - s)/σ absolute for |r - s| <= 5σ,
     its exponential within about 50u² (the reduction by k ln 2 and the Horner steps);
-    the edge correction's product and division add (30d + 15)u²; a work-item adds at most
+    the edge correction's product and division add (30d + 15)u². Uniform radii take the
+    Gaussian along them by the recurrence e_{k+1} = e_k·a_k, a_{k+1} = a_k·b: after m
+    steps e carries m times the error of a_0 (at most T) and m² times 3u² from the
+    products and b's split. A work-item adds at most
     16(n - 1) terms into a radius' sum, 3u² each, relative. Not counted: a pair whose
     distance lies within that error of the cut (5σ) or of the reach, which one path
     counts and the other not (a term of e^-12.5 ≈ 3.7e-6).
     """
+    radii = np.asarray(radii, dtype=np.float64)
     reach = float(np.max(radii)) + CUT * sigma
-    eps = 5.0 * (8.0 * math.sqrt(d) + (4.0 * d + 36.0) * reach) / sigma + 190.0
-    eps += 3.0 * POINTS_PER_ITEM * (n - 1) + (0.0 if periodic else 30.0 * d + 15.0)
-    return eps * U2
+    term = 5.0 * (8.0 * math.sqrt(d) + (4.0 * d + 36.0) * reach) / sigma + 190.0
+    term += 0.0 if periodic else 30.0 * d + 15.0
+    if _uniform(radii):
+        m = 2.0 * CUT * sigma / float(radii[1] - radii[0]) + 1.0
+        term = term * (m + 1.0) + 3.0 * m * m
+    return (term + 3.0 * POINTS_PER_ITEM * (n - 1)) * U2
 
 
-def _pcf_sums_ff(pts, cell, start, r, n, d, cells, radii, sigma, cut, reach, periodic):
+def _uniform(radii):
+    """Whether radii are r0 + k·step (the kernels' recurrence along them)."""
+    return len(radii) > 1 and bool(np.allclose(np.diff(radii), radii[1] - radii[0], rtol=1e-9, atol=0.0))
+
+
+def _pcf_sums_ff(pts, cell, start, r, n, d, cells, radii, sigma, cut, reach, periodic, uniform):
     """pcf_sums_ff (kernels/neighbors_ff.cl): the pair sums in float-float, (r, NR)."""
     limit = runtime.loop_limit()
     ppi = POINTS_PER_ITEM if limit is None else 1
@@ -199,13 +212,15 @@ def _pcf_sums_ff(pts, cell, start, r, n, d, cells, radii, sigma, cut, reach, per
     ff = lambda v: split(np.float64(v)).view(_FLOAT2)[()]        # noqa: E731  (a float2 argument)
     out = runtime.Output((r, items, len(radii), 2), np.float32,
                          host=np.empty((r, items, len(radii), 2), np.float32))
+    step = float(radii[1] - radii[0]) if len(radii) > 1 else 1.0
+    inv2s2 = 1.0 / (2.0 * sigma * sigma)
     runtime.kernel("neighbors_ff.cl", "pcf_sums_ff", {"D": d, "NR": len(radii), "PPI": ppi,
-                                                      "PERIODIC": int(periodic)})(
+                                                      "PERIODIC": int(periodic), "UNIFORM": int(uniform)})(
         runtime.queue(), (items, r), None,
         *(runtime.to_device(a).data for a in (split(pts), cell, start)), np.uint32(n), np.int32(cells),
         np.uint32(3 ** d if cells > 1 else 1), ff(reach * reach), runtime.to_device(split(radii)).data,
-        ff(1.0 / (2.0 * sigma * sigma)), ff(cut * sigma), runtime.to_device(split(coef)).data,
-        np.uint32(items), out.buffer)
+        ff(inv2s2), ff(cut * sigma), runtime.to_device(split(coef)).data, ff(step), ff(step * step),
+        ff(math.exp(-2.0 * step * step * inv2s2)), np.float32(1.0 / step), np.uint32(items), out.buffer)
     pairs = out.finish().astype(np.float64)
     return (pairs[..., 0] + pairs[..., 1]).sum(axis=1)
 
@@ -309,8 +324,7 @@ def pair_correlation(points, radii=None, sigma=None, backend="opencl", periodic=
     d = sets[0].shape[1]
     spacing = mean_spacing(min(len(s) for s in sets), d)
     radii, sigma = _check_radii(radii, sigma, spacing, CUT)
-    uniform = len(radii) > 1 and bool(np.allclose(np.diff(radii), radii[1] - radii[0],
-                                                  rtol=1e-9, atol=0.0))
+    uniform = _uniform(radii)
     sums = np.zeros((len(sets), len(radii)))
     if backend == "numpy":
         for k, s in enumerate(sets):
