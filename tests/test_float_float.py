@@ -355,3 +355,35 @@ def test_a_device_without_fp64_computes_the_pair_correlation(device):
         runtime.use_device(DEFAULT.index)
     sigma = neighbors.SIGMA_SPACING * neighbors.mean_spacing(300, 2)
     assert np.all(np.abs(got - want) <= neighbors.pcf_float_float_bound(300, 2, radii, sigma) * want)
+
+
+def test_device_arrays_are_checked_without_fp64():
+    """check_points reads a device array's range by bit patterns where there is no fp64:
+    the same answers, so sample_device output and expected_spectrum run there."""
+    vals = np.array([0.5, 0.25, -0.0, 0.0, 0.999, 1e-300, -1e-5, 2.0, np.inf, np.nan, -np.inf, 5e-324])
+    for pick in ([0, 1, 2, 3, 4, 5], [0, 1, 6], [0, 7], [0, 8], [0, 9], [1, 10], [3, 11], [2]):
+        want = runtime.bounds(runtime.to_device(vals[pick]))
+        with runtime.without_fp64():
+            assert runtime.bounds(runtime.to_device(vals[pick])) == want, pick
+    bad = runtime.to_device(np.array([[[0.5, 1.0]]]))
+    with runtime.without_fp64(), pytest.raises(InvalidArgumentError, match=r"\[0, 1\)"):
+        power_spectrum(bad, 16)
+    s = clsamp.make_sampler("jittered", seed=1)
+    want = power_spectrum(s.sample(256, realizations=2), 16, progress=False)
+    with runtime.without_fp64():
+        got = power_spectrum(s.sample_device(256, realizations=2), 16, progress=False)
+        assert np.max(np.abs(got - want)) <= error_bound(256)
+        assert np.array_equal(clsamp.expected_spectrum(s, 256, 2, resolution=16, progress=False), got)
+    for device in WITHOUT_FP64:
+        runtime.use_device(device.index)
+        try:
+            got = clsamp.expected_spectrum(s, 256, 2, resolution=16, progress=False)
+        finally:
+            runtime.use_device(DEFAULT.index)
+        assert np.max(np.abs(got - want)) <= error_bound(256), str(device)
+
+
+@pytest.mark.parametrize("file", ["spectrum_ff.cl", "discrepancy_ff.cl", "neighbors_ff.cl",
+                                  "anchored_counts.cl", "points.cl", "float_float_probe.cl"])
+def test_these_kernels_use_no_double_without_fp64(file):
+    assert not runtime.needs_fp64(file)
