@@ -147,9 +147,10 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
         Show a progress bar when the work is long (several chunks).
     precision : {"double", "float-float"}, optional
         What the device computes the direct sum in; default ``"double"`` where the device
-        has fp64, ``"float-float"`` where it has not (:mod:`clsamp.spectrum_ff`: exact
-        integer phases, float-float sums, within :func:`clsamp.spectrum_ff.error_bound`
-        (n) ≈ 2^-47·n·(400 + 5n/64) of the exact spectrum; the fast method is double only).
+        has fp64, ``"float-float"`` where it has not (:mod:`clsamp.spectrum_ff`). Direct:
+        exact integer phases, float-float sums, within :func:`clsamp.spectrum_ff.error_bound`
+        (n) ≈ 2^-47·n·(400 + 5n/64) of the exact spectrum; fast: float-float spreading,
+        ``tol`` >= 1e-11 (``spectrum_ff.FAST_MIN_TOL``), the FFT in float64 on the host.
 
     Returns
     -------
@@ -220,16 +221,16 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
     if batch.shape[-1] == 3 and method == "fast":
         raise InvalidArgumentError("'method' 'fast' (the NUFFT) computes 1-D and 2-D spectra; a 3-D "
                                    "spectrum is 'direct' (exact)")
-    if method == "fast" and precision == "float-float" and backend == "opencl":
-        if asked is None:                # the device's default: it has no fp64 for the NUFFT
-            runtime.require_fp64()
-        raise InvalidArgumentError("'method' 'fast' (the NUFFT) computes in double; with "
-                                   "precision='float-float' the spectrum is 'direct'")
+    ff = precision == "float-float" and backend == "opencl"
+    if ff and method == "fast" and tol is not None and tol < spectrum_ff.FAST_MIN_TOL:
+        raise InvalidArgumentError(f"'tol' must be >= {spectrum_ff.FAST_MIN_TOL:g} for method='fast' "
+                                   f"in float-float; got {tol:g}")
     if method == "auto":
-        method = "direct" if precision == "float-float" else _choose_method(batch.shape, resolution, tol)
+        method = _choose_method(batch.shape, resolution, tol)
     if method == "fast":
-        return _fast(batch, resolution, DEFAULT_FAST_TOL if tol is None else max(tol, MIN_TOL),
-                     backend, progress)
+        floor = spectrum_ff.FAST_MIN_TOL if ff else MIN_TOL
+        return _fast(batch, resolution, max(floor, DEFAULT_FAST_TOL if tol is None else tol), backend,
+                     progress, precision)
     return _direct(batch, resolution, backend, progress, precision)
 
 
@@ -308,8 +309,7 @@ def expected_spectrum(sampler, n, realizations, resolution=256, method="auto", t
     check_choice(method, "method", METHODS)
     precision = check_precision(precision, backend)
     if method == "auto":
-        method = "direct" if precision == "float-float" else _choose_method(
-            (realizations, n, sampler.d), resolution, tol)
+        method = _choose_method((realizations, n, sampler.d), resolution, tol)
     tasks = [(sampler, n, lo, hi, resolution, method, tol, backend, precision)
              for lo, hi in parallel.block_ranges(realizations, n * resolution)]
     blocks, _ = parallel.run(spectrum_block, tasks, client=client, checkpoint=checkpoint,
@@ -718,7 +718,7 @@ def _add_squares(F, total):
         total += squares[..., 0::2] + squares[..., 1::2]
 
 
-def _fast(batch, resolution, tol, backend, progress):
+def _fast(batch, resolution, tol, backend, progress, precision="double"):
     r, n, d = batch.shape
     sigma, width, beta = nufft_parameters(tol, d)
     M = grid_size(resolution, sigma, width)
@@ -728,12 +728,12 @@ def _fast(batch, resolution, tol, backend, progress):
     size = M**d
     if backend == "opencl":
         import pyopencl.array as cla
-        runtime.require_fp64()
         queue = runtime.queue()
         device = runtime.current_device()
         defines = {"DIM": d, "WIDTH": width}
-        spread = runtime.kernel("nufft.cl", "spectrum_spread", defines, _MAD)
-        sum_copies = runtime.kernel("nufft.cl", "spectrum_sum_copies", defines, _MAD)
+        if precision == "double":
+            spread = runtime.kernel("nufft.cl", "spectrum_spread", defines, _MAD)
+            sum_copies = runtime.kernel("nufft.cl", "spectrum_sum_copies", defines, _MAD)
         local = runtime.local_size(64)
         # a work-item spreads a block of points onto its own grid copy: enough of them to
         # keep every compute unit busy, never blocks of fewer than 1024 points
@@ -752,19 +752,22 @@ def _fast(batch, resolution, tol, backend, progress):
             grids = spread_reference(batch[r0:r1], M, width, beta)
         else:
             pts = _block(batch, r0, r1)
-            # the grids the FFT reads are written into host memory (on a CPU device in place)
-            # (read-write: with one block the spreading adds into it)
-            grids = runtime.Output(None, host=np.empty((rc,) + (M,) * d), read_write=True)
-            if blocks > 1:
-                copies = cla.empty(queue, rc * blocks * size, np.float64)
-                spread(queue, (blocks, rc), (1, 1), pts.data, copies.data, np.uint32(n), np.uint32(M),
-                       np.uint32(blocks), np.float64(beta))
-                sum_copies(queue, (_pad(size, local), rc), (local, 1), copies.data, grids.buffer,
-                           np.uint32(size), np.uint32(blocks))
+            if precision == "float-float":
+                grids = spectrum_ff.spread(pts, M, width, beta, blocks)
             else:
-                spread(queue, (1, rc), (1, 1), pts.data, grids.buffer, np.uint32(n), np.uint32(M),
-                       np.uint32(1), np.float64(beta))
-            grids = grids.finish()
+                # the grids the FFT reads are written into host memory (on a CPU device in place)
+                # (read-write: with one block the spreading adds into it)
+                grids = runtime.Output(None, host=np.empty((rc,) + (M,) * d), read_write=True)
+                if blocks > 1:
+                    copies = cla.empty(queue, rc * blocks * size, np.float64)
+                    spread(queue, (blocks, rc), (1, 1), pts.data, copies.data, np.uint32(n), np.uint32(M),
+                           np.uint32(blocks), np.float64(beta))
+                    sum_copies(queue, (_pad(size, local), rc), (local, 1), copies.data, grids.buffer,
+                               np.uint32(size), np.uint32(blocks))
+                else:
+                    spread(queue, (1, rc), (1, 1), pts.data, grids.buffer, np.uint32(n), np.uint32(M),
+                           np.uint32(1), np.float64(beta))
+                grids = grids.finish()
         _accumulate_power(grids, resolution, total)
         if bar is not None:
             bar.update(1)

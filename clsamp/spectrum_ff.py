@@ -1,5 +1,7 @@
-"""The direct power spectrum in float-float, for devices without fp64: the kernels of
-``kernels/spectrum_ff.cl`` and the error bound they keep.
+"""Power spectra in float-float, for devices without fp64: the kernels of
+``kernels/spectrum_ff.cl`` and the error bound of the direct sum; :func:`spread` is the
+fast (NUFFT) path's spreading, whose error, with the FFT in float64 on the host, stays
+within ``tol``·N for ``tol`` >= :data:`FAST_MIN_TOL` (measured, tests/test_float_float.py).
 
 :func:`clsamp.spectrum.power_spectrum` runs these with ``precision="float-float"`` (the
 default on a device without fp64). Phases are exact integers (the coordinate as the 64-bit
@@ -33,7 +35,10 @@ import numpy as np
 from . import runtime
 from .float_float import U2, split
 
-__all__ = ["sincos_tables", "error_bound", "twiddles", "accumulate", "power", "to_complex"]
+__all__ = ["sincos_tables", "error_bound", "twiddles", "accumulate", "power", "to_complex", "spread",
+           "FAST_MIN_TOL"]
+
+FAST_MIN_TOL = 1e-11   # the fast path's floor in float-float (tests/test_float_float.py)
 
 BLOCK = 64             # terms per partial sum, as BLOCK in spectrum_ff.cl
 LANES = 8              # frequencies v a work-item of spectrum_ff_product (float8)
@@ -165,3 +170,56 @@ def power(S):
     r, count_u, tiles, _, lanes = S.shape
     z = to_complex(np.swapaxes(S, -1, -2).reshape(r, count_u, tiles * lanes, 4))
     return np.sum(z.real**2 + z.imag**2, axis=0)
+
+
+def _exp_coefficients():
+    import math
+    return split(np.append(1.0 / np.array([math.factorial(i) for i in range(13)], dtype=np.float64),
+                           math.log(2.0)))
+
+
+def spread(points, M, width, beta, blocks):
+    """The NUFFT's spreading in float-float (``spectrum_spread_ff``): the grids of a block of
+    sets, read back as float64.
+
+    Parameters
+    ----------
+    points : pyopencl.array.Array
+        (r, n, d) float64 points, d = 1 or 2, contiguous (read as bit patterns).
+    M, width, beta : int, int, float
+        Nodes per axis, the kernel's width and shape (:func:`clsamp.nufft.nufft_parameters`).
+    blocks : int
+        Grid copies a set's points are split over (one work-item each).
+
+    Returns
+    -------
+    ndarray of float64, shape (r, M) or (r, M, M)
+        Each node's float-float sum, hi + lo.
+    """
+    import pyopencl.array as cla
+    r, n, d = points.shape
+    q = runtime.queue()
+    size = M ** d
+    pair = np.dtype([("hi", np.float32), ("lo", np.float32)])
+    ff = lambda v: split(np.float64(v)).view(pair)[()]            # noqa: E731  (a float2 argument)
+    defines = {**_defines(), "DIM": d, "WIDTH": width}
+    coef = runtime.table("spectrum_ff_exp", _exp_coefficients, np.float32)
+    limit = runtime.loop_limit()
+    if limit is not None:
+        # llvmpipe's limit: a work-item's points times the loops a point takes
+        blocks = max(blocks, -(-n * 2 * (width * width + 30 * width) // limit))
+        if r * blocks * size * 8 > 2**28:
+            runtime.require_short_loops("the float-float fast spectrum of this many points")
+    copies = cla.zeros(q, (r, blocks, size, 2), np.float32)
+    runtime.kernel("spectrum_ff.cl", "spectrum_spread_ff", defines)(
+        q, (blocks, r), (1, 1), points.data, copies.data, np.uint32(n), np.uint32(M), np.uint32(blocks),
+        ff(beta), ff(2.0 / width), coef.data)
+    if blocks > 1:
+        out = cla.empty(q, (r, size, 2), np.float32)
+        local = runtime.local_size(64)
+        runtime.kernel("spectrum_ff.cl", "spectrum_sum_copies_ff", defines)(
+            q, (-(-size // local) * local, r), (local, 1), copies.data, out.data, np.uint32(size),
+            np.uint32(blocks))
+        copies = out
+    grids = copies.get().astype(np.float64)
+    return (grids[..., 0] + grids[..., 1]).reshape((r,) + (M,) * d)

@@ -119,3 +119,141 @@ __kernel void spectrum_ff_product(__global const float4 *A, __global const float
     s[2] = ih;
     s[3] = il;
 }
+
+#ifdef WIDTH
+/* The NUFFT's spreading (nufft.cl's spectrum_spread) in float-float, for method="fast"
+ * with precision="float-float". A coordinate's fixed-point fraction X times M gives its
+ * node floor(x M) = mul_hi(X, M) and the fraction f of the way to the next exactly
+ * (the low 64 bits), taken to float-float with an error below 2^-48; the weights
+ * phi(z) = exp(-beta z^2 / (1 + sqrt(1 - z^2))) of the WIDTH nodes from i0 = ceil(x M -
+ * WIDTH / 2) are float-float (float_float.h, exp and sqrt as in neighbors_ff.cl), and
+ * so are the grid's sums. Build options: DIM, WIDTH, DELTA_HI, DELTA_LO, BLOCK (unused). */
+
+inline float2 ffs_add(const float2 a, const float2 b)
+{
+    float h, l;
+    FF_ADD(float, a.x, a.y, b.x, b.y, h, l);
+    return (float2)(h, l);
+}
+
+inline float2 ffs_mul(const float2 a, const float2 b)
+{
+    float h, l;
+    FF_MUL(float, a.x, a.y, b.x, b.y, h, l);
+    return (float2)(h, l);
+}
+
+/* exp(x), -87 <= x <= 0: x = k ln 2 + r, |r| <= 0.35, degree-12 Taylor (coef: 1/i!,
+ * i = 0..12, then ln 2) */
+inline float2 ffs_exp(const float2 x, __global const float2 *coef)
+{
+    const int k = (int)(x.x * 1.44269504f - 0.5f);
+    float h, l;
+    FF_MUL_F(float, coef[13].x, coef[13].y, (float)k, h, l);
+    const float2 r = ffs_add(x, (float2)(-h, -l));
+    float2 p = coef[12];
+#pragma unroll
+    for (int i = 11; i >= 0; --i)
+        p = ffs_add(ffs_mul(p, r), coef[i]);
+    return p * as_float((k + 127) << 23);
+}
+
+inline float2 ffs_sqrt(const float2 a)
+{
+    if (a.x <= 0.0f)
+        return (float2)(0.0f);
+    const float s = sqrt(a.x);
+    float ph, pl, h, l;
+    FF_TWO_PROD(float, s, s, ph, pl);
+    FF_FAST_TWO_SUM(float, s, (((a.x - ph) - pl) + a.y) / (2.0f * s), h, l);
+    return (float2)(h, l);
+}
+
+/* The WIDTH weights of one axis into w, the first node returned. */
+inline int axis_weights_ff(const ulong bits, const uint M, const float2 beta, const float2 scale,
+                           __global const float2 *coef, float2 *w)
+{
+    const ulong X = fixed64_from_bits(bits);
+    const int node = (int)mul_hi(X, (ulong)M);
+    const ulong frac = X * (ulong)M;
+    const float2 f = (float2)((float)(uint)(frac >> 40) * 0x1p-24f,
+                              (float)(uint)((frac >> 16) & 0xFFFFFF) * 0x1p-48f);
+    /* i0 = ceil(node + f - WIDTH / 2) */
+#if WIDTH % 2 == 0
+    const int i0 = node - WIDTH / 2 + (frac != 0);
+#else
+    const int i0 = node - (WIDTH + 1) / 2 + (f.x > 0.5f || (f.x == 0.5f && f.y > 0.0f) ? 2 : 1);
+#endif
+    const float2 base = ffs_add((float2)((float)(i0 - node), 0.0f), -f);      /* i0 - x M */
+    for (int l = 0; l < WIDTH; ++l) {
+        const float2 z = ffs_mul(ffs_add(base, (float2)((float)l, 0.0f)), scale);
+        const float2 z2 = ffs_mul(z, z);
+        const float2 root = ffs_sqrt(ffs_add((float2)(1.0f, 0.0f), -z2));
+        const float2 den = ffs_add((float2)(1.0f, 0.0f), root);
+        float h, l2;
+        FF_DIV(float, z2.x, z2.y, den.x, den.y, h, l2);
+        const float2 arg = ffs_mul((float2)(h, l2), beta);
+        w[l] = ffs_exp(-arg, coef);
+    }
+    return i0;
+}
+
+inline int wrap_ff(const int i, const int M) { return i < 0 ? i + M : (i >= M ? i - M : i); }
+
+/* As spectrum_spread: every point of block c of realization r adds its tensor-product
+ * kernel to the WIDTH^DIM nodes nearest to it, into the work-item's own grid copy, in
+ * float-float. Grid (copies, realizations). */
+__kernel void spectrum_spread_ff(__global const ulong *points, __global float2 *copies,
+                                 const uint n, const uint M, const uint blocks, const float2 beta,
+                                 const float2 scale, __global const float2 *coef)
+{
+    const uint c = get_global_id(0);
+    const uint r = get_global_id(1);
+    if (c >= blocks)
+        return;
+#if DIM == 1
+    const size_t size = M;
+#else
+    const size_t size = (size_t)M * M;
+#endif
+    __global float2 *g = copies + ((size_t)r * blocks + c) * size;     /* zeroed by the host */
+    const uint per = (n + blocks - 1) / blocks;
+    const uint k0 = c * per, k1 = min(n, k0 + per);
+    __global const ulong *p = points + (size_t)r * n * DIM;
+    for (uint k = k0; k < k1; ++k) {
+        float2 wx[WIDTH];
+        const int i0 = axis_weights_ff(p[k * DIM], M, beta, scale, coef, wx);
+#if DIM == 1
+        for (int l = 0; l < WIDTH; ++l) {
+            __global float2 *o = g + wrap_ff(i0 + l, M);
+            *o = ffs_add(*o, wx[l]);
+        }
+#else
+        float2 wy[WIDTH];
+        const int j0 = axis_weights_ff(p[k * 2 + 1], M, beta, scale, coef, wy);
+        for (int l = 0; l < WIDTH; ++l) {
+            __global float2 *row = g + (size_t)wrap_ff(i0 + l, M) * M;
+            for (int m = 0; m < WIDTH; ++m) {
+                __global float2 *o = row + wrap_ff(j0 + m, M);
+                *o = ffs_add(*o, ffs_mul(wx[l], wy[m]));
+            }
+        }
+#endif
+    }
+}
+
+/* out[r][i] = sum_c copies[r][c][i] in float-float, in order of c. Grid (size, realizations). */
+__kernel void spectrum_sum_copies_ff(__global const float2 *copies, __global float2 *out,
+                                     const uint size, const uint blocks)
+{
+    const uint i = get_global_id(0);
+    const uint r = get_global_id(1);
+    if (i >= size)
+        return;
+    __global const float2 *src = copies + (size_t)r * blocks * size + i;
+    float2 sum = (float2)(0.0f);
+    for (uint c = 0; c < blocks; ++c)
+        sum = ffs_add(sum, src[(size_t)c * size]);
+    out[(size_t)r * size + i] = sum;
+}
+#endif

@@ -148,8 +148,8 @@ def test_without_fp64_the_default_is_float_float():
             assert np.array_equal(got, explicit)
         with pytest.raises(NoDeviceError, match="'precision' 'double' needs fp64"):
             power_spectrum(pts, 32, precision="double", progress=False)
-        with pytest.raises(NoDeviceError, match="fp64|double"):
-            power_spectrum(pts, 32, method="fast", tol=1e-6, precision=None, progress=False)
+        fast = power_spectrum(pts, 32, method="fast", tol=1e-6, progress=False)
+        assert np.max(np.abs(fast - explicit)) <= 2e-6 * pts.shape[1]
     assert check_precision(None) == "double"
 
 
@@ -157,8 +157,8 @@ def test_precision_is_checked_in_one_line():
     pts = _sets(2, n=16, r=1)
     with pytest.raises(InvalidArgumentError, match="'precision' must be one of 'double', 'float-float'"):
         power_spectrum(pts, 16, precision="single")
-    with pytest.raises(InvalidArgumentError, match="'method' 'fast'.*float-float"):
-        power_spectrum(pts, 16, method="fast", tol=1e-6, precision="float-float")
+    with pytest.raises(InvalidArgumentError, match="'tol' must be >= 1e-11 for method='fast' in float-float"):
+        power_spectrum(pts, 16, method="fast", tol=1e-12, precision="float-float")
 
 
 def test_a_grid_in_float_float():
@@ -387,3 +387,34 @@ def test_device_arrays_are_checked_without_fp64():
                                   "anchored_counts.cl", "points.cl", "float_float_probe.cl"])
 def test_these_kernels_use_no_double_without_fp64(file):
     assert not runtime.needs_fp64(file)
+
+
+@pytest.mark.parametrize("d", [1, 2])
+@pytest.mark.parametrize("tol", [1e-3, 1e-7, 1e-11])
+def test_the_fast_spectrum_in_float_float_meets_its_tolerance(d, tol):
+    """Float-float spreading (exact node and fraction from the fixed-point coordinate),
+    the FFT in float64: within tol·N of the exact spectrum, as the double path."""
+    pts = _sets(d, n=1500, r=2, seed=30 + d)
+    want = direct_reference(pts, 48)
+    got = power_spectrum(pts, 48, method="fast", tol=tol, precision="float-float", progress=False)
+    double = power_spectrum(pts, 48, method="fast", tol=tol, precision="double", progress=False)
+    assert np.max(np.abs(got - want)) <= tol * pts.shape[1]
+    assert np.max(np.abs(got - double)) <= 1e-12 * pts.shape[1]
+
+
+def test_the_fast_spectrum_in_float_float_with_many_blocks():
+    """Sets long enough to be spread over several grid copies, summed in float-float."""
+    pts = _sets(2, n=5000, r=1, seed=3)
+    got = power_spectrum(pts, 32, method="fast", tol=1e-9, precision="float-float", progress=False)
+    assert np.max(np.abs(got - direct_reference(pts, 32))) <= 1e-9 * 5000
+
+
+@pytest.mark.parametrize("device", WITHOUT_FP64, ids=lambda d: f"{d.index}-{d.platform[:12]}")
+def test_a_device_without_fp64_computes_the_fast_spectrum(device):
+    pts = _sets(2, n=800, r=1)
+    runtime.use_device(device.index)
+    try:
+        got = power_spectrum(pts, 32, method="fast", tol=1e-9, progress=False)
+    finally:
+        runtime.use_device(DEFAULT.index)
+    assert np.max(np.abs(got - direct_reference(pts, 32))) <= 1e-9 * 800

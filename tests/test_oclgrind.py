@@ -153,6 +153,14 @@ def _spectrum_direct_ff():
     assert np.max(np.abs(got - want)) <= error_bound(pts.shape[1])
 
 
+@check("spectrum-fast-float-float")
+def _spectrum_fast_ff():
+    pts = _points()
+    got = clsamp.power_spectrum(pts, 32, method="fast", tol=1e-6, precision="float-float", progress=False)
+    want = clsamp.power_spectrum(pts, 32, method="direct", backend="numpy", progress=False)
+    assert np.max(np.abs(got - want)) <= 1e-6 * pts.shape[1]
+
+
 @check("spectrum-fast")
 def _spectrum_fast():
     pts = _points()

@@ -36,7 +36,7 @@ CAPABILITIES = {
     "distance samplers": ("dart_throwing.cl", "ccvt.cl"),
     "spectra": ("spectrum.cl", "nufft.cl"),
     # without double precision (precision="float-float")
-    "direct spectra in float-float": ("spectrum_ff.cl",),
+    "spectra in float-float": ("spectrum_ff.cl",),
     "discrepancies in float-float": ("discrepancy_ff.cl",),
     "pair correlation and nearest neighbours in float-float": ("neighbors_ff.cl",),
     # comparisons only: exact on every device (bit patterns where there is no fp64)
