@@ -129,6 +129,16 @@ def _float_float_rows(devices, quick):
     ref = spectrum.direct_reference(pts, R)
     for device in devices:
         on_device(device)
+        t_ff, ff = timed(lambda: power_spectrum(pts, R, method="fast", tol=1e-6, precision="float-float",
+                                                progress=False), repeats=3)
+        quality = f"max err {np.abs(ff - ref).max() / n:.1e}"
+        t_d = None
+        if device.fp64:
+            t_d, fast = timed(lambda: power_spectrum(pts, R, method="fast", tol=1e-6, precision="double",
+                                                     progress=False), repeats=3)
+            quality += f"; double {np.abs(fast - ref).max() / n:.1e}"
+        rows.append(Row("spectrum fast tol=1e-06 float-float", f"{r}x{n} at {R}^2", short_name(device), t_ff,
+                        "clsamp fast in double" if device.fp64 else "", t_d, quality))
         t_ff, ff = timed(lambda: power_spectrum(pts, R, method="direct", precision="float-float",
                                                 progress=False), repeats=3)
         quality = f"max err {np.abs(ff - ref).max() / n:.1e}"
