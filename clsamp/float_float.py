@@ -8,16 +8,19 @@ Joldes, Muller & Popescu 2017, are stated there). :func:`check_precision` is the
 the ``precision=`` argument is read.
 """
 
+import math
+
 import numpy as np
 
 from . import runtime
 from .errors import NoDeviceError
 from .validation import check_choice
 
-__all__ = ["PRECISIONS", "U2", "check_precision", "split", "join"]
+__all__ = ["PRECISIONS", "U2", "check_precision", "split", "join", "exp_coefficients", "argument"]
 
 PRECISIONS = ("double", "float-float")
 U2 = 2.0**-48          # u^2 with u = 2^-24: the unit in which float-float error bounds count
+_FLOAT2 = np.dtype([("hi", np.float32), ("lo", np.float32)])
 
 
 def check_precision(precision, backend="opencl"):
@@ -102,3 +105,30 @@ def join(pairs):
     """
     pairs = np.asarray(pairs)
     return pairs[..., 0].astype(np.float64) + pairs[..., 1].astype(np.float64)
+
+
+def exp_coefficients():
+    """What ``ff2_exp`` in ``kernels/float_float.h`` reads: 1/i! for i = 0..12, then ln 2, as
+    float-float pairs.
+
+    Returns
+    -------
+    ndarray of float32, shape (14, 2)
+    """
+    return split(np.append(1.0 / np.array([math.factorial(i) for i in range(13)], dtype=np.float64),
+                           math.log(2.0)))
+
+
+def argument(value):
+    """A float64 number as a ``float2`` kernel argument (hi, lo).
+
+    Parameters
+    ----------
+    value : float
+
+    Returns
+    -------
+    numpy.void
+        A scalar of a (hi, lo) float32 record, which pyopencl passes as a float2.
+    """
+    return split(np.float64(value)).view(_FLOAT2)[()]

@@ -33,7 +33,7 @@ References
 import numpy as np
 
 from . import runtime
-from .float_float import U2, split
+from .float_float import U2, argument, exp_coefficients, split
 
 __all__ = ["sincos_tables", "error_bound", "twiddles", "accumulate", "power", "to_complex", "spread",
            "FAST_MIN_TOL"]
@@ -172,12 +172,6 @@ def power(S):
     return np.sum(z.real**2 + z.imag**2, axis=0)
 
 
-def _exp_coefficients():
-    import math
-    return split(np.append(1.0 / np.array([math.factorial(i) for i in range(13)], dtype=np.float64),
-                           math.log(2.0)))
-
-
 def spread(points, M, width, beta, blocks):
     """The NUFFT's spreading in float-float (``spectrum_spread_ff``): the grids of a block of
     sets, read back as float64.
@@ -200,10 +194,8 @@ def spread(points, M, width, beta, blocks):
     r, n, d = points.shape
     q = runtime.queue()
     size = M ** d
-    pair = np.dtype([("hi", np.float32), ("lo", np.float32)])
-    ff = lambda v: split(np.float64(v)).view(pair)[()]            # noqa: E731  (a float2 argument)
     defines = {**_defines(), "DIM": d, "WIDTH": width}
-    coef = runtime.table("spectrum_ff_exp", _exp_coefficients, np.float32)
+    coef = runtime.table("float_float exp", exp_coefficients, np.float32)
     limit = runtime.loop_limit()
     if limit is not None:
         # llvmpipe's limit: a work-item's points times the loops a point takes
@@ -213,7 +205,7 @@ def spread(points, M, width, beta, blocks):
     copies = cla.zeros(q, (r, blocks, size, 2), np.float32)
     runtime.kernel("spectrum_ff.cl", "spectrum_spread_ff", defines)(
         q, (blocks, r), (1, 1), points.data, copies.data, np.uint32(n), np.uint32(M), np.uint32(blocks),
-        ff(beta), ff(2.0 / width), coef.data)
+        argument(beta), argument(2.0 / width), coef.data)
     if blocks > 1:
         out = cla.empty(q, (r, size, 2), np.float32)
         local = runtime.local_size(64)

@@ -74,4 +74,56 @@
         FF_ADD(T, p3h_, p3l_, p4h_, p4l_, zih, zil);                              \
     } while (0)
 
+/* Scalar float-float values held as float2 (.x hi, .y lo): the operations above as
+ * functions, and the square root and exponential the pair statistics and the NUFFT's
+ * spreading need. */
+inline float2 ff2_add(const float2 a, const float2 b)
+{
+    float h, l;
+    FF_ADD(float, a.x, a.y, b.x, b.y, h, l);
+    return (float2)(h, l);
+}
+
+inline float2 ff2_mul(const float2 a, const float2 b)
+{
+    float h, l;
+    FF_MUL(float, a.x, a.y, b.x, b.y, h, l);
+    return (float2)(h, l);
+}
+
+/* a < b for normalized pairs (|lo| <= ulp(hi) / 2): by hi, then lo; exact */
+inline int ff2_less(const float2 a, const float2 b) { return a.x < b.x || (a.x == b.x && a.y < b.y); }
+
+/* sqrt(a) for a >= 0: the float square root, then one Newton correction from the exact
+ * remainder a - s^2; relative error below 32u^2 with OpenCL's 3-ulp sqrt and 2.5-ulp
+ * division (the bounds of clsamp.metrics.neighbors count it so). */
+inline float2 ff2_sqrt(const float2 a)
+{
+    if (a.x <= 0.0f)
+        return (float2)(0.0f);
+    const float s = sqrt(a.x);
+    float ph, pl, h, l;
+    FF_TWO_PROD(float, s, s, ph, pl);
+    FF_FAST_TWO_SUM(float, s, (((a.x - ph) - pl) + a.y) / (2.0f * s), h, l);
+    return (float2)(h, l);
+}
+
+/* exp(x) for -87 <= x <= 87: x = k ln 2 + r with |r| <= 0.35, the degree-12 Taylor
+ * polynomial of exp(r) in Horner form (its remainder below 2u^2), times 2^k exactly. The
+ * coefficients 1/i! (coef[0..12]) and ln 2 (coef[13]) come split from the host
+ * (clsamp.float_float.exp_coefficients). */
+inline float2 ff2_exp(const float2 x, __global const float2 *coef)
+{
+    const float v = x.x * 1.44269504f;
+    const int k = (int)(v < 0.0f ? v - 0.5f : v + 0.5f);      /* the nearest integer */
+    float h, l;
+    FF_MUL_F(float, coef[13].x, coef[13].y, (float)k, h, l);
+    const float2 r = ff2_add(x, (float2)(-h, -l));
+    float2 p = coef[12];
+#pragma unroll
+    for (int i = 11; i >= 0; --i)
+        p = ff2_add(ff2_mul(p, r), coef[i]);
+    return p * as_float((k + 127) << 23);
+}
+
 #endif

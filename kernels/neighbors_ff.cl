@@ -23,31 +23,17 @@
 #define PERIODIC 1
 #endif
 
-inline float2 ff_sum(const float2 a, const float2 b)
-{
-    float h, l;
-    FF_ADD(float, a.x, a.y, b.x, b.y, h, l);
-    return (float2)(h, l);
-}
 
-inline float2 ff_square(const float2 a)
-{
-    float h, l;
-    FF_MUL(float, a.x, a.y, a.x, a.y, h, l);
-    return (float2)(h, l);
-}
 
-/* comparisons of normalized pairs: by hi, then lo */
-inline int ff_below(const float2 a, const float2 b) { return a.x < b.x || (a.x == b.x && a.y < b.y); }
 
 /* min(|a - b|, 1 - |a - b|) on the torus, |a - b| in the cube */
 inline float2 ff_delta(const float2 a, const float2 b)
 {
-    float2 t = ff_sum(a, -b);
+    float2 t = ff2_add(a, -b);
     t = t.x < 0.0f ? -t : t;
 #if PERIODIC
-    const float2 u = ff_sum((float2)(1.0f, 0.0f), -t);
-    t = ff_below(u, t) ? u : t;
+    const float2 u = ff2_add((float2)(1.0f, 0.0f), -t);
+    t = ff2_less(u, t) ? u : t;
 #endif
     return t;
 }
@@ -77,10 +63,13 @@ __kernel void nearest_neighbor_ff(__global const float2 *pts, __global const uin
             if (j == gi)
                 continue;
             __global const float2 *y = pts + (size_t)j * D;
-            float2 d2 = ff_square(ff_delta(x[0], y[0]));
-            for (int k = 1; k < D; ++k)
-                d2 = ff_sum(d2, ff_square(ff_delta(x[k], y[k])));
-            if (ff_below(d2, nearest)) {
+            float2 t = ff_delta(x[0], y[0]);
+            float2 d2 = ff2_mul(t, t);
+            for (int k = 1; k < D; ++k) {
+                t = ff_delta(x[k], y[k]);
+                d2 = ff2_add(d2, ff2_mul(t, t));
+            }
+            if (ff2_less(d2, nearest)) {
                 nearest = d2;
                 found = j;
             }
@@ -90,39 +79,6 @@ __kernel void nearest_neighbor_ff(__global const float2 *pts, __global const uin
 }
 
 #ifdef NR
-/* sqrt(a) for a >= 0: the float square root, then one Newton correction from the exact
- * remainder a - s^2 (relative error below 32u^2 with OpenCL's 3-ulp sqrt and 2.5-ulp
- * division; clsamp.metrics.neighbors.pcf_float_float_bound counts it so). */
-inline float2 ff_sqrt(const float2 a)
-{
-    if (a.x <= 0.0f)
-        return (float2)(0.0f);
-    const float s = sqrt(a.x);
-    float ph, pl, h, l;
-    FF_TWO_PROD(float, s, s, ph, pl);
-    const float c = (((a.x - ph) - pl) + a.y) / (2.0f * s);
-    FF_FAST_TWO_SUM(float, s, c, h, l);
-    return (float2)(h, l);
-}
-
-/* exp(x) for -87 <= x <= 87 (here -12.5 .. 12.5): x = k ln 2 + r with |r| <= 0.35, the degree-12 Taylor
- * polynomial of exp(r) in Horner form (its remainder below 2u^2), times 2^k exactly. The
- * coefficients 1/i! and ln 2 come split from the host (coef[0..12], coef[13] = ln 2). */
-inline float2 ff_exp(const float2 x, __global const float2 *coef)
-{
-    const float v = x.x * 1.44269504f;
-    const int k = (int)(v < 0.0f ? v - 0.5f : v + 0.5f);      /* the nearest integer */
-    float h, l;
-    FF_MUL_F(float, coef[13].x, coef[13].y, (float)k, h, l);
-    const float2 r = ff_sum(x, (float2)(-h, -l));
-    float2 p = coef[12];
-#pragma unroll
-    for (int i = 11; i >= 0; --i) {
-        FF_MUL(float, p.x, p.y, r.x, r.y, h, l);
-        p = ff_sum((float2)(h, l), coef[i]);
-    }
-    return p * as_float((k + 127) << 23);
-}
 
 /* Grid (items, realizations): as pcf_sums in neighbors.cl (every unordered pair within
  * reach once, through the forward half of the 3^D stencil), in float-float:
@@ -133,8 +89,8 @@ inline float2 ff_exp(const float2 x, __global const float2 *coef)
  * recurrence, two exp a pair; others evaluate each radius' Gaussian. */
 inline int within_cut(const float2 radius, const float2 s, const float2 cut)
 {
-    const float2 dt = ff_sum(radius, -s);
-    return !ff_below(cut, dt.x < 0.0f ? -dt : dt);
+    const float2 dt = ff2_add(radius, -s);
+    return !ff2_less(cut, dt.x < 0.0f ? -dt : dt);
 }
 
 __kernel void pcf_sums_ff(__global const float2 *pts, __global const uint *cell,
@@ -169,30 +125,30 @@ __kernel void pcf_sums_ff(__global const float2 *pts, __global const uint *cell,
             for (uint j = o == centre ? (uint)gi + 1 : start[slot]; j < s1; ++j) {
                 __global const float2 *y = pts + (size_t)j * D;
                 float2 t = ff_delta(x[0], y[0]);
-                float2 d2 = ff_square(t);
+                float2 d2 = ff2_mul(t, t);
 #if !PERIODIC
-                float2 cover = ff_sum((float2)(1.0f, 0.0f), -t);
+                float2 cover = ff2_add((float2)(1.0f, 0.0f), -t);
 #endif
                 for (int k = 1; k < D; ++k) {
                     t = ff_delta(x[k], y[k]);
-                    d2 = ff_sum(d2, ff_square(t));
+                    d2 = ff2_add(d2, ff2_mul(t, t));
 #if !PERIODIC
                     float h, l;
-                    const float2 side = ff_sum((float2)(1.0f, 0.0f), -t);
+                    const float2 side = ff2_add((float2)(1.0f, 0.0f), -t);
                     FF_MUL(float, cover.x, cover.y, side.x, side.y, h, l);
                     cover = (float2)(h, l);
 #endif
                 }
-                if (!ff_below(d2, reach2))
+                if (!ff2_less(d2, reach2))
                     continue;
-                const float2 s = ff_sqrt(d2);
+                const float2 s = ff2_sqrt(d2);
 #if UNIFORM
                 /* the radii within the cut, a contiguous run k0 .. k1: from a float guess,
                  * moved by the float-float test |radius_k - s| <= cut */
                 int k0 = clamp((int)((s.x - cut.x - radii[0].x) * inv_step), 0, NR - 1);
                 while (k0 > 0 && within_cut(radii[k0 - 1], s, cut))
                     --k0;
-                while (k0 < NR && !within_cut(radii[k0], s, cut) && ff_below(radii[k0], s))
+                while (k0 < NR && !within_cut(radii[k0], s, cut) && ff2_less(radii[k0], s))
                     ++k0;
                 if (k0 == NR || !within_cut(radii[k0], s, cut))
                     continue;
@@ -201,21 +157,21 @@ __kernel void pcf_sums_ff(__global const float2 *pts, __global const uint *cell,
                     ++k1;
                 /* e_k = exp(-t_k^2 / 2 sigma^2) along t_k = t_k0 + (k - k0) step:
                  * e_{k+1} = e_k a_k, a_k = exp(-(2 t_k step + step^2) / 2 sigma^2), a_{k+1} = a_k b */
-                const float2 t0 = ff_sum(radii[k0], -s);
+                const float2 t0 = ff2_add(radii[k0], -s);
                 float h, l;
                 FF_MUL(float, t0.x, t0.y, t0.x, t0.y, h, l);
                 FF_MUL(float, h, l, inv2s2.x, inv2s2.y, h, l);
-                float2 e = ff_exp((float2)(-h, -l), coef);
+                float2 e = ff2_exp((float2)(-h, -l), coef);
                 FF_MUL(float, t0.x, t0.y, step.x, step.y, h, l);
-                const float2 twice = ff_sum((float2)(2.0f * h, 2.0f * l), step2);
+                const float2 twice = ff2_add((float2)(2.0f * h, 2.0f * l), step2);
                 FF_MUL(float, twice.x, twice.y, inv2s2.x, inv2s2.y, h, l);
-                float2 a = ff_exp((float2)(-h, -l), coef);
+                float2 a = ff2_exp((float2)(-h, -l), coef);
 #if !PERIODIC
                 FF_DIV(float, e.x, e.y, cover.x, cover.y, h, l);
                 e = (float2)(h, l);
 #endif
                 for (int k = k0; k <= k1; ++k) {
-                    hist[k] = ff_sum(hist[k], e);
+                    hist[k] = ff2_add(hist[k], e);
                     FF_MUL(float, e.x, e.y, a.x, a.y, h, l);
                     e = (float2)(h, l);
                     FF_MUL(float, a.x, a.y, b.x, b.y, h, l);
@@ -223,18 +179,18 @@ __kernel void pcf_sums_ff(__global const float2 *pts, __global const uint *cell,
                 }
 #else
                 for (int k = 0; k < NR; ++k) {
-                    const float2 dt = ff_sum(radii[k], -s);
-                    if (ff_below(cut, dt.x < 0.0f ? -dt : dt))
+                    const float2 dt = ff2_add(radii[k], -s);
+                    if (ff2_less(cut, dt.x < 0.0f ? -dt : dt))
                         continue;
                     float h, l;
                     FF_MUL(float, dt.x, dt.y, dt.x, dt.y, h, l);
                     FF_MUL(float, h, l, inv2s2.x, inv2s2.y, h, l);
-                    float2 e = ff_exp((float2)(-h, -l), coef);
+                    float2 e = ff2_exp((float2)(-h, -l), coef);
 #if !PERIODIC
                     FF_DIV(float, e.x, e.y, cover.x, cover.y, h, l);
                     e = (float2)(h, l);
 #endif
-                    hist[k] = ff_sum(hist[k], e);
+                    hist[k] = ff2_add(hist[k], e);
                 }
 #endif
             }

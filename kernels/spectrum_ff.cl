@@ -126,50 +126,10 @@ __kernel void spectrum_ff_product(__global const float4 *A, __global const float
  * node floor(x M) = mul_hi(X, M) and the fraction f of the way to the next exactly
  * (the low 64 bits), taken to float-float with an error below 2^-48; the weights
  * phi(z) = exp(-beta z^2 / (1 + sqrt(1 - z^2))) of the WIDTH nodes from i0 = ceil(x M -
- * WIDTH / 2) are float-float (float_float.h, exp and sqrt as in neighbors_ff.cl), and
+ * WIDTH / 2) are float-float (float_float.h: ff2_sqrt, FF_DIV, ff2_exp), and
  * so are the grid's sums. Build options: DIM, WIDTH, DELTA_HI, DELTA_LO, BLOCK (unused). */
 
-inline float2 ffs_add(const float2 a, const float2 b)
-{
-    float h, l;
-    FF_ADD(float, a.x, a.y, b.x, b.y, h, l);
-    return (float2)(h, l);
-}
 
-inline float2 ffs_mul(const float2 a, const float2 b)
-{
-    float h, l;
-    FF_MUL(float, a.x, a.y, b.x, b.y, h, l);
-    return (float2)(h, l);
-}
-
-/* exp(x), -87 <= x <= 0: x = k ln 2 + r, |r| <= 0.35, degree-12 Taylor (coef: 1/i!,
- * i = 0..12, then ln 2) */
-inline float2 ffs_exp(const float2 x, __global const float2 *coef)
-{
-    const int k = (int)(x.x * 1.44269504f - 0.5f);
-    float h, l;
-    FF_MUL_F(float, coef[13].x, coef[13].y, (float)k, h, l);
-    const float2 r = ffs_add(x, (float2)(-h, -l));
-    float2 p = coef[12];
-#pragma unroll
-    for (int i = 11; i >= 0; --i)
-        p = ffs_add(ffs_mul(p, r), coef[i]);
-    return p * as_float((k + 127) << 23);
-}
-
-inline float2 ffs_sqrt(const float2 a)
-{
-    if (a.x <= 0.0f)
-        return (float2)(0.0f);
-    const float s = sqrt(a.x);
-    float ph, pl, h, l;
-    FF_TWO_PROD(float, s, s, ph, pl);
-    FF_FAST_TWO_SUM(float, s, (((a.x - ph) - pl) + a.y) / (2.0f * s), h, l);
-    return (float2)(h, l);
-}
-
-/* The WIDTH weights of one axis into w, the first node returned. */
 inline int axis_weights_ff(const ulong bits, const uint M, const float2 beta, const float2 scale,
                            __global const float2 *coef, float2 *w)
 {
@@ -184,16 +144,16 @@ inline int axis_weights_ff(const ulong bits, const uint M, const float2 beta, co
 #else
     const int i0 = node - (WIDTH + 1) / 2 + (f.x > 0.5f || (f.x == 0.5f && f.y > 0.0f) ? 2 : 1);
 #endif
-    const float2 base = ffs_add((float2)((float)(i0 - node), 0.0f), -f);      /* i0 - x M */
+    const float2 base = ff2_add((float2)((float)(i0 - node), 0.0f), -f);      /* i0 - x M */
     for (int l = 0; l < WIDTH; ++l) {
-        const float2 z = ffs_mul(ffs_add(base, (float2)((float)l, 0.0f)), scale);
-        const float2 z2 = ffs_mul(z, z);
-        const float2 root = ffs_sqrt(ffs_add((float2)(1.0f, 0.0f), -z2));
-        const float2 den = ffs_add((float2)(1.0f, 0.0f), root);
+        const float2 z = ff2_mul(ff2_add(base, (float2)((float)l, 0.0f)), scale);
+        const float2 z2 = ff2_mul(z, z);
+        const float2 root = ff2_sqrt(ff2_add((float2)(1.0f, 0.0f), -z2));
+        const float2 den = ff2_add((float2)(1.0f, 0.0f), root);
         float h, l2;
         FF_DIV(float, z2.x, z2.y, den.x, den.y, h, l2);
-        const float2 arg = ffs_mul((float2)(h, l2), beta);
-        w[l] = ffs_exp(-arg, coef);
+        const float2 arg = ff2_mul((float2)(h, l2), beta);
+        w[l] = ff2_exp(-arg, coef);
     }
     return i0;
 }
@@ -226,7 +186,7 @@ __kernel void spectrum_spread_ff(__global const ulong *points, __global float2 *
 #if DIM == 1
         for (int l = 0; l < WIDTH; ++l) {
             __global float2 *o = g + wrap_ff(i0 + l, M);
-            *o = ffs_add(*o, wx[l]);
+            *o = ff2_add(*o, wx[l]);
         }
 #else
         float2 wy[WIDTH];
@@ -235,7 +195,7 @@ __kernel void spectrum_spread_ff(__global const ulong *points, __global float2 *
             __global float2 *row = g + (size_t)wrap_ff(i0 + l, M) * M;
             for (int m = 0; m < WIDTH; ++m) {
                 __global float2 *o = row + wrap_ff(j0 + m, M);
-                *o = ffs_add(*o, ffs_mul(wx[l], wy[m]));
+                *o = ff2_add(*o, ff2_mul(wx[l], wy[m]));
             }
         }
 #endif
@@ -253,7 +213,7 @@ __kernel void spectrum_sum_copies_ff(__global const float2 *copies, __global flo
     __global const float2 *src = copies + (size_t)r * blocks * size + i;
     float2 sum = (float2)(0.0f);
     for (uint c = 0; c < blocks; ++c)
-        sum = ffs_add(sum, src[(size_t)c * size]);
+        sum = ff2_add(sum, src[(size_t)c * size]);
     out[(size_t)r * size + i] = sum;
 }
 #endif

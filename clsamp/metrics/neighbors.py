@@ -15,13 +15,12 @@ import numpy as np
 
 from .. import runtime
 from ..errors import InvalidArgumentError
-from ..float_float import U2, check_precision, split
+from ..float_float import U2, argument, check_precision, exp_coefficients, split
 from ..geometry.cells import cells_for, sorted_by_cell
 from ..geometry.torus import distance2
 from ..validation import check_bool, check_choice, check_points, point_sets
 
 BACKENDS = ("opencl", "numpy")
-_FLOAT2 = np.dtype([("hi", np.float32), ("lo", np.float32)])      # a float2 kernel argument
 RADII = 100                  # default radii: 100, up to RADII_SPAN mean spacings
 RADII_SPAN = 3.0
 SIGMA_SPACING = 0.05         # default sigma: this many mean spacings
@@ -208,8 +207,7 @@ def _pcf_sums_ff(pts, cell, start, r, n, d, cells, radii, sigma, cut, reach, per
         if ppi * stencil * (len(radii) + 2) > limit // 2:
             runtime.require_short_loops("the float-float pair correlation at these radii")
     items = -(-n // ppi)
-    coef = np.append(1.0 / np.array([math.factorial(i) for i in range(13)], dtype=np.float64), math.log(2.0))
-    ff = lambda v: split(np.float64(v)).view(_FLOAT2)[()]        # noqa: E731  (a float2 argument)
+    coef = runtime.table("float_float exp", exp_coefficients, np.float32)
     out = runtime.Output((r, items, len(radii), 2), np.float32,
                          host=np.empty((r, items, len(radii), 2), np.float32))
     step = float(radii[1] - radii[0]) if len(radii) > 1 else 1.0
@@ -218,9 +216,10 @@ def _pcf_sums_ff(pts, cell, start, r, n, d, cells, radii, sigma, cut, reach, per
                                                       "PERIODIC": int(periodic), "UNIFORM": int(uniform)})(
         runtime.queue(), (items, r), None,
         *(runtime.to_device(a).data for a in (split(pts), cell, start)), np.uint32(n), np.int32(cells),
-        np.uint32(3 ** d if cells > 1 else 1), ff(reach * reach), runtime.to_device(split(radii)).data,
-        ff(inv2s2), ff(cut * sigma), runtime.to_device(split(coef)).data, ff(step), ff(step * step),
-        ff(math.exp(-2.0 * step * step * inv2s2)), np.float32(1.0 / step), np.uint32(items), out.buffer)
+        np.uint32(3 ** d if cells > 1 else 1), argument(reach * reach), runtime.to_device(split(radii)).data,
+        argument(inv2s2), argument(cut * sigma), coef.data, argument(step), argument(step * step),
+        argument(math.exp(-2.0 * step * step * inv2s2)), np.float32(1.0 / step), np.uint32(items),
+        out.buffer)
     pairs = out.finish().astype(np.float64)
     return (pairs[..., 0] + pairs[..., 1]).sum(axis=1)
 
