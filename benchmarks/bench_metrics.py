@@ -8,7 +8,9 @@
   NumPy twin (2-D prefix counts) where it fits in memory;
 - the pair correlation function of 64 x 4096 points (quick: 16 x 1024), 100 radii up to
   3 mean spacings, against a vectorised NumPy estimator over periodic cKDTree pairs;
-- nearest-neighbour distances of the same sets against cKDTree.query(k=2, boxsize=1).
+- nearest-neighbour distances of the same sets against cKDTree.query(k=2, boxsize=1);
+- the float-float paths (``precision="float-float"``, what a device without fp64
+  computes: the CD, the PCF, nearest neighbours) against the double ones on each device.
 
 Memory is the peak of the OpenCL buffers each call holds at once (common.device_memory).
 """
@@ -111,7 +113,7 @@ def run(devices, quick):
     sigma = neighbors.SIGMA_SPACING * neighbors.mean_spacing(n_pcf, 2)
     t_peer_pcf, g_peer = timed(lambda: _pcf_peer(sets, radii, sigma), repeats=1 if not quick else 2)
     t_peer_nn, nn_peer = timed(lambda: _nn_peer(sets), repeats=3)
-    for device in devices:
+    for device in [d for d in devices if d.fp64]:       # without fp64: the float-float rows only
         on_device(device)
         dev = short_name(device)
         for method in SCIPY_METHODS:
@@ -147,6 +149,36 @@ def run(devices, quick):
         rows.append(Row("nearest neighbours", f"{r_pcf}x{n_pcf}", dev, t_nn,
                         "cKDTree.query k=2 boxsize=1", t_peer_nn,
                         f"max |diff| {np.max(np.abs(nn - nn_peer)):.1e}; mem {_mib(memory)}"))
+    return rows + _float_float_rows(devices, quick)
+
+
+def _float_float_rows(devices, quick):
+    """The float-float paths (what a device without fp64 computes) against the double ones
+    on the same device; errors against the NumPy twins."""
+    rows = []
+    x = _points(1, 1024 if quick else 4096, 4, seed=5)[0]
+    sets = _points(2, 1024 if quick else 4096, 2, seed=6)
+    cases = [("discrepancy CD", f"{len(x)} x 4-D", lambda p: clsamp.discrepancy(x, "CD", precision=p),
+              l2.discrepancy_reference(x, "CD")),
+             ("pair correlation", f"{len(sets)}x{sets.shape[1]}, 100 radii",
+              lambda p: clsamp.pair_correlation(sets, precision=p)[1],
+              clsamp.pair_correlation(sets, backend="numpy")[1]),
+             ("nearest neighbours", f"{len(sets)}x{sets.shape[1]}",
+              lambda p: clsamp.nearest_neighbor_distances(sets, precision=p),
+              clsamp.nearest_neighbor_distances(sets, backend="numpy"))]
+    for device in devices:
+        on_device(device)
+        for case, size, fn, ref in cases:
+            t_ff, ff = timed(lambda fn=fn: fn("float-float"), repeats=3)
+            quality = f"max err {np.max(np.abs(np.asarray(ff) - ref)):.1e}"
+            if device.fp64:
+                t_d, dbl = timed(lambda fn=fn: fn("double"), repeats=3)
+                quality += f"; double {np.max(np.abs(np.asarray(dbl) - ref)):.1e}"
+                rows.append(Row(f"{case} float-float", size, short_name(device), t_ff, "clsamp in double",
+                                t_d, quality))
+            else:
+                rows.append(Row(f"{case} float-float", size, short_name(device), t_ff,
+                                quality=quality + "; double: no fp64 on this device"))
     return rows
 
 

@@ -1,8 +1,9 @@
 """Power spectra: the expected spectrum of r realizations of N points at R², clsamp's exact
 (direct) and NUFFT (fast) paths against finufft (nufft2d1, isign=-1, same tolerance) and the
-NumPy separable GEMM (``clsamp.spectrum.direct_reference``), in one run; and one 3-D set of
+NumPy separable GEMM (``clsamp.spectrum.direct_reference``), in one run; one 3-D set of
 4096 points at R³ (R = 32, 64): the fast path against the exact direct sum and finufft
-(nufft3d1).
+(nufft3d1); and the direct sum in float-float (``precision="float-float"``, what a device
+without fp64 computes) against the double one on the same device.
 
 Max error is max_ω |P̃(ω) - P(ω)| / N against clsamp's direct result (itself checked
 against the NumPy reference in the same run). The direct rows also report the kernel's rate
@@ -129,7 +130,7 @@ def run(devices, quick):
         have_finufft = True
     except ImportError:
         have_finufft = False
-    for device in devices:
+    for device in [d for d in devices if d.fp64]:       # without fp64: the float-float rows only
         on_device(device)
         dev = short_name(device)
         t_direct, exact = timed(lambda: power_spectrum(pts, R, method="direct", progress=False),
@@ -150,6 +151,41 @@ def run(devices, quick):
             rows.append(_fast_row("spectrum", size, dev, pts, R, tol, exact, 3,
                                   _finufft if have_finufft else None))
         rows += run_3d(dev, quick, have_finufft)
+    rows += _float_float_rows(devices, quick)
+    return rows
+
+
+def _float_float_rows(devices, quick):
+    """The direct sum in float-float (a device without fp64 computes only this) against the
+    double one on the same device; errors against the NumPy reference, relative to N."""
+    rows = []
+    r, n, R = (2, 1024, 64) if quick else (8, 2048, 128)
+    pts = _points(r, n)
+    ref = spectrum.direct_reference(pts, R)
+    for device in devices:
+        on_device(device)
+        t_ff, ff = timed(lambda: power_spectrum(pts, R, method="fast", tol=1e-6, precision="float-float",
+                                                progress=False), repeats=3)
+        quality = f"max err {np.abs(ff - ref).max() / n:.1e}"
+        t_d = None
+        if device.fp64:
+            t_d, fast = timed(lambda: power_spectrum(pts, R, method="fast", tol=1e-6, precision="double",
+                                                     progress=False), repeats=3)
+            quality += f"; double {np.abs(fast - ref).max() / n:.1e}"
+        rows.append(Row("spectrum fast tol=1e-06 float-float", f"{r}x{n} at {R}^2", short_name(device), t_ff,
+                        "clsamp fast in double" if device.fp64 else "", t_d, quality))
+        t_ff, ff = timed(lambda: power_spectrum(pts, R, method="direct", precision="float-float",
+                                                progress=False), repeats=3)
+        quality = f"max err {np.abs(ff - ref).max() / n:.1e}"
+        if device.fp64:
+            t_d, exact = timed(lambda: power_spectrum(pts, R, method="direct", precision="double",
+                                                      progress=False), repeats=3)
+            quality += f"; double {np.abs(exact - ref).max() / n:.1e}"
+            rows.append(Row("spectrum direct float-float", f"{r}x{n} at {R}^2", short_name(device), t_ff,
+                            "clsamp direct in double", t_d, quality))
+        else:
+            rows.append(Row("spectrum direct float-float", f"{r}x{n} at {R}^2", short_name(device), t_ff,
+                            quality=quality + "; double: no fp64 on this device"))
     return rows
 
 

@@ -37,8 +37,9 @@ import os
 
 import numpy as np
 
-from . import parallel, runtime
+from . import parallel, runtime, spectrum_ff
 from .errors import InvalidArgumentError
+from .float_float import check_precision
 from .nufft import MIN_TOL, grid_size, kernel_transform, nufft_parameters, spread_reference
 from .spectral_stats import anisotropy, check_spectrum, radial_mean  # noqa: F401  (public here)
 from .validation import check_choice, check_int, check_points, check_real, point_sets
@@ -119,7 +120,8 @@ def _check_resolution(resolution):
 
 
 # -- the public entry point -------------------------------------------------------------
-def power_spectrum(points, resolution=256, method="auto", tol=None, backend="opencl", progress=True):
+def power_spectrum(points, resolution=256, method="auto", tol=None, backend="opencl", progress=True,
+                   precision=None):
     """Periodogram of a point set, or the expected spectrum of a batch of realizations.
 
     Parameters
@@ -144,6 +146,12 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
         ``"numpy"`` runs the NumPy references of the kernels instead.
     progress : bool
         Show a progress bar when the work is long (several chunks).
+    precision : {"double", "float-float"}, optional
+        What the device computes the direct sum in; default ``"double"`` where the device
+        has fp64, ``"float-float"`` where it has not (:mod:`clsamp.spectrum_ff`). Direct:
+        exact integer phases, float-float sums, within :func:`clsamp.spectrum_ff.error_bound`
+        (n) ≈ 2^-47·n·(400 + 5n/64) of the exact spectrum; fast: float-float spreading,
+        ``tol`` >= 1e-11 (``spectrum_ff.FAST_MIN_TOL``), the FFT in float64 on the host.
 
     Returns
     -------
@@ -197,9 +205,10 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
     ((32, 32), 256.0)
     """
     check_choice(backend, "backend", BACKENDS)
+    asked, precision = precision, check_precision(precision, backend)
     sets = point_sets(points, "points", d=(1, 2, 3))
     if sets is not None:
-        return _sets_spectrum(sets, resolution, method, tol, backend, progress)
+        return _sets_spectrum(sets, resolution, method, tol, backend, progress, asked)
     batch, _ = check_points(points, "points", d=(1, 2, 3), keep_device=backend == "opencl")
     resolution = _check_resolution(resolution)
     # the spectrum and the working copies of its halves
@@ -212,15 +221,19 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
             raise InvalidArgumentError(
                 f"'tol' must be >= {MIN_TOL:g} for method='fast' (the fp64 floor of the NUFFT); "
                 f"got {tol:g}; method='direct' is exact")
+    ff = precision == "float-float" and backend == "opencl"
+    if ff:
+        spectrum_ff.check_fast(batch.shape[-1], method, tol)
     if method == "auto":
-        method = _choose_method(batch.shape, resolution, tol)
+        method = "direct" if ff and batch.shape[-1] == 3 else _choose_method(batch.shape, resolution, tol)
     if method == "fast":
-        return _fast(batch, resolution, DEFAULT_FAST_TOL if tol is None else max(tol, MIN_TOL),
-                     backend, progress)
-    return _direct(batch, resolution, backend, progress)
+        floor = spectrum_ff.FAST_MIN_TOL if ff else MIN_TOL
+        return _fast(batch, resolution, max(floor, DEFAULT_FAST_TOL if tol is None else tol), backend,
+                     progress, precision)
+    return _direct(batch, resolution, backend, progress, precision)
 
 
-def spectrum_block(sampler, n, lo, hi, resolution, method, tol, backend):
+def spectrum_block(sampler, n, lo, hi, resolution, method, tol, backend, precision=None):
     """One task of :func:`expected_spectrum`: the sum of the periodograms of realizations
     lo .. hi - 1 (the block's mean times its size).
 
@@ -228,7 +241,7 @@ def spectrum_block(sampler, n, lo, hi, resolution, method, tol, backend):
     ----------
     sampler, n, lo, hi
         The sampler, its points per set, and the block.
-    resolution, method, tol, backend
+    resolution, method, tol, backend, precision
         As :func:`power_spectrum` (``method`` already decided, not ``"auto"``).
 
     Returns
@@ -239,11 +252,12 @@ def spectrum_block(sampler, n, lo, hi, resolution, method, tol, backend):
         points = sampler.sample_device(n, realizations=range(lo, hi))
     else:
         points = sampler.sample(n, realizations=range(lo, hi))
-    return power_spectrum(points, resolution, method, tol, backend, progress=False) * float(hi - lo)
+    return power_spectrum(points, resolution, method, tol, backend, progress=False,
+                          precision=precision) * float(hi - lo)
 
 
 def expected_spectrum(sampler, n, realizations, resolution=256, method="auto", tol=None,
-                      backend="opencl", client=None, checkpoint=None, progress=True):
+                      backend="opencl", client=None, checkpoint=None, progress=True, precision=None):
     """The expected power spectrum of a sampler: the mean periodogram of ``realizations``
     sets of ``n`` points, in blocks of realizations, here or on a Dask cluster.
 
@@ -252,7 +266,7 @@ def expected_spectrum(sampler, n, realizations, resolution=256, method="auto", t
     sampler : Sampler or str
         A sampler, or a name (``make_sampler(name, d=2)``).
     n, realizations : int
-    resolution, method, tol, backend
+    resolution, method, tol, backend, precision
         As :func:`power_spectrum` (``method="auto"`` is decided once for the whole sweep).
     client : dask.distributed.Client, optional
         Compute the blocks there (:mod:`clsamp.parallel`). The blocks' sums are added in
@@ -292,9 +306,10 @@ def expected_spectrum(sampler, n, realizations, resolution=256, method="auto", t
     runtime.check_host_bytes(3 * 8 * resolution ** sampler.d,
                              f"a power spectrum at resolution {resolution} in {sampler.d}-D")
     check_choice(method, "method", METHODS)
+    precision = check_precision(precision, backend)
     if method == "auto":
         method = _choose_method((realizations, n, sampler.d), resolution, tol)
-    tasks = [(sampler, n, lo, hi, resolution, method, tol, backend)
+    tasks = [(sampler, n, lo, hi, resolution, method, tol, backend, precision)
              for lo, hi in parallel.block_ranges(realizations, n * resolution)]
     blocks, _ = parallel.run(spectrum_block, tasks, client=client, checkpoint=checkpoint,
                              progress=progress, desc=f"spectrum {sampler.label}")
@@ -304,7 +319,7 @@ def expected_spectrum(sampler, n, realizations, resolution=256, method="auto", t
     return total / float(realizations)
 
 
-def _sets_spectrum(sets, resolution, method, tol, backend, progress):
+def _sets_spectrum(sets, resolution, method, tol, backend, progress, precision):
     """Mean over sets of different sizes of |S_k|^2 / n_k: a batch per size, by counts."""
     groups = {}
     for k, s in enumerate(sets):
@@ -312,7 +327,8 @@ def _sets_spectrum(sets, resolution, method, tol, backend, progress):
     total = None
     for size in sorted(groups):
         members = groups[size]
-        P = power_spectrum(np.stack([sets[k] for k in members]), resolution, method, tol, backend, progress)
+        P = power_spectrum(np.stack([sets[k] for k in members]), resolution, method, tol, backend, progress,
+                           precision)
         part = P * (len(members) / len(sets)) if len(groups) > 1 else P
         total = part if total is None else total + part
     return total
@@ -450,14 +466,15 @@ def _sum3(A, B, C):
     return out
 
 
-def _direct3(batch, resolution, progress):
+def _direct3(batch, resolution, progress, precision):
     """The 3-D direct sum: each axis' twiddle panel from ``spectrum_twiddles`` into host
-    memory, the products by :func:`_sum3` in the host's BLAS, a set and a chunk of points
-    at a time."""
+    memory (from ``spectrum_ff_twiddles`` in float-float), the products by :func:`_sum3` in
+    the host's BLAS, a set and a chunk of points at a time."""
     (r, n, _), R = batch.shape, resolution
     points_per_chunk = min(n, runtime.fit(3 * 2 * R * 8 + 24, WORKING_SET))
-    twiddles = runtime.kernel("spectrum.cl", "spectrum_twiddles",
-                              {"SUPER": _SUPER, "KBLOCK": 128, "FINE": _FINE}, _MAD)
+    if precision == "double":
+        twiddles = runtime.kernel("spectrum.cl", "spectrum_twiddles",
+                                  {"SUPER": _SUPER, "KBLOCK": 128, "FINE": _FINE}, _MAD)
     queue, local = runtime.queue(), runtime.local_size(64)
     point_chunks = [(a, min(n, a + points_per_chunk)) for a in range(0, n, points_per_chunk)]
     bar = _progress(r * len(point_chunks), progress, _direct_seconds(r, n, R, 3), "spectrum (direct)")
@@ -467,6 +484,12 @@ def _direct3(batch, resolution, progress):
         for k0, k1 in point_chunks:
             nc = k1 - k0
             pts = _block(batch, k, k + 1, k0, k1)
+            if precision == "float-float":
+                panels = (spectrum_ff.twiddles(pts, -(R // 2), R, axis).get()[0, ..., 0] for axis in range(3))
+                S += _sum3(*(spectrum_ff.to_complex(panel).T for panel in panels))
+                if bar is not None:
+                    bar.update(1)
+                continue
             panels = [runtime.Output(None, host=np.empty((1, nc, 2, R))) for _ in range(3)]
             for axis, out in enumerate(panels):
                 twiddles(queue, (_pad(nc, local), 1), (local, 1), pts.data, out.buffer, np.uint32(nc),
@@ -494,13 +517,14 @@ def _block(batch, r0, r1, k0=0, k1=None):
     return runtime.to_device(np.ascontiguousarray(batch[r0:r1, k0:k1]))
 
 
-def _direct(batch, resolution, backend, progress):
+def _direct(batch, resolution, backend, progress, precision):
     if backend == "numpy":
         return direct_reference(batch, resolution)
     import pyopencl.array as cla
-    runtime.require_fp64()
     if batch.shape[-1] == 3:
-        return _direct3(batch, resolution, progress)
+        return _direct3(batch, resolution, progress, precision)
+    if precision == "float-float":
+        return _direct_ff(batch, resolution, progress)
     if HOST_GEMM and batch.shape[-1] == 2 and runtime.shape().host_gemm:
         return _direct_host_gemm(batch, resolution, progress)
     queue = runtime.queue()
@@ -561,6 +585,39 @@ def _direct(batch, resolution, backend, progress):
     if d == 1:
         return H[:resolution]
     return _unfold(H.reshape(count_u, count_v), resolution)
+
+
+def _direct_ff(batch, resolution, progress):
+    """The 1-D and 2-D direct sums in float-float (:mod:`clsamp.spectrum_ff`): S(u, v) over
+    the half plane u <= 0 on the device (a 1-D set as a 2-D one with u = 0 only), squared
+    and summed over realizations on the host."""
+    import pyopencl.array as cla
+    (r, n, d), half = batch.shape, resolution // 2
+    count_u, count_v = (half + 1, _pad(resolution + 1, spectrum_ff.LANES)) if d == 2 else (1, resolution)
+    per_point = (count_u + count_v) * 16 + d * 8
+    # (a work-item of the product loops ~1.02 times per point: llvmpipe's limit caps a chunk)
+    points_per_chunk = min(n, runtime.fit(per_point, WORKING_SET), (runtime.loop_limit() or 2**62) // 2)
+    reals_per_chunk = min(r, runtime.fit(per_point * points_per_chunk + count_u * count_v * 16, WORKING_SET))
+    chunks = [(a, min(r, a + reals_per_chunk)) for a in range(0, r, reals_per_chunk)]
+    point_chunks = [(a, min(n, a + points_per_chunk)) for a in range(0, n, points_per_chunk)]
+    bar = _progress(len(chunks) * len(point_chunks), progress, 10 * _direct_seconds(r, n, resolution, d),
+                    "spectrum (direct, float-float)")
+    H = np.zeros((count_u, count_v))
+    for r0, r1 in chunks:
+        lanes = spectrum_ff.LANES
+        S = cla.zeros(runtime.queue(), (r1 - r0, count_u, count_v // lanes, 4, lanes), np.float32)
+        for k0, k1 in point_chunks:
+            pts = _block(batch, r0, r1, k0, k1)
+            # (1-D: u = 0 only, a panel of ones; the frequencies along v)
+            A = spectrum_ff.twiddles(pts, -half if d == 2 else 0, count_u, 0)
+            spectrum_ff.accumulate(A, spectrum_ff.twiddles(pts, -half, count_v, d - 1, lanes), S)
+            if bar is not None:
+                bar.update(1)
+        H += spectrum_ff.power(S.get())
+    if bar is not None:
+        bar.close()
+    H /= r * n
+    return H[0] if d == 1 else _unfold(H, resolution)
 
 
 def _unfold(H, resolution):
@@ -663,7 +720,7 @@ def _add_squares(F, total):
         total += squares[..., 0::2] + squares[..., 1::2]
 
 
-def _fast(batch, resolution, tol, backend, progress):
+def _fast(batch, resolution, tol, backend, progress, precision="double"):
     r, n, d = batch.shape
     sigma, width, beta = nufft_parameters(tol, d)
     M = grid_size(resolution, sigma, width)
@@ -673,12 +730,12 @@ def _fast(batch, resolution, tol, backend, progress):
     size = M**d
     if backend == "opencl":
         import pyopencl.array as cla
-        runtime.require_fp64()
         queue = runtime.queue()
         device = runtime.current_device()
         defines = {"DIM": d, "WIDTH": width}
-        spread = runtime.kernel("nufft.cl", "spectrum_spread", defines, _MAD)
-        sum_copies = runtime.kernel("nufft.cl", "spectrum_sum_copies", defines, _MAD)
+        if precision == "double":
+            spread = runtime.kernel("nufft.cl", "spectrum_spread", defines, _MAD)
+            sum_copies = runtime.kernel("nufft.cl", "spectrum_sum_copies", defines, _MAD)
         local = runtime.local_size(64)
         # a work-item spreads a block of points onto its own grid copy: enough of them to
         # keep every compute unit busy, never blocks of fewer than 1024 points; in 3-D a
@@ -699,19 +756,22 @@ def _fast(batch, resolution, tol, backend, progress):
             grids = spread_reference(batch[r0:r1], M, width, beta)
         else:
             pts = _block(batch, r0, r1)
-            # the grids the FFT reads are written into host memory (on a CPU device in place)
-            # (read-write: with one block the spreading adds into it)
-            grids = runtime.Output(None, host=np.empty((rc,) + (M,) * d), read_write=True)
-            if blocks > 1:
-                copies = cla.empty(queue, rc * blocks * size, np.float64)
-                spread(queue, (blocks, rc), (1, 1), pts.data, copies.data, np.uint32(n), np.uint32(M),
-                       np.uint32(blocks), np.float64(beta))
-                sum_copies(queue, (_pad(size, local), rc), (local, 1), copies.data, grids.buffer,
-                           np.uint32(size), np.uint32(blocks))
+            if precision == "float-float":
+                grids = spectrum_ff.spread(pts, M, width, beta, blocks)
             else:
-                spread(queue, (1, rc), (1, 1), pts.data, grids.buffer, np.uint32(n), np.uint32(M),
-                       np.uint32(1), np.float64(beta))
-            grids = grids.finish()
+                # the grids the FFT reads are written into host memory (on a CPU device in place)
+                # (read-write: with one block the spreading adds into it)
+                grids = runtime.Output(None, host=np.empty((rc,) + (M,) * d), read_write=True)
+                if blocks > 1:
+                    copies = cla.empty(queue, rc * blocks * size, np.float64)
+                    spread(queue, (blocks, rc), (1, 1), pts.data, copies.data, np.uint32(n), np.uint32(M),
+                           np.uint32(blocks), np.float64(beta))
+                    sum_copies(queue, (_pad(size, local), rc), (local, 1), copies.data, grids.buffer,
+                               np.uint32(size), np.uint32(blocks))
+                else:
+                    spread(queue, (1, rc), (1, 1), pts.data, grids.buffer, np.uint32(n), np.uint32(M),
+                           np.uint32(1), np.float64(beta))
+                grids = grids.finish()
         _accumulate_power(grids, resolution, total)
         if bar is not None:
             bar.update(1)

@@ -4,33 +4,42 @@
  *
  * Grid (m4 / 4): counts[c] = #{points p : p_k < corner_k for every k} (STRICT 1) or
  * p_k <= corner_k (STRICT 0), four corners a work-item; corners (D, m4) coordinate-major,
- * points (n, D). Comparisons only: the same counts on every device. Build options: D,
- * STRICT. */
+ * points (n, D). Comparisons only: the same counts on every device. Without fp64
+ * (CLSAMP_FP64 0) the kernel compares the float64 bit patterns as unsigned integers, whose
+ * order is the order of the non-negative doubles they encode (points and corners lie in
+ * [0, 1]): the same counts, exactly. Build options: D, STRICT. */
+#if CLSAMP_FP64
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#define COORD double
+#define COORD4 double4
+#else
+#define COORD ulong
+#define COORD4 ulong4
+#endif
 
-__kernel void anchored_counts(__global const double *points, const uint n,
-                              __global const double *corners, const uint m4,
+__kernel void anchored_counts(__global const COORD *points, const uint n,
+                              __global const COORD *corners, const uint m4,
                               __global uint *counts)
 {
     const uint w = get_global_id(0);
     if (4 * w >= m4)
         return;
-    double4 c[D];
+    COORD4 c[D];
     for (int k = 0; k < D; ++k)
-        c[k] = *(__global const double4 *)(corners + (size_t)k * m4 + 4 * w);
+        c[k] = *(__global const COORD4 *)(corners + (size_t)k * m4 + 4 * w);
     long4 count = (long4)(0);
     for (uint i = 0; i < n; ++i) {
-        __global const double *p = points + (size_t)i * D;
+        __global const COORD *p = points + (size_t)i * D;
 #if STRICT
-        long4 inside = (double4)(p[0]) < c[0];
+        long4 inside = (COORD4)(p[0]) < c[0];
 #pragma unroll
         for (int k = 1; k < D; ++k)
-            inside &= (double4)(p[k]) < c[k];
+            inside &= (COORD4)(p[k]) < c[k];
 #else
-        long4 inside = (double4)(p[0]) <= c[0];
+        long4 inside = (COORD4)(p[0]) <= c[0];
 #pragma unroll
         for (int k = 1; k < D; ++k)
-            inside &= (double4)(p[k]) <= c[k];
+            inside &= (COORD4)(p[k]) <= c[k];
 #endif
         count -= inside;           /* a true comparison is -1 in every bit */
     }

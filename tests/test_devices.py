@@ -2,7 +2,9 @@
 bits (every sampler and randomization, a convergence experiment), the stated tolerance where
 it says so (spectra, metrics, the float32 renderer). A device without fp64 gives every
 sampler's bits too, but poisson_disk and ccvt, and refuses those and the analyses with
-NoDeviceError, never a BuildError; so does a device that lacks what a kernel needs
+NoDeviceError, never a BuildError, but for what it computes in float-float (spectra, the
+L2 discrepancies, the PCF and nearest neighbours) or exactly (the star discrepancy's certified bounds),
+tests/test_float_float.py; so does a device that lacks what a kernel needs
 (lloyd's 64-bit atomics) or stops long loops (llvmpipe: pmj02bn, lloyd). CI installs Debian's PoCL and Mesa's
 rusticl beside PyPI's PoCL, and Intel's CPU runtime from PyPI (.ci/run; registered by
 scripts/ensure-opencl.sh), so four implementations meet here; with one device the module is
@@ -166,14 +168,18 @@ def test_a_device_without_fp64_refuses_what_needs_it_by_name(device):
     pts = np.random.default_rng(1).random((64, 2))
     calls = [lambda name=name, d=d, r=r: _points(name, d, r) for name, d, r in _samplers()
              if sampler_class(name).needs_fp64]
-    calls += [lambda: power_spectrum(pts, resolution=32, method="direct", progress=False),
-              lambda: power_spectrum(pts, resolution=32, method="fast", tol=1e-3, progress=False),
-              lambda: discrepancy(pts, "CD"),
+    calls += [lambda: power_spectrum(pts, resolution=32, method="direct", precision="double", progress=False),
+              lambda: power_spectrum(pts, resolution=32, method="fast", tol=1e-3, precision="double",
+                                     progress=False),
+              lambda: discrepancy(pts, "CD", precision="double"),
               lambda: render(scene, "random", spp=1, resolution=8, progress=False)]
     assert len(calls) > 4
     for call in calls:
         with pytest.raises(NoDeviceError, match="fp64|double"):
             on(device, call)
     runs = runtime.capabilities(device.index)
-    assert runs["samplers"] is None
-    assert {why for name, why in runs.items() if name != "samplers"} == {"needs fp64"}
+    running = ["samplers", "certified star-discrepancy bounds"] + [
+        name for name in runs if name.endswith("in float-float")]
+    assert len(running) >= 4
+    assert all(runs[name] is None for name in running)
+    assert {why for name, why in runs.items() if name not in running} == {"needs fp64"}

@@ -16,10 +16,11 @@ PACKAGE = ROOT / "clsamp"
 # docs/design.md, "Layers": a module may import its own layer and the layers before it.
 LAYERS = [
     ("core", {"errors", "validation", "runtime", "host_memory", "philox", "number_theory",
-              "generating_matrices", "permutation", "files", "parallel", "transforms", "density"}),
+              "generating_matrices", "permutation", "files", "parallel", "transforms", "density",
+              "float_float"}),
     ("geometry", {"geometry"}),
     ("samplers", {"samplers"}),
-    ("analysis", {"nufft", "spectral_stats", "spectrum", "metrics"}),
+    ("analysis", {"nufft", "spectral_stats", "spectrum_ff", "spectrum", "metrics"}),
     ("experiments", {"integrands", "integrand_kernel", "families", "estimates", "sweep", "results", "theory",
                      "integration", "cubature", "fused"}),
     ("render", {"scene", "pixel_sampling", "render_numpy", "render"}),

@@ -154,6 +154,23 @@ def _spectrum_direct():
     assert np.max(np.abs(got - want)) <= 4e-15 * pts.shape[1] * 4
 
 
+@check("spectrum-direct-float-float")
+def _spectrum_direct_ff():
+    from clsamp.spectrum_ff import error_bound
+    pts = _points()
+    got = clsamp.power_spectrum(pts, 32, method="direct", precision="float-float", progress=False)
+    want = clsamp.power_spectrum(pts, 32, method="direct", backend="numpy", progress=False)
+    assert np.max(np.abs(got - want)) <= error_bound(pts.shape[1])
+
+
+@check("spectrum-fast-float-float")
+def _spectrum_fast_ff():
+    pts = _points()
+    got = clsamp.power_spectrum(pts, 32, method="fast", tol=1e-6, precision="float-float", progress=False)
+    want = clsamp.power_spectrum(pts, 32, method="direct", backend="numpy", progress=False)
+    assert np.max(np.abs(got - want)) <= 1e-6 * pts.shape[1]
+
+
 @check("spectrum-fast")
 def _spectrum_fast():
     pts = _points()
@@ -168,6 +185,15 @@ for _method in ("CD", "WD", "MD", "L2-star", "symmetric", "L2"):
         np.testing.assert_allclose(clsamp.discrepancy(pts, method),
                                    clsamp.discrepancy(pts, method, backend="numpy"), rtol=1e-12)
     check(f"discrepancy-{_method}")(_discrepancy)
+
+    def _discrepancy_ff(method=_method):
+        from clsamp.metrics.l2 import ROOTED, float_float_bound
+        pts = _points()
+        got, want = (clsamp.discrepancy(pts, method, precision=p) for p in ("float-float", "double"))
+        if method in ROOTED:
+            got, want = got * got, want * want
+        assert np.all(np.abs(got - want) <= float_float_bound(method, 2))
+    check(f"discrepancy-{_method}-float-float")(_discrepancy_ff)
 
 
 @check("star-discrepancy")
@@ -196,6 +222,25 @@ def _neighbours():
     pts = _points()
     np.testing.assert_allclose(clsamp.nearest_neighbor_distances(pts),
                                clsamp.nearest_neighbor_distances(pts, backend="numpy"), rtol=1e-12)
+
+
+@check("pair-correlation-float-float")
+def _pcf_ff():
+    from clsamp.metrics.neighbors import SIGMA_SPACING, mean_spacing, pcf_float_float_bound
+    pts = _points()
+    radii, want = clsamp.pair_correlation(pts, backend="numpy")
+    _, got = clsamp.pair_correlation(pts, precision="float-float")
+    eps = pcf_float_float_bound(pts.shape[1], 2, radii, SIGMA_SPACING * mean_spacing(pts.shape[1], 2))
+    assert np.all(np.abs(got - want) <= eps * want + 1e-12)
+
+
+@check("nearest-neighbours-float-float")
+def _neighbours_ff():
+    from clsamp.metrics.neighbors import float_float_bound
+    pts = _points()
+    want = clsamp.nearest_neighbor_distances(pts, backend="numpy")
+    got = clsamp.nearest_neighbor_distances(pts, precision="float-float")
+    assert np.all(np.abs(got - want) <= float_float_bound(want, 2))
 
 
 @check("normalized-energy")

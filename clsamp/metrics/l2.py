@@ -18,6 +18,7 @@ import numpy as np
 
 from .. import runtime
 from ..errors import InvalidArgumentError
+from ..float_float import U2, check_precision, split
 from ..validation import check_choice, check_points, point_sets
 
 METHODS = ("CD", "WD", "MD", "L2-star", "symmetric", "L2")
@@ -120,6 +121,84 @@ def discrepancy_reference(points, method="CD"):
     return _combine(method, d, n, single, pairs)
 
 
+# the largest |g| of a pair term, per method (CD, WD: 3/2; MD: 15/8; symmetric 1 with c2 = 2^d
+# / n^2, counted here; L2: 1/4)
+_G_MAX = {"CD": 1.5, "WD": 1.5, "MD": 1.875, "L2-star": 1.0, "symmetric": 2.0, "L2": 0.25}
+FF_BLOCK = 64                # terms per partial sum in discrepancy_ff.cl
+
+
+def float_float_bound(method, d):
+    """How far the float-float pair sum can move D^2 (``precision="float-float"``).
+
+    Parameters
+    ----------
+    method : str
+        One of :data:`METHODS`.
+    d : int
+
+    Returns
+    -------
+    float
+        A bound on |D^2_float-float - D^2|: (17d + 600)·u²·G^d, u = 2^-24, G the largest
+        pair factor of the method (3/2 for CD and WD, 15/8 for MD, 1 for L2-star, 2 for
+        symmetric, whose c2 is 2^d / n², 1/4 for L2). The rooted methods (L2-star,
+        symmetric, L2) return D, off by at most this bound over 2D.
+
+    Notes
+    -----
+    With the float-float errors of Joldes, Muller & Popescu 2017 (an addition 3u², a
+    product 5u², relative): the host's split of each float64 layout number errs by u²;
+    each factor g (at most two additions, a product and exact min/max/abs) is then within
+    12u² of its value relative to G, and the product of d factors within (17d)u² of
+    Π g. A lane of the kernel sums one row's terms (weights 0, 1 or 2, exact) in blocks of
+    64 columns, then adds the block sums of its two rows' chunks (at most 2·(4096/64 + 1)
+    = 130): each addition errs by at most 3u² times the partial sum, so the sum is within
+    3u²·(64 + 130) <= 600u² of the sum of |terms|; the host adds the lanes' sums exactly.
+    Σ|Π g| <= n² G^d and c2 = 1/n² give the bound. The double path's own rounding (a few
+    ulps of the terms) is below 2^-50 G^d, inside it.
+    """
+    check_method(method)
+    return (17.0 * d + 600.0) * U2 * _G_MAX[method] ** d
+
+
+def _layouts(batch, method):
+    """The rows' and columns' numbers of each point (XR, UR, XC, VC of discrepancy.cl), in
+    float64 on the host: (4, r, n, d)."""
+    x = batch
+    a = np.abs(x - 0.5)
+    zero = np.zeros_like(x)
+    if method == "CD":
+        return np.stack([1.0 + a, np.where(x < 0.5, -0.0, 0.0), np.where(x < 0.5, -(1.0 + a), 1.0 + a),
+                         zero])
+    if method == "WD":
+        return np.stack([x, zero, x, zero])
+    if method == "MD":
+        return np.stack([x, 1.875 - 0.25 * a, x, 0.25 * a])
+    if method == "L2-star":
+        return np.stack([1.0 - x, zero, 1.0 - x, zero])
+    return np.stack([x, 1.0 - x, x, (1.0 - x) if method == "L2" else x])   # symmetric, L2
+
+
+def _device_sums_ff(batch, method):
+    """Per realization: the per-point products (r, n) (host, float64) and the pair sum's
+    partial sums in float-float from ``discrepancy_ff_pairs``, as float64 values whose exact
+    sum it is (r, 2 · chunks · items)."""
+    import pyopencl.array as cla
+    q = runtime.queue()
+    r, n, d = batch.shape
+    single = np.prod(_terms(method, batch), axis=2)
+    layouts = [cla.to_device(q, np.ascontiguousarray(split(v))) for v in _layouts(batch, method)]
+    limit = runtime.loop_limit()
+    cols = 4096 if limit is None else max(1, min(4096, limit // (4 * (d + 2))))
+    tiles = -(-n // 8)                                     # tiles of 8 rows, two an item
+    chunks, items = -(-n // cols), -(-tiles // 2)
+    out = cla.empty(q, (r, chunks, items, 8, 2), np.float32)
+    defines = {"METHOD": _CODES[method], "D": d, "COLS": cols, "BLOCK": FF_BLOCK}
+    runtime.kernel("discrepancy_ff.cl", "discrepancy_ff_pairs", defines)(
+        q, (items, chunks, r), None, *(v.data for v in layouts), np.uint32(n), np.uint32(items), out.data)
+    return single, out.get().astype(np.float64).reshape(r, -1)
+
+
 def _device_sums(batch, method):
     """Per realization: (the per-point products (r, n), the row blocks' pair sums as
     (hi, lo) pairs (r, nb, 2)). Each set is sorted by its first coordinate first (the
@@ -151,7 +230,7 @@ def _device_sums(batch, method):
     return f.get()[:, :n], out.get()
 
 
-def discrepancy(points, method="CD", backend="opencl"):
+def discrepancy(points, method="CD", backend="opencl", precision=None):
     """The L2-type discrepancy of a point set, as scipy.stats.qmc and UTK define it.
 
     Parameters
@@ -164,6 +243,10 @@ def discrepancy(points, method="CD", backend="opencl"):
         et al. 2013), ``"L2-star"`` (Warnock 1972), ``"symmetric"`` (Hickernell 1998),
         ``"L2"`` the unanchored (extreme) L2 discrepancy (Morokoff and Caflisch 1994).
     backend : {"opencl", "numpy"}
+    precision : {"double", "float-float"}, optional
+        What the device computes the pair sum in; default ``"double"`` where the device
+        has fp64, ``"float-float"`` where it has not: then |ΔD²| <=
+        :func:`float_float_bound` (method, d) = (17d + 600)·2^-48·G^d (G = 3/2 for CD).
 
     Returns
     -------
@@ -216,9 +299,10 @@ def discrepancy(points, method="CD", backend="opencl"):
     """
     check_choice(method, "method", METHODS)
     check_choice(backend, "backend", BACKENDS)
+    precision = check_precision(precision, backend)
     sets = point_sets(points)
     if sets is not None:
-        return np.array([discrepancy(s, method, backend) for s in sets])
+        return np.array([discrepancy(s, method, backend, precision) for s in sets])
     batch, single = check_points(points, "points")
     r, n, d = batch.shape
     if backend == "numpy":
@@ -226,8 +310,9 @@ def discrepancy(points, method="CD", backend="opencl"):
     else:
         values = np.empty(r)
         # per realization: the points, four per-point layouts and the products
+        sums = _device_sums_ff if precision == "float-float" else _device_sums
         for lo, hi in runtime.chunk_ranges(r, 8 * (n + 8) * (5 * d + 2)):
-            f, pairs = _device_sums(batch[lo:hi], method)
+            f, pairs = sums(batch[lo:hi], method)
             values[lo:hi] = [_combine(method, d, n, f[k], pairs[k]) for k in range(hi - lo)]
     return float(values[0]) if single else values
 

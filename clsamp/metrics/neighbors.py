@@ -15,6 +15,7 @@ import numpy as np
 
 from .. import runtime
 from ..errors import InvalidArgumentError
+from ..float_float import U2, argument, check_precision, exp_coefficients, split
 from ..geometry.cells import cells_for, sorted_by_cell
 from ..geometry.torus import distance2
 from ..validation import check_bool, check_choice, check_points, point_sets
@@ -118,13 +119,15 @@ def _pcf_sums_reference(points, radii, sigma, cut, periodic=True):
     return out
 
 
-def _pcf_sums_device(sets, radii, sigma, cut, uniform, periodic=True):
+def _pcf_sums_device(sets, radii, sigma, cut, uniform, periodic=True, precision="double"):
     """pcf_sums for sets of one size: (r, NR) sums over each set's unordered pairs."""
     r, (n, d) = len(sets), sets[0].shape
     batch = np.stack(sets)
     reach = float(radii[-1] + cut * sigma)
     cells = cells_for(reach)
     pts, cell, start, _ = sorted_by_cell(batch, cells)
+    if precision == "float-float":
+        return _pcf_sums_ff(pts, cell, start, r, n, d, cells, radii, sigma, cut, reach, periodic, uniform)
     items = -(-n // POINTS_PER_ITEM)
     defines = {"D": d, "NR": len(radii), "UNIFORM": int(uniform), "PPI": POINTS_PER_ITEM,
                "PERIODIC": int(periodic)}
@@ -140,6 +143,85 @@ def _pcf_sums_device(sets, radii, sigma, cut, uniform, periodic=True):
            np.float64(step), np.float64(1.0 / step), np.float64(inv2s2), np.float64(cut * sigma),
            np.float64(math.exp(-2.0 * step * step * inv2s2)), np.uint32(items), out.buffer)
     return out.finish().sum(axis=1)
+
+
+def pcf_float_float_bound(n, d, radii, sigma, periodic=True):
+    """The relative error of a float-float pair correlation (``precision="float-float"``).
+
+    Parameters
+    ----------
+    n, d : int
+        Points per set and dimensions.
+    radii : ndarray
+    sigma : float
+        As :func:`pair_correlation` used them (its returned radii; sigma defaults to 0.05
+        mean spacings, ``SIGMA_SPACING * mean_spacing(n, d)``).
+    periodic : bool
+
+    Returns
+    -------
+    float
+        ε with |g_float-float(r) - g(r)| <= ε·g(r) at every radius: u²·(T + 48(n - 1)),
+        u = 2^-24, T = 5·(8√d + (4d + 36)·ρ) / σ + 190 (+ 30d + 15 in the cube), ρ the
+        reach (largest radius plus 5σ); for uniform radii T·(m + 1) + 3m² instead of T,
+        m = 10σ / step + 1 the radii a pair's Gaussian reaches.
+
+    Notes
+    -----
+    Every term is positive, so relative errors of the terms and of their sums bound the
+    result's. With the float-float errors of Joldes, Muller & Popescu 2017: a coordinate
+    difference is within 8u² (the split into pairs, a subtraction, the wrap), the
+    distance s within 8√d·u² + (4d + 32)u²·s (the squares, the sum, the square root),
+    the kernel's argument -(r - s)²/2σ² within 5·Δ(r - s)/σ absolute for |r - s| <= 5σ,
+    its exponential within about 50u² (the reduction by k ln 2 and the Horner steps);
+    the edge correction's product and division add (30d + 15)u². Uniform radii take the
+    Gaussian along them by the recurrence e_{k+1} = e_k·a_k, a_{k+1} = a_k·b: after m
+    steps e carries m times the error of a_0 (at most T) and m² times 3u² from the
+    products and b's split. A work-item adds at most
+    16(n - 1) terms into a radius' sum, 3u² each, relative. Not counted: a pair whose
+    distance lies within that error of the cut (5σ) or of the reach, which one path
+    counts and the other not (a term of e^-12.5 ≈ 3.7e-6).
+    """
+    radii = np.asarray(radii, dtype=np.float64)
+    reach = float(np.max(radii)) + CUT * sigma
+    term = 5.0 * (8.0 * math.sqrt(d) + (4.0 * d + 36.0) * reach) / sigma + 190.0
+    term += 0.0 if periodic else 30.0 * d + 15.0
+    if _uniform(radii):
+        m = 2.0 * CUT * sigma / float(radii[1] - radii[0]) + 1.0
+        term = term * (m + 1.0) + 3.0 * m * m
+    return (term + 3.0 * POINTS_PER_ITEM * (n - 1)) * U2
+
+
+def _uniform(radii):
+    """Whether radii are r0 + k·step (the kernels' recurrence along them)."""
+    return len(radii) > 1 and bool(np.allclose(np.diff(radii), radii[1] - radii[0], rtol=1e-9, atol=0.0))
+
+
+def _pcf_sums_ff(pts, cell, start, r, n, d, cells, radii, sigma, cut, reach, periodic, uniform):
+    """pcf_sums_ff (kernels/neighbors_ff.cl): the pair sums in float-float, (r, NR)."""
+    limit = runtime.loop_limit()
+    ppi = POINTS_PER_ITEM if limit is None else 1
+    if limit is not None:
+        # a work-item's loops: the stencil's points, each over every radius
+        stencil = (3 ** d if cells > 1 else 1) * n / cells ** d + 1
+        if ppi * stencil * (len(radii) + 2) > limit // 2:
+            runtime.require_short_loops("the float-float pair correlation at these radii")
+    items = -(-n // ppi)
+    coef = runtime.table("float_float exp", exp_coefficients, np.float32)
+    out = runtime.Output((r, items, len(radii), 2), np.float32,
+                         host=np.empty((r, items, len(radii), 2), np.float32))
+    step = float(radii[1] - radii[0]) if len(radii) > 1 else 1.0
+    inv2s2 = 1.0 / (2.0 * sigma * sigma)
+    runtime.kernel("neighbors_ff.cl", "pcf_sums_ff", {"D": d, "NR": len(radii), "PPI": ppi,
+                                                      "PERIODIC": int(periodic), "UNIFORM": int(uniform)})(
+        runtime.queue(), (items, r), None,
+        *(runtime.to_device(a).data for a in (split(pts), cell, start)), np.uint32(n), np.int32(cells),
+        np.uint32(3 ** d if cells > 1 else 1), argument(reach * reach), runtime.to_device(split(radii)).data,
+        argument(inv2s2), argument(cut * sigma), coef.data, argument(step), argument(step * step),
+        argument(math.exp(-2.0 * step * step * inv2s2)), np.float32(1.0 / step), np.uint32(items),
+        out.buffer)
+    pairs = out.finish().astype(np.float64)
+    return (pairs[..., 0] + pairs[..., 1]).sum(axis=1)
 
 
 def _check_radii(radii, sigma, spacing, cut):
@@ -170,7 +252,7 @@ def _check_radii(radii, sigma, spacing, cut):
     return radii, sigma
 
 
-def pair_correlation(points, radii=None, sigma=None, backend="opencl", periodic=True):
+def pair_correlation(points, radii=None, sigma=None, backend="opencl", periodic=True, precision=None):
     """The pair correlation function g(r) of a point set, or its expectation over sets.
 
     Parameters
@@ -190,6 +272,10 @@ def pair_correlation(points, radii=None, sigma=None, backend="opencl", periodic=
         for sets that are not periodic, each pair weighted by the translation edge
         correction 1 / prod_k (1 - |x_k - y_k|) (Ohser 1983), the inverse of the volume
         of the cube and its translate's overlap, so that a Poisson process still gives 1.
+    precision : {"double", "float-float"}, optional
+        What the device computes the pair sums in; default ``"double"`` where the device
+        has fp64, ``"float-float"`` where it has not, within :func:`pcf_float_float_bound`
+        of the double result (each radius' Gaussian evaluated directly, no recurrence).
 
     Returns
     -------
@@ -232,18 +318,17 @@ def pair_correlation(points, radii=None, sigma=None, backend="opencl", periodic=
     """
     check_choice(backend, "backend", BACKENDS)
     periodic = check_bool(periodic, "periodic")
+    precision = check_precision(precision, backend)
     sets, _ = _check_sets(points, "points")
     d = sets[0].shape[1]
     spacing = mean_spacing(min(len(s) for s in sets), d)
     radii, sigma = _check_radii(radii, sigma, spacing, CUT)
-    uniform = len(radii) > 1 and bool(np.allclose(np.diff(radii), radii[1] - radii[0],
-                                                  rtol=1e-9, atol=0.0))
+    uniform = _uniform(radii)
     sums = np.zeros((len(sets), len(radii)))
     if backend == "numpy":
         for k, s in enumerate(sets):
             sums[k] = _pcf_sums_reference(s, radii, sigma, CUT, periodic)
     else:
-        runtime.require_fp64()
         sizes = sorted({len(s) for s in sets})
         for size in sizes:
             idx = [k for k, s in enumerate(sets) if len(s) == size]
@@ -251,7 +336,7 @@ def pair_correlation(points, radii=None, sigma=None, backend="opencl", periodic=
             for lo, hi in runtime.chunk_ranges(len(idx), per_set):
                 part = idx[lo:hi]
                 sums[part] = _pcf_sums_device([sets[k] for k in part], radii, sigma, CUT, uniform,
-                                              periodic)
+                                              periodic, precision)
     norm = pcf_normalisation(radii, sigma, d)
     kernel_scale = 1.0 / (math.sqrt(2.0 * math.pi) * sigma)
     counts = np.array([len(s) * (len(s) - 1) for s in sets], dtype=np.float64)
@@ -287,20 +372,63 @@ def nearest_neighbor_reference(points, periodic=True):
     return np.sqrt(best)
 
 
-def _nearest_device(batch, periodic=True):
+def float_float_bound(distances, d):
+    """How far a float-float nearest-neighbour distance may be from the double one.
+
+    Parameters
+    ----------
+    distances : ndarray
+        Nearest-neighbour distances s (either path's).
+    d : int
+
+    Returns
+    -------
+    ndarray
+        2u²·(8√d + (4 + 2d)·s), u = 2^-24, per distance; 0 difference in practice.
+
+    Notes
+    -----
+    The kernel chooses the nearest neighbour by float-float squared distances and the
+    host computes the chosen pair's distance in float64, so the result is the double
+    path's bits unless another candidate lies within the float-float error. Each
+    coordinate difference is within 8u² of its value (the split of the two points into
+    pairs, 2^-49 each, a subtraction and the wrap, 3u² relative each, Joldes, Muller &
+    Popescu 2017), so a float-float distance is within 8√d·u² + (3 + 2d)u²·s of the
+    exact one (the squares and the sum, 5u² and 3u² relative), and the chosen
+    neighbour's distance within twice that of the nearest; the float64 rounding of the
+    two paths adds less than u²·s.
+    """
+    s = np.asarray(distances, dtype=np.float64)
+    return 2.0 * U2 * (8.0 * math.sqrt(d) + (4.0 + 2.0 * d) * s)
+
+
+def _nearest_device(batch, periodic=True, precision="double"):
     """Squared nearest-neighbour distances (r, n) of sets of one size, in their order."""
     r, n, d = batch.shape
     cells = int(math.floor(1.0 / (NN_CELL_SPACINGS * mean_spacing(n, d))))
     cells = cells if cells >= 3 and cells ** d * r < 2**31 else 1
     pts, cell, start, order = sorted_by_cell(batch, cells)
     total = r * n
-    kernel = runtime.kernel("neighbors.cl", "nearest_neighbor", {"D": d, "PERIODIC": int(periodic)})
-    out = runtime.Output((total,), np.float64, host=np.empty(total))
     local = runtime.local_size(64)
-    kernel(runtime.queue(), (-(-total // local) * local,), (local,),
-           *(runtime.to_device(a).data for a in (pts, cell, start)), np.uint32(n),
-           np.uint32(total), np.int32(cells), np.uint32(3 ** d if cells > 1 else 1), out.buffer)
-    d2_sorted = out.finish()
+    grid = (np.uint32(n), np.uint32(total), np.int32(cells), np.uint32(3 ** d if cells > 1 else 1))
+    defines = {"D": d, "PERIODIC": int(periodic)}
+    if precision == "float-float":
+        # the nearest by float-float distances, its distance in float64 here
+        best = runtime.Output((total,), np.uint32, host=np.empty(total, np.uint32))
+        runtime.kernel("neighbors_ff.cl", "nearest_neighbor_ff", defines)(
+            runtime.queue(), (-(-total // local) * local,), (local,),
+            *(runtime.to_device(a).data for a in (split(pts), cell, start)), *grid, best.buffer)
+        best = best.finish().astype(np.int64)
+        flat = pts.reshape(total, d)
+        d2_sorted = np.full(total, np.inf)
+        some = best != 0xFFFFFFFF
+        d2_sorted[some] = distance2(flat[some], flat[best[some]], periodic)
+    else:
+        out = runtime.Output((total,), np.float64, host=np.empty(total))
+        runtime.kernel("neighbors.cl", "nearest_neighbor", defines)(
+            runtime.queue(), (-(-total // local) * local,), (local,),
+            *(runtime.to_device(a).data for a in (pts, cell, start)), *grid, out.buffer)
+        d2_sorted = out.finish()
     d2 = np.empty(total)
     d2[order] = d2_sorted
     d2 = d2.reshape(r, n)
@@ -315,7 +443,7 @@ def _nearest_device(batch, periodic=True):
     return d2
 
 
-def nearest_neighbor_distances(points, backend="opencl", periodic=True):
+def nearest_neighbor_distances(points, backend="opencl", periodic=True, precision=None):
     """The distance from each point to its nearest neighbour on the torus (or in the cube).
 
     Parameters
@@ -325,6 +453,12 @@ def nearest_neighbor_distances(points, backend="opencl", periodic=True):
     backend : {"opencl", "numpy"}
     periodic : bool
         True: distances on the torus; False: in the unit cube (no wrapping).
+    precision : {"double", "float-float"}, optional
+        What the device compares distances in; default ``"double"`` where the device has
+        fp64, ``"float-float"`` where it has not: the nearest neighbour is chosen in
+        float-float and its distance computed in float64 on the host, the double path's
+        bits unless two candidates lie within :func:`float_float_bound` (about 1e-13 of a
+        unit) of each other.
 
     Returns
     -------
@@ -350,18 +484,18 @@ def nearest_neighbor_distances(points, backend="opencl", periodic=True):
     """
     check_choice(backend, "backend", BACKENDS)
     periodic = check_bool(periodic, "periodic")
+    precision = check_precision(precision, backend)
     listed = point_sets(points) is not None
     sets, single = _check_sets(points, "points")
     if backend == "numpy":
         out = [nearest_neighbor_reference(s, periodic) for s in sets]
     else:
-        runtime.require_fp64()
         out = [None] * len(sets)
         for size in sorted({len(s) for s in sets}):
             idx = [k for k, s in enumerate(sets) if len(s) == size]
             for lo, hi in runtime.chunk_ranges(len(idx), 8 * size * (sets[0].shape[1] + 3)):
                 part = idx[lo:hi]
-                d2 = _nearest_device(np.stack([sets[k] for k in part]), periodic)
+                d2 = _nearest_device(np.stack([sets[k] for k in part]), periodic, precision)
                 for row, k in enumerate(part):
                     out[k] = np.sqrt(d2[row])
     if listed:

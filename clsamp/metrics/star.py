@@ -218,14 +218,14 @@ def anchored_counts(points, corners, strict=True, backend="opencl"):
     -------
     ndarray of int64, shape (m,)
 
-    Raises
-    ------
-    NoDeviceError
-        With ``"opencl"``, a device without double precision.
+    Notes
+    -----
+    Comparisons only, so the counts are exact on every device; without fp64 the kernel
+    compares the float64 bit patterns as unsigned integers (for non-negative doubles the
+    same order), so :func:`star_bounds` runs there too, with the same results.
     """
     if backend == "numpy":
         return anchored_counts_reference(points, corners, strict)
-    runtime.require_fp64()
     q = runtime.queue()
     n, d = points.shape
     kernel = runtime.kernel("anchored_counts.cl", "anchored_counts",

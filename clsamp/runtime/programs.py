@@ -35,6 +35,12 @@ CAPABILITIES = {
     # kernels need 64-bit atomics instead, which runtime.require_extension checks)
     "distance samplers": ("dart_throwing.cl", "ccvt.cl"),
     "spectra": ("spectrum.cl", "nufft.cl"),
+    # without double precision (precision="float-float")
+    "spectra in float-float": ("spectrum_ff.cl",),
+    "discrepancies in float-float": ("discrepancy_ff.cl",),
+    "pair correlation and nearest neighbours in float-float": ("neighbors_ff.cl",),
+    # comparisons only: exact on every device (bit patterns where there is no fp64)
+    "certified star-discrepancy bounds": ("anchored_counts.cl",),
     "metrics": ("discrepancy.cl", "star_discrepancy.cl", "anchored_counts.cl", "neighbors.cl"),
     "experiments": ("integrands.cl", "fused_integrals.cl", "families.cl"),
     "render": ("render.cl",),
