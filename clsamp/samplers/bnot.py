@@ -483,6 +483,9 @@ class BNOTSampler(OptimizerSampler):
     """
 
     info = BNOTInfo
+    # the device runs only CCVT's power pass, in integers on the integer torus: the same bits
+    # without fp64 (tests/test_devices.py)
+    needs_fp64 = False
 
     def __init__(self, d=2, seed=0, points_per_site=POINTS_PER_SITE, iterations=ITERATIONS,
                  tol=TOL, density="jittered", newton=NEWTON, backend="opencl", progress=True):
