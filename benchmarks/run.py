@@ -45,6 +45,7 @@ MODULES = (
     "bench_gbn",
     "bench_sample_elimination",
     "bench_sot",
+    "bench_utk",        # UTK's samplers where built (CLSAMP_UTK_BIN); no rows otherwise
 )
 
 
