@@ -226,7 +226,7 @@ def _bnot_rows(binaries, sizes, disk, dev):
                      clsamp.make_sampler("gbn", seed=1, iterations=iterations, tol=0.0), 3))
         ours.append(("ccvt", "default", clsamp.make_sampler("ccvt", seed=1, progress=False), 3))
         if "bnot" in clsamp.sampler_names():
-            ours.append(("bnot", "default", clsamp.make_sampler("bnot", seed=1), 1))
+            ours.append(("bnot", "default", clsamp.make_sampler("bnot", seed=1, progress=False), 1))
         for name, setting, sampler, repeats in ours:
             seconds, pts = timed(lambda s=sampler, n=n: s.sample(n), repeats=repeats)
             figures = _figures(pts)
