@@ -53,10 +53,11 @@ import numpy as np
 from bench_gbn import LADDER as GBN_LADDER
 from bench_gbn import low_frequency_power
 from bench_sot import LADDER as SOT_LADDER
+from bench_sot import _mean_nn
 from common import Row, main, on_device, short_name, timed
 
 import clsamp
-from clsamp.metrics import max_min_distance, nearest_neighbor_distances, relative_radius
+from clsamp.metrics import relative_radius
 
 ENV = "CLSAMP_UTK_BIN"
 BINARIES = {"SOT": "utk_sot", "PeriodicBNOT": "utk_periodic_bnot",
@@ -128,10 +129,6 @@ def interleaved(clsamp_fn, utk_fn, repeats):
 def _figures(points):
     """rho and low-frequency power of a 2-D set."""
     return float(relative_radius(points)), low_frequency_power(points)
-
-
-def _mean_nn(points, n, d):
-    return float(nearest_neighbor_distances(points, periodic=False).mean()) / max_min_distance(n, d)
 
 
 def _describe(points, n, d):
