@@ -6,7 +6,7 @@
 #     scripts/build-utk-peers.sh UTK_SRC SOT_SRC OUT_DIR
 #     CLSAMP_UTK_BIN=OUT_DIR python benchmarks/bench_utk.py
 #
-# UTK_SRC: a tree of utk-team/utk (include/ and externals/ are what is read);
+# UTK_SRC: a tree of utk-team/utk (include/, externals/ and data/niederreiter/ are read);
 # SOT_SRC: Paulin et al.'s Sliced-Optimal-Transport-Sampling at the commit UTK's
 # cmake/externals/sot.cmake pins (e1a9aadabd0594291c0aa6131efc930c1f855102; UTK's
 # sot.patch only edits that project's CMakeLists.txt, which this script does not use);
