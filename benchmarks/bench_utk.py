@@ -11,7 +11,9 @@ missing gives none; ``benchmarks/run.py`` runs it all the same. Each UTK binary
 own clock, so process start and file I/O are not counted; its points come back for the
 quality figures. The machine may be shared, so the two sides are timed close together:
 for ``sot`` and the nets clsamp's and UTK's calls alternate (each column the median of
-its calls), for PeriodicBNOT clsamp's calls follow UTK's.
+its calls), for PeriodicBNOT clsamp's calls follow UTK's. Even so a loaded machine bends
+the ratios: UTK's SOT runs OpenMP threads, which slowed 22x at a load of 10 on two cores
+where clsamp's sot slowed 2.2x (docs/performance.md); compare runs at low load.
 
 Cases (``--quick``: n = 1024 only):
 
