@@ -47,6 +47,7 @@ MODULES = (
     "bench_sample_elimination",
     "bench_sot",
     "bench_shapes",
+    "bench_utk",        # UTK's samplers where built (CLSAMP_UTK_BIN); no rows otherwise
 )
 
 
