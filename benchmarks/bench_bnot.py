@@ -2,7 +2,7 @@
 
     python benchmarks/bench_bnot.py [--device all] [--quick] [--out FILE]
 
-Cases: n = 1024 and 4096 (``--quick``: 1024 only), 2-D (the method's domain, the unit
+Cases: n = 1024 and 4096 (``--quick``: 256 only, CI-sized), 2-D (the method's domain, the unit
 torus), one set (seed 1) with the default 256 density points a site. The quality asked of
 a set is gbn's in 2-D: rho >= 0.75 and a low-frequency power (mean periodogram over the
 integer frequencies 0 < |w| < sqrt(n) / 2) at most a seventh of Poisson disk's, whose
@@ -25,7 +25,7 @@ LADDER = (8, 16, 32, 64)
 
 def run(devices, quick):
     rows = []
-    sizes = (1024,) if quick else (1024, 4096)
+    sizes = (256,) if quick else (1024, 4096)
     disk = {n: low_frequency_power(clsamp.make_sampler("poisson_disk", seed=1).sample(n, realizations=4))
             for n in sizes}
     for device in devices:
