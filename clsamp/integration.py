@@ -241,7 +241,7 @@ def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**2
     (True, True)
     >>> net = clsamp.integrate(clsamp.integrands.keister(3), 3, abs_tol=1e-4, method="digital")
     >>> bool(abs(net.estimate - 2.168309102165) < 1e-4), net.method, net.n
-    (True, 'digital', 262144)
+    (True, 'digital', 131072)
     """
     t0 = time.perf_counter()
     method = check_choice(method, "method", METHODS)
