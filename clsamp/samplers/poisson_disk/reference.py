@@ -25,7 +25,7 @@ from .grid import (
 
 def draw_darts(seed, index, realization, block0, d):
     """The darts' uniforms and priorities, as ``dart_draw`` in the kernel: Philox blocks
-    ``block0 .. block0 + d // 2`` of (index, realization) in ``Stream.CANDIDATES``, two
+    ``block0`` to ``block0 + d // 2`` of (index, realization) in ``Stream.CANDIDATES``, two
     coordinates a block, the priority the first word left over.
 
     Parameters
