@@ -192,9 +192,9 @@ def _add_tour(sub):
     p = sub.add_parser("tour", help="the whole story in one report: DIR/index.html", description=(
         "Every sampler's points, spectra, PCF; discrepancy and MSE against N with the published "
         "rates; AO renders; accuracy against time; the device: DIR/index.html and tour.json. "
-        "About 2 min 20 s on 2 cores (plus about 25 s once, to cache the reference renders)."))
+        "About 2 min 55 s on 2 cores (plus about 25 s once, to cache the reference renders)."))
     p.add_argument("--out", default="tour", help=f"output folder (default: tour; {FOLDERS})")
-    p.add_argument("--quick", action="store_true", help="smaller sizes (CI-sized; about 31 s)")
+    p.add_argument("--quick", action="store_true", help="smaller sizes (CI-sized; about 40 s)")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     _add_scheduler(p)
     p.set_defaults(run=_run_tour)
