@@ -127,7 +127,8 @@ class Integrand:
         return OpenCLIntegrand(source, d, integral=integral, name=name)
 
     def __call__(self, points):
-        """Evaluate at points (the NumPy reference).
+        """Evaluate at points (the NumPy reference; a :meth:`from_opencl` integrand runs its
+        OpenCL code on the current device, the same code as every kernel runs).
 
         Parameters
         ----------
@@ -256,26 +257,6 @@ class OpenCLIntegrand(Integrand):
         """
         known = "unknown" if self.integral is None else repr(float(self.integral))
         return f"{self.name}: {self._describe()}, integral {known}"
-
-    def __call__(self, points):
-        """Evaluate at points on the current device (the same code as every kernel runs).
-
-        Parameters
-        ----------
-        points : array_like
-            (n, d) or (r, n, d) points.
-
-        Returns
-        -------
-        ndarray
-            float64 of shape (n,) or (r, n).
-
-        Raises
-        ------
-        InvalidArgumentError
-            Points of the wrong shape.
-        """
-        return self._evaluate(_points(points, self.d))
 
     def _evaluate(self, x):
         return device.device_values(self, x)
