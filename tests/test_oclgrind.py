@@ -65,11 +65,6 @@ SKIPS = {}
 # computes wrongly: the values are not compared there (the test skips, by name, after the
 # reports are checked).
 UNCOMPARED = {
-    "star-discrepancy-bounds": "Oclgrind 21.10 zero-extends a true lane of a double4 "
-                               "comparison to 255, not 1, where LLVM folds 'count -= (a < b)' "
-                               "into a zero extension (kernels/anchored_counts.cl), so its counts "
-                               "come out 255 times too large; PoCL, Intel and rusticl count right "
-                               "(tests/test_metrics.py, tests/test_devices.py)",
     "discrepancy-CD-float-float": "Oclgrind 21.10 gives the float-float CD pair sums of "
                                   "kernels/discrepancy_ff.cl negative (-0.78 for 0.0012 on 2 x 128 "
                                   "points) with no memory or race report, where PoCL 3.0 and 3.1, "
