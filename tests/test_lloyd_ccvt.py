@@ -7,7 +7,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 import clsamp
-from clsamp import metrics, philox
+from clsamp import metrics, philox, runtime
 from clsamp.errors import InvalidArgumentError
 from clsamp.geometry import integer_torus as it
 from clsamp.geometry import voronoi
@@ -460,6 +460,41 @@ def test_ccvt_tail_in_one_launch_equals_launch_per_step():
     c = device.ccvt_device(sites, points, members, n, fused=False, tail=45)
     assert [len(e) for e in c[1]] == [n] * 3 and not c[3].any()
     assert [e[:n] for e in b[1]] == c[1]
+
+
+@pytest.mark.parametrize("n, p, kind, seed", [(64, 32, "jittered", 1), (200, 24, "random", 2),
+                                             (500, 16, "jittered", 3)])
+def test_ccvt_without_fp64_gives_the_bits_of_fp64_and_numpy(n, p, kind, seed):
+    # kernels/ccvt.h is exact integers, its pruning bounds too: a device without fp64
+    # (runtime.without_fp64: the build refuses any double) gives the bits of the fp64
+    # device's build and of the NumPy twin, every realization, energies included
+    params = dict(seed=seed, points_per_site=p, density=kind, progress=False)
+    s = clsamp.make_sampler("ccvt", **params)
+    here, here_info = s.sample(n, realizations=range(1, 4), return_info=True)
+    with runtime.without_fp64():
+        assert not runtime.current_device().fp64
+        there, there_info = s.sample(n, realizations=range(1, 4), return_info=True)
+    ref = clsamp.make_sampler("ccvt", backend="numpy", **params).sample(n, realizations=range(1, 4))
+    assert np.array_equal(here.view(np.uint64), there.view(np.uint64))
+    assert np.array_equal(here.view(np.uint64), ref.view(np.uint64))
+    assert np.array_equal(here_info.energy_history, there_info.energy_history)
+    assert np.array_equal(here_info.iterations, there_info.iterations)
+
+
+@pytest.mark.parametrize("fused", [False, True], ids=["stepwise", "one-launch"])
+def test_ccvt_without_fp64_equals_reference_from_degenerate_starts(fused):
+    # duplicates and a tiny cluster keep sites wide (their buckets read whole, sums from
+    # scratch) and the bounds at their extremes; n = 144 with p = 24 also prunes by bucket
+    sites = it.to_torus(_degenerate_starts(144))
+    points = density.density_points(6, np.arange(3), 144 * 24)
+    members = start.start_partition(sites, points, 24)
+    with runtime.without_fp64():
+        a = device.ccvt_device(sites, points, members, 30, fused=fused)
+    b = reference.ccvt_reference(sites, points, members, 30)
+    assert np.array_equal(a[0], b[0])
+    assert a[1] == b[1]
+    assert np.array_equal(np.sort(a[2]), np.sort(b[2]))
+    assert np.array_equal(a[3], b[3])
 
 
 def test_ccvt_capacities_exact_after_every_iteration_and_energy_never_rises():

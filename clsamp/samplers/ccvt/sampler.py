@@ -238,6 +238,9 @@ class CCVTSampler(OptimizerSampler):
 
     info = CCVTInfo
     rates = {"best": Rate(-3.0, PILLEBOUE), "worst": Rate(-1.5, PILLEBOUE)}
+    # exact integers on the torus, the pruning bounds too (kernels/ccvt.h): 64-bit atomics,
+    # no double
+    needs_fp64 = False
 
     def __init__(self, d=2, seed=0, points_per_site=1024, iterations=1000, backend="opencl",
                  density="jittered", relax=0, progress=True):
