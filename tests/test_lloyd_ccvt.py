@@ -2,6 +2,8 @@
 rising, exact capacities, degenerate starts, quality, bad input. Sizes are small: the
 references are exact twins, so a small case checks every branch."""
 
+import math
+
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
@@ -392,6 +394,65 @@ def test_ccvt_has_no_axis_cross_in_its_spectrum():
     axes = np.concatenate([P[c, c + 8:], P[c + 8:, c]]).mean()
     beside = np.concatenate([P[c + 3, c + 8:], P[c + 8:, c + 3]]).mean()
     assert axes / beside < 1.15, (axes, beside)
+
+
+# kernels/ccvt.h's integer helpers, evaluated by a probe appended to ccvt.cl
+_PROBE = """
+__kernel void ccvt_probe(__global const long *x, __global const long *dot, __global long *out,
+                         __global const uint *ns)
+{
+    const size_t t = get_global_id(0);
+    __global long *o = out + 16 * t;
+    o[0] = ccvt_isqrt(x[t]);
+    o[1] = ccvt_sqrt_up(x[t]);
+    for (int k = 0; k < 4; ++k)
+        o[2 + k] = ccvt_ray_dot(k, dot[t]);
+    const ccvt_t c = ccvt_state(ns[t], 1, 0, 0, 0, 0, 0, 0, 0, 0, 0);
+    for (int b = 0; b < CCVT_BANDS - 1; ++b)
+        o[6 + b] = c.edge[b];
+    for (int b = 0; b < CCVT_BANDS; ++b)
+        o[9 + b] = c.lo[b];
+    o[13] = c.drift;
+}
+"""
+
+
+def _at_least_over_sqrt2(u, d):
+    """u >= d / sqrt(2), decided in integers."""
+    return (d >= 0 and u >= 0 and 2 * u * u >= d * d) or (d < 0 and (u >= 0 or 2 * u * u <= d * d))
+
+
+def test_ccvt_integer_bounds_are_exact():
+    # the helpers that replaced ccvt.h's doubles: floor and ceiling square roots (a float
+    # guess corrected in integers), the sector rays' e.D rounded up (|ray| 1, 13, sqrt 2),
+    # the band edges and drift of n; built without fp64 (no double)
+    rng = np.random.default_rng(4)
+    k = np.concatenate([np.arange(0, 40), [2**21 - 1, 2**21, 2**22 - 1, 2**22, 2**23, 2**31 - 1],
+                        rng.integers(0, 2**23, 200)]).astype(np.int64)
+    x = np.clip(np.concatenate([k * k, k * k + 1, k * k - 1, k * k + 2 * k]), 0, None)
+    x = np.concatenate([x, rng.integers(0, 2**46, 300), [2**62 - 1]])
+    dot = rng.integers(-2**26, 2**26, x.size)
+    dot[:40] = np.arange(-20, 20)
+    ns = rng.integers(1, 2**20, x.size).astype(np.uint32)
+    ns[:5] = (1, 2, 3, 1024, 4096)
+    with runtime.without_fp64():
+        kernel = runtime.kernel("ccvt.cl", "ccvt_probe", pairs.ccvt_defines(), appendix=_PROBE)
+        q = runtime.queue()
+        out = runtime.to_device(np.zeros((x.size, 16), dtype=np.int64))
+        kernel(q, (x.size,), None, runtime.to_device(x).data, runtime.to_device(dot).data,
+               out.data, runtime.to_device(ns).data)
+        out = out.get()
+    for t in range(x.size):
+        v, d, n = int(x[t]), int(dot[t]), int(ns[t])
+        r = math.isqrt(v)
+        assert out[t, 0] == r and out[t, 1] == (r if r * r == v else r + 1), v
+        up = [int(u) for u in out[t, 2:6]]                # rays 0 to 3: |ray| 1, 13, sqrt 2, 13
+        assert up[0] == d and up[1] == up[3] == -(-d // 13)
+        assert _at_least_over_sqrt2(up[2], d) and not _at_least_over_sqrt2(up[2] - 2, d), d
+        edges = [(f << 44) // (g * n) for f, g in ((1764, 10**4), (2401, 10**4), (297025, 10**6))]
+        assert list(out[t, 6:9]) == edges
+        assert list(out[t, 9:13]) == [0] + [math.isqrt(e) for e in edges]
+        assert out[t, 13] == math.isqrt(2**44 // (100 * n))
 
 
 def test_ccvt_kernel_equals_reference():
