@@ -200,7 +200,10 @@ class CCVTSampler(OptimizerSampler):
     the buckets that can hold a candidate; pairs that cannot have changed since they last
     met are skipped. Every skip is exact: the NumPy reference, which reads everything,
     gives the same bits. Positions are integers on the 2^22 torus of
-    :mod:`clsamp.geometry.integer_torus`.
+    :mod:`clsamp.geometry.integer_torus`, and so is everything computed on them, the
+    bounds that skip included (integer upper bounds: radii rounded up by an exact integer
+    square root), so a device without fp64 gives the same bits; the device needs 64-bit
+    integer atomics (the energy totals) instead.
 
     *Density.* A site owns exactly p density points, so its cell's true area is the area
     those p points cover. With i.i.d. points that is a random count (relative spread
