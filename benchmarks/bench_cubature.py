@@ -2,6 +2,7 @@
 
     python benchmarks/bench_cubature.py [--device all] [--quick] [--out FILE]
     python benchmarks/bench_cubature.py --genz 200 [--abs-tol 1e-6] [--rel-tol 1e-3]
+    python benchmarks/bench_cubature.py --ceiling
 
 - ``clsamp.integrate(f, d, method="digital")`` against qmcpy's ``CubQMCNetG`` (on its
   ``DigitalNetB2``: LMS + digital shift, radical-inverse order) and ``method="lattice"``
@@ -23,6 +24,8 @@
   to max(abs_tol, rel_tol |I|); per family and method the share of members whose estimate
   meets the tolerance, the share that converged before ``max_n`` = 2^22, and the median
   points used.
+- ``--ceiling``: qmcpy's seconds over the NumPy integrand's own seconds on qmcpy's points,
+  the most any code that evaluates that integrand on those points can gain.
 """
 
 import argparse
@@ -123,8 +126,27 @@ def genz_reliability(instances, abs_tol, rel_tol, max_n=2**22):
     return out
 
 
+def ceiling(tolerances=(1e-3, 1e-4)):
+    """Per case, method and tolerance: qmcpy's seconds and the seconds of the NumPy integrand
+    alone on as many points, called once per doubling (1024, then 2^m more) as a cubature
+    calls it; their ratio bounds the speed-up of any code that evaluates that integrand on
+    those points (docs/performance.md, "Against qmcpy: seconds and points")."""
+    print("| case | method | points | qmcpy s | f alone s | ceiling |")
+    for name, f in _cases():
+        for tol in tolerances:
+            for method in METHODS:
+                qmcpy_seconds, (_, n) = timed(lambda: _qmcpy(f.__call__, f.d, tol, method), repeats=3)
+                x = np.random.default_rng(0).random((n, f.d))
+                chunks = [x[:min(n, 1024)]] + [x[2**m:2**(m + 1)] for m in range(10, n.bit_length() - 1)]
+                f_seconds = timed(lambda: [f(c) for c in chunks], repeats=3)[0]
+                print(f"| {name}, {tol:g} | {method} | {n} | {qmcpy_seconds:.4g} | {f_seconds:.4g} | "
+                      f"{qmcpy_seconds / f_seconds:.1f}x |", flush=True)
+
+
 if __name__ == "__main__":
-    if "--genz" in sys.argv:
+    if "--ceiling" in sys.argv:
+        ceiling()
+    elif "--genz" in sys.argv:
         p = argparse.ArgumentParser(description=__doc__)
         p.add_argument("--genz", type=int, required=True)
         p.add_argument("--abs-tol", type=float, default=1e-6)

@@ -190,6 +190,8 @@ class Cubature:
         coefficients and their ordering on the device and transform there
         (:class:`clsamp.cubature_device.DeviceWalsh`, the same bits). None: where the
         current device has fp64.
+    max_n : int, optional
+        The most points the run will take (sizes the device's arrays).
 
     Notes
     -----
@@ -199,7 +201,8 @@ class Cubature:
     returns (mean, bound). See the module's references.
     """
 
-    def __init__(self, values, d, method, seed, periodization="none", block=None, device=None):
+    def __init__(self, values, d, method, seed, periodization="none", block=None, device=None,
+                 max_n=None):
         if method == "digital":
             self.sampler = make_sampler("sobol", d=d, seed=seed, randomize="lms+shift")
         else:
@@ -210,7 +213,7 @@ class Cubature:
         self._coefficients = self._kappa = None
         if device is None:
             device = runtime.current_device().fp64
-        self.walsh = DeviceWalsh() if device and method == "digital" else None
+        self.walsh = DeviceWalsh(max_n) if device and method == "digital" else None
 
     @property
     def coefficients(self):

@@ -1,10 +1,11 @@
 """The digital-net cubature's transform, butterfly, wavenumber ordering and bound terms on the
 device (``kernels/walsh.cl``), for :class:`clsamp.cubature.Cubature`.
 
-Once the host's state is loaded, the coefficients and the ordering stay on the device from
-one doubling to the next; a doubling uploads the new values, transforms them, combines
-them with the coefficients already there, reorders the wavenumbers and reads back only
-the 2^(m-r-1) terms of the bound. The kernels do the NumPy twin's operations
+Once the host's state is loaded, the coefficients (in wavenumber order) and the ordering
+stay on the device from one doubling to the next, in arrays with room to grow; a doubling
+uploads the new values, transforms them, combines them with the coefficients already
+there in place, reorders the wavenumbers and reads back only the 2^(m-r-1) terms of the
+bound. The kernels do the NumPy twin's operations
 (:func:`clsamp.cubature.walsh_coefficients`, ``Cubature.step``, ``_order_wavenumbers``) in
 the same order: the same bits.
 """
@@ -17,6 +18,12 @@ from . import runtime
 class DeviceWalsh:
     """The Walsh coefficients of a digital-net rule and their wavenumber ordering, on the
     current device (fp64).
+
+    Parameters
+    ----------
+    limit : int, optional
+        The most coefficients the rule will hold (its ``max_n``): the arrays grow 4x at a
+        time, never past it.
 
     Examples
     --------
@@ -32,31 +39,39 @@ class DeviceWalsh:
     [2.5, -0.5, -1.0, 0.0]
     """
 
-    def __init__(self):
+    def __init__(self, limit=None):
         runtime.require_fp64()
         self.q = runtime.queue()
-        self.c = self.kappa = None
+        self.limit = limit
+        self.n = 0
+        self.a = self.kappa = self.t = None     # a[i] = c[kappa[i]], room for 2 n or more
 
     @staticmethod
     def _kernel(name):
         return runtime.kernel("walsh.cl", name)
 
-    def transform(self, y):
+    def transform(self, y, out=None):
         """The discrete Walsh coefficients of values, on the device.
 
         Parameters
         ----------
         y : ndarray of float64
             On the host, length a power of 2, in the net's natural order.
+        out : pyopencl.array.Array, optional
+            Room for them (float64, at least ``y.size``).
 
         Returns
         -------
         pyopencl.array.Array of float64
-            :func:`clsamp.cubature.walsh_coefficients` of ``y``, bit for bit (its passes).
+            :func:`clsamp.cubature.walsh_coefficients` of ``y``, bit for bit (its passes), in
+            the first ``y.size`` entries.
         """
+        import pyopencl as cl
         import pyopencl.array as cla
         n = y.size
-        t = cla.to_device(self.q, np.ascontiguousarray(y, dtype=np.float64))
+        y = np.ascontiguousarray(y, dtype=np.float64)
+        t = out if out is not None else cla.empty(self.q, n, np.float64)
+        cl.enqueue_copy(self.q, t.data, y)
         h = 1
         while h < n:
             if 4 * h <= n:
@@ -71,8 +86,28 @@ class DeviceWalsh:
     def _order(self, top, bottom, m):
         for level in range(top, bottom, -1):
             nl = 2**level
-            self._kernel("walsh_order")(self.q, (nl - 1,), None, self.c.data, self.kappa.data,
-                                        np.uint32(nl), np.uint32(2**m // (2 * nl)))
+            # nl - 1 work-items padded to whole groups (an odd count leaves PoCL groups of a few)
+            local = min(nl, runtime.local_size(64))
+            self._kernel("walsh_order")(self.q, (-(-(nl - 1) // local) * local,), (local,),
+                                        self.kappa.data, self.a.data, np.uint32(nl),
+                                        np.uint32(2**m // (2 * nl)))
+
+    def _room(self, size):
+        """Arrays for ``size`` coefficients, the ones held kept (grown 4x at a time: each
+        growth is a copy, and fresh memory costs its first touch)."""
+        import pyopencl as cl
+        import pyopencl.array as cla
+        if self.a is not None and self.a.size >= size:
+            return
+        room = max(size, 4 * (self.a.size if self.a is not None else 0))
+        if self.limit is not None:
+            room = max(size, min(room, self.limit))
+        a, kappa = cla.empty(self.q, room, np.float64), cla.empty(self.q, room, np.uint32)
+        if self.n:
+            cl.enqueue_copy(self.q, a.data, self.a.data, byte_count=8 * self.n)
+            cl.enqueue_copy(self.q, kappa.data, self.kappa.data, byte_count=4 * self.n)
+        self.a, self.kappa = a, kappa
+        self.t = cla.empty(self.q, room // 2, np.float64)
 
     def load(self, coefficients, kappa):
         """Take over a state made on the host.
@@ -84,9 +119,13 @@ class DeviceWalsh:
         kappa : ndarray of int
             Their wavenumber ordering.
         """
-        import pyopencl.array as cla
-        self.c = cla.to_device(self.q, np.ascontiguousarray(coefficients, dtype=np.float64))
-        self.kappa = cla.to_device(self.q, np.ascontiguousarray(kappa, dtype=np.uint32))
+        import pyopencl as cl
+        kappa = np.asarray(kappa)
+        self.n = 0
+        self._room(2 * kappa.size)
+        cl.enqueue_copy(self.q, self.a.data, np.ascontiguousarray(coefficients[kappa], dtype=np.float64))
+        cl.enqueue_copy(self.q, self.kappa.data, np.ascontiguousarray(kappa, dtype=np.uint32))
+        self.n = kappa.size
 
     def double(self, y, bottom):
         """Add the values of the next n points (n: the points so far).
@@ -99,15 +138,16 @@ class DeviceWalsh:
             After the doubling's butterfly the ordering runs from level m - 1 down to
             ``bottom`` + 1 (2^m = 2n).
         """
-        import pyopencl.array as cla
-        n = y.size
-        t = self.transform(y)
-        c2 = cla.empty(self.q, 2 * n, np.float64)
-        kappa2 = cla.empty(self.q, 2 * n, np.uint32)
-        self._kernel("walsh_double")(self.q, (n,), None, self.c.data, t.data, self.kappa.data,
-                                     np.uint32(n), c2.data, kappa2.data)
-        self.c, self.kappa = c2, kappa2
-        self._order((2 * n).bit_length() - 2, bottom, (2 * n).bit_length() - 1)
+        n = self.n
+        if y.size != n:
+            raise ValueError(f"a doubling of {n} values, got {y.size}")
+        self._room(2 * n)
+        t = self.transform(y, self.t)
+        self._kernel("walsh_double")(self.q, (n,), None, self.a.data, t.data, self.kappa.data,
+                                     np.uint32(n))
+        self.n = 2 * n
+        m = self.n.bit_length() - 1
+        self._order(m - 1, bottom, m)
 
     def terms(self, low):
         """The terms of the error bound.
@@ -122,11 +162,7 @@ class DeviceWalsh:
         ndarray of float64
             |c[kappa[low + i]]| for i < low, on the host (the bound sums them in NumPy).
         """
-        import pyopencl.array as cla
-        out = cla.empty(self.q, low, np.float64)
-        self._kernel("walsh_terms")(self.q, (low,), None, self.c.data, self.kappa.data,
-                                    np.uint32(low), out.data)
-        return out.get()
+        return np.abs(self.a[low:2 * low].get())
 
     def coefficients(self):
         """The coefficients.
@@ -134,9 +170,11 @@ class DeviceWalsh:
         Returns
         -------
         ndarray of float64
-            On the host.
+            On the host, in wavenumber order 0 .. 2^m - 1.
         """
-        return self.c.get()
+        out = np.empty(self.n)
+        out[self.ordering()] = self.a[:self.n].get()
+        return out
 
     def ordering(self):
         """The wavenumber ordering.
@@ -146,4 +184,4 @@ class DeviceWalsh:
         ndarray of int64
             On the host.
         """
-        return self.kappa.get().astype(np.int64)
+        return self.kappa[:self.n].get().astype(np.int64)

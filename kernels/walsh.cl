@@ -42,43 +42,39 @@ __kernel void walsh_scale(__global double *y, const double scale)
     y[get_global_id(0)] *= scale;
 }
 
-/* The doubling: c2 = ((c + t) / 2, (c - t) / 2) as (c + t) * 0.5, and kappa2 = (kappa,
- * n + kappa). Grid: n. */
-__kernel void walsh_double(__global const double *c, __global const double *t,
-                           __global const uint *kappa, const uint n, __global double *c2,
-                           __global uint *kappa2)
+/* The doubling, in place in arrays of room for 2n: the coefficients are kept in wavenumber
+ * order, a[i] = c[kappa[i]] (what the ordering compares and the bound sums, read
+ * contiguously), so the butterfly ((c + t) / 2, (c - t) / 2) as (c + t) * 0.5 becomes
+ * a[i], a[n + i] = (a[i] + t[k]) * 0.5, (a[i] - t[k]) * 0.5 with k = kappa[i], and kappa
+ * becomes (kappa, n + kappa). Grid: n. */
+__kernel void walsh_double(__global double *a, __global const double *t, __global uint *kappa,
+                           const uint n)
 {
     const uint i = get_global_id(0);
-    const double a = c[i], b = t[i];
-    c2[i] = (a + b) * 0.5;
-    c2[n + i] = (a - b) * 0.5;
     const uint k = kappa[i];
-    kappa2[i] = k;
-    kappa2[n + i] = n + k;
+    const double c = a[i], v = t[k];
+    a[i] = (c + v) * 0.5;
+    a[n + i] = (c - v) * 0.5;
+    kappa[n + i] = n + k;
 }
 
-/* One level of the ordering: for j in [1, nl) the first block decides (|c[kappa[j + nl]]| >
- * |c[kappa[j]]|) and every block b of 2 nl swaps its entries j and j + nl alike, the blocks
- * one after another in the work-item (block 0's pair is read before it is written). Grid:
- * nl - 1 (j - 1). */
-__kernel void walsh_order(__global const double *c, __global uint *kappa, const uint nl,
+/* One level of the ordering: for j in [1, nl) the first block decides (|a[j + nl]| > |a[j]|,
+ * the sizes |c[kappa[.]]|) and every block b of 2 nl swaps its entries j and j + nl alike, in
+ * kappa and in a, the blocks one after another in the work-item (block 0's pair is read
+ * before it is written). Grid: at least nl - 1 (j - 1). */
+__kernel void walsh_order(__global uint *kappa, __global double *a, const uint nl,
                           const uint blocks)
 {
     const uint j = get_global_id(0) + 1u;
-    if (!(fabs(c[kappa[j + nl]]) > fabs(c[kappa[j]])))
+    if (j >= nl || !(fabs(a[j + nl]) > fabs(a[j])))
         return;
     for (uint b = 0; b < blocks; ++b) {
         const size_t at = (size_t)b * 2 * nl + j;
-        const uint swap = kappa[at];
+        const uint k = kappa[at];
         kappa[at] = kappa[at + nl];
-        kappa[at + nl] = swap;
+        kappa[at + nl] = k;
+        const double v = a[at];
+        a[at] = a[at + nl];
+        a[at + nl] = v;
     }
-}
-
-/* The bound's terms |c[kappa[low + i]]|, i < low. Grid: low. */
-__kernel void walsh_terms(__global const double *c, __global const uint *kappa, const uint low,
-                          __global double *out)
-{
-    const uint i = get_global_id(0);
-    out[i] = fabs(c[kappa[low + i]]);
 }
