@@ -15,15 +15,21 @@
  * doubles), and a box's value fl(fl(c / n) - fl(fl(t s) u)) (or the reverse) is the
  * correctly rounded IEEE-754 result of the same operations; fl(c / n) comes from a table
  * the host fills (ratios[c], c = 0..n). The largest of those values is fl of the largest
- * exact difference (rounding is monotone), so the maximum is the fp64 kernel's. Exact
- * evaluation costs tens of integer operations, so each box is first estimated in float:
- * the estimate is within ESTIMATE_ERROR of the exact difference (see below), and a box
- * whose estimate lies more than twice that below the best estimate so far (of a box
- * evaluated exactly) cannot be the largest and is skipped. Coordinates below 2^-300 enter
- * the volumes as 0: such a volume is below 2^-600 either way, which changes no value
- * fl(c / n - v) with c >= 1 (c / n >= 2^-32, its ulp far above), and a value v - c / n
- * below 2^-600 is never the maximum (D* >= 1 / (2n), the bound of the first coordinate's
- * projection); every volume then stays in the normal range that f64bits.h's products need.
+ * exact difference D (rounding is monotone), so the maximum is the fp64 kernel's. Exact
+ * evaluation costs tens of integer operations, so every box is first estimated in float,
+ * within E = ESTIMATE_ERROR of its exact difference (the bound is derived below). Pass 1
+ * (star_estimate) keeps each work-item's largest estimate; M, the largest of all, is the
+ * estimate of some box, so M < D + E, and the box of D has an estimate > D - E > M - 2E.
+ * Pass 2 (star_sweep) sweeps only the work-items whose largest estimate reaches M - 2E,
+ * and evaluates exactly the boxes whose estimates reach b - 2E, b the largest of M and of
+ * the estimates of the boxes it evaluated (each < D + E): the box of D is among them, and
+ * the largest value found is fl(D). Both passes carry their counts in a state buffer, so
+ * the host may cut the sweep into launches over a few points (llvmpipe's loop limit).
+ * Coordinates below 2^-300 enter the volumes as 0: such a volume is below 2^-600 either
+ * way, which changes no value fl(c / n - v) with c >= 1 (c / n >= 2^-32, its ulp far
+ * above), and a value v - c / n below 2^-600 is never the maximum (D* >= 1 / (2n), the
+ * bound of the first coordinate's projection); every volume then stays in the normal
+ * range that f64bits.h's products need.
  */
 #include "f64bits.h"
 #pragma OPENCL FP_CONTRACT OFF
@@ -78,13 +84,15 @@ __kernel void star_sweep(__global const double *xs, __global const double *ys,
 
 #define TINY 0x12B0000000000000UL          /* 2^-300 */
 
-/* |estimate - exact difference| <= ESTIMATE_ERROR = 2^-19 (32 u, u = 2^-24), for counts
- * c <= n and coordinates in [0, 1]: c n^-1 in float is within 3 u (c / n) of c / n
- * (float(c) exact below 2^24, else 1 u more; 1 / n rounded; the product rounded), and
- * fl(c / n) within 2^-53 of it; each coordinate truncated to float is within 2^-23 = 2 u
- * relative (or 2^-126 absolute where it is flushed), the two float products round with
- * 1 u each, and the double volume is within 2^-52 of the exact product: 9 u (1 + 9 u) plus
- * 2^-124; the difference rounds with 1 u of at most 1. In all below 16 u: a margin of 2. */
+/* |estimate - exact difference| < ESTIMATE_ERROR = 2^-19 = 32 u (u = 2^-24), for counts
+ * c <= n and coordinates in [0, 1]. c n^-1 in float is within 3 u (c / n) of c / n
+ * (float(c), exact below 2^24; 1 / n; the product: one rounding each), and fl(c / n)
+ * within 2^-53 of it. A volume estimate: three coordinates truncated to float (each within
+ * 2 u relative, or 2^-126 absolute where flushed) and two float products (1 u each, or
+ * 2^-126 flushed) are within 8 u (1 + 8 u) + 5 2^-126 of the exact product, which the
+ * double volume is within 2^-52 of (and 2^-600 where TINY flushes). The difference of the
+ * two estimates (at most 1 + 8 u) rounds with 1 u (1 + 8 u). In all below 13 u: E is
+ * more than twice the bound. */
 #define ESTIMATE_ERROR 0x1p-19f
 
 /* A non-negative double (bits) truncated to float; 0 below 2^-126. */
