@@ -118,26 +118,32 @@ inline ulong exact_volume(ulong t, ulong s, ulong u)
 #endif
 }
 
-#define LANE(v, i) ((i) == 0 ? (v).x : (i) == 1 ? (v).y : (i) == 2 ? (v).z : (v).w)
-
 /* The boxes of estimates d (one per lane) at x value t that pass the filter, evaluated
- * exactly: open (the volume minus counts / n) or closed (the reverse). */
+ * exactly: open (the volume minus counts / n) or closed (the reverse). Lanes are read from
+ * private arrays: Oclgrind 21.10 simulates a chain `i == 0 ? v.x : i == 1 ? v.y : ...`
+ * wrongly (kernels/philox.h, clsamp_lane). */
 inline void evaluate(const float4 d, const int open, const ulong t, const ulong4 s, const ulong4 u,
                      const int4 counts, __global const ulong *ratios, ulong *best, float *best_f)
 {
     const float threshold = *best_f - 2.0f * ESTIMATE_ERROR;
     if (!any(d >= (float4)(threshold)))
         return;
+    float e[4];
+    ulong sv[4], uv[4];
+    int c[4];
+    vstore4(d, 0, e);
+    vstore4(s, 0, sv);
+    vstore4(u, 0, uv);
+    vstore4(counts, 0, c);
     for (int i = 0; i < 4; ++i) {
-        const float e = LANE(d, i);
-        if (e < threshold)
+        if (e[i] < threshold)
             continue;
-        const ulong volume = exact_volume(t, LANE(s, i), LANE(u, i));
-        const ulong ratio = ratios[LANE(counts, i)];
+        const ulong volume = exact_volume(t, sv[i], uv[i]);
+        const ulong ratio = ratios[c[i]];
         const ulong value = open ? positive_difference(volume, ratio)
                                  : positive_difference(ratio, volume);
         *best = max(*best, value);
-        *best_f = fmax(*best_f, e);
+        *best_f = fmax(*best_f, e[i]);
     }
 }
 
