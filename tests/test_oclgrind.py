@@ -477,6 +477,7 @@ def _probes():
         else:
             got = test_f64bits._device(*cases)
         _same_bits(got, test_f64bits.EXPECTED[:300])
+        test_f64bits.check_subtraction(integer_path, 300)
     import test_float_float
     test_float_float.test_float_float_operations_keep_their_bounds()
     test_float_float.WITHOUT_FP64 = []                 # Oclgrind alone, not the other devices
