@@ -306,6 +306,21 @@ def _integrate():
     np.testing.assert_allclose(kernel.estimate, python.estimate, rtol=1e-12)
 
 
+@check("walsh-on-the-device")
+def _walsh():
+    from clsamp import cubature
+    from clsamp.cubature import Cubature
+    cubature.DEVICE_FROM = 2**10
+
+    def f(x):
+        return np.exp(np.sum(x, axis=1)) * np.cos(9.0 * x[:, 0])
+    rules = [Cubature(f, 2, "digital", 3, device=device) for device in (False, True)]
+    for _ in range(3):
+        assert rules[0].step() == rules[1].step()
+    _same_bits(rules[0].coefficients, rules[1].coefficients)
+    _same_bits(rules[0].kappa, rules[1].kappa)
+
+
 @check("render")
 def _render():
     from clsamp import render as rendering
@@ -469,15 +484,9 @@ def _probes():
     r, i, j = np.arange(2)[:, None, None], np.arange(16)[None, :, None], np.arange(3)[None, None, :]
     _same_bits(out.get(), philox.uniform(9, philox.Stream.SHIFT, r, i, j))
     _same_bits(words.get(), philox.random_words(9, philox.Stream.SHIFT, r, i, j))
-    cases = [c[:300] for c in test_f64bits.CASES]
     for integer_path in (False, True):
-        if integer_path:
-            with runtime.without_fp64():
-                got = test_f64bits._device(*cases)
-        else:
-            got = test_f64bits._device(*cases)
-        _same_bits(got, test_f64bits.EXPECTED[:300])
-        test_f64bits.check_subtraction(integer_path, 300)
+        test_f64bits.test_every_operation_is_correctly_rounded(integer_path)
+        test_f64bits.test_subtraction_is_correctly_rounded(integer_path)
     import test_float_float
     test_float_float.test_float_float_operations_keep_their_bounds()
     test_float_float.WITHOUT_FP64 = []                 # Oclgrind alone, not the other devices

@@ -31,8 +31,8 @@ _build_count = 0
 CAPABILITIES = {
     "samplers": ("random.cl", "stratified.cl", "lowdiscrepancy.cl", "lattice.cl", "zsobol.cl",
                  "pmj.cl", "permutation.cl"),
-    # poisson_disk and ccvt: distances and energies in double precision (lloyd's integer
-    # kernels need 64-bit atomics instead, which runtime.require_extension checks)
+    # poisson_disk: distances in double precision; ccvt is exact integers (like lloyd's
+    # kernels it needs 64-bit atomics instead, which runtime.require_extension checks)
     "distance samplers": ("dart_throwing.cl", "ccvt.cl"),
     "spectra": ("spectrum.cl", "nufft.cl"),
     # without double precision (precision="float-float")
