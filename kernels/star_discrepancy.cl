@@ -107,7 +107,7 @@ inline ulong volume_coordinate(ulong x) { return x < TINY ? 0 : x; }
 /* fl(a - b) for a > b, else 0 (the value of a box that cannot beat the start, 0) */
 inline ulong positive_difference(ulong a, ulong b) { return a > b ? f64_sub(a, b) : 0; }
 
-/* The exact volume fl(fl(t s) u) of lane i. */
+/* The exact volume fl(fl(t s) u) of one box (fl(t s) in 2-D). */
 inline ulong exact_volume(ulong t, ulong s, ulong u)
 {
     const ulong ts = f64_mul(volume_coordinate(t), volume_coordinate(s));
