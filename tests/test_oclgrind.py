@@ -202,6 +202,25 @@ def _star():
     assert clsamp.star_discrepancy(pts) == clsamp.star_discrepancy(pts, backend="numpy")
 
 
+@check("star-discrepancy-without-fp64")
+def _star_without_fp64():
+    from clsamp import runtime
+    from clsamp.metrics.star import star_discrepancy_brute
+    rng = np.random.default_rng(2)
+    grid = rng.integers(0, 8, (40, 2)) / 8                 # ties: boxes of equal value
+    sets = [_points(64, 1)[0], grid, rng.random((14, 3)), rng.integers(0, 4, (12, 3)) / 4]
+    limit = runtime.discovery.loop_limit
+    try:
+        for k, pts in enumerate(sets + sets[1:2]):
+            if k == len(sets):                              # launches of 20 points
+                runtime.discovery.loop_limit = lambda: 320
+            with runtime.without_fp64():
+                got = clsamp.star_discrepancy(pts)
+            _same_bits(np.array([got]), np.array([star_discrepancy_brute(pts)]))
+    finally:
+        runtime.discovery.loop_limit = limit
+
+
 @check("star-discrepancy-bounds")
 def _star_bounds():
     pts = _points(16, 1)[0]
@@ -467,6 +486,7 @@ def _probes():
     _same_bits(words.get(), philox.random_words(9, philox.Stream.SHIFT, r, i, j))
     for integer_path in (False, True):
         test_f64bits.test_every_operation_is_correctly_rounded(integer_path)
+        test_f64bits.test_subtraction_is_correctly_rounded(integer_path)
     import test_float_float
     test_float_float.test_float_float_operations_keep_their_bounds()
     test_float_float.WITHOUT_FP64 = []                 # Oclgrind alone, not the other devices

@@ -41,6 +41,8 @@ CAPABILITIES = {
     "pair correlation and nearest neighbours in float-float": ("neighbors_ff.cl",),
     # comparisons only: exact on every device (bit patterns where there is no fp64)
     "certified star-discrepancy bounds": ("anchored_counts.cl",),
+    # the fp64 result's bits in integer arithmetic
+    "exact star discrepancy": ("star_discrepancy.cl",),
     "metrics": ("discrepancy.cl", "star_discrepancy.cl", "anchored_counts.cl", "neighbors.cl"),
     "experiments": ("integrands.cl", "fused_integrals.cl", "families.cl"),
     "render": ("render.cl",),
