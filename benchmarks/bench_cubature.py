@@ -24,6 +24,9 @@
   to max(abs_tol, rel_tol |I|); per family and method the share of members whose estimate
   meets the tolerance, the share that converged before ``max_n`` = 2^22, and the median
   points used.
+- A doubling of the digital rule's state (Walsh transform of 2^18 or 2^21 new values, the
+  butterfly, the wavenumber ordering, the bound's terms) on the device
+  (:mod:`clsamp.cubature_device`) against its NumPy twin, the same bits.
 - ``--ceiling``: qmcpy's seconds over the NumPy integrand's own seconds on qmcpy's points,
   the most any code that evaluates that integrand on those points can gain.
 """
@@ -100,6 +103,53 @@ def run(devices, quick):
                                    f"bound {res.half_width:.1e}{peer_quality}")
                         rows.append(Row(f"integrate {method} {label}, abs_tol {tol:g}", kind,
                                         dev, t, peer, t_peer, quality))
+    return rows + _walsh_rows(devices, quick)
+
+
+def _walsh_rows(devices, quick):
+    """One doubling of the digital rule's state (transform of the new half, butterfly,
+    ordering, the bound's terms) on the device against its NumPy twin, the same bits."""
+    from clsamp import runtime
+    from clsamp.cubature import R_LAG, _order_wavenumbers, walsh_coefficients
+    from clsamp.cubature_device import DeviceWalsh
+    rows = []
+    for device in [d for d in devices if d.fp64]:
+        on_device(device)
+        for m in (18,) if quick else (18, 21):
+            n = 2**m
+            rng = np.random.default_rng(m)
+            c = walsh_coefficients(rng.standard_normal(n))
+            kappa = _order_wavenumbers(np.arange(n), np.abs(c), m - 1, 0, m)
+            y = rng.standard_normal(n)
+            low = 2**(m + 1 - R_LAG - 1)
+            state = DeviceWalsh()
+
+            def on_device_once():
+                state.load(c, kappa)          # outside the timing below: a fresh state each call
+                runtime.queue().finish()
+                t0 = time.perf_counter()
+                state.double(y, m - R_LAG)
+                terms = state.terms(low)
+                return time.perf_counter() - t0, terms
+
+            def numpy_once():
+                t0 = time.perf_counter()
+                new = walsh_coefficients(y)
+                both = np.empty(2 * n)
+                np.add(c, new, out=both[:n])
+                np.subtract(c, new, out=both[n:])
+                both *= 0.5
+                k2 = _order_wavenumbers(np.concatenate([kappa, n + kappa]), np.abs(both), m,
+                                        m - R_LAG, m + 1)
+                return time.perf_counter() - t0, np.abs(both[k2[low:2 * low]])
+
+            runs = [on_device_once() for _ in range(4)][1:]
+            twin = [numpy_once() for _ in range(3)]
+            same = all(np.array_equal(a[1], b[1]) for a, b in zip(runs, twin, strict=True))
+            rows.append(Row("integrate digital: a doubling's Walsh state", f"2^{m} new values",
+                            short_name(device), float(np.median([r[0] for r in runs])),
+                            "clsamp NumPy twin", float(np.median([r[0] for r in twin])),
+                            "the same bits" if same else "BITS DIFFER"))
     return rows
 
 
