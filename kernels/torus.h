@@ -12,6 +12,8 @@
  * wrapped into [-1/2, 1/2].
  * TORUS_HOMOGENIZING_SHIFT: the random shift of realization r that homogenizes an
  * experiment (Pilleboue et al. 2015), Philox point 0 of (stream, r).
+ * torus_delta_bits, torus_distance2_bits: torus_delta and torus_distance2 on float64 bit
+ * patterns (f64bits.h), the same bits on devices without fp64.
  */
 #ifndef CLSAMP_TORUS_H
 #define CLSAMP_TORUS_H
@@ -82,5 +84,26 @@ CLSAMP_TORUS_WRAPPED(torus_wrapped4, double4)
     for (uint j_ = 0; j_ < (uint)(dims); ++j_)                                   \
         (u)[j_] = clsamp_uniform((key), (stream), (realization), 0u, j_)
 #endif
+
+/* torus_delta on bit patterns of [0, 1): |a - b| rounds as b - a does (round to nearest is
+ * symmetric), and the patterns of non-negative doubles compare as their values. */
+inline ulong torus_delta_bits(const ulong a, const ulong b)
+{
+    const ulong t = a < b ? f64_sub(b, a) : f64_sub(a, b);
+    const ulong u = f64_sub(F64_ONE, t);
+    return t < u ? t : u;
+}
+
+/* torus_distance2 on bit patterns: the same operations in the same order. */
+inline ulong torus_distance2_bits(const ulong *a, __global const ulong *b, const int dims)
+{
+    ulong t = torus_delta_bits(a[0], b[0]);
+    ulong total = f64_mul(t, t);
+    for (int k = 1; k < dims; ++k) {
+        t = torus_delta_bits(a[k], b[k]);
+        total = f64_add(total, f64_mul(t, t));
+    }
+    return total;
+}
 
 #endif
