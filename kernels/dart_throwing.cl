@@ -24,8 +24,8 @@
  * (kernels/torus.h), so the NumPy reference gives the same bits. Every double is held as its
  * IEEE-754 bit pattern (ulong) and computed by kernels/f64bits.h: by the hardware where the
  * device has fp64, by integer arithmetic with the same rounding where it has not, so every
- * device gives the same points. All the doubles here are non-negative, so comparisons are
- * integer comparisons of their patterns, exact.
+ * device gives the same points. All the doubles here are non-negative, so a device without
+ * fp64 compares their patterns as integers, exactly (f64_less, f64_max).
  * Build options: DIM, and D = DIM for cells.h. */
 #pragma OPENCL FP_CONTRACT OFF
 #include "torus.h"
@@ -158,14 +158,14 @@ __kernel void dart_throw(__global const uint *rel, __global const uint *base,
     for (int k = 0; k < DIM; ++k) {     /* (c + u) / M */
         const ulong c = ((ulong)bc[k] << level) | (ulong)sub[i * DIM + k];
         x[k] = f64_div_int(f64_add(f64_from_int(c), u[k]), M);
-        if (x[k] >= F64_ONE)    /* rounded up to the far edge: the same torus point */
+        if (!f64_less(x[k], F64_ONE))   /* rounded up to the far edge: the same torus point */
             x[k] = 0;
     }
     uchar ok = occ[slot] ? 0 : 1;
     for (uint o = 0; ok && o < nwindow; ++o) {
         const size_t nslot = (size_t)ri * cells
                              + neighbour_cell(bc, bi, inner, window + o * ROW, G);
-        if (occ[nslot] && torus_distance2_bits(x, pts + nslot * DIM, DIM) < r2)
+        if (occ[nslot] && torus_closer_bits(x, pts + nslot * DIM, DIM, r2))
             ok = 0;
     }
     for (int k = 0; k < DIM; ++k)
@@ -207,7 +207,7 @@ inline bool dart_rival(const ulong *x, const uint i, const uint pi, const uint j
     if (!(pj > pi || (pj == pi && j < i)))
         return false;           /* not higher (this also skips j == i) */
     const uchar sj = in[j];
-    if (sj == DART_OUT || !(torus_distance2_bits(x, cand + (size_t)j * DIM, DIM) < r2))
+    if (sj == DART_OUT || !torus_closer_bits(x, cand + (size_t)j * DIM, DIM, r2))
         return false;
     if (sj == DART_IN) {
         *beaten = true;
@@ -272,10 +272,10 @@ __kernel void dart_resolve(__global const uint *rel, __global const uint *base,
  * level longer, an uncovered one is never dropped). */
 inline ulong far_end(const ulong lo, const ulong hi, const ulong tl, const ulong th)
 {
-    const ulong f = max(tl, th);
+    const ulong f = f64_max(tl, th);
     const ulong w = f64_sub(hi, lo);
     /* f > 0.5 - w; a box wider than 1/2 makes the right side negative */
-    return w > F64_HALF || f > f64_sub(F64_HALF, w) ? F64_HALF : f;
+    return f64_less(F64_HALF, w) || f64_less(f64_sub(F64_HALF, w), f) ? F64_HALF : f;
 }
 
 /* Which children (split = 1: the 2^DIM halves, at most 16: DIM <= 4; split = 0: the cell
@@ -333,7 +333,7 @@ __kernel void dart_refine(__global const uint *rel, __global const uint *base,
             const ulong f = far_end(lo[k], hi[k], tl[k], th[k]);
             far2 = k ? f64_add(far2, f64_mul(f, f)) : f64_mul(f, f);
         }
-        if (far2 < r2) {
+        if (f64_less(far2, r2)) {
             open = 0;
             break;
         }
@@ -351,7 +351,7 @@ __kernel void dart_refine(__global const uint *rel, __global const uint *base,
                                 : far_end(lo[k], mid[k], tl[k], tm[k]);
                 c2 = k ? f64_add(c2, f64_mul(f, f)) : f64_mul(f, f);
             }
-            if (c2 < r2)
+            if (f64_less(c2, r2))
                 open &= ~(1u << t);
         }
     }
@@ -463,7 +463,7 @@ __kernel void coarse_throw(__global const uint *ids, const uint darts, const uin
         const size_t slot = (size_t)a * cells + neighbour(c, o, G);
         const uint s1 = start[slot + 1];
         for (uint q = start[slot]; q < s1; ++q)
-            if (torus_distance2_bits(x, pts + (size_t)q * DIM, DIM) < r2) {
+            if (torus_closer_bits(x, pts + (size_t)q * DIM, DIM, r2)) {
                 ok = 0;
                 break;
             }

@@ -9,8 +9,9 @@
  * Operands: non-negative, finite, zero or normal doubles (the samplers' coordinates and
  * their parts), integers below 2^53 where they meet a double, results in the normal
  * range. Kernels keep their output as `__global ulong *`; the host views it as float64.
- * The bit patterns of such doubles (+0, never -0) order as the values do, so a kernel
- * compares them (<, max) as integers, exactly, on every device.
+ * The bit patterns of such doubles (+0, never -0) order as the values do, so f64_less and
+ * f64_max compare them as integers where there is no fp64, exactly; the fp64 path compares
+ * the doubles, which keeps a chain of operations in floating-point registers.
  */
 #ifndef CLSAMP_F64BITS_H
 #define CLSAMP_F64BITS_H
@@ -62,6 +63,10 @@ inline ulong f64_mul(ulong x, ulong y) { return as_ulong(as_double(x) * as_doubl
 
 /* x - y for x >= y, correctly rounded. */
 inline ulong f64_sub(ulong x, ulong y) { return as_ulong(as_double(x) - as_double(y)); }
+
+/* x < y, and the larger of x and y. */
+inline bool f64_less(ulong x, ulong y) { return as_double(x) < as_double(y); }
+inline ulong f64_max(ulong x, ulong y) { return as_ulong(fmax(as_double(x), as_double(y))); }
 
 /* y - 1 for 1 <= y < 2, exact (Sterbenz). */
 inline ulong f64_minus_one(ulong y) { return as_ulong(as_double(y) - 1.0); }
@@ -231,6 +236,9 @@ inline ulong f64_mul(ulong x, ulong y)
 }
 
 inline ulong f64_minus_one(ulong y) { return f64_scaled((y & F64_MANTISSA), -52); }
+
+inline bool f64_less(ulong x, ulong y) { return x < y; }
+inline ulong f64_max(ulong x, ulong y) { return max(x, y); }
 
 #endif
 

@@ -3,12 +3,13 @@
 #include "f64bits.h"
 #include "torus.h"
 
-#define F64BITS_RESULTS 11
+#define F64BITS_RESULTS 16
 
 /* Per i: x, y doubles (bits) and a, b integers; F64BITS_RESULTS results each (the larger
  * less the smaller for f64_sub, the floor of x b as a double, the torus distance of x and
  * y along one axis, the squared torus distance of the 2-D points (x[i], y[i]) and
- * (y[j], y[j + 1]), j = min(i, n - 2)). */
+ * (y[j], y[j + 1]), j = min(i, n - 2), x < y as 0.0 or 1.0, the larger of x and y, and
+ * whether that distance is below x[i], itself and the next double up, as 0.0 or 1.0). */
 __kernel void f64bits_ops(__global const ulong *x, __global const ulong *y,
                           __global const ulong *a, __global const ulong *b,
                           __global const int *e, __global ulong *out, const uint n)
@@ -29,4 +30,10 @@ __kernel void f64bits_ops(__global const ulong *x, __global const ulong *y,
     o[9] = torus_delta_bits(x[i], y[i]);
     const ulong p[2] = {x[i], y[i]};
     o[10] = torus_distance2_bits(p, y + min(i, n - 2), 2);
+    o[11] = f64_from_int(f64_less(x[i], y[i]));
+    o[12] = f64_max(x[i], y[i]);
+    __global const ulong *q = y + min(i, n - 2);
+    o[13] = f64_from_int(torus_closer_bits(p, q, 2, x[i]));
+    o[14] = f64_from_int(torus_closer_bits(p, q, 2, o[10]));
+    o[15] = f64_from_int(torus_closer_bits(p, q, 2, f64_next_up(o[10])));
 }

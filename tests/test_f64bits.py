@@ -78,6 +78,11 @@ def _expected(x, y, a, b, e, wide):
     out[:, 9] = torus.wrapped_delta(x, y)
     j = np.minimum(np.arange(len(x)), len(x) - 2)
     out[:, 10] = torus.distance2(np.stack([x, y], 1), np.stack([y[j], y[j + 1]], 1))
+    out[:, 11] = x < y
+    out[:, 12] = np.maximum(x, y)
+    out[:, 13] = out[:, 10] < x
+    out[:, 14] = 0.0                                        # not below itself
+    out[:, 15] = out[:, 10] < np.nextafter(out[:, 10], 1.0)   # 1
     return out
 
 
@@ -97,7 +102,8 @@ def _device(x, y, a, b, e, wide):
 
 
 NAMES = ["add", "div", "div_int", "mul_int", "scaled", "shift_mod1", "mul", "sub", "floor",
-         "torus_delta", "torus_distance2"]
+         "torus_delta", "torus_distance2", "less", "max", "closer", "closer_equal",
+         "closer_next"]
 CASES = _cases()
 EXPECTED = _expected(*CASES)
 
