@@ -267,15 +267,23 @@ __kernel void dart_resolve(__global const uint *rel, __global const uint *base,
     }
 }
 
-/* Per axis, the distance from p to the farther end of [lo, hi], or 0.5 when the interval
- * comes within its width of the antipode (conservative: a covered box may stay active one
- * level longer, an uncovered one is never dropped). */
-inline ulong far_end(const ulong lo, const ulong hi, const ulong tl, const ulong th)
+/* Per axis, the distance from p to the farther end of [lo, hi] (tl, th: to each end), or
+ * 0.5 when the interval comes within its width of the antipode, f > 0.5 - (hi - lo)
+ * (conservative: a covered box may stay active one level longer, an uncovered one is never
+ * dropped). `near` is 0.5 - (hi - lo), once per interval (near_bound). */
+inline ulong far_end(const ulong tl, const ulong th, const ulong near)
 {
     const ulong f = f64_max(tl, th);
+    return f64_less(near, f) ? F64_HALF : f;
+}
+
+/* 0.5 - (hi - lo) for far_end; +0 for an interval wider than 1/2 (never: G >= 3), where the
+ * difference is negative: f > 0 there, as one end of an interval narrower than 1 is away
+ * from p. */
+inline ulong near_bound(const ulong lo, const ulong hi)
+{
     const ulong w = f64_sub(hi, lo);
-    /* f > 0.5 - w; a box wider than 1/2 makes the right side negative */
-    return f64_less(F64_HALF, w) || f64_less(f64_sub(F64_HALF, w), f) ? F64_HALF : f;
+    return f64_less(F64_HALF, w) ? 0 : f64_sub(F64_HALF, w);
 }
 
 /* Which children (split = 1: the 2^DIM halves, at most 16: DIM <= 4; split = 0: the cell
@@ -310,12 +318,15 @@ __kernel void dart_refine(__global const uint *rel, __global const uint *base,
     const bool inner = inside(bc, reach, G);
     const ulong Mp = (ulong)G << level;
     const ulong Mc = (ulong)G << (level + 1);
-    ulong lo[DIM], mid[DIM], hi[DIM];
+    ulong lo[DIM], mid[DIM], hi[DIM], near[DIM], near_lo[DIM], near_hi[DIM];
     for (int k = 0; k < DIM; ++k) {     /* c / Mp, (c + 1) / Mp, (2c + 1) / Mc */
         const ulong c = ((ulong)bc[k] << level) | (ulong)sub[i * DIM + k];
         lo[k] = f64_div(c, Mp, 0);
         hi[k] = f64_div(c + 1, Mp, 0);
         mid[k] = f64_div(2 * c + 1, Mc, 0);
+        near[k] = near_bound(lo[k], hi[k]);
+        near_lo[k] = near_bound(lo[k], mid[k]);
+        near_hi[k] = near_bound(mid[k], hi[k]);
     }
     const uint children = split ? (1u << DIM) : 1u;
     uint open = (1u << children) - 1u;
@@ -330,7 +341,7 @@ __kernel void dart_refine(__global const uint *rel, __global const uint *base,
         for (int k = 0; k < DIM; ++k) {
             tl[k] = torus_delta_bits(lo[k], p[k]);
             th[k] = torus_delta_bits(hi[k], p[k]);
-            const ulong f = far_end(lo[k], hi[k], tl[k], th[k]);
+            const ulong f = far_end(tl[k], th[k], near[k]);
             far2 = k ? f64_add(far2, f64_mul(f, f)) : f64_mul(f, f);
         }
         if (f64_less(far2, r2)) {
@@ -347,9 +358,13 @@ __kernel void dart_refine(__global const uint *rel, __global const uint *base,
             ulong c2 = 0;
             for (int k = 0; k < DIM; ++k) {
                 const ulong f = ((t >> (DIM - 1 - k)) & 1u)
-                                ? far_end(mid[k], hi[k], tm[k], th[k])
-                                : far_end(lo[k], mid[k], tl[k], tm[k]);
+                                ? far_end(tm[k], th[k], near_hi[k])
+                                : far_end(tl[k], tm[k], near_lo[k]);
                 c2 = k ? f64_add(c2, f64_mul(f, f)) : f64_mul(f, f);
+#if !CLSAMP_FP64
+                if (!f64_less(c2, r2))  /* the sums only grow (torus_closer_bits) */
+                    break;
+#endif
             }
             if (f64_less(c2, r2))
                 open &= ~(1u << t);
