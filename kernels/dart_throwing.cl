@@ -20,8 +20,12 @@
  * cells); for a fixed n in DIM 5..8, coarse_throw and coarse_resolve at the end throw darts
  * into the whole torus and find neighbours through cells at least r wide (kernels/cells.h).
  *
- * Exactly rounded double operations only (no contraction), in the order of
- * clsamp.geometry.torus.distance2 (kernels/torus.h), so the NumPy reference gives the same bits.
+ * Exactly rounded double operations only, in the order of clsamp.geometry.torus.distance2
+ * (kernels/torus.h), so the NumPy reference gives the same bits. Every double is held as its
+ * IEEE-754 bit pattern (ulong) and computed by kernels/f64bits.h: by the hardware where the
+ * device has fp64, by integer arithmetic with the same rounding where it has not, so every
+ * device gives the same points. All the doubles here are non-negative, so a device without
+ * fp64 compares their patterns as integers, exactly (f64_less, f64_max).
  * Build options: DIM, and D = DIM for cells.h. */
 #pragma OPENCL FP_CONTRACT OFF
 #include "torus.h"
@@ -36,17 +40,17 @@
  * block0 + NBLOCKS - 1 of (index, realization), coordinates two a block, the priority the
  * first word left over (clsamp.samplers.poisson_disk.reference.draw_darts). */
 inline uint dart_draw(const uint2 key, const uint stream, const uint realization,
-                      const uint index, const uint block0, double *u)
+                      const uint index, const uint block0, ulong *u)
 {
     uint priority = 0u;
     for (uint b = 0; b < NBLOCKS; ++b) {
         const uint4 w = clsamp_block(key, stream, realization, index, block0 + b);
         if (2 * b < DIM)
-            u[2 * b] = clsamp_unit(w.x, w.y);
+            u[2 * b] = clsamp_unit_bits(w.x, w.y);
         else
             priority = w.x;
         if (2 * b + 1 < DIM)
-            u[2 * b + 1] = clsamp_unit(w.z, w.w);
+            u[2 * b + 1] = clsamp_unit_bits(w.z, w.w);
         else if (2 * b < DIM)
             priority = w.z;
     }
@@ -118,12 +122,12 @@ __kernel void dart_init(__global uint *rel, __global uint *base, __global uint *
  * entries (tagged with the round) for dart_resolve. valid[i] is DART_OPEN or DART_OUT. */
 __kernel void dart_throw(__global const uint *rel, __global const uint *base,
                          __global const uint *sub, __global const uint *first,
-                         __global const uchar *occ, __global const double *pts,
-                         __global double *cand, __global uint *prio, __global uchar *valid,
+                         __global const uchar *occ, __global const ulong *pts,
+                         __global ulong *cand, __global uint *prio, __global uchar *valid,
                          __global uint *cand_round, __global uint *cand_first,
                          __global uint *overflow, const uint m, const uint G,
                          __global const int *window, const uint nwindow, const int reach,
-                         const uint cells, const uint level, const uint round, const double r2,
+                         const uint cells, const uint level, const uint round, const ulong r2,
                          __global const uint *ids, const uint attempt, const uint key_lo,
                          const uint key_hi, const uint stream)
 {
@@ -147,21 +151,21 @@ __kernel void dart_throw(__global const uint *rel, __global const uint *base,
     const uint tag = (round << 20) | (i - fi);
     const uint index = bi | (attempt << 26);
     const uint2 key = (uint2)(key_lo, key_hi);
-    double u[DIM];
+    ulong u[DIM];
     const uint priority = dart_draw(key, stream, ids[ri], index, tag * NBLOCKS, u);
-    const double M = (double)((ulong)G << level);
-    double x[DIM];
-    for (int k = 0; k < DIM; ++k) {
+    const ulong M = (ulong)G << level;
+    ulong x[DIM];
+    for (int k = 0; k < DIM; ++k) {     /* (c + u) / M */
         const ulong c = ((ulong)bc[k] << level) | (ulong)sub[i * DIM + k];
-        x[k] = ((double)c + u[k]) / M;
-        if (x[k] >= 1.0)    /* rounded up to the far edge: the same torus point */
-            x[k] = 0.0;
+        x[k] = f64_div_int(f64_add(f64_from_int(c), u[k]), M);
+        if (!f64_less(x[k], F64_ONE))   /* rounded up to the far edge: the same torus point */
+            x[k] = 0;
     }
     uchar ok = occ[slot] ? 0 : 1;
     for (uint o = 0; ok && o < nwindow; ++o) {
         const size_t nslot = (size_t)ri * cells
                              + neighbour_cell(bc, bi, inner, window + o * ROW, G);
-        if (occ[nslot] && torus_distance2(x, pts + nslot * DIM, DIM) < r2)
+        if (occ[nslot] && torus_closer_bits(x, pts + nslot * DIM, DIM, r2))
             ok = 0;
     }
     for (int k = 0; k < DIM; ++k)
@@ -178,7 +182,7 @@ __kernel void dart_throw(__global const uint *rel, __global const uint *base,
 /* Whether dart i is still open in this step of dart_resolve, its position then in x; a
  * decided dart keeps its state. */
 inline bool dart_open(const uint i, __global const uchar *in, __global uchar *out,
-                      __global const double *cand, double *x)
+                      __global const ulong *cand, ulong *x)
 {
     const uchar state = in[i];
     if (state != DART_OPEN) {
@@ -194,16 +198,16 @@ inline bool dart_open(const uint i, __global const uchar *in, __global uchar *ou
  * higher dart (random priority, then lower index) still in play and closer than r counts;
  * an accepted one beats i, an open one blocks it. True when the scan may stop: i is beaten,
  * or blocked at step 0 (no dart is in yet, so the first blocker decides, exactly). */
-inline bool dart_rival(const double *x, const uint i, const uint pi, const uint j,
+inline bool dart_rival(const ulong *x, const uint i, const uint pi, const uint j,
                        __global const uint *prio, __global const uchar *in,
-                       __global const double *cand, const double r2, const uint step,
+                       __global const ulong *cand, const ulong r2, const uint step,
                        bool *beaten, bool *blocked)
 {
     const uint pj = prio[j];
     if (!(pj > pi || (pj == pi && j < i)))
         return false;           /* not higher (this also skips j == i) */
     const uchar sj = in[j];
-    if (sj == DART_OUT || !(torus_distance2(x, cand + (size_t)j * DIM, DIM) < r2))
+    if (sj == DART_OUT || !torus_closer_bits(x, cand + (size_t)j * DIM, DIM, r2))
         return false;
     if (sj == DART_IN) {
         *beaten = true;
@@ -226,16 +230,16 @@ inline bool dart_rival(const double *x, const uint i, const uint pi, const uint 
  * shorter than r), so each grid cell gains at most one point. Points are written to the
  * grid as they are accepted (no step reads the grid). */
 __kernel void dart_resolve(__global const uint *rel, __global const uint *base,
-                           __global const double *cand, __global const uint *prio,
+                           __global const ulong *cand, __global const uint *prio,
                            __global const uchar *in, __global uchar *out,
                            __global const uint *cand_round, __global const uint *cand_first,
-                           __global uchar *occ, __global double *pts, __global uint *accepted,
+                           __global uchar *occ, __global ulong *pts, __global uint *accepted,
                            const uint m, const uint G, __global const int *window,
                            const uint nwindow, const int reach, const uint cells,
-                           const uint round, const uint step, const double r2)
+                           const uint round, const uint step, const ulong r2)
 {
     const uint i = get_global_id(0);
-    double x[DIM];
+    ulong x[DIM];
     if (i >= m || !dart_open(i, in, out, cand, x))
         return;
     const uint ri = rel[i], bi = base[i], pi = prio[i];
@@ -263,13 +267,23 @@ __kernel void dart_resolve(__global const uint *rel, __global const uint *base,
     }
 }
 
-/* Per axis, the distance from p to the farther end of [lo, hi], or 0.5 when the interval
- * comes within its width of the antipode (conservative: a covered box may stay active one
- * level longer, an uncovered one is never dropped). */
-inline double far_end(const double lo, const double hi, const double tl, const double th)
+/* Per axis, the distance from p to the farther end of [lo, hi] (tl, th: to each end), or
+ * 0.5 when the interval comes within its width of the antipode, f > 0.5 - (hi - lo)
+ * (conservative: a covered box may stay active one level longer, an uncovered one is never
+ * dropped). `near` is 0.5 - (hi - lo), once per interval (near_bound). */
+inline ulong far_end(const ulong tl, const ulong th, const ulong near)
 {
-    const double f = fmax(tl, th);
-    return f > 0.5 - (hi - lo) ? 0.5 : f;
+    const ulong f = f64_max(tl, th);
+    return f64_less(near, f) ? F64_HALF : f;
+}
+
+/* 0.5 - (hi - lo) for far_end; +0 for an interval wider than 1/2 (never: G >= 3), where the
+ * difference is negative: f > 0 there, as one end of an interval narrower than 1 is away
+ * from p. */
+inline ulong near_bound(const ulong lo, const ulong hi)
+{
+    const ulong w = f64_sub(hi, lo);
+    return f64_less(F64_HALF, w) ? 0 : f64_sub(F64_HALF, w);
 }
 
 /* Which children (split = 1: the 2^DIM halves, at most 16: DIM <= 4; split = 0: the cell
@@ -282,12 +296,12 @@ inline double far_end(const double lo, const double hi, const double tl, const d
  * `window` is the cover table of the children's level: only its cells can cover. */
 __kernel void dart_refine(__global const uint *rel, __global const uint *base,
                           __global const uint *sub, __global const uchar *occ,
-                          __global const double *pts, __global const uchar *done,
+                          __global const ulong *pts, __global const uchar *done,
                           __global ushort *mask, __global uchar *count,
                           __global uint *remaining, const uint m, const uint G,
                           __global const int *window, const uint nwindow, const int reach,
                           const uint cells, const uint level, const uint split,
-                          const double r2)
+                          const ulong r2)
 {
     const uint i = get_global_id(0);
     if (i >= m)
@@ -302,14 +316,17 @@ __kernel void dart_refine(__global const uint *rel, __global const uint *base,
     int bc[DIM];
     cell_coords(bi, G, bc);
     const bool inner = inside(bc, reach, G);
-    const double Mp = (double)((ulong)G << level);
-    const double Mc = (double)((ulong)G << (level + 1));
-    double lo[DIM], mid[DIM], hi[DIM];
-    for (int k = 0; k < DIM; ++k) {
+    const ulong Mp = (ulong)G << level;
+    const ulong Mc = (ulong)G << (level + 1);
+    ulong lo[DIM], mid[DIM], hi[DIM], near[DIM], near_lo[DIM], near_hi[DIM];
+    for (int k = 0; k < DIM; ++k) {     /* c / Mp, (c + 1) / Mp, (2c + 1) / Mc */
         const ulong c = ((ulong)bc[k] << level) | (ulong)sub[i * DIM + k];
-        lo[k] = (double)c / Mp;
-        hi[k] = (double)(c + 1) / Mp;
-        mid[k] = (double)(2 * c + 1) / Mc;
+        lo[k] = f64_div(c, Mp, 0);
+        hi[k] = f64_div(c + 1, Mp, 0);
+        mid[k] = f64_div(2 * c + 1, Mc, 0);
+        near[k] = near_bound(lo[k], hi[k]);
+        near_lo[k] = near_bound(lo[k], mid[k]);
+        near_hi[k] = near_bound(mid[k], hi[k]);
     }
     const uint children = split ? (1u << DIM) : 1u;
     uint open = (1u << children) - 1u;
@@ -318,34 +335,38 @@ __kernel void dart_refine(__global const uint *rel, __global const uint *base,
                              + neighbour_cell(bc, bi, inner, window + o * ROW, G);
         if (!occ[nslot])
             continue;
-        __global const double *p = pts + nslot * DIM;
-        double tl[DIM], tm[DIM], th[DIM];
-        double far2 = 0.0;
+        __global const ulong *p = pts + nslot * DIM;
+        ulong tl[DIM], tm[DIM], th[DIM];
+        ulong far2 = 0;
         for (int k = 0; k < DIM; ++k) {
-            tl[k] = torus_delta(lo[k], p[k]);
-            th[k] = torus_delta(hi[k], p[k]);
-            const double f = far_end(lo[k], hi[k], tl[k], th[k]);
-            far2 = k ? far2 + f * f : f * f;
+            tl[k] = torus_delta_bits(lo[k], p[k]);
+            th[k] = torus_delta_bits(hi[k], p[k]);
+            const ulong f = far_end(tl[k], th[k], near[k]);
+            far2 = k ? f64_add(far2, f64_mul(f, f)) : f64_mul(f, f);
         }
-        if (far2 < r2) {
+        if (f64_less(far2, r2)) {
             open = 0;
             break;
         }
         if (!split)
             continue;
         for (int k = 0; k < DIM; ++k)
-            tm[k] = torus_delta(mid[k], p[k]);
+            tm[k] = torus_delta_bits(mid[k], p[k]);
         for (uint t = 0; t < children; ++t) {
             if (!(open & (1u << t)))
                 continue;
-            double c2 = 0.0;
+            ulong c2 = 0;
             for (int k = 0; k < DIM; ++k) {
-                const double f = ((t >> (DIM - 1 - k)) & 1u)
-                                 ? far_end(mid[k], hi[k], tm[k], th[k])
-                                 : far_end(lo[k], mid[k], tl[k], tm[k]);
-                c2 = k ? c2 + f * f : f * f;
+                const ulong f = ((t >> (DIM - 1 - k)) & 1u)
+                                ? far_end(tm[k], th[k], near_hi[k])
+                                : far_end(tl[k], tm[k], near_lo[k]);
+                c2 = k ? f64_add(c2, f64_mul(f, f)) : f64_mul(f, f);
+#if !CLSAMP_FP64
+                if (!f64_less(c2, r2))  /* the sums only grow (torus_closer_bits) */
+                    break;
+#endif
             }
-            if (c2 < r2)
+            if (f64_less(c2, r2))
                 open &= ~(1u << t);
         }
     }
@@ -398,8 +419,8 @@ __kernel void dart_clear(__global uchar *occ, __global const uint *slots, const 
 /* The points of each realization in grid-cell order, written from point dst[r] of out
  * (shape (total, DIM)); dst[r] = 0xFFFFFFFF skips realization r (it will be redrawn).
  * One work-item per realization. */
-__kernel void dart_gather(__global const uchar *occ, __global const double *pts,
-                          __global const uint *dst, __global double *out,
+__kernel void dart_gather(__global const uchar *occ, __global const ulong *pts,
+                          __global const uint *dst, __global ulong *out,
                           const uint cells, const uint B)
 {
     const uint r = get_global_id(0);
@@ -425,10 +446,10 @@ __kernel void dart_gather(__global const uchar *occ, __global const double *pts,
  * cell, hold every neighbour closer than r); `start` is the first sorted index of each
  * (set, cell). Set a of the round holds darts a * darts .. (a + 1) * darts - 1. */
 
-inline void coarse_cell(const double *x, const int G, int *c)
+inline void coarse_cell(const ulong *x, const int G, int *c)
 {
-    for (int k = 0; k < DIM; ++k) {     /* as clsamp.geometry.cells.sorted_by_cell */
-        const int v = (int)(x[k] * (double)G);
+    for (int k = 0; k < DIM; ++k) {     /* (int)(x G), as clsamp.geometry.cells.sorted_by_cell */
+        const int v = (int)f64_floor(f64_mul_int(x[k], (ulong)G));
         c[k] = v < G - 1 ? v : G - 1;
     }
 }
@@ -437,17 +458,17 @@ inline void coarse_cell(const double *x, const int G, int *c)
  * realization, round * NBLOCKS + block, stream); valid when no accepted point of its set in
  * the cells around it is closer than r. */
 __kernel void coarse_throw(__global const uint *ids, const uint darts, const uint m,
-                           __global const double *pts, __global const uint *start,
+                           __global const ulong *pts, __global const uint *start,
                            const int G, const uint stencil, const uint cells,
-                           const double r2, const uint round, const uint attempt,
+                           const ulong r2, const uint round, const uint attempt,
                            const uint key_lo, const uint key_hi, const uint stream,
-                           __global double *cand, __global uint *prio, __global uchar *valid)
+                           __global ulong *cand, __global uint *prio, __global uchar *valid)
 {
     const uint i = get_global_id(0);
     if (i >= m)
         return;
     const uint a = i / darts, j = i % darts;
-    double x[DIM];
+    ulong x[DIM];
     const uint priority = dart_draw((uint2)(key_lo, key_hi), stream, ids[a],
                                     j | (attempt << 26), round * NBLOCKS, x);
     int c[DIM];
@@ -457,7 +478,7 @@ __kernel void coarse_throw(__global const uint *ids, const uint darts, const uin
         const size_t slot = (size_t)a * cells + neighbour(c, o, G);
         const uint s1 = start[slot + 1];
         for (uint q = start[slot]; q < s1; ++q)
-            if (torus_distance2(x, pts + (size_t)q * DIM, DIM) < r2) {
+            if (torus_closer_bits(x, pts + (size_t)q * DIM, DIM, r2)) {
                 ok = 0;
                 break;
             }
@@ -470,14 +491,14 @@ __kernel void coarse_throw(__global const uint *ids, const uint darts, const uin
 
 /* One step of dart_resolve's greedy independent set among the round's darts, sorted by
  * (set, cell): the same rule, the tie of equal priorities broken by the lower sorted index. */
-__kernel void coarse_resolve(__global const double *cand, __global const uint *prio,
+__kernel void coarse_resolve(__global const ulong *cand, __global const uint *prio,
                              __global const uint *start, __global const uchar *in,
                              __global uchar *out, const uint darts, const uint m, const int G,
                              const uint stencil, const uint cells, const uint step,
-                             const double r2)
+                             const ulong r2)
 {
     const uint i = get_global_id(0);
-    double x[DIM];
+    ulong x[DIM];
     if (i >= m || !dart_open(i, in, out, cand, x))
         return;
     const uint a = i / darts, pi = prio[i];

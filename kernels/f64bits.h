@@ -9,6 +9,9 @@
  * Operands: non-negative, finite, zero or normal doubles (the samplers' coordinates and
  * their parts), integers below 2^53 where they meet a double, results in the normal
  * range. Kernels keep their output as `__global ulong *`; the host views it as float64.
+ * The bit patterns of such doubles (+0, never -0) order as the values do, so f64_less and
+ * f64_max compare them as integers where there is no fp64, exactly; the fp64 path compares
+ * the doubles, which keeps a chain of operations in floating-point registers.
  */
 #ifndef CLSAMP_F64BITS_H
 #define CLSAMP_F64BITS_H
@@ -29,6 +32,7 @@
 #define F64_MANTISSA 0x000FFFFFFFFFFFFFUL
 #define F64_HIDDEN 0x0010000000000000UL
 #define F64_ONE 0x3FF0000000000000UL
+#define F64_HALF 0x3FE0000000000000UL
 
 #if CLSAMP_FP64
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
@@ -57,11 +61,15 @@ inline ulong f64_mul_int(ulong x, ulong c) { return as_ulong(as_double(x) * (dou
 /* x y, correctly rounded. */
 inline ulong f64_mul(ulong x, ulong y) { return as_ulong(as_double(x) * as_double(y)); }
 
-/* y - 1 for 1 <= y < 2, exact (Sterbenz). */
-inline ulong f64_minus_one(ulong y) { return as_ulong(as_double(y) - 1.0); }
-
 /* x - y for x >= y, correctly rounded. */
 inline ulong f64_sub(ulong x, ulong y) { return as_ulong(as_double(x) - as_double(y)); }
+
+/* x < y, and the larger of x and y. */
+inline bool f64_less(ulong x, ulong y) { return as_double(x) < as_double(y); }
+inline ulong f64_max(ulong x, ulong y) { return as_ulong(fmax(as_double(x), as_double(y))); }
+
+/* y - 1 for 1 <= y < 2, exact (Sterbenz). */
+inline ulong f64_minus_one(ulong y) { return as_ulong(as_double(y) - 1.0); }
 
 #else   /* integer arithmetic only: no double reaches the compiler */
 
@@ -153,6 +161,23 @@ inline ulong f64_div_int(ulong x, ulong c)
     return x == 0 ? 0 : f64_div(f64_significand(x), c, f64_exponent(x));
 }
 
+/* The significand of x shifted left by d (0 <= d <= 74) as (hi 2^64 + lo): x in units of
+ * y's last place, d the difference of their exponents, exact. */
+inline void f64_aligned(ulong x, int d, ulong *hi, ulong *lo)
+{
+    const ulong mx = f64_significand(x);
+    if (d == 0) {
+        *hi = 0;
+        *lo = mx;
+    } else if (d < 64) {
+        *hi = mx >> (64 - d);
+        *lo = mx << d;
+    } else {
+        *hi = mx << (d - 64);
+        *lo = 0;
+    }
+}
+
 inline ulong f64_add(ulong x, ulong y)
 {
     if (x == 0)
@@ -167,20 +192,31 @@ inline ulong f64_add(ulong x, ulong y)
     const int d = f64_exponent(x) - f64_exponent(y);
     if (d > 74)              /* y is far below half an ulp of x */
         return x;
-    const ulong mx = f64_significand(x), my = f64_significand(y);
     ulong hi, lo;
-    if (d == 0) {
-        hi = 0;
-        lo = mx;
-    } else if (d < 64) {
-        hi = mx >> (64 - d);
-        lo = mx << d;
-    } else {
-        hi = mx << (d - 64);
-        lo = 0;
-    }
+    f64_aligned(x, d, &hi, &lo);
+    const ulong my = f64_significand(y);
     lo += my;
     hi += lo < my;
+    return f64_round128(hi, lo, f64_exponent(y));
+}
+
+/* The exact difference in y's units, rounded once. Below 2^-74 x, y is under a quarter
+ * of the gap below x even where x is a power of two: the result is x. The difference must
+ * be zero or normal (it is a multiple of y's ulp, so x, y >= 2^-969 suffices). */
+inline ulong f64_sub(ulong x, ulong y)
+{
+    if (y == 0)
+        return x;
+    if (x == y)
+        return 0;
+    const int d = f64_exponent(x) - f64_exponent(y);
+    if (d > 74)
+        return x;
+    ulong hi, lo;
+    f64_aligned(x, d, &hi, &lo);
+    const ulong my = f64_significand(y);
+    hi -= lo < my;
+    lo -= my;
     return f64_round128(hi, lo, f64_exponent(y));
 }
 
@@ -202,36 +238,8 @@ inline ulong f64_mul(ulong x, ulong y)
 
 inline ulong f64_minus_one(ulong y) { return f64_scaled((y & F64_MANTISSA), -52); }
 
-/* x - y for x >= y, round to nearest even: x's significand shifted up to y's exponent
- * (127 bits at most), y's subtracted, the 128-bit difference rounded once. A y more than
- * 74 binades below x is less than a quarter of x's ulp (a power of two's gap below is half
- * an ulp): the result is x. The difference must be zero or normal (it is a multiple of y's
- * ulp, so x, y >= 2^-969 suffices). */
-inline ulong f64_sub(ulong x, ulong y)
-{
-    if (y == 0)
-        return x;
-    if (x == y)
-        return 0;
-    const int d = f64_exponent(x) - f64_exponent(y);
-    if (d > 74)
-        return x;
-    const ulong mx = f64_significand(x), my = f64_significand(y);
-    ulong hi, lo;
-    if (d == 0) {
-        hi = 0;
-        lo = mx;
-    } else if (d < 64) {
-        hi = mx >> (64 - d);
-        lo = mx << d;
-    } else {
-        hi = mx << (d - 64);
-        lo = 0;
-    }
-    hi -= lo < my;
-    lo -= my;
-    return f64_round128(hi, lo, f64_exponent(y));
-}
+inline bool f64_less(ulong x, ulong y) { return x < y; }
+inline ulong f64_max(ulong x, ulong y) { return max(x, y); }
 
 #endif
 
@@ -254,7 +262,8 @@ inline ulong f64_shift_mod1(ulong x, ulong u)
 #endif
 }
 
-/* floor(x 2^k) of a double 0 <= x < 2^(64 - k) that is a multiple of 2^-k. */
+/* floor(x 2^k) of a double 0 <= x < 2^(64 - k) that is a multiple of 2^-k, or any
+ * x 2^k >= 1 (the shift drops the fraction). */
 inline ulong f64_to_fixed(ulong x, int k)
 {
     if (x == 0)
@@ -263,5 +272,8 @@ inline ulong f64_to_fixed(ulong x, int k)
     const ulong m = (x & F64_MANTISSA) | F64_HIDDEN;
     return e >= 0 ? m << e : m >> -e;
 }
+
+/* floor(x), exactly, for 0 <= x < 2^63: C's (ulong)x of a non-negative double. */
+inline ulong f64_floor(ulong x) { return x < F64_ONE ? 0 : f64_to_fixed(x, 0); }
 
 #endif

@@ -12,6 +12,9 @@
  * wrapped into [-1/2, 1/2].
  * TORUS_HOMOGENIZING_SHIFT: the random shift of realization r that homogenizes an
  * experiment (Pilleboue et al. 2015), Philox point 0 of (stream, r).
+ * torus_delta_bits, torus_distance2_bits: torus_delta and torus_distance2 on float64 bit
+ * patterns (f64bits.h), the same bits on devices without fp64; torus_closer_bits the
+ * comparison of the latter with a threshold.
  */
 #ifndef CLSAMP_TORUS_H
 #define CLSAMP_TORUS_H
@@ -82,5 +85,55 @@ CLSAMP_TORUS_WRAPPED(torus_wrapped4, double4)
     for (uint j_ = 0; j_ < (uint)(dims); ++j_)                                   \
         (u)[j_] = clsamp_uniform((key), (stream), (realization), 0u, j_)
 #endif
+
+/* torus_delta on bit patterns of [0, 1): the double function where there is fp64; else
+ * |a - b| as b - a where a < b (round to nearest is symmetric), the patterns of
+ * non-negative doubles compared as integers. */
+#if CLSAMP_FP64
+inline ulong torus_delta_bits(const ulong a, const ulong b)
+{
+    return as_ulong(torus_delta(as_double(a), as_double(b)));
+}
+#else
+inline ulong torus_delta_bits(const ulong a, const ulong b)
+{
+    const ulong t = a < b ? f64_sub(b, a) : f64_sub(a, b);
+    const ulong u = f64_sub(F64_ONE, t);
+    return t < u ? t : u;
+}
+#endif
+
+/* torus_distance2 on bit patterns: the same operations in the same order. */
+inline ulong torus_distance2_bits(const ulong *a, __global const ulong *b, const int dims)
+{
+    ulong t = torus_delta_bits(a[0], b[0]);
+    ulong total = f64_mul(t, t);
+    for (int k = 1; k < dims; ++k) {
+        t = torus_delta_bits(a[k], b[k]);
+        total = f64_add(total, f64_mul(t, t));
+    }
+    return total;
+}
+
+/* Whether torus_distance2_bits(a, b, dims) < r2. Without fp64 the scan stops at the first
+ * partial sum that reaches r2: the terms are non-negative and rounding is monotone, so the
+ * sums only grow and the answer is the full sum's (most pairs of a dart's neighbourhood
+ * are out after a coordinate or two, and each soft operation is dear). */
+inline bool torus_closer_bits(const ulong *a, __global const ulong *b, const int dims,
+                              const ulong r2)
+{
+#if CLSAMP_FP64
+    return f64_less(torus_distance2_bits(a, b, dims), r2);
+#else
+    ulong total = 0;                /* 0 + x = x: the first term as torus_distance2 has it */
+    for (int k = 0; k < dims; ++k) {
+        const ulong t = torus_delta_bits(a[k], b[k]);
+        total = f64_add(total, f64_mul(t, t));
+        if (!f64_less(total, r2))
+            return false;
+    }
+    return true;
+#endif
+}
 
 #endif

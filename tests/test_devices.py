@@ -1,14 +1,14 @@
 """Every OpenCL device found, against the default one: the same bits where the contract says
 bits (every sampler and randomization, a convergence experiment), the stated tolerance where
 it says so (spectra, metrics, the float32 renderer). A device without fp64 gives every
-sampler's bits too, but those that compute in double (needs_fp64), and refuses those and
-the analyses with NoDeviceError, never a BuildError, but for what it computes in
-float-float (spectra, the L2 discrepancies, the PCF and nearest neighbours) or exactly (the
-star discrepancy's certified bounds, tests/test_float_float.py; its exact value,
-tests/test_star_without_fp64.py); so does a device that lacks what a kernel needs (lloyd's
-and ccvt's 64-bit atomics) or stops long loops (llvmpipe: pmj02bn, lloyd, ccvt). CI
-installs Debian's PoCL and Mesa's rusticl beside PyPI's PoCL, and Intel's CPU runtime from
-PyPI (.ci/run; registered by
+sampler's bits too (poisson_disk's distances by kernels/f64bits.h, ccvt's in exact integers),
+but those that compute in double (needs_fp64), and refuses those and the analyses with
+NoDeviceError, never a BuildError, but for what it computes in float-float (spectra, the L2
+discrepancies, the PCF and nearest neighbours) or exactly (the star discrepancy's certified
+bounds, tests/test_float_float.py; its exact value, tests/test_star_without_fp64.py); so
+does a device that lacks what a kernel needs (lloyd's and ccvt's 64-bit atomics) or stops
+long loops (llvmpipe: pmj02bn, lloyd, ccvt, poisson_disk). CI installs Debian's PoCL and
+Mesa's rusticl beside PyPI's PoCL, and Intel's CPU runtime from PyPI (.ci/run; registered by
 scripts/ensure-opencl.sh), so four implementations meet here; with one device the module is
 skipped. Oclgrind, a simulator, is left out: tests/test_oclgrind.py runs every kernel on it
 at sizes an interpreter manages, against the NumPy twins."""
@@ -72,7 +72,7 @@ def refusal(device, name):
     or None where it runs it."""
     if not device.fp64 and sampler_class(name).needs_fp64:
         return "fp64|double"
-    if name == "pmj02bn" and on(device, runtime.loop_limit) is not None:
+    if name in ("pmj02bn", "poisson_disk") and on(device, runtime.loop_limit) is not None:
         return "loops"
     # exact integers, no fp64: 64-bit atomics and long loops instead
     if name in ("lloyd", "ccvt") and ("cl_khr_int64_base_atomics" not in device.extensions
@@ -115,6 +115,24 @@ def test_many_dimensions_give_the_same_bits(device, name, d, randomize, n):
     here = s.sample(n, realizations=2)
     there = on(device, lambda: s.sample(n, realizations=2))
     assert np.array_equal(here.view(np.uint64), there.view(np.uint64))
+
+
+@pytest.mark.parametrize("device", WITHOUT_FP64, ids=_label)
+@pytest.mark.parametrize("d, params", [(2, {"radius": 0.12}), (3, {"radius": 0.25}), (2, {}),
+                                       (5, {})])
+def test_poisson_disk_without_fp64_gives_the_same_bits(monkeypatch, device, d, params):
+    """The dart-throwing kernels' integer path (kernels/f64bits.h) built by the device's own
+    compiler: the bits of the default device. Sets this small stay far below llvmpipe's
+    loop limit, which the sampler otherwise refuses."""
+    monkeypatch.setattr(runtime.discovery, "loop_limit", lambda: None)
+    s = clsamp.make_sampler("poisson_disk", d=d, seed=6, **params)
+
+    def sets():
+        return s.sample_sets(2) if params else list(s.sample(48, realizations=2))
+
+    here, there = sets(), on(device, sets)
+    assert [len(p) for p in here] == [len(p) for p in there]
+    assert all(np.array_equal(a.view(np.uint64), b.view(np.uint64)) for a, b in zip(here, there, strict=True))
 
 
 @pytest.mark.parametrize("device", OTHERS, ids=_label)

@@ -1,4 +1,5 @@
-"""kernels/f64bits.h: float64 bit patterns by hardware double and by integer arithmetic.
+"""kernels/f64bits.h: float64 bit patterns by hardware double and by integer arithmetic
+(and the torus geometry on them, kernels/torus.h).
 
 Both paths must give the correctly rounded IEEE-754 result, which Python's exact integer
 and fraction arithmetic gives here; the integer path is what devices without fp64 run.
@@ -14,6 +15,7 @@ import pytest
 import clsamp
 from clsamp import runtime
 from clsamp.errors import NoDeviceError
+from clsamp.geometry import torus
 from clsamp.samplers import sampler_class
 
 rng = np.random.default_rng(20261204)
@@ -41,7 +43,12 @@ def _cases(count=4000):
     x, y = _doubles(count), _doubles(count)
     # halfway cases of the sum: 1 + 2^-53 (to even: 1), 1 + 3 2^-53 (up), 0.5 + 2^-54 ...
     ties = [(0.5, 2.0**-54), (0.5, 3 * 2.0**-54), (0.75, 2.0**-54), (2.0**-10, 2.0**-63),
-            (1 - 2.0**-53, 2.0**-53), (1 - 2.0**-53, 1 - 2.0**-53), (0.999, 0.5)]
+            (1 - 2.0**-53, 2.0**-53), (1 - 2.0**-53, 1 - 2.0**-53), (0.999, 0.5),
+            # differences: below a power of two the gap halves (0.5 - 2^-55 ties to 0.5,
+            # 0.5 - 3 2^-56 rounds down), y at and past 2^-74 x, equal operands, zero
+            (0.5, 2.0**-55), (0.5, 3 * 2.0**-56), (0.5, 2.0**-75), (0.5, 3 * 2.0**-76),
+            (0.5, 2.0**-76), (0.5, 2.0**-80), (0.25, 0.25), (0.375, 0.0), (0.0, 0.0),
+            (0.75, 0.25), (0.3, 0.8)]
     x[:len(ties)], y[:len(ties)] = zip(*ties, strict=True)
     a = _integers(count)
     b = _integers(count)
@@ -55,7 +62,7 @@ def _cases(count=4000):
 
 
 def _expected(x, y, a, b, e, wide):
-    out = np.empty((len(x), 7), np.float64)
+    out = np.empty((len(x), len(NAMES)), np.float64)
     for i in range(len(x)):
         s = float(Fraction(x[i]) + Fraction(y[i]))
         out[i, 0] = s
@@ -65,6 +72,17 @@ def _expected(x, y, a, b, e, wide):
         out[i, 4] = math.ldexp(float(int(wide[i])), int(e[i]))
         out[i, 5] = s - 1.0 if s >= 1.0 else s
         out[i, 6] = float(Fraction(x[i]) * Fraction(y[i]))
+        out[i, 7] = float(abs(Fraction(x[i]) - Fraction(y[i])))
+        out[i, 8] = math.floor(out[i, 3])
+    # the torus geometry as clsamp.geometry.torus computes it in float64
+    out[:, 9] = torus.wrapped_delta(x, y)
+    j = np.minimum(np.arange(len(x)), len(x) - 2)
+    out[:, 10] = torus.distance2(np.stack([x, y], 1), np.stack([y[j], y[j + 1]], 1))
+    out[:, 11] = x < y
+    out[:, 12] = np.maximum(x, y)
+    out[:, 13] = out[:, 10] < x
+    out[:, 14] = 0.0                                        # not below itself
+    out[:, 15] = out[:, 10] < np.nextafter(out[:, 10], 1.0)   # 1
     return out
 
 
@@ -72,7 +90,7 @@ def _device(x, y, a, b, e, wide):
     q = runtime.queue()
     args = [cla.to_device(q, np.ascontiguousarray(v)) for v in
             (x.view(np.uint64), y.view(np.uint64), a, b, e)]
-    out = cla.empty(q, (len(x), 7), np.uint64)
+    out = cla.empty(q, (len(x), len(NAMES)), np.uint64)
     kernel = runtime.kernel("f64bits_probe.cl", "f64bits_ops")
     kernel(q, (len(x),), None, *(v.data for v in args), out.data, np.uint32(len(x)))
     first = out.get()
@@ -83,9 +101,11 @@ def _device(x, y, a, b, e, wide):
     return first.view(np.float64)
 
 
+NAMES = ["add", "div", "div_int", "mul_int", "scaled", "shift_mod1", "mul", "sub", "floor",
+         "torus_delta", "torus_distance2", "less", "max", "closer", "closer_equal",
+         "closer_next"]
 CASES = _cases()
 EXPECTED = _expected(*CASES)
-NAMES = ["add", "div", "div_int", "mul_int", "scaled", "shift_mod1", "mul"]
 
 
 @pytest.mark.parametrize("integer_path", [False, True], ids=["fp64", "integer"])

@@ -6,6 +6,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 import clsamp
+from clsamp import runtime
 from clsamp.errors import InvalidArgumentError
 from clsamp.metrics import max_min_distance, min_distance, relative_radius
 from clsamp.samplers import poisson_disk
@@ -134,6 +135,43 @@ def test_kernel_equals_numpy_reference_maximal(d, radius):
     np.testing.assert_array_equal(a, b)
     np.testing.assert_array_equal(info.counts, ref_info.counts)
     assert info.counts.tolist() == [len(a)]
+
+
+def _bits(points):
+    return [np.ascontiguousarray(p).view(np.uint64) for p in points]
+
+
+@pytest.mark.parametrize("d, n, seed, params", [
+    (2, 256, 2**40 + 9, {}), (2, 64, 4, {}), (3, 128, 5, {}), (4, 32, 6, {}),
+    (5, 2048, 5, {"radius": 0.15}),        # through 4^5 cells (the coarse kernels' stencil)
+    (6, 96, 8, {})])
+def test_without_fp64_a_fixed_n_has_the_same_bits(d, n, seed, params):
+    """Every double of the dart-throwing kernels by integer arithmetic (kernels/f64bits.h),
+    as a device without fp64 computes it: the bits of the fp64 path and of the NumPy twin
+    (fine grid in d <= 4, the coarse kernels in d >= 5)."""
+    s = clsamp.make_sampler("poisson_disk", d=d, seed=seed, **params)
+    assert not s.needs_fp64
+    here = s.sample(n, realizations=range(1, 3))
+    with runtime.without_fp64():
+        there = s.sample(n, realizations=range(1, 3))
+    assert np.array_equal(_bits([here]), _bits([there]))
+    if n <= 256:
+        ref = clsamp.make_sampler("poisson_disk", d=d, seed=seed, backend="numpy",
+                                  **params).sample(n, realizations=range(1, 3))
+        assert np.array_equal(_bits([ref]), _bits([there]))
+
+
+@pytest.mark.parametrize("d, radius, seed", [(2, 0.04, 3), (2, 0.1, 11), (3, 0.13, 4),
+                                             (4, 0.35, 2)])
+def test_without_fp64_a_maximal_set_has_the_same_bits(d, radius, seed):
+    """Maximal sets (every refinement level of the voids) by integer arithmetic: the bits
+    of the fp64 path, set by set."""
+    s = clsamp.make_sampler("poisson_disk", d=d, radius=radius, seed=seed)
+    here = s.sample_sets(range(2, 4))
+    with runtime.without_fp64():
+        there = s.sample_sets(range(2, 4))
+    assert [len(p) for p in here] == [len(p) for p in there]
+    assert all(np.array_equal(a, b) for a, b in zip(_bits(here), _bits(there), strict=True))
 
 
 @pytest.mark.parametrize("d, radius, k", [(2, 0.03, 600), (3, 0.11, 64), (4, 0.2, 12)])

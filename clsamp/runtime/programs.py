@@ -29,11 +29,12 @@ _build_count = 0
 
 # What each capability builds (the kernel files its code asks for), for `clsamp devices`.
 CAPABILITIES = {
+    # poisson_disk's distances too, by kernels/f64bits.h without fp64
     "samplers": ("random.cl", "stratified.cl", "lowdiscrepancy.cl", "lattice.cl", "zsobol.cl",
-                 "pmj.cl", "permutation.cl"),
-    # poisson_disk: distances in double precision; ccvt is exact integers (like lloyd's
-    # kernels it needs 64-bit atomics instead, which runtime.require_extension checks)
-    "distance samplers": ("dart_throwing.cl", "ccvt.cl"),
+                 "pmj.cl", "permutation.cl", "dart_throwing.cl"),
+    # ccvt is exact integers (like lloyd's kernels it needs 64-bit atomics instead, which
+    # runtime.require_extension checks)
+    "distance samplers": ("ccvt.cl",),
     "spectra": ("spectrum.cl", "nufft.cl"),
     # without double precision (precision="float-float")
     "spectra in float-float": ("spectrum_ff.cl",),

@@ -1,5 +1,9 @@
 """Dart throwing in OpenCL (``kernels/dart_throwing.cl``): each step one launch over every
-active entry of every realization."""
+active entry of every realization.
+
+The kernels hold every double as its IEEE-754 bit pattern and compute it through
+``kernels/f64bits.h``, so a device without fp64 gives the same points; the threshold r^2
+goes to them as its bits (:func:`_bits`)."""
 
 import numpy as np
 import pyopencl as cl
@@ -8,6 +12,18 @@ import pyopencl.array as cla
 from ... import philox, runtime
 from .coarse import COARSE_STEPS
 from .grid import IN, OPEN, OUT, rank_overflow, resolve_steps
+
+
+def _bits(x):
+    """The IEEE-754 bit pattern of the double x, the kernels' form of a scalar double."""
+    return np.float64(x).view(np.uint64)
+
+
+def _check_loops():
+    """Refuse a device that ends long loops (llvmpipe): a work-item of these kernels loops
+    over a window of grid cells, the darts of its cells and every cell of its realization
+    (the gather), for as long as the sets need."""
+    runtime.require_short_loops("poisson_disk's dart throwing")
 
 
 class DeviceDarts:
@@ -30,11 +46,11 @@ class DeviceDarts:
     Raises
     ------
     NoDeviceError
-        The current device has no fp64.
+        The current device ends long loops (:func:`clsamp.runtime.loop_limit`).
     """
 
     def __init__(self, geo, ids, attempt, seed):
-        runtime.require_fp64()
+        _check_loops()
         self.geo, self.attempt, self.seed = geo, attempt, seed
         self.B = len(ids)
         q = self.q = runtime.queue()
@@ -127,7 +143,7 @@ class DeviceDarts:
                   self.first.data, self.occ.data, self.pts.data, self.cand.data, self.prio.data,
                   self.valid.data, self.cand_round.data, self.cand_first.data,
                   self.overflow.data, *self._common(),
-                  np.uint32(level), np.uint32(round_), np.float64(self.geo.r2), self.ids.data,
+                  np.uint32(level), np.uint32(round_), _bits(self.geo.r2), self.ids.data,
                   np.uint32(self.attempt), *philox.seed_key(self.seed),
                   np.uint32(philox.Stream.CANDIDATES))
 
@@ -148,7 +164,7 @@ class DeviceDarts:
                       self.prio.data, state.data, other.data, self.cand_round.data,
                       self.cand_first.data, self.occ.data, self.pts.data, self.accepted_.data,
                       *self._common(), np.uint32(round_), np.uint32(step),
-                      np.float64(self.geo.r2))
+                      _bits(self.geo.r2))
             state, other = other, state
         self.won = state
 
@@ -230,7 +246,7 @@ class DeviceDarts:
         self._run("dart_refine", self.m, self.rel.data, self.base.data, self.sub.data,
                   self.occ.data, self.pts.data, self.done.data, self.mask.data, self.count.data,
                   self.remaining.data, *self._common(self._cover_window(level + split)),
-                  np.uint32(level), np.uint32(split), np.float64(self.geo.r2))
+                  np.uint32(level), np.uint32(split), _bits(self.geo.r2))
         return (self.count[:self.m].get(),
                 self.remaining.get().astype(np.int64) if tally else None)
 
@@ -285,11 +301,11 @@ class DeviceCoarse:
     for bit, made with the same arguments (a ``CoarseGeometry``, the realizations, the
     attempt, the seed); the round loop and the sorts by cell are the host's
     (:func:`~clsamp.samplers.poisson_disk.coarse.throw_coarse`). Like :class:`DeviceDarts`
-    it raises ``NoDeviceError`` on a device without fp64.
+    it raises ``NoDeviceError`` on a device that ends long loops.
     """
 
     def __init__(self, geo, ids, attempt, seed):
-        runtime.require_fp64()
+        _check_loops()
         self.geo, self.attempt, self.seed = geo, attempt, seed
         self.ids = np.asarray(ids, dtype=np.uint32)
         self.B = len(ids)
@@ -318,7 +334,7 @@ class DeviceCoarse:
                              np.zeros(1))
         dstart = cla.to_device(q, start)
         self._run("coarse_throw", m, ids.data, np.uint32(g.darts), np.uint32(m), dpts.data,
-                  dstart.data, *self._grid(), np.float64(g.r2), np.uint32(round_),
+                  dstart.data, *self._grid(), _bits(g.r2), np.uint32(round_),
                   np.uint32(self.attempt), *philox.seed_key(self.seed),
                   np.uint32(philox.Stream.CANDIDATES), cand.data, prio.data, valid.data)
         return cand.get(), prio.get(), valid.get().astype(bool)
@@ -335,6 +351,6 @@ class DeviceCoarse:
         for step in range(COARSE_STEPS):
             self._run("coarse_resolve", m, dcand.data, dprio.data, dstart.data, state.data,
                       other.data, np.uint32(g.darts), np.uint32(m), *self._grid(),
-                      np.uint32(step), np.float64(g.r2))
+                      np.uint32(step), _bits(g.r2))
             state, other = other, state
         return state.get()

@@ -210,6 +210,14 @@ class PoissonDiskSampler(Sampler):
     default 0.65 takes 4-6 (docs/performance.md). The points of a set come in the order
     they were accepted (each round's in cell order).
 
+    The kernels hold every double as its IEEE-754 bit pattern and compute each operation
+    (the darts' coordinates, the cells' corners, differences, squares and sums of the
+    distances) through ``kernels/f64bits.h``: by the hardware where the device has fp64,
+    else by integer arithmetic with the same round-to-nearest-even, and they compare the
+    non-negative doubles as integers. The sampler therefore runs on devices without fp64
+    (most laptop GPUs) and gives the same bits there; a device that ends long loops
+    (llvmpipe) refuses it with ``NoDeviceError``.
+
     In radius mode the count differs between realizations, so ``sample()`` accepts
     ``realizations`` of None (shape (m, d)) or 1 (shape (1, m, d)) only;
     :meth:`sample_sets` returns a list of k maximal sets (made in one batch). ``start``
@@ -250,7 +258,7 @@ class PoissonDiskSampler(Sampler):
     dimensions = tuple(range(1, 9))
     accepts_start = False
     expensive = True
-    needs_fp64 = True
+    needs_fp64 = False
     info = PoissonDiskInfo
     rates = {"best": Rate(-1.0, PILLEBOUE), "worst": Rate(-1.0, PILLEBOUE)}
 
