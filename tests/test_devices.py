@@ -199,7 +199,8 @@ def test_a_device_without_fp64_refuses_what_needs_it_by_name(device):
         with pytest.raises(NoDeviceError, match="fp64|double"):
             on(device, call)
     runs = runtime.capabilities(device.index)
-    running = ["samplers", "certified star-discrepancy bounds", "exact star discrepancy"] + [
+    running = ["samplers", "distance samplers", "certified star-discrepancy bounds",
+               "exact star discrepancy"] + [
         name for name in runs if name.endswith("in float-float")]
     assert len(running) >= 5
     assert all(runs[name] is None for name in running)
