@@ -69,10 +69,12 @@ _LMS_BASE_B = ("Oclgrind 21.10 computes kernels/lowdiscrepancy.cl's lms_digits t
 UNCOMPARED = {
     "sampler-faure:lms-d5": _LMS_BASE_B,
     "sampler-faure:lms+shift-d5": _LMS_BASE_B,
-    "star-discrepancy-bounds": "Oclgrind 21.10 zero-extends a true lane of a double4 "
-                               "comparison to 255, not 1, where LLVM folds 'count -= (a < b)' "
-                               "into a zero extension (kernels/anchored_counts.cl), so its counts "
-                               "come out 255 times too large; PoCL, Intel and rusticl count right "
+    "star-discrepancy-bounds": "Oclgrind 21.10 holds an i1 in a whole byte and writes a true "
+                               "lane of a vector comparison as 0xFF (OpenCL's -1), so the "
+                               "'zext <4 x i1>' LLVM folds 'count -= (a < b)' into gives 255, not "
+                               "1 (kernels/anchored_counts.cl; reduced in "
+                               "scripts/oclgrind_narrow_ints.py, zext-count): its counts come out "
+                               "255 times too large; PoCL, Intel and rusticl count right "
                                "(tests/test_metrics.py, tests/test_devices.py)",
     "discrepancy-CD-float-float": "Oclgrind 21.10 gives the float-float CD pair sums of "
                                   "kernels/discrepancy_ff.cl negative (-0.78 for 0.0012 on 2 x 128 "
