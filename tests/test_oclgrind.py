@@ -61,14 +61,7 @@ SKIPS = {}
 # Checks whose kernels run under Oclgrind's memory and race checks but whose values Oclgrind
 # computes wrongly: the values are not compared there (the test skips, by name, after the
 # reports are checked).
-_LMS_BASE_B = ("Oclgrind 21.10 computes kernels/lowdiscrepancy.cl's lms_digits tables in base 5 "
-               "differently from PoCL, Intel and the NumPy twin, which agree bit for bit, from the "
-               "third row of L on, with no memory or race report; not yet diagnosed (a minimal "
-               "kernel of clsamp_bits words also differs there alone, while every other sampler "
-               "drawing such words matches)")
 UNCOMPARED = {
-    "sampler-faure:lms-d5": _LMS_BASE_B,
-    "sampler-faure:lms+shift-d5": _LMS_BASE_B,
     "star-discrepancy-bounds": "Oclgrind 21.10 holds an i1 in a whole byte and writes a true "
                                "lane of a vector comparison as 0xFF (OpenCL's -1), so the "
                                "'zext <4 x i1>' LLVM folds 'count -= (a < b)' into gives 255, not "
