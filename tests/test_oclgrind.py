@@ -69,13 +69,6 @@ UNCOMPARED = {
                                "scripts/oclgrind_narrow_ints.py, zext-count): its counts come out "
                                "255 times too large; PoCL, Intel and rusticl count right "
                                "(tests/test_metrics.py, tests/test_devices.py)",
-    "discrepancy-CD-float-float": "Oclgrind 21.10 gives the float-float CD pair sums of "
-                                  "kernels/discrepancy_ff.cl negative (-0.78 for 0.0012 on 2 x 128 "
-                                  "points) with no memory or race report, where PoCL 3.0 and 3.1, "
-                                  "Intel's runtime and rusticl agree with the NumPy twin within "
-                                  "2.4e-16 and the other five discrepancies' float-float sums match "
-                                  "there; not yet diagnosed (a minimal kernel of the same sign flip, "
-                                  "vector comparisons and select agrees on Oclgrind)",
 }
 
 
