@@ -27,7 +27,10 @@ __kernel void anchored_counts(__global const COORD *points, const uint n,
     COORD4 c[D];
     for (int k = 0; k < D; ++k)
         c[k] = *(__global const COORD4 *)(corners + (size_t)k * m4 + 4 * w);
-    long4 count = (long4)(0);
+    /* the sum of the comparisons (a true one is -1 in every bit), negated at the end: LLVM
+     * makes 'count -= inside' a zext of <4 x i1>, which Oclgrind (21.10) computes as 255
+     * for a true lane (scripts/oclgrind_narrow_ints.py), and keeps this sum a sext */
+    long4 minus = (long4)(0);
     for (uint i = 0; i < n; ++i) {
         __global const COORD *p = points + (size_t)i * D;
 #if STRICT
@@ -41,8 +44,9 @@ __kernel void anchored_counts(__global const COORD *points, const uint n,
         for (int k = 1; k < D; ++k)
             inside &= (COORD4)(p[k]) <= c[k];
 #endif
-        count -= inside;           /* a true comparison is -1 in every bit */
+        minus += inside;
     }
+    const long4 count = -minus;
     counts[4 * w] = (uint)count.x;
     counts[4 * w + 1] = (uint)count.y;
     counts[4 * w + 2] = (uint)count.z;

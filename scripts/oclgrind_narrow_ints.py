@@ -29,8 +29,9 @@ zext-count
     ``zext <4 x i1>``: 255 for a true lane (kernels/anchored_counts.cl, the star
     discrepancy's certified bounds).
 
-clsamp's kernels avoid the first two forms (the lane by its bits; the float-float floor
-loaded, not a constant), with the same bits on every device. Exits 1 where a device other
+clsamp's kernels avoid the three forms (the lane by its bits; the float-float floor loaded,
+not a constant; the counts summed as -1s and negated once), with the same bits on every
+device. Exits 1 where a device other
 than Oclgrind disagrees with the expected values (then the reduction itself is wrong).
 """
 

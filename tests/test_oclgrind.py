@@ -61,15 +61,7 @@ SKIPS = {}
 # Checks whose kernels run under Oclgrind's memory and race checks but whose values Oclgrind
 # computes wrongly: the values are not compared there (the test skips, by name, after the
 # reports are checked).
-UNCOMPARED = {
-    "star-discrepancy-bounds": "Oclgrind 21.10 holds an i1 in a whole byte and writes a true "
-                               "lane of a vector comparison as 0xFF (OpenCL's -1), so the "
-                               "'zext <4 x i1>' LLVM folds 'count -= (a < b)' into gives 255, not "
-                               "1 (kernels/anchored_counts.cl; reduced in "
-                               "scripts/oclgrind_narrow_ints.py, zext-count): its counts come out "
-                               "255 times too large; PoCL, Intel and rusticl count right "
-                               "(tests/test_metrics.py, tests/test_devices.py)",
-}
+UNCOMPARED = {}
 
 
 def _simulator():
