@@ -73,16 +73,21 @@ inline uint4 clsamp_block(uint2 key, uint stream, uint realization, uint index, 
     return philox4x32_10((uint4)(index, realization, block, stream), key);
 }
 
-/* Word w of (key, stream, realization, index): block w/4, lane w%4. The lane is chosen by
- * its two bits, not by comparing w % 4 with 0, 1 and 2: LLVM turns that comparison chain
- * into a switch on `trunc i32 w to i2`, and Oclgrind (21.10, and its source to 26.03) keeps
- * such a narrow integer in a whole byte without masking it to its width, so w = 4 or 5
- * matched no case there and gave lane 3 (scripts/oclgrind_narrow_ints.py). */
+/* Lane w % 4 of b, chosen by the two bits of w, not by comparing w % 4 with 0, 1 and 2:
+ * LLVM turns that comparison chain into a switch on `trunc i32 w to i2`, and Oclgrind
+ * (21.10, and its source to 26.03) keeps such a narrow integer in a whole byte without
+ * masking it to its width, so w = 4 or 5 matched no case there and gave lane 3
+ * (scripts/oclgrind_narrow_ints.py). */
+inline uint clsamp_lane(const uint4 b, const uint w)
+{
+    const uint2 pair = (w & 2u) ? b.zw : b.xy;
+    return (w & 1u) ? pair.y : pair.x;
+}
+
+/* Word w of (key, stream, realization, index): block w/4, lane w%4. */
 inline uint clsamp_bits(uint2 key, uint stream, uint realization, uint index, uint word)
 {
-    const uint4 b = clsamp_block(key, stream, realization, index, word >> 2);
-    const uint2 pair = (word & 2u) ? b.zw : b.xy;
-    return (word & 1u) ? pair.y : pair.x;
+    return clsamp_lane(clsamp_block(key, stream, realization, index, word >> 2), word);
 }
 
 /* The double in [0, 1) of 53 random bits (genrand_res53) from the words hi and lo,

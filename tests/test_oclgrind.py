@@ -301,6 +301,16 @@ def _permutations():
     steps = np.arange(ranges.size)
     _same_bits(permutation.bounded_integers(3, Stream.PERMUTATION, 7, steps, 5, ranges),
                permutation.bounded_integers_device(3, Stream.PERMUTATION, 7, steps, 5, ranges))
+    # clsamp_fisher_yates, the inline form other kernels may call (one work-item a row)
+    import pyopencl.array as cla
+
+    from clsamp import philox, runtime
+    out = cla.empty(runtime.queue(), (3, 3, 37), np.uint32)
+    runtime.kernel("permutation.cl", "fisher_yates_inline")(
+        runtime.queue(), (9,), None, out.data, np.uint32(37), np.uint32(3), np.uint32(3),
+        np.uint32(1), np.uint32(2), *philox.seed_key(8), np.uint32(Stream.PERMUTATION))
+    _same_bits(out.get(), permutation.random_permutations(8, Stream.PERMUTATION, range(2, 5), 37,
+                                                          range(1, 4)))
 
 
 def child(names):
