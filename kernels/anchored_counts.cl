@@ -27,7 +27,10 @@ __kernel void anchored_counts(__global const COORD *points, const uint n,
     COORD4 c[D];
     for (int k = 0; k < D; ++k)
         c[k] = *(__global const COORD4 *)(corners + (size_t)k * m4 + 4 * w);
-    long4 count = (long4)(0);
+    /* the sum of the comparisons (a true one is -1 in every bit), negated at the end: LLVM
+     * makes 'count -= inside' a zext of <4 x i1>, which Oclgrind (21.10) computes as 255
+     * for a true lane (scripts/oclgrind_narrow_ints.py), and keeps this sum a sext */
+    long4 minus = (long4)(0);
     for (uint i = 0; i < n; ++i) {
         __global const COORD *p = points + (size_t)i * D;
 #if STRICT
@@ -41,13 +44,11 @@ __kernel void anchored_counts(__global const COORD *points, const uint n,
         for (int k = 1; k < D; ++k)
             inside &= (COORD4)(p[k]) <= c[k];
 #endif
-        /* a true comparison is -1 in every bit: the lanes count down, negated below. Not
-         * `count -= inside`: LLVM turns that into a zero extension of the comparison, which
-         * Oclgrind 21.10 extends to 255, not 1 (its counts came out 255 times too large) */
-        count += inside;
+        minus += inside;
     }
-    counts[4 * w] = (uint)-count.x;
-    counts[4 * w + 1] = (uint)-count.y;
-    counts[4 * w + 2] = (uint)-count.z;
-    counts[4 * w + 3] = (uint)-count.w;
+    const long4 count = -minus;
+    counts[4 * w] = (uint)count.x;
+    counts[4 * w + 1] = (uint)count.y;
+    counts[4 * w + 2] = (uint)count.z;
+    counts[4 * w + 3] = (uint)count.w;
 }

@@ -2,10 +2,11 @@
  * precision="float-float"; the double kernels are discrepancy.cl, whose formulas these are):
  *     sum_i sum_j prod_k g(x_ik, x_jk)
  * for devices without fp64. The host computes each point's row and column numbers (XR, UR,
- * XC, VC of discrepancy.cl) in float64 and splits them into float-float pairs (float2: hi,
- * lo); here every g and every product is float-float (float_float.h), each pair once (twice
- * the upper part plus the diagonal), summed in blocks of BLOCK terms; the host adds the
- * partial sums exactly. The bound is derived in clsamp.metrics.l2.float_float_bound.
+ * XC, VC of discrepancy.cl; for CD, VC is the factor's floor 1) in float64 and splits them
+ * into float-float pairs (float2: hi, lo); here every g and every product is float-float
+ * (float_float.h), each pair once (twice the upper part plus the diagonal), summed in blocks
+ * of BLOCK terms; the host adds the partial sums exactly. The bound is derived in
+ * clsamp.metrics.l2.float_float_bound.
  *
  * Build options: METHOD (0 CD, 1 WD, 2 MD, 3 L2-star, 4 symmetric, 5 L2 unanchored), D (the
  * dimension), COLS (columns a work-item sums: a grid axis of column chunks keeps every
@@ -45,12 +46,16 @@ inline void g8(const float8 xh, const float8 xl, const float8 uh, const float8 u
 {
     float8 h, l;
 #if METHOD == 0          /* 1 + min(a_i, a_j) on one side of 1/2, else 1 (u: the row's side) */
+    /* v is the floor 1 (as the pair 1, 0), loaded rather than a constant: with constant
+     * arms LLVM folds the selects below into `and` with `sext (xor (fcmp ...), true)` of
+     * <8 x i1>, which Oclgrind (21.10) computes from a true lane stored as 0xFF, not 1
+     * (scripts/oclgrind_narrow_ints.py); same values everywhere. */
     const uint8 sign = as_uint8(uh) & (uint8)(0x80000000u);
     const float8 ch = as_float8(as_uint8(yh) ^ sign), cl = as_float8(as_uint8(yl) ^ sign);
     FF_MIN8(xh, xl, ch, cl, h, l);
-    const int8 below = FF_LESS8(h, l, (float8)(1.0f), (float8)(0.0f));
-    h = below ? (float8)(1.0f) : h;
-    l = below ? (float8)(0.0f) : l;
+    const int8 below = FF_LESS8(h, l, vh, vl);
+    h = below ? vh : h;
+    l = below ? vl : l;
 #elif METHOD == 1 || METHOD == 2    /* t = |x_i - x_j|; WD 3/2 - t + t^2, MD (u - v) + t (t/2 - 3/4) */
     float8 th, tl, sh, sl;
     FF_ADD(float8, xh, xl, -yh, -yl, th, tl);

@@ -73,20 +73,21 @@ inline uint4 clsamp_block(uint2 key, uint stream, uint realization, uint index, 
     return philox4x32_10((uint4)(index, realization, block, stream), key);
 }
 
-/* Lane `lane` (0..3) of b, chosen by its two bits. The equivalent chain
- * `lane == 0u ? b.x : lane == 1u ? b.y : lane == 2u ? b.z : b.w` is what Oclgrind 21.10
- * simulates wrongly (lanes 0 and 1 read as b.w from the second quad of work-items on, with
- * no report: the permutations of fisher_yates_inline and Faure's base-5 LMS came out wrong
- * there; tests/test_oclgrind.py). */
-inline uint clsamp_lane(const uint4 b, const uint lane)
+/* Lane w % 4 of b, chosen by the two bits of w, not by comparing w % 4 with 0, 1 and 2:
+ * LLVM turns that comparison chain into a switch on `trunc i32 w to i2`, and Oclgrind
+ * (21.10, and its source to 26.03) keeps such a narrow integer in a whole byte without
+ * masking it to its width, so w = 4 or 5 matched no case there and gave lane 3
+ * (scripts/oclgrind_narrow_ints.py). */
+inline uint clsamp_lane(const uint4 b, const uint w)
 {
-    return (lane & 2u) ? ((lane & 1u) ? b.w : b.z) : ((lane & 1u) ? b.y : b.x);
+    const uint2 pair = (w & 2u) ? b.zw : b.xy;
+    return (w & 1u) ? pair.y : pair.x;
 }
 
 /* Word w of (key, stream, realization, index): block w/4, lane w%4. */
 inline uint clsamp_bits(uint2 key, uint stream, uint realization, uint index, uint word)
 {
-    return clsamp_lane(clsamp_block(key, stream, realization, index, word >> 2), word & 3u);
+    return clsamp_lane(clsamp_block(key, stream, realization, index, word >> 2), word);
 }
 
 /* The double in [0, 1) of 53 random bits (genrand_res53) from the words hi and lo,

@@ -64,15 +64,7 @@ SKIPS = {}
 # Checks whose kernels run under Oclgrind's memory and race checks but whose values Oclgrind
 # computes wrongly: the values are not compared there (the test skips, by name, after the
 # reports are checked).
-UNCOMPARED = {
-    "discrepancy-CD-float-float": "Oclgrind 21.10 gives the float-float CD pair sums of "
-                                  "kernels/discrepancy_ff.cl negative (-0.78 for 0.0012 on 2 x 128 "
-                                  "points) with no memory or race report, where PoCL 3.0 and 3.1, "
-                                  "Intel's runtime and rusticl agree with the NumPy twin within "
-                                  "2.4e-16 and the other five discrepancies' float-float sums match "
-                                  "there; not yet diagnosed (a minimal kernel of the same sign flip, "
-                                  "vector comparisons and select agrees on Oclgrind)",
-}
+UNCOMPARED = {}
 
 
 def _simulator():
@@ -346,6 +338,16 @@ def _permutations():
     steps = np.arange(ranges.size)
     _same_bits(permutation.bounded_integers(3, Stream.PERMUTATION, 7, steps, 5, ranges),
                permutation.bounded_integers_device(3, Stream.PERMUTATION, 7, steps, 5, ranges))
+    # clsamp_fisher_yates, the inline form other kernels may call (one work-item a row)
+    import pyopencl.array as cla
+
+    from clsamp import philox, runtime
+    out = cla.empty(runtime.queue(), (3, 3, 37), np.uint32)
+    runtime.kernel("permutation.cl", "fisher_yates_inline")(
+        runtime.queue(), (9,), None, out.data, np.uint32(37), np.uint32(3), np.uint32(3),
+        np.uint32(1), np.uint32(2), *philox.seed_key(8), np.uint32(Stream.PERMUTATION))
+    _same_bits(out.get(), permutation.random_permutations(8, Stream.PERMUTATION, range(2, 5), 37,
+                                                          range(1, 4)))
 
 
 # -- kernels the registry's runs and the analyses above do not reach ----------------------------

@@ -167,9 +167,9 @@ def _layouts(batch, method):
     x = batch
     a = np.abs(x - 0.5)
     zero = np.zeros_like(x)
-    if method == "CD":
+    if method == "CD":          # VC: the factor's floor 1 (discrepancy_ff.cl loads it)
         return np.stack([1.0 + a, np.where(x < 0.5, -0.0, 0.0), np.where(x < 0.5, -(1.0 + a), 1.0 + a),
-                         zero])
+                         np.ones_like(x)])
     if method == "WD":
         return np.stack([x, zero, x, zero])
     if method == "MD":
