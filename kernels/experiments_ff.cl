@@ -20,11 +20,13 @@
  *
  * integrand_error_sums_ff: grid (groups * local, realizations), work-group (local, 1),
  * local a power of two; group g sums f(x_i) - integral over points g slice .. (g + 1)
- * slice - 1 (slice = 64 local: at most 64 a work-item, strided), then a tree of
+ * slice - 1 (slice = per_item local, per_item <= 64 points a work-item, strided), then a tree of
  * float-float additions in local memory; out (realizations, groups) float2.
- * family_error_sums_ff: grid (members, realizations); each work-item sums its member over
- * the n points in blocks of 64 and superblocks of 64 blocks; out (realizations, members)
- * float2. The order of every addition depends on (n, local size) only. */
+ * family_error_sums_ff: grid (members, realizations, chunks); each work-item sums its
+ * member over `chunk` points (a multiple of 64: 2^16, fewer where the device limits a
+ * work-item's loops) in blocks of 64 and superblocks of 64 blocks; out (realizations,
+ * chunks, members) float2. The order of every addition depends on (n, the local size or
+ * the chunk) only; the host adds the chunks in double-double. */
 #include "float_float.h"
 #include "philox.h"
 #include "experiment_codes.h"
@@ -372,24 +374,25 @@ __kernel void integrand_error_sums_ff(__global const ulong *points, const uint n
 #endif
 
 #ifdef FAMILY
-__kernel void family_error_sums_ff(__global const ulong *points, const uint n, const uint realization0,
-                                   const uint key_lo, const uint key_hi, const uint stream,
-                                   __global const float2 *params, const uint mp,
+__kernel void family_error_sums_ff(__global const ulong *points, const uint n, const uint chunk,
+                                   const uint realization0, const uint key_lo, const uint key_hi,
+                                   const uint stream, __global const float2 *params, const uint mp,
                                    __global const float2 *integrals, __global const float2 *c,
                                    __global float2 *out)
 {
-    const uint m = get_global_id(0), r = get_global_id(1);
+    const uint m = get_global_id(0), r = get_global_id(1), k = get_global_id(2);
     if (m >= mp)
         return;
     HOMOGENIZING_BITS(shift, key_lo, key_hi, stream, realization0 + r);
     const float2 integral = integrals[m];
     __global const ulong *base = points + (size_t)r * n * DIM;
+    const uint last = min(n, (k + 1u) * chunk);
     float2 total = (float2)(0.0f);
-    for (uint s0 = 0; s0 < n; s0 += 4096u) {
+    for (uint s0 = k * chunk; s0 < last; s0 += 4096u) {
         float2 super = (float2)(0.0f);
-        for (uint b0 = s0; b0 < min(n, s0 + 4096u); b0 += 64u) {
+        for (uint b0 = s0; b0 < min(last, s0 + 4096u); b0 += 64u) {
             float2 block = (float2)(0.0f);
-            for (uint i = b0; i < min(n, b0 + 64u); ++i) {
+            for (uint i = b0; i < min(last, b0 + 64u); ++i) {
                 float2 x[DIM];
                 ulong bits[DIM];
                 point_ff(base, i, shift, x, bits);
@@ -399,6 +402,6 @@ __kernel void family_error_sums_ff(__global const ulong *points, const uint n, c
         }
         total = ff2_add(total, super);
     }
-    out[(size_t)r * mp + m] = total;
+    out[((size_t)r * get_global_size(2) + k) * mp + m] = total;
 }
 #endif
