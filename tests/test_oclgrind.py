@@ -7,9 +7,9 @@ At small sizes, every sampler and randomization of the registry, spectra (direct
 every discrepancy, the star discrepancy and its bounds, the pair correlation and nearest
 neighbours, a convergence experiment, a family of integrands (each also in float-float),
 ``integrate``, a tiny render, dart throwing, Lloyd, CCVT and the permutation kernels run on
-Oclgrind and are held against their NumPy twins (bits for samplers and permutations, the tests' tolerances for
-the rest). Oclgrind prints what it finds to stderr and goes on, so the checks run in a child
-process (``python tests/test_oclgrind.py NAME ...``) that marks where each begins and ends
+Oclgrind and are held against their NumPy twins (bits for samplers and permutations, the
+tests' tolerances for the rest). Oclgrind prints what it finds to stderr and goes on, so the
+checks run in a child process (``python tests/test_oclgrind.py NAME ...``) that marks where each begins and ends
 on stderr; a check fails on any Oclgrind report inside its marks, or on a wrong result.
 
 The module is skipped where Oclgrind is not installed (``pip install
