@@ -174,16 +174,17 @@ inline float2 integrand_ff(const float2 *x, const ulong *bits, __global const fl
                            __global const float2 *c)
 {
 #if INTEGRAND == GAUSSIAN
-    /* images at |w|, 1 - |w|, 1 + |w|: exp(s w^2) + exp(s (1 - 2|w|) + s w^2) + exp(s (1 +
-     * 2|w|) + s w^2), the last as one exponential (the fp64 kernel divides exp(2s) by B) */
-    const float2 s = p[0];
+    /* images at |w|, 1 - |w|, 1 + |w|: E0 (1 + B + exp(2s) / B), as the fp64 kernel; where
+     * exp(2s) is below float's range (sigma < 0.076) the far image, at most exp(s) <
+     * e^-43, is left out */
+    const float2 s = p[0], e2s = p[1 + DIM];
     float2 f = (float2)(1.0f, 0.0f);
     for (int j = 0; j < DIM; ++j) {
         const float2 w = ff2_wrapped(x[j], p[1 + j]);
         const float2 a = ff2_abs(w);
         const float2 e0 = ff2_exp0(ff2_mul(s, ff2_mul(w, w)), c);
         const float2 b = ff2_exp0(ff2_mul(s, ff2_sub((float2)(1.0f, 0.0f), ff2_add(a, a))), c);
-        const float2 far = ff2_exp0(ff2_mul(s, ff2_add((float2)(1.0f, 0.0f), ff2_add(a, a))), c);
+        const float2 far = e2s.x > 0.0f ? ff2_div(e2s, b) : (float2)(0.0f);
         f = ff2_mul(f, ff2_mul(e0, ff2_add(ff2_add((float2)(1.0f, 0.0f), b), far)));
     }
     return f;
