@@ -51,18 +51,21 @@
 #define C_AS241 40
 #define C_LN2 13
 
-/* The float64 with bits b (non-negative, finite) as a float-float pair: its significand m
- * rounded to a float, the rest (at most 29 bits) rounded to a float, both scaled exactly;
- * within 2^-48 of x, relative (subnormals and zero: 0). */
+/* The float64 x = m 2^(e - 1075) with bits b (non-negative, below 2^100) as a float-float
+ * pair: the top 24 bits of its significand m rounded (half up) to t, the rest m - t 2^29
+ * (|rest| <= 2^28) rounded to a float, both scaled by powers of two: exact where the
+ * results are normal, so within 2^-48 of x, relative, for x >= 2^-126 (below 2^-174: 0).
+ * Integer shifts and int-to-float conversions, no library call. */
 inline float2 ff_from_bits(const ulong b)
 {
     const int e = (int)(b >> 52) & 0x7FF;
-    if (e == 0)
+    if (e < 849)
         return (float2)(0.0f);
     const ulong m = (b & F64_MANTISSA) | F64_HIDDEN;
-    const float h = convert_float_rte(m);
-    const float l = convert_float_rte((long)m - (long)h);
-    return (float2)(ldexp(h, e - 1075), ldexp(l, e - 1075));
+    const ulong t = (m + 0x10000000UL) >> 29;
+    const int rest = (int)((long)m - (long)(t << 29));
+    const float scale = as_float((e - 1075 + 100 + 127) << 23), down = 0x1p-100f;
+    return (float2)((((float)(uint)t * 0x1p29f) * scale) * down, (((float)rest) * scale) * down);
 }
 
 inline float2 ff2_sub(const float2 a, const float2 b) { return ff2_add(a, -b); }
