@@ -62,6 +62,7 @@ __all__ = ["IntegrandKernelFF", "FamilyKernelFF", "constants", "value_bound", "e
 
 BLOCK = 64             # points a work-item of integrand_error_sums_ff sums (at most)
 CHUNK = 2**16          # points a work-item of family_error_sums_ff sums (at most)
+MAX_SCALE = 2.0**126   # the largest integrand scale float-float evaluates (float's range)
 
 
 def constants():
@@ -98,12 +99,18 @@ def check_target(target):
     ------
     InvalidArgumentError
         An integrand written in OpenCL C (``Integrand.from_opencl``): its source computes
-        in double.
+        in double; or one whose values reach beyond float's range (:data:`MAX_SCALE`: Genz's
+        discontinuous or product-peak integrands with large ``a``).
     """
     if getattr(target, "kernel_code", None) == USER_SOURCE:
         raise InvalidArgumentError(
             f"'precision' 'float-float' cannot evaluate integrand {target.name!r}: its OpenCL C "
             "source computes in double; use precision='double' on a device with fp64")
+    scale = value_bound(target)[1]
+    if not scale <= MAX_SCALE:
+        raise InvalidArgumentError(
+            f"'precision' 'float-float' cannot evaluate integrand {target.name!r}: its values reach "
+            f"{scale:.3g}, beyond float's range (2^126); use precision='double' on a device with fp64")
 
 
 def _pairs(values):
@@ -255,7 +262,8 @@ def value_bound(target):
         if target.code == families.CLIPPED:          # sqrt(h) <= 1 / (0.05 sqrt 2)
             return 20.0 + 33.0 * d, scale
         return 0.0, scale
-    check_target(target)
+    if target.kernel_code == USER_SOURCE:
+        check_target(target)
     code, p, integral = target.kernel_code, target.kernel_params(), abs(float(target.integral or 0.0))
     a = np.asarray(p[:d]) if code >= base.GENZ else None
     if code == base.GAUSSIAN:
@@ -271,11 +279,11 @@ def value_bound(target):
     if kind == "product_peak":
         return float(np.sum(50.0 + 2.0 * a)), float(np.prod(a * a)) + integral
     if kind == "corner_peak":
-        return (d + 1) * (7.0 * a.sum() + 3 * d + 5) + 15.0, 1.0 + integral
+        return (d + 1) * (7.0 * a.sum() + 3 * d + 15), 1.0 + integral
     if kind in ("gaussian", "continuous"):
         return 20.0 + 3 * d + 2.0 * a.sum(), 1.0 + integral
     if kind == "discontinuous":
-        return 10.0 + (7 + 3 * d) * a.sum(), math.exp(a.sum()) + integral
+        return 10.0 + (7 + 3 * d) * a.sum(), math.exp(min(a.sum(), 700.0)) + integral
     # Keister: |y_j| <= 6 for coordinates in [2^-53, 1 - 2^-53], AS 241's rational
     # functions within 200u² relative, cos(sqrt s) changing by at most half of s's error
     return 60.0 + 1200.0 * d, p[0] + integral

@@ -230,10 +230,12 @@ inline float2 integrand_ff(const float2 *x, const ulong *bits, __global const fl
     float2 t = (float2)(1.0f, 0.0f);
     for (int j = 0; j < DIM; ++j)
         t = ff2_add(t, ff2_mul(p[j], x[j]));
-    float2 q = t;
+    /* 1 / t^(d+1) as d + 1 divisions by t >= 1: no overflow where t^(d+1) passes float's
+     * range (f then underflows towards 0, as it should) */
+    float2 f = ff2_div((float2)(1.0f, 0.0f), t);
     for (int j = 0; j < DIM; ++j)
-        q = ff2_mul(q, t);
-    return ff2_div((float2)(1.0f, 0.0f), q);
+        f = ff2_div(f, t);
+    return f;
 #elif INTEGRAND == GENZ_GAUSSIAN || INTEGRAND == GENZ_CONTINUOUS
     float2 s = (float2)(0.0f);
     for (int j = 0; j < DIM; ++j) {

@@ -161,3 +161,13 @@ def test_integrate_in_float_float():
         assert clsamp.integrate(f, 3, **kw).estimate == got.estimate
         with pytest.raises(InvalidArgumentError, match="'method' 'digital' evaluates an integrand in double"):
             clsamp.integrate(f, 3, abs_tol=1e-3, method="digital", progress=False)
+
+
+def test_integrands_beyond_floats_range_are_refused_by_name():
+    from clsamp.integrands.qmc import Genz
+    f = Genz("discontinuous", [60.0, 40.0], [0.9, 0.9])
+    with pytest.raises(InvalidArgumentError, match="'genz_discontinuous': its values reach .*beyond float's"):
+        clsamp.convergence("random", f, [16], realizations=2, progress=False, precision="float-float")
+    steep = Genz("corner_peak", [40.0] * 16, [0.5] * 16)         # t^17 passes float's range
+    want, got = _both("random", steep, [64], 2)
+    _within(want, got, steep, [64])
