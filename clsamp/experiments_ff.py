@@ -5,7 +5,8 @@
 :func:`clsamp.convergence` runs these with ``precision="float-float"`` (the default on a
 device without fp64). Every integrand of :mod:`clsamp.integrands` but one written in OpenCL
 C (whose source computes in double) and every family of :mod:`clsamp.families` has a
-float-float form. The shifted coordinates are the fp64 kernels' bits, each rounded to a
+float-float form; an integrand whose values pass float's range (2^126: Genz's
+discontinuous or product peak with large ``a``) is refused by name (:func:`check_target`). The shifted coordinates are the fp64 kernels' bits, each rounded to a
 float-float pair; values and sums are float-float (Joldes, Muller & Popescu 2017); the host
 adds the per-group sums in double-double.
 
