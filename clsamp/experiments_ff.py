@@ -6,9 +6,10 @@
 device without fp64). Every integrand of :mod:`clsamp.integrands` but one written in OpenCL
 C (whose source computes in double) and every family of :mod:`clsamp.families` has a
 float-float form; an integrand whose values pass float's range (2^126: Genz's
-discontinuous or product peak with large ``a``) is refused by name (:func:`check_target`). The shifted coordinates are the fp64 kernels' bits, each rounded to a
-float-float pair; values and sums are float-float (Joldes, Muller & Popescu 2017); the host
-adds the per-group sums in double-double.
+discontinuous or product peak with large ``a``) is refused by name (:func:`check_target`).
+The shifted coordinates are the fp64 kernels' bits, each rounded to a float-float pair;
+values and sums are float-float (Joldes, Muller & Popescu 2017); the host adds the
+per-group sums in double-double.
 
 Error bound (u = 2^-24, u² = 2^-48 ≈ 3.6e-15). For realization k the float-float error
 e_k = (1/n) Σ_i (f(x_i) - I) differs from the fp64 one by at most
@@ -284,7 +285,9 @@ def value_bound(target):
     if kind in ("gaussian", "continuous"):
         return 20.0 + 3 * d + 2.0 * a.sum(), 1.0 + integral
     if kind == "discontinuous":
-        return 10.0 + (7 + 3 * d) * a.sum(), math.exp(min(a.sum(), 700.0)) + integral
+        u = np.asarray(p[d:2 * d])
+        top = float(np.sum(a[:2] * u[:2]) + np.sum(a[2:]))         # the sup: x_j <= u_j for j < 2
+        return 10.0 + (7 + 3 * d) * a.sum(), math.exp(min(top, 700.0)) + integral
     # Keister: |y_j| <= 6 for coordinates in [2^-53, 1 - 2^-53], AS 241's rational
     # functions within 200u² relative, cos(sqrt s) changing by at most half of s's error
     return 60.0 + 1200.0 * d, p[0] + integral
