@@ -2,6 +2,7 @@
 
     python benchmarks/bench_cubature.py [--device all] [--quick] [--out FILE]
     python benchmarks/bench_cubature.py --genz 200 [--abs-tol 1e-6] [--rel-tol 1e-3]
+    python benchmarks/bench_cubature.py --ceiling
 
 - ``clsamp.integrate(f, d, method="digital")`` against qmcpy's ``CubQMCNetG`` (on its
   ``DigitalNetB2``: LMS + digital shift, radical-inverse order) and ``method="lattice"``
@@ -23,6 +24,11 @@
   to max(abs_tol, rel_tol |I|); per family and method the share of members whose estimate
   meets the tolerance, the share that converged before ``max_n`` = 2^22, and the median
   points used.
+- A doubling of the digital rule's state (Walsh transform of 2^18 or 2^21 new values, the
+  butterfly, the wavenumber ordering, the bound's terms) on the device
+  (:mod:`clsamp.cubature_device`) against its NumPy twin, the same bits.
+- ``--ceiling``: qmcpy's seconds over the NumPy integrand's own seconds on qmcpy's points,
+  the most any code that evaluates that integrand on those points can gain.
 """
 
 import argparse
@@ -97,6 +103,53 @@ def run(devices, quick):
                                    f"bound {res.half_width:.1e}{peer_quality}")
                         rows.append(Row(f"integrate {method} {label}, abs_tol {tol:g}", kind,
                                         dev, t, peer, t_peer, quality))
+    return rows + _walsh_rows(devices, quick)
+
+
+def _walsh_rows(devices, quick):
+    """One doubling of the digital rule's state (transform of the new half, butterfly,
+    ordering, the bound's terms) on the device against its NumPy twin, the same bits."""
+    from clsamp import runtime
+    from clsamp.cubature import R_LAG, _order_wavenumbers, walsh_coefficients
+    from clsamp.cubature_device import DeviceWalsh
+    rows = []
+    for device in [d for d in devices if d.fp64]:
+        on_device(device)
+        for m in (18,) if quick else (18, 21):
+            n = 2**m
+            rng = np.random.default_rng(m)
+            c = walsh_coefficients(rng.standard_normal(n))
+            kappa = _order_wavenumbers(np.arange(n), np.abs(c), m - 1, 0, m)
+            y = rng.standard_normal(n)
+            low = 2**(m + 1 - R_LAG - 1)
+            state = DeviceWalsh()
+
+            def on_device_once():
+                state.load(c, kappa)          # outside the timing below: a fresh state each call
+                runtime.queue().finish()
+                t0 = time.perf_counter()
+                state.double(y, m - R_LAG)
+                terms = state.terms(low)
+                return time.perf_counter() - t0, terms
+
+            def numpy_once():
+                t0 = time.perf_counter()
+                new = walsh_coefficients(y)
+                both = np.empty(2 * n)
+                np.add(c, new, out=both[:n])
+                np.subtract(c, new, out=both[n:])
+                both *= 0.5
+                k2 = _order_wavenumbers(np.concatenate([kappa, n + kappa]), np.abs(both), m,
+                                        m - R_LAG, m + 1)
+                return time.perf_counter() - t0, np.abs(both[k2[low:2 * low]])
+
+            runs = [on_device_once() for _ in range(4)][1:]
+            twin = [numpy_once() for _ in range(3)]
+            same = all(np.array_equal(a[1], b[1]) for a, b in zip(runs, twin, strict=True))
+            rows.append(Row("integrate digital: a doubling's Walsh state", f"2^{m} new values",
+                            short_name(device), float(np.median([r[0] for r in runs])),
+                            "clsamp NumPy twin", float(np.median([r[0] for r in twin])),
+                            "the same bits" if same else "BITS DIFFER"))
     return rows
 
 
@@ -123,8 +176,27 @@ def genz_reliability(instances, abs_tol, rel_tol, max_n=2**22):
     return out
 
 
+def ceiling(tolerances=(1e-3, 1e-4)):
+    """Per case, method and tolerance: qmcpy's seconds and the seconds of the NumPy integrand
+    alone on as many points, called once per doubling (1024, then 2^m more) as a cubature
+    calls it; their ratio bounds the speed-up of any code that evaluates that integrand on
+    those points (docs/performance.md, "Against qmcpy: seconds and points")."""
+    print("| case | method | points | qmcpy s | f alone s | ceiling |")
+    for name, f in _cases():
+        for tol in tolerances:
+            for method in METHODS:
+                qmcpy_seconds, (_, n) = timed(lambda: _qmcpy(f.__call__, f.d, tol, method), repeats=3)
+                x = np.random.default_rng(0).random((n, f.d))
+                chunks = [x[:min(n, 1024)]] + [x[2**m:2**(m + 1)] for m in range(10, n.bit_length() - 1)]
+                f_seconds = timed(lambda: [f(c) for c in chunks], repeats=3)[0]
+                print(f"| {name}, {tol:g} | {method} | {n} | {qmcpy_seconds:.4g} | {f_seconds:.4g} | "
+                      f"{qmcpy_seconds / f_seconds:.1f}x |", flush=True)
+
+
 if __name__ == "__main__":
-    if "--genz" in sys.argv:
+    if "--ceiling" in sys.argv:
+        ceiling()
+    elif "--genz" in sys.argv:
         p = argparse.ArgumentParser(description=__doc__)
         p.add_argument("--genz", type=int, required=True)
         p.add_argument("--abs-tol", type=float, default=1e-6)

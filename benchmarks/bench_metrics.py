@@ -10,7 +10,10 @@
   3 mean spacings, against a vectorised NumPy estimator over periodic cKDTree pairs;
 - nearest-neighbour distances of the same sets against cKDTree.query(k=2, boxsize=1);
 - the float-float paths (``precision="float-float"``, what a device without fp64
-  computes: the CD, the PCF, nearest neighbours) against the double ones on each device.
+  computes: the CD, the PCF, nearest neighbours) against the double ones on each device;
+- the exact star discrepancy without fp64 (integer arithmetic, the double's bits) against
+  the double sweep: under ``runtime.without_fp64()`` where the device has fp64, random and
+  lattice sets, 2-D n = 1024 and 4096, 3-D n = 512 (quick: 1024 and 256).
 
 Memory is the peak of the OpenCL buffers each call holds at once (common.device_memory).
 """
@@ -149,7 +152,7 @@ def run(devices, quick):
         rows.append(Row("nearest neighbours", f"{r_pcf}x{n_pcf}", dev, t_nn,
                         "cKDTree.query k=2 boxsize=1", t_peer_nn,
                         f"max |diff| {np.max(np.abs(nn - nn_peer)):.1e}; mem {_mib(memory)}"))
-    return rows + _float_float_rows(devices, quick)
+    return rows + _float_float_rows(devices, quick) + star_without_fp64_rows(devices, quick)
 
 
 def _float_float_rows(devices, quick):
@@ -179,6 +182,35 @@ def _float_float_rows(devices, quick):
             else:
                 rows.append(Row(f"{case} float-float", size, short_name(device), t_ff,
                                 quality=quality + "; double: no fp64 on this device"))
+    return rows
+
+
+def star_without_fp64_rows(devices, quick):
+    """The exact star discrepancy's integer path (what a device without fp64 computes)
+    against the double sweep on the same device; the quality column says whether the bits
+    are the double's."""
+    from clsamp import runtime
+    rows = []
+    cases = [(2, 1024), (3, 256)] if quick else [(2, 1024), (2, 4096), (3, 512)]
+    for device in devices:
+        on_device(device)
+        for name in ("random", "lattice"):
+            for d, n in cases:
+                pts = clsamp.make_sampler(name, d=d, seed=7).sample(n)
+                size = f"{name} {n} x {d}-D"
+                if not device.fp64:
+                    t_int, _ = timed(lambda p=pts: clsamp.star_discrepancy(p), repeats=3)
+                    rows.append(Row("star discrepancy exact, integer", size, short_name(device),
+                                    t_int, quality="double: no fp64 on this device"))
+                    continue
+
+                def integer(p=pts):
+                    with runtime.without_fp64():
+                        return clsamp.star_discrepancy(p)
+                t_int, value = timed(integer, repeats=5)
+                t_d, want = timed(lambda p=pts: clsamp.star_discrepancy(p), repeats=5)
+                rows.append(Row("star discrepancy exact, integer", size, short_name(device), t_int,
+                                "clsamp in double", t_d, f"same bits: {value == want}"))
     return rows
 
 

@@ -16,9 +16,11 @@ with (``_order_wavenumbers``). n doubles from 2^10 until the bound meets the tol
 The algorithm, its constants and the wavenumber ordering are those of the authors' GAIL
 ``cubSobol_g`` / ``cubLattice_g`` and of qmcpy's ``CubQMCNetG`` / ``CubQMCLatticeG``.
 
-The transforms run in NumPy (a butterfly loop for Walsh, ``np.fft`` for Fourier) on the
-host, on the values of f; the points come from the samplers (on the device), or, for an
-integrand with a kernel, are made in the kernel that evaluates it (:mod:`clsamp.fused`).
+The Walsh transform, the doubling's butterfly and the wavenumber ordering of a digital net
+run on the device where it has fp64 (:mod:`clsamp.cubature_device`, the same bits as the
+NumPy here); the lattice's ``np.fft`` runs on the host. The points come from the samplers
+(on the device), or, for an integrand with a kernel, are made in the kernel that
+evaluates it (:mod:`clsamp.fused`).
 
 References
 ----------
@@ -38,6 +40,8 @@ import warnings
 import numpy as np
 
 from . import number_theory as nt
+from . import runtime
+from .cubature_device import DeviceWalsh
 from .errors import InvalidArgumentError
 from .samplers import make_sampler
 from .transforms import sidi, tent
@@ -47,6 +51,10 @@ R_LAG = 4                # r: the bound sums the coefficients of wavenumbers 2^(
 PERIODIZATIONS = ("none", "baker", "sidi")
 _ONE_BELOW = 1.0 - 2.0**-53
 CHUNK = 2**20            # points sampled and evaluated at a time
+# a digital net's state moves to the device at the doubling of this many points: below it
+# the launches cost more than the NumPy passes (docs/performance.md, "Integrands on the
+# device: fused points (issue 38)")
+DEVICE_FROM = 2**16
 
 __all__ = ["fudge", "walsh_coefficients", "fourier_coefficients", "Cubature", "PERIODIZATIONS"]
 
@@ -177,6 +185,13 @@ class Cubature:
         (start, count) -> the (periodized) values at points start .. start + count - 1 in
         natural order, made without the sampler: :meth:`clsamp.fused.FusedRule.values`,
         whose kernel makes the same points. ``values`` is not called then.
+    device : bool, optional
+        Digital only: from the doubling of :data:`DEVICE_FROM` points on, keep the Walsh
+        coefficients and their ordering on the device and transform there
+        (:class:`clsamp.cubature_device.DeviceWalsh`, the same bits). None: where the
+        current device has fp64.
+    max_n : int, optional
+        The most points the run will take (sizes the device's arrays).
 
     Notes
     -----
@@ -186,7 +201,8 @@ class Cubature:
     returns (mean, bound). See the module's references.
     """
 
-    def __init__(self, values, d, method, seed, periodization="none", block=None):
+    def __init__(self, values, d, method, seed, periodization="none", block=None, device=None,
+                 max_n=None):
         if method == "digital":
             self.sampler = make_sampler("sobol", d=d, seed=seed, randomize="lms+shift")
         else:
@@ -194,7 +210,20 @@ class Cubature:
         self.values, self.method, self.periodization = values, method, periodization
         self.fused = block
         self.n, self.total = 0, 0.0
-        self.coefficients = self.kappa = None
+        self._coefficients = self._kappa = None
+        if device is None:
+            device = runtime.current_device().fp64
+        self.walsh = DeviceWalsh(max_n) if device and method == "digital" else None
+
+    @property
+    def coefficients(self):
+        """The discrete Walsh (Fourier) coefficients of the 2^m values so far, on the host."""
+        return self._coefficients if self._coefficients is not None else self.walsh.coefficients()
+
+    @property
+    def kappa(self):
+        """The wavenumber ordering (``_order_wavenumbers``), on the host."""
+        return self._kappa if self._kappa is not None else self.walsh.ordering()
 
     @property
     def label(self):
@@ -237,12 +266,14 @@ class Cubature:
         mean, bound : float
             The sample mean of the 2^m points and C(m) S~_(m-r, m).
         """
+        if self.walsh is not None and self.n >= DEVICE_FROM:
+            return self._device_step()
         if self.n == 0:
             n = 2**M_MIN
             y = self._block(0, n)
-            self.coefficients = self._transform(y)
+            self._coefficients = self._transform(y)
             m = M_MIN
-            self.kappa = _order_wavenumbers(np.arange(n), np.abs(self.coefficients), m - 1, 0, m)
+            self._kappa = _order_wavenumbers(np.arange(n), np.abs(self._coefficients), m - 1, 0, m)
         else:
             n = self.n
             y = self._block(n, n)
@@ -250,19 +281,35 @@ class Cubature:
             if self.method == "lattice":
                 new = new * np.exp(-1j * np.pi * np.arange(n) / n)
             # the doubling's butterfly, (c + new, c - new) / 2, written into one new array
-            both = np.empty(2 * n, dtype=np.result_type(self.coefficients, new))
-            np.add(self.coefficients, new, out=both[:n])
-            np.subtract(self.coefficients, new, out=both[n:])
+            both = np.empty(2 * n, dtype=np.result_type(self._coefficients, new))
+            np.add(self._coefficients, new, out=both[:n])
+            np.subtract(self._coefficients, new, out=both[n:])
             both *= 0.5
-            self.coefficients = both
+            self._coefficients = both
             m = (2 * n).bit_length() - 1
-            self.kappa = _order_wavenumbers(np.concatenate([self.kappa, n + self.kappa]),
-                                            np.abs(self.coefficients), m - 1, m - R_LAG - 1, m)
+            self._kappa = _order_wavenumbers(np.concatenate([self._kappa, n + self._kappa]),
+                                             np.abs(self._coefficients), m - 1, m - R_LAG - 1, m)
             n = 2 * n
         self.total += float(np.sum(y))
         self.n = n
         low = 2**(m - R_LAG - 1)
-        bound = fudge(m) * float(np.sum(np.abs(self.coefficients[self.kappa[low:2 * low]])))
+        bound = fudge(m) * float(np.sum(np.abs(self._coefficients[self._kappa[low:2 * low]])))
+        return self.total / n, bound
+
+    def _device_step(self):
+        """:meth:`step` with the coefficients and the ordering on the device from the doubling
+        of :data:`DEVICE_FROM` points on: the same operations (kernels/walsh.cl), the same
+        bits."""
+        if self._coefficients is not None:                 # the host's state moves over once
+            self.walsh.load(self._coefficients, self._kappa)
+            self._coefficients = self._kappa = None
+        y = self._block(self.n, self.n)
+        n = 2 * self.n
+        self.walsh.double(y, n.bit_length() - 1 - R_LAG - 1)
+        m = n.bit_length() - 1
+        self.total += float(np.sum(y))
+        self.n = n
+        bound = fudge(m) * float(np.sum(self.walsh.terms(2**(m - R_LAG - 1))))
         return self.total / n, bound
 
 

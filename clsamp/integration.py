@@ -139,7 +139,8 @@ def _guaranteed(f, d, method, periodization, abs_tol, rel_tol, max_n, seed, prog
         raise InvalidArgumentError(f"'max_n' must be at least {2**M_MIN} for method={method!r}, got {max_n}")
     block = (FusedRule(f, method, seed, periodization=periodization).values
              if isinstance(f, Integrand) else None)
-    rule = Cubature(lambda x: _blocked_values(f, x), d, method, seed, periodization, block)
+    rule = Cubature(lambda x: _blocked_values(f, x), d, method, seed, periodization, block,
+                    max_n=max_n)
     from tqdm import tqdm
     bar = tqdm(desc=f"integrate ({method})", unit="round", disable=not progress, delay=2)
     history = []

@@ -41,10 +41,13 @@ __kernel void anchored_counts(__global const COORD *points, const uint n,
         for (int k = 1; k < D; ++k)
             inside &= (COORD4)(p[k]) <= c[k];
 #endif
-        count -= inside;           /* a true comparison is -1 in every bit */
+        /* a true comparison is -1 in every bit: the lanes count down, negated below. Not
+         * `count -= inside`: LLVM turns that into a zero extension of the comparison, which
+         * Oclgrind 21.10 extends to 255, not 1 (its counts came out 255 times too large) */
+        count += inside;
     }
-    counts[4 * w] = (uint)count.x;
-    counts[4 * w + 1] = (uint)count.y;
-    counts[4 * w + 2] = (uint)count.z;
-    counts[4 * w + 3] = (uint)count.w;
+    counts[4 * w] = (uint)-count.x;
+    counts[4 * w + 1] = (uint)-count.y;
+    counts[4 * w + 2] = (uint)-count.z;
+    counts[4 * w + 3] = (uint)-count.w;
 }

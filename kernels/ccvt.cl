@@ -14,7 +14,6 @@
  * in the same or adjacent cells meets once per iteration, independent pairs run in
  * parallel, and the result does not depend on the device or the scheduling. */
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
-#pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #include "voronoi.h"
 #include "ccvt.h"
 

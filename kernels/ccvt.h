@@ -25,12 +25,33 @@
 #define ccvt_prefetch(p) ((void)(p))
 #endif
 
-/* max, min and |x| as plain comparisons: PoCL calls its builtins for them out of line, a
- * call per use in the loops below (no argument here is ever NaN) */
-inline double ccvt_fmax(const double a, const double b) { return a > b ? a : b; }
-inline double ccvt_fmin(const double a, const double b) { return a < b ? a : b; }
-inline double ccvt_fabs(const double a) { return a < 0.0 ? -a : a; }
+/* max and min as plain comparisons: PoCL calls its builtins for them out of line, a call
+ * per use in the loops below */
 inline long ccvt_max(const long a, const long b) { return a > b ? a : b; }
+inline long ccvt_min(const long a, const long b) { return a < b ? a : b; }
+
+/* Exact integers only: no double (devices without fp64 run this file), and the pruning
+ * bounds below are integer upper bounds, so every decision they make is exact on every
+ * device. floor(sqrt(x)) for 0 <= x < 2^62: the float square root is only a first guess
+ * (any error in it, even more than OpenCL's 3 ulp, is corrected by the two loops, which
+ * check r^2 <= x < (r + 1)^2 in integers); for x < 2^48, as here, the guess is within a
+ * few units and the loops run a step or two. */
+inline long ccvt_isqrt(const long x)
+{
+    long r = (long)sqrt((float)x);
+    while (r > 0 && r * r > x)
+        --r;
+    while ((r + 1) * (r + 1) <= x)
+        ++r;
+    return r;
+}
+
+/* ceil(sqrt(x)): an integer upper bound on a length whose square x is known. */
+inline long ccvt_sqrt_up(const long x)
+{
+    const long r = ccvt_isqrt(x);
+    return r * r == x ? r : r + 1;
+}
 
 /* Buckets. The members of a site are kept grouped in CCVT_BUCKETS buckets: 16 angular
  * sectors times 4 radial bands of their offset w from the site's `base` (its position
@@ -45,8 +66,9 @@ inline long ccvt_max(const long a, const long b) { return a > b ? a : b; }
 #define CCVT_BUCKETS (CCVT_SECTORS * CCVT_BANDS)
 /* Per-site record (longs), kept exact between rebuilds by the exchanges and moves:
  * sums of the offsets u = x - s and of |u|^2 over the members (s: the site now), a
- * bound on the reach (largest |u|, rounded up), the largest |w| (a double, rounded up),
- * the base, `wide`; then for each bucket its largest |w| (doubles, rounded up).
+ * bound on the reach (largest |u|, rounded up), the largest |w| (rounded up), the base,
+ * `wide`; then for each bucket its largest |w| (rounded up: integers >= the true
+ * lengths, ccvt_sqrt_up).
  * A site is wide while its reach may exceed CCVT_LIMIT (1/8 of the torus): offsets of
  * its members could then wrap when it moves, so its sums are recomputed from scratch
  * instead of updated, and its buckets are read whole. Only rebuilds clear it. */
@@ -63,16 +85,32 @@ inline long ccvt_max(const long a, const long b) { return a > b ? a : b; }
 #error "CCVT_META of the host does not match the record laid out here"
 #endif
 #define CCVT_LIMIT (1L << 19)
+#if VOR_BITS > 22
+#error "the integer bounds below are sized for VOR_BITS <= 22 (products below 2^46)"
+#endif
 
 /* Rays of the sector boundaries, counter-clockwise (the octants, each halved by a ray
  * at 22.6 degrees from its first side); sector k lies between rays k and k + 1. */
 __constant int CCVT_RAY[2 * (CCVT_SECTORS + 1)] = {
     1, 0, 12, 5, 1, 1, 5, 12, 0, 1, -5, 12, -1, 1, -12, 5, -1, 0,
     -12, -5, -1, -1, -5, -12, 0, -1, 5, -12, 1, -1, 12, -5, 1, 0};
-/* 1 / |ray k| */
-__constant double CCVT_RAY_INV[CCVT_SECTORS] = {
-    1.0, 1.0 / 13.0, M_SQRT1_2, 1.0 / 13.0, 1.0, 1.0 / 13.0, M_SQRT1_2, 1.0 / 13.0,
-    1.0, 1.0 / 13.0, M_SQRT1_2, 1.0 / 13.0, 1.0, 1.0 / 13.0, M_SQRT1_2, 1.0 / 13.0};
+
+/* An integer upper bound on e.D for the unit vector e along ray k, from dot = ray_k . D
+ * (exact): |ray k| is 1 (k % 4 == 0), 13 (k odd: 12^2 + 5^2 = 13^2) or sqrt(2)
+ * (k % 4 == 2), so e.D = dot, dot / 13 or dot / sqrt(2). dot / 13 rounds up (C's division
+ * truncates toward zero, which is up for dot < 0). For sqrt(2) with h = floor(dot^2 / 2):
+ * isqrt(h) <= |dot| / sqrt(2) < isqrt(h) + 1 (since h <= dot^2 / 2 < h + 1 and
+ * (isqrt(h) + 1)^2 >= h + 1), so isqrt(h) + 1 bounds dot >= 0 and -isqrt(h) dot < 0.
+ * On the diagonal rays |dot| <= |dx| + |dy| <= 2^VOR_BITS, so dot^2 <= 2^44. */
+inline long ccvt_ray_dot(const int k, const long dot)
+{
+    if (k % 4 == 0)
+        return dot;
+    if (k & 1)
+        return dot >= 0 ? (dot + 12) / 13 : dot / 13;
+    const long h = ccvt_isqrt(dot * dot / 2);
+    return dot >= 0 ? h + 1 : -h;
+}
 
 typedef struct {
     __global uint *ids;       /* members' point indices, p slots per site */
@@ -86,7 +124,7 @@ typedef struct {
     __global uint *touched;
     uint p;
     long edge[CCVT_BANDS - 1];  /* squared radii between the bands */
-    double lo[CCVT_BANDS];      /* radius below which no point of a band lies (rounded down) */
+    long lo[CCVT_BANDS];        /* radius below which no point of a band lies (rounded down) */
     long drift;                 /* drift from the base that makes the iteration's end rebuild */
 } ccvt_t;
 
@@ -107,14 +145,20 @@ inline ccvt_t ccvt_state(const uint n, const uint p, __global uint *ids, __globa
     c.touched = touched;
     c.p = p;
     /* band edges at 0.42, 0.49, 0.545 / sqrt(n): a cell of area 1/n has its inradius
-     * near 0.54 / sqrt(n), so the outer bands hold the points near its edges */
-    const double unit = (double)VOR_SIZE * (double)VOR_SIZE / (double)n;
-    const double f[CCVT_BANDS - 1] = {0.42, 0.49, 0.545};
-    c.lo[0] = 0.0;
-    c.drift = (long)(0.1 * sqrt(unit));
+     * near 0.54 / sqrt(n), so the outer bands hold the points near its edges. In
+     * integers, exactly: edge = floor(f^2 2^(2 VOR_BITS) / n) with f^2 = 1764 / 10^4,
+     * 2401 / 10^4 and 297025 / 10^6 (297025 << 44 < 2^63); the drift, a tenth of the
+     * spacing, floor(sqrt(2^(2 VOR_BITS) / (100 n))) = isqrt(floor(2^(2 VOR_BITS) / (100 n))).
+     * Which bucket a point is kept in, and when a site is rebuilt, change no result
+     * (the buckets only decide what need not be read). */
+    const long unit = 1L << (2 * VOR_BITS);
+    const long num[CCVT_BANDS - 1] = {1764L, 2401L, 297025L};
+    const long den[CCVT_BANDS - 1] = {10000L, 10000L, 1000000L};
+    c.lo[0] = 0;
+    c.drift = ccvt_isqrt(unit / (100L * (long)n));
     for (int b = 0; b < CCVT_BANDS - 1; ++b) {
-        c.edge[b] = (long)(f[b] * f[b] * unit);
-        c.lo[b + 1] = ccvt_fmax(0.0, sqrt((double)c.edge[b]) * (1.0 - 1e-12) - 1.0);
+        c.edge[b] = (num[b] << (2 * VOR_BITS)) / (den[b] * (long)n);
+        c.lo[b + 1] = ccvt_isqrt(c.edge[b]);   /* a point of band b + 1 has |w|^2 >= edge */
     }
     return c;
 }
@@ -140,10 +184,11 @@ inline int ccvt_bucket(const ccvt_t *c, const long x, const long y, const long d
     return ccvt_sector(x, y) * CCVT_BANDS + band;
 }
 
-/* An upper bound on |u| from |u|^2. */
+/* An upper bound on |u| from |u|^2: floor(sqrt) + 1, the value the reach bound has
+ * always had (a wide site is one whose reach bound reaches CCVT_LIMIT). */
 inline long ccvt_ceil_sqrt(const long d2)
 {
-    return (long)sqrt((double)d2) + 1;
+    return ccvt_isqrt(d2) + 1;
 }
 
 /* The base of a site's record: where it was when its buckets were built. */
@@ -176,23 +221,31 @@ inline void ccvt_recenter(const ccvt_t *c, const uint i)
     s[1] = (uint)((long)y0 + vor_round_mean(sy, (long)c->p)) & VOR_MASK;
 }
 
-/* The view of a site from a direction D: for each sector k, the largest e.D over the unit
- * vectors e between rays k and k + 1 (|D| when D lies between them, else that of the
- * nearer ray), and Q.D with Q the site's drift from its base. A bucket's members w = u + Q
- * then have u.D <= rho cone - Q.D (rho its largest |w|) when cone >= 0, and
- * <= lo cone - Q.D otherwise (lo the smallest |w| of its band). */
+/* The view of a site from a direction D: for each sector k, an integer upper bound on the
+ * largest e.D over the unit vectors e between rays k and k + 1 (ceil |D| when D lies
+ * between them, else the larger bound of the two rays, ccvt_ray_dot: e.D is a cosine in
+ * the angle from D, so over an arc that does not hold D's direction it is largest at an
+ * end), and Q.D with Q the site's drift from its base. A bucket's members w = u + Q then
+ * have u.D = w.D - Q.D <= |w| cone - Q.D, which is at most rho cone - Q.D (rho >= |w| its
+ * largest |w|) when cone >= 0, and at most lo cone - Q.D (lo <= |w| the smallest |w| of
+ * its band) when cone < 0. All exact integers: |w|, |D| < 2^23, so the products stay
+ * below 2^46 and every bound below is a true upper bound, never one rounded down. */
 typedef struct {
-    double cone[CCVT_SECTORS];
-    double qd, dlen;
+    long cone[CCVT_SECTORS];
+    long qd, dlen;
     int wide;
 } ccvt_view;
+
+/* A bound that never prunes: the site bound of a wide site (hi + hj and dd - 2 hj stay
+ * far inside a long). */
+#define CCVT_HUGE (1L << 60)
 
 /* The parts of a view that belong to the site: Q.D and whether it is wide. */
 inline void ccvt_look_site(const ccvt_t *c, const uint i, const long dx, const long dy,
                            ccvt_view *v)
 {
     const long2 q = ccvt_drift(c, i);
-    v->qd = (double)(q.x * dx + q.y * dy);
+    v->qd = q.x * dx + q.y * dy;
     v->wide = c->meta[(size_t)i * CCVT_META + CCVT_WIDE] != 0;
 }
 
@@ -200,16 +253,16 @@ inline void ccvt_look(const ccvt_t *c, const uint i, const long dx, const long d
                       ccvt_view *v)
 {
     ccvt_look_site(c, i, dx, dy, v);
-    v->dlen = sqrt((double)(dx * dx + dy * dy));
-    double dot = 0.0;
+    v->dlen = ccvt_sqrt_up(dx * dx + dy * dy);
+    long dot = 0;
     int left = 0;
     for (int k = 0; k <= CCVT_SECTORS; ++k) {
         const int r = k % CCVT_SECTORS;
         const long ax = CCVT_RAY[2 * r], ay = CCVT_RAY[2 * r + 1];
-        const double d = (double)(ax * dx + ay * dy) * CCVT_RAY_INV[r];
+        const long d = ccvt_ray_dot(r, ax * dx + ay * dy);
         const int l = ax * dy - ay * dx >= 0;
         if (k > 0)
-            v->cone[k - 1] = left && !l ? v->dlen : ccvt_fmax(dot, d);
+            v->cone[k - 1] = left && !l ? v->dlen : ccvt_max(dot, d);
         dot = d;
         left = l;
     }
@@ -226,34 +279,31 @@ inline void ccvt_look_back(const ccvt_t *c, const uint j, const long ex, const l
         v->cone[k] = front->cone[(k + CCVT_SECTORS / 2) % CCVT_SECTORS];
 }
 
-/* An upper bound on u.D over the members of a bucket whose largest |w| is rho (with the
- * margin that covers the rounding of the doubles). */
-inline double ccvt_bound(const ccvt_t *c, const ccvt_view *v, const int k, const double rho)
+/* An upper bound on u.D over the members of bucket k whose largest |w| is at most rho. */
+inline long ccvt_bound(const ccvt_t *c, const ccvt_view *v, const int k, const long rho)
 {
-    const double e = v->cone[k / CCVT_BANDS];
-    const double b = (e >= 0.0 ? rho : c->lo[k % CCVT_BANDS]) * e - v->qd;
-    return b + 1e-9 * (ccvt_fabs(b) + ccvt_fabs(v->qd) + rho * v->dlen) + 64.0;
+    const long e = v->cone[k / CCVT_BANDS];
+    return (e >= 0 ? rho : c->lo[k % CCVT_BANDS]) * e - v->qd;
 }
 
-/* An upper bound on u.D over the members of a sector whose largest |w| is rho. */
-inline double ccvt_sector_bound(const ccvt_view *v, const int sector, const double rho)
+/* An upper bound on u.D over the members of a sector whose largest |w| is at most rho. */
+inline long ccvt_sector_bound(const ccvt_view *v, const int sector, const long rho)
 {
-    const double b = rho * ccvt_fmax(v->cone[sector], 0.0) - v->qd;
-    return b + 1e-9 * (ccvt_fabs(b) + ccvt_fabs(v->qd) + rho * v->dlen) + 64.0;
+    return rho * ccvt_max(v->cone[sector], 0) - v->qd;
 }
 
 /* An upper bound on max u.D over all members of site i: per sector, the largest |w| of
- * its members (CCVT_RHOSEC); INFINITY while the site is wide. */
-inline double ccvt_site_bound(const ccvt_t *c, const uint i, const ccvt_view *v)
+ * its members (CCVT_RHOSEC); CCVT_HUGE while the site is wide. */
+inline long ccvt_site_bound(const ccvt_t *c, const uint i, const ccvt_view *v)
 {
     if (v->wide)
-        return INFINITY;
+        return CCVT_HUGE;
     __global const long *m = c->meta + (size_t)i * CCVT_META;
-    double b = -INFINITY;
+    long b = -CCVT_HUGE;
     for (int k = 0; k < CCVT_SECTORS; ++k) {
-        const double rho = as_double(m[CCVT_RHOSEC + k]);
-        if (rho >= 0.0)
-            b = ccvt_fmax(b, ccvt_sector_bound(v, k, rho));
+        const long rho = m[CCVT_RHOSEC + k];
+        if (rho >= 0)
+            b = ccvt_max(b, ccvt_sector_bound(v, k, rho));
     }
     return b;
 }
@@ -296,8 +346,8 @@ inline void ccvt_insert(const long g, const uint k, const uint bucket, uint *c, 
 }
 
 /* The CCVT_TOP points of site i that gain most by moving to the site at offset D from it,
- * among those with gain > floor, sorted by ccvt_before; only the buckets whose bound on
- * u.D exceeds thr (the u.D that gain = floor means) are read. Returns how many. The gain
+ * among those with gain > floor, sorted by ccvt_before; only the buckets whose bound B on
+ * u.D can give such a gain (2 B - dd > floor) are read. Returns how many. The gain
  * of x, with u its offset from s_i, is
  *     |u|^2 - |u - D|^2 = 2 u.D - |D|^2  (dd = |D|^2),
  * the exact change of its squared distance when the other site's image at s_i + D is the
@@ -305,8 +355,7 @@ inline void ccvt_insert(const long g, const uint k, const uint bucket, uint *c, 
  * other site nearer): an exchange accepted on these gains lowers the energy at least as
  * much as they say. */
 inline uint ccvt_top(const ccvt_t *c, const uint i, const long dx, const long dy, const long dd,
-                     const ccvt_view *v, const double thr, const long floor, long *gain,
-                     uint *slot, uint *bk)
+                     const ccvt_view *v, const long floor, long *gain, uint *slot, uint *bk)
 {
     __global const uint *bs = c->bstart + (size_t)i * (CCVT_BUCKETS + 1);
     __global const uint *ids = c->ids + (size_t)i * c->p;
@@ -318,9 +367,11 @@ inline uint ccvt_top(const ccvt_t *c, const uint i, const long dx, const long dy
     const long2 drift = ccvt_drift(c, i);
     const long qx = drift.x, qy = drift.y;
     uint count = 0;
-    /* once CCVT_TOP candidates are in, a bucket whose bound is below half (dd + the last
-     * one's gain) can only hold points that gain less: it is not read either */
-    double cut = -INFINITY;
+    /* a bucket whose bound B has 2 B <= thr = dd + floor holds no point with gain > floor;
+     * once CCVT_TOP candidates are in, one with 2 B < cut = dd + the last one's gain only
+     * points that gain less than it: neither is read. (|floor| <= 2^61: ccvt_pair) */
+    const long thr = dd + floor;
+    long cut = LONG_MIN;
     long low = floor;
     /* the sectors nearest the direction of D first (the best candidates lie there, so
      * the list fills with them early and the rest are mostly skipped or rejected) */
@@ -336,24 +387,24 @@ inline uint ccvt_top(const ccvt_t *c, const uint i, const long dx, const long dy
     for (int turn = 0; turn < CCVT_SECTORS; ++turn) {
         const int step = (turn + 1) / 2;   /* facing, facing + 1, facing - 1, facing + 2, ... */
         const int sector = (facing + (turn & 1 ? step : CCVT_SECTORS - step)) % CCVT_SECTORS;
-        const double top = as_double(m[CCVT_RHOSEC + sector]);
-        if (top < 0.0)
+        const long top = m[CCVT_RHOSEC + sector];
+        if (top < 0)
             continue;   /* no members */
         if (!v->wide) {
-            const double b = ccvt_sector_bound(v, sector, top);
-            if (!(b > thr) || b < cut)
+            const long b = 2 * ccvt_sector_bound(v, sector, top);
+            if (b <= thr || b < cut)
                 continue;
         }
-        double most = -1.0;
+        long most = -1;
         for (int band = CCVT_BANDS - 1; band >= 0; --band) {
             const int k = sector * CCVT_BANDS + band;
             if (bs[k] == bs[k + 1])
                 continue;
-            const double rho = as_double(m[CCVT_RHO + k]);
+            const long rho = m[CCVT_RHO + k];
             if (!v->wide) {
-                const double b = ccvt_bound(c, v, k, rho);
-                if (!(b > thr) || b < cut) {
-                    most = ccvt_fmax(most, rho);
+                const long b = 2 * ccvt_bound(c, v, k, rho);
+                if (b <= thr || b < cut) {
+                    most = ccvt_max(most, rho);
                     continue;
                 }
             }
@@ -372,14 +423,14 @@ inline uint ccvt_top(const ccvt_t *c, const uint i, const long dx, const long dy
                 }
             }
             if (count == CCVT_TOP)
-                cut = 0.5 * (double)(dd + gain[CCVT_TOP - 1]);
-            const double exact = sqrt((double)w2) * (1.0 + 1e-12) + 1.0;
+                cut = dd + gain[CCVT_TOP - 1];
+            const long exact = ccvt_sqrt_up(w2);
             if (!v->wide)
-                m[CCVT_RHO + k] = as_long(exact);
-            most = ccvt_fmax(most, exact);
+                m[CCVT_RHO + k] = exact;
+            most = ccvt_max(most, exact);
         }
         if (!v->wide)
-            m[CCVT_RHOSEC + sector] = as_long(most);
+            m[CCVT_RHOSEC + sector] = most;
     }
     return count;
 }
@@ -432,11 +483,11 @@ inline void ccvt_rehome(const ccvt_t *c, const uint i, uint t, int from, uint *p
     const long wx = vor_delta(q[t].x, base.x), wy = vor_delta(q[t].y, base.y);
     const long w2 = wx * wx + wy * wy;
     const int to = ccvt_bucket(c, wx, wy, w2);
-    const double w = sqrt((double)w2) * (1.0 + 1e-12) + 1.0;
+    const long w = ccvt_sqrt_up(w2);
     const int top = CCVT_RHOSEC + to / CCVT_BANDS;   /* its sector's largest |w| */
-    m[CCVT_RHO + to] = as_long(ccvt_fmax(as_double(m[CCVT_RHO + to]), w));
-    m[top] = as_long(ccvt_fmax(as_double(m[top]), w));
-    m[CCVT_FAR] = as_long(ccvt_fmax(as_double(m[CCVT_FAR]), w));
+    m[CCVT_RHO + to] = ccvt_max(m[CCVT_RHO + to], w);
+    m[top] = ccvt_max(m[top], w);
+    m[CCVT_FAR] = ccvt_max(m[CCVT_FAR], w);
     for (; from < to; ++from) {
         const uint last = bs[from + 1] - 1;
         ccvt_slot_swap(ids, q, t, last, pend, np);
@@ -486,17 +537,17 @@ inline void ccvt_rebuild(const ccvt_t *c, const uint i)
         bs[k] = at;
         at += count[k];
         count[k] = bs[k];
-        m[CCVT_RHO + k] = as_long(sqrt((double)top[k]) * (1.0 + 1e-12) + 1.0);
+        m[CCVT_RHO + k] = ccvt_sqrt_up(top[k]);
     }
     bs[CCVT_BUCKETS] = at;
     for (int sector = 0; sector < CCVT_SECTORS; ++sector) {
-        double most = -1.0;
+        long most = -1;
         for (int band = 0; band < CCVT_BANDS; ++band) {
             const int k = sector * CCVT_BANDS + band;
             if (bs[k] != bs[k + 1])
-                most = ccvt_fmax(most, as_double(m[CCVT_RHO + k]));
+                most = ccvt_max(most, m[CCVT_RHO + k]);
         }
-        m[CCVT_RHOSEC + sector] = as_long(most);
+        m[CCVT_RHOSEC + sector] = most;
     }
     for (uint t = 0; t < p; ++t) {
         const long ux = vor_delta(q[t].x, sx), uy = vor_delta(q[t].y, sy);
@@ -512,7 +563,7 @@ inline void ccvt_rebuild(const ccvt_t *c, const uint i)
     m[CCVT_SUMY] = sumy;
     m[CCVT_ENERGY] = e;
     m[CCVT_REACH] = ccvt_ceil_sqrt(far);
-    m[CCVT_FAR] = as_long(sqrt((double)far) * (1.0 + 1e-12) + 1.0);
+    m[CCVT_FAR] = ccvt_sqrt_up(far);
     m[CCVT_BASE] = (long)((ulong)sx | ((ulong)sy << 32));   /* read by ccvt_base */
     m[CCVT_WIDE] = m[CCVT_REACH] >= CCVT_LIMIT;
 }
@@ -547,14 +598,13 @@ inline void ccvt_move(const ccvt_t *c, const uint i)
 
 /* A bound on the distance from site i to its farthest member: the reach bound, or the
  * largest |w| plus the drift from the base if that is smaller (not while wide). */
-inline double ccvt_reach(const ccvt_t *c, const uint i)
+inline long ccvt_reach(const ccvt_t *c, const uint i)
 {
     __global const long *m = c->meta + (size_t)i * CCVT_META;
     if (m[CCVT_WIDE])
-        return (double)m[CCVT_REACH];
+        return m[CCVT_REACH];
     const long2 q = ccvt_drift(c, i);
-    return ccvt_fmin((double)m[CCVT_REACH],
-                     as_double(m[CCVT_FAR]) + (double)((long)abs(q.x) + (long)abs(q.y)));
+    return ccvt_min(m[CCVT_REACH], m[CCVT_FAR] + (long)abs(q.x) + (long)abs(q.y));
 }
 
 /* Balzer's pairwise swap for sites i and j: their best candidates toward each other,
@@ -580,8 +630,11 @@ inline uint ccvt_pair(const ccvt_t *c, const uint i, const uint j, const long ne
     const long dist2 = vor_d2(ix, iy, jx, jy);
     if (dist2 >= near2)
         return 0;   /* not neighbours: the pair graph joins sites closer than ccvt_near */
-    const double rr = ccvt_reach(c, i) + ccvt_reach(c, j);
-    if ((double)dist2 > rr * rr * (1.0 + 1e-9) + 64.0)
+    /* (a reach bound grows by at most a move's length per move, and a site moves a few
+     * dozen times an iteration before the rebuild that resets a wide one: rr stays far
+     * below 2^31; the guard keeps rr^2 in a long whatever happens) */
+    const long rr = ccvt_reach(c, i) + ccvt_reach(c, j);
+    if (rr < (1L << 31) && dist2 > rr * rr)
         return 0;
     ccvt_prefetch_site(c, i);
     ccvt_prefetch_site(c, j);
@@ -604,19 +657,16 @@ inline uint ccvt_pair(const ccvt_t *c, const uint i, const uint j, const long ne
             ccvt_look_back(c, j, djix, djiy, &vi, &vj);
         else
             ccvt_look(c, j, djix, djiy, &vj);
-        const double hi = ccvt_site_bound(c, i, &vi), hj = ccvt_site_bound(c, j, &vj);
-        if (hi + hj <= (double)dd)
+        const long hi = ccvt_site_bound(c, i, &vi), hj = ccvt_site_bound(c, j, &vj);
+        if (hi + hj <= dd)
             break;
         /* a point of i can only be exchanged if its gain beats minus j's best, at most
-         * 2 Hj - dd; one of j only if it beats minus i's best, gi[0] */
-        const double low = (double)dd - 2.0 * hj;
-        const long floor_i = low > -4e18 ? (long)floor(low) - 1 : LONG_MIN;
-        const uint ci = ccvt_top(c, i, dijx, dijy, dd, &vi, 0.5 * (double)(dd + floor_i),
-                                 floor_i, gi, si, ki);
+         * 2 Hj - dd; one of j only if it beats minus i's best, gi[0] (all exact: with
+         * |Hj| <= CCVT_HUGE = 2^60, dd - 2 Hj and dd + floor stay within 2^62) */
+        const uint ci = ccvt_top(c, i, dijx, dijy, dd, &vi, dd - 2 * hj, gi, si, ki);
         if (ci == 0)
             break;
-        const uint cj = ccvt_top(c, j, djix, djiy, dd, &vj, 0.5 * (double)(dd - gi[0]),
-                                 -gi[0], gj, sj, kj);
+        const uint cj = ccvt_top(c, j, djix, djiy, dd, &vj, -gi[0], gj, sj, kj);
         const uint k = min(ci, cj);
         uint done = 0;
         while (done < k && gi[done] + gj[done] > 0) {

@@ -60,6 +60,9 @@ inline ulong f64_mul(ulong x, ulong y) { return as_ulong(as_double(x) * as_doubl
 /* y - 1 for 1 <= y < 2, exact (Sterbenz). */
 inline ulong f64_minus_one(ulong y) { return as_ulong(as_double(y) - 1.0); }
 
+/* x - y for x >= y, correctly rounded. */
+inline ulong f64_sub(ulong x, ulong y) { return as_ulong(as_double(x) - as_double(y)); }
+
 #else   /* integer arithmetic only: no double reaches the compiler */
 
 inline ulong f64_bitlength(ulong m) { return 64u - clz(m); }
@@ -198,6 +201,37 @@ inline ulong f64_mul(ulong x, ulong y)
 }
 
 inline ulong f64_minus_one(ulong y) { return f64_scaled((y & F64_MANTISSA), -52); }
+
+/* x - y for x >= y, round to nearest even: x's significand shifted up to y's exponent
+ * (127 bits at most), y's subtracted, the 128-bit difference rounded once. A y more than
+ * 74 binades below x is less than a quarter of x's ulp (a power of two's gap below is half
+ * an ulp): the result is x. The difference must be zero or normal (it is a multiple of y's
+ * ulp, so x, y >= 2^-969 suffices). */
+inline ulong f64_sub(ulong x, ulong y)
+{
+    if (y == 0)
+        return x;
+    if (x == y)
+        return 0;
+    const int d = f64_exponent(x) - f64_exponent(y);
+    if (d > 74)
+        return x;
+    const ulong mx = f64_significand(x), my = f64_significand(y);
+    ulong hi, lo;
+    if (d == 0) {
+        hi = 0;
+        lo = mx;
+    } else if (d < 64) {
+        hi = mx >> (64 - d);
+        lo = mx << d;
+    } else {
+        hi = mx << (d - 64);
+        lo = 0;
+    }
+    hi -= lo < my;
+    lo -= my;
+    return f64_round128(hi, lo, f64_exponent(y));
+}
 
 #endif
 

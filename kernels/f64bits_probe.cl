@@ -19,3 +19,12 @@ __kernel void f64bits_ops(__global const ulong *x, __global const ulong *y,
     o[5] = f64_shift_mod1(x[i], y[i]);
     o[6] = f64_mul(x[i], y[i]);
 }
+
+/* Per i: x[i] - y[i] for x[i] >= y[i]. */
+__kernel void f64bits_sub(__global const ulong *x, __global const ulong *y, __global ulong *out,
+                          const uint n)
+{
+    const uint i = get_global_id(0);
+    if (i < n)
+        out[i] = f64_sub(x[i], y[i]);
+}

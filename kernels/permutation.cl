@@ -46,9 +46,7 @@ __kernel void fisher_yates_draws(__global uint *draws, const uint length, const 
     const uint t0 = 4u * quad0;
     const uint here = length - t0 < 16u ? length - t0 : 16u;
     for (uint s = 0; s < here; ++s) {
-        const uint4 v = step[s & 3u];
-        const uint l = s >> 2;
-        out[t0 + s] = t0 + s == 0u ? 0u : l == 0u ? v.s0 : l == 1u ? v.s1 : l == 2u ? v.s2 : v.s3;
+        out[t0 + s] = t0 + s == 0u ? 0u : clsamp_lane(step[s & 3u], s >> 2);
     }
 }
 

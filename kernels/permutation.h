@@ -139,9 +139,8 @@ inline void clsamp_fisher_yates(__global uint *a, const uint length, uint2 key, 
         /* Steps descend, so a new Philox block is needed at t = length-1 and at t%4 == 3. */
         if (t == length - 1u || (t & 3u) == 3u)
             block = clsamp_block(key, stream, realization, t >> 2, perm << 8);
-        const uint lane = t & 3u;
-        const uint x = lane == 0u ? block.x : lane == 1u ? block.y : lane == 2u ? block.z : block.w;
-        const uint j = clsamp_bounded_from(x, key, stream, realization, t, perm, t + 1u);
+        const uint j = clsamp_bounded_from(clsamp_lane(block, t & 3u), key, stream, realization,
+                                           t, perm, t + 1u);
         const uint swap = a[t];
         a[t] = a[j];
         a[j] = swap;

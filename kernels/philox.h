@@ -73,12 +73,20 @@ inline uint4 clsamp_block(uint2 key, uint stream, uint realization, uint index, 
     return philox4x32_10((uint4)(index, realization, block, stream), key);
 }
 
+/* Lane `lane` (0..3) of b, chosen by its two bits. The equivalent chain
+ * `lane == 0u ? b.x : lane == 1u ? b.y : lane == 2u ? b.z : b.w` is what Oclgrind 21.10
+ * simulates wrongly (lanes 0 and 1 read as b.w from the second quad of work-items on, with
+ * no report: the permutations of fisher_yates_inline and Faure's base-5 LMS came out wrong
+ * there; tests/test_oclgrind.py). */
+inline uint clsamp_lane(const uint4 b, const uint lane)
+{
+    return (lane & 2u) ? ((lane & 1u) ? b.w : b.z) : ((lane & 1u) ? b.y : b.x);
+}
+
 /* Word w of (key, stream, realization, index): block w/4, lane w%4. */
 inline uint clsamp_bits(uint2 key, uint stream, uint realization, uint index, uint word)
 {
-    const uint4 b = clsamp_block(key, stream, realization, index, word >> 2);
-    const uint lane = word & 3u;
-    return lane == 0u ? b.x : lane == 1u ? b.y : lane == 2u ? b.z : b.w;
+    return clsamp_lane(clsamp_block(key, stream, realization, index, word >> 2), word & 3u);
 }
 
 /* The double in [0, 1) of 53 random bits (genrand_res53) from the words hi and lo,

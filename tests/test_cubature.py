@@ -45,6 +45,28 @@ def test_doubling_updates_equal_a_fresh_transform(method):
     assert math.isclose(rule.total / rule.n, float(np.mean(y)), rel_tol=1e-14)
 
 
+def test_the_device_walsh_state_has_the_numpy_bits(monkeypatch):
+    # kernels/walsh.cl does walsh_coefficients, the butterfly and _order_wavenumbers in the
+    # NumPy order: the same coefficients, ordering and bounds, bit for bit
+    from clsamp import cubature
+    monkeypatch.setattr(cubature, "DEVICE_FROM", 2**11)      # on the device from 4096 points
+
+    def f(x):
+        return np.exp(np.sum(x, axis=1)) * np.cos(9.0 * x[:, 0]) + (x[:, 1] > 0.3)
+
+    rules = [Cubature(f, 3, "digital", 6, device=device) for device in (False, True)]
+    assert rules[0].walsh is None and rules[1].walsh is not None
+    for _ in range(6):
+        assert rules[0].step() == rules[1].step()
+    assert rules[1]._coefficients is None                     # the state is on the device
+    assert rules[1].n == 2**15
+    host, device = rules[0].coefficients, rules[1].coefficients
+    assert np.array_equal(host.view(np.uint64), device.view(np.uint64))
+    assert np.array_equal(rules[0].kappa, rules[1].kappa)
+    # the ordering did reorder: not the identity
+    assert not np.array_equal(rules[1].kappa, np.arange(rules[1].n))
+
+
 @pytest.mark.parametrize("method", ["digital", "lattice"])
 def test_sampling_in_chunks_changes_nothing(method, monkeypatch):
     from clsamp import cubature

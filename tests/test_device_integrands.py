@@ -160,9 +160,13 @@ class _Allocations:
 
 @pytest.mark.parametrize("method", ["digital", "replications"])
 def test_integrate_never_allocates_the_points(monkeypatch, method):
-    # device memory O(1) in n: with launches of at most CHUNK points, the largest buffer a
-    # call makes does not grow with n, while n * d doubles of points would
+    # replications: device memory O(1) in n: with launches of at most CHUNK points, the
+    # largest buffer a call makes does not grow with n, while n * d doubles of points would.
+    # digital: the Walsh coefficients live on the device (cubature_device), one double a
+    # point, never the d coordinates of the points
+    from clsamp import cubature
     monkeypatch.setattr(fused, "CHUNK", 2**11)
+    monkeypatch.setattr(cubature, "DEVICE_FROM", 2**11)
     f = keister(4)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
@@ -178,7 +182,12 @@ def test_integrate_never_allocates_the_points(monkeypatch, method):
         largest[max_n] = max(log.sizes)
         monkeypatch.undo()
         monkeypatch.setattr(fused, "CHUNK", 2**11)
-    assert largest[2**16] == largest[2**12] <= 8 * 2**11
+        monkeypatch.setattr(cubature, "DEVICE_FROM", 2**11)
+    if method == "replications":
+        assert largest[2**16] == largest[2**12] <= 8 * 2**11
+    else:
+        # the coefficients (on the device from 2^12 points here) are the largest buffer
+        assert largest[2**12] <= 8 * 2**12 and 8 * 2**15 <= largest[2**16] <= 8 * 2**16
     # the same measurement sees the points of a NumPy integrand
     log = _Allocations(monkeypatch)
     with warnings.catch_warnings():

@@ -1,12 +1,14 @@
 """Every OpenCL device found, against the default one: the same bits where the contract says
 bits (every sampler and randomization, a convergence experiment), the stated tolerance where
 it says so (spectra, metrics, the float32 renderer). A device without fp64 gives every
-sampler's bits too, but poisson_disk and ccvt, and refuses those and the analyses with
-NoDeviceError, never a BuildError, but for what it computes in float-float (spectra, the
-L2 discrepancies, the PCF and nearest neighbours) or exactly (the star discrepancy's certified bounds),
-tests/test_float_float.py; so does a device that lacks what a kernel needs
-(lloyd's 64-bit atomics) or stops long loops (llvmpipe: pmj02bn, lloyd). CI installs Debian's PoCL and Mesa's
-rusticl beside PyPI's PoCL, and Intel's CPU runtime from PyPI (.ci/run; registered by
+sampler's bits too, but those that compute in double (needs_fp64), and refuses those and
+the analyses with NoDeviceError, never a BuildError, but for what it computes in
+float-float (spectra, the L2 discrepancies, the PCF and nearest neighbours) or exactly (the
+star discrepancy's certified bounds, tests/test_float_float.py; its exact value,
+tests/test_star_without_fp64.py); so does a device that lacks what a kernel needs (lloyd's
+and ccvt's 64-bit atomics) or stops long loops (llvmpipe: pmj02bn, lloyd, ccvt). CI
+installs Debian's PoCL and Mesa's rusticl beside PyPI's PoCL, and Intel's CPU runtime from
+PyPI (.ci/run; registered by
 scripts/ensure-opencl.sh), so four implementations meet here; with one device the module is
 skipped. Oclgrind, a simulator, is left out: tests/test_oclgrind.py runs every kernel on it
 at sizes an interpreter manages, against the NumPy twins."""
@@ -72,8 +74,9 @@ def refusal(device, name):
         return "fp64|double"
     if name == "pmj02bn" and on(device, runtime.loop_limit) is not None:
         return "loops"
-    if name == "lloyd" and ("cl_khr_int64_base_atomics" not in device.extensions
-                            or on(device, runtime.loop_limit) is not None):
+    # exact integers, no fp64: 64-bit atomics and long loops instead
+    if name in ("lloyd", "ccvt") and ("cl_khr_int64_base_atomics" not in device.extensions
+                                      or on(device, runtime.loop_limit) is not None):
         return "cl_khr_int64_base_atomics|loops"
     return None
 
@@ -178,8 +181,8 @@ def test_a_device_without_fp64_refuses_what_needs_it_by_name(device):
         with pytest.raises(NoDeviceError, match="fp64|double"):
             on(device, call)
     runs = runtime.capabilities(device.index)
-    running = ["samplers", "certified star-discrepancy bounds"] + [
+    running = ["samplers", "certified star-discrepancy bounds", "exact star discrepancy"] + [
         name for name in runs if name.endswith("in float-float")]
-    assert len(running) >= 4
+    assert len(running) >= 5
     assert all(runs[name] is None for name in running)
     assert {why for name, why in runs.items() if name not in running} == {"needs fp64"}

@@ -107,6 +107,46 @@ def test_the_integer_path_uses_no_double():
     assert "double" in runtime.active_source(runtime.kernel_source("f64bits_probe.cl"), fp64=True)
 
 
+def _subtraction_cases(count=4000):
+    """x >= y >= 0 from _doubles, with cancellations (y a few ulps below x, the same
+    binade, one binade down), y far below x (74 and 75 binades, a power-of-two x) and
+    halfway cases."""
+    x, y = _doubles(count), _doubles(count)
+    x, y = np.maximum(x, y), np.minimum(x, y)
+    near = np.flatnonzero(x > 0)[:count // 6 * 2]
+    half = len(near) // 2
+    steps = rng.integers(0, 5, half).astype(np.uint64)
+    y[near[:half]] = (x[near[:half]].view(np.uint64) - steps).view(np.float64)
+    y[near[half:]] = x[near[half:]] * rng.uniform(0.25, 1.0, len(near) - half)
+    special = [(1.0, 2.0**-54), (1.0, 2.0**-53), (1.0, 3 * 2.0**-54), (0.5, 2.0**-76),
+               (0.5, 2.0**-200), (0.75, 0.75), (1.0, 1.0 - 2.0**-53), (2.0**-10, 2.0**-85),
+               (2.0**-10, 2.0**-84 * 1.5), (1.0, 0.0), (0.0, 0.0), (0.3, 2.0**-76 * 1.75)]
+    x[:len(special)], y[:len(special)] = zip(*special, strict=True)
+    return x, y
+
+
+@pytest.mark.parametrize("integer_path", [False, True], ids=["fp64", "integer"])
+def test_subtraction_is_correctly_rounded(integer_path):
+    x, y = _subtraction_cases()
+    want = np.array([float(Fraction(a) - Fraction(b)) for a, b in zip(x, y, strict=True)])
+
+    def run():
+        q = runtime.queue()
+        args = [cla.to_device(q, np.ascontiguousarray(v.view(np.uint64))) for v in (x, y)]
+        out = cla.empty(q, len(x), np.uint64)
+        runtime.kernel("f64bits_probe.cl", "f64bits_sub")(
+            q, (len(x),), None, args[0].data, args[1].data, out.data, np.uint32(len(x)))
+        return out.get()
+
+    if integer_path:
+        with runtime.without_fp64():
+            got = run()
+    else:
+        got = run()
+    bad = np.flatnonzero(got != want.view(np.uint64))
+    assert bad.size == 0, [(x[i], y[i], got[i].view(np.float64), want[i]) for i in bad[:3]]
+
+
 def _sampler_cases():
     for name in clsamp.sampler_names():
         cls = sampler_class(name)

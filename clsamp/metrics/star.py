@@ -20,6 +20,7 @@ EXACT_DIMENSIONS = (1, 2, 3)
 MAX_EXACT_3D = 2048             # n beyond which 3-D exact (O(n^3)) asks for bounds=True
 MAX_LEAVES = 1 << 22            # boxes of a bounds partition at most (memory)
 STAR_WORK = 1 << 33             # corner-point tests of a bounds call at most (seconds)
+ESTIMATE_ERROR = 2.0**-19      # bound of a box's float estimate (kernels/star_discrepancy.cl)
 SNAPPED = 64                    # best corners of each kind snapped to critical boxes
 DELTAS = tuple(2.0 ** (-k / 2) for k in range(0, 17))      # 1, 0.71, 0.5, ... 0.004
 
@@ -91,13 +92,14 @@ def star_discrepancy_reference(points):
 
 
 def _sweep_device(points):
-    """The exact sweep of ``kernels/star_discrepancy.cl`` (2-D or 3-D) for one set."""
+    """The exact sweep of ``kernels/star_discrepancy.cl`` (2-D or 3-D) for one set: in
+    double, or without fp64 the same bits in integer arithmetic (the kernel's notes)."""
     import pyopencl.array as cla
-    runtime.require_fp64()
     q = runtime.queue()
     n, d = points.shape
     order = np.lexsort((points[:, 0],))                 # by x (stable)
-    p = np.ascontiguousarray(points[order])
+    # + 0.0: a -0.0 as +0.0 (the same value; its bit pattern would compare as the largest)
+    p = np.ascontiguousarray(points[order]) + 0.0
     x = p[:, 0]
     flags = np.zeros(n, dtype=np.uint8)
     flags[np.concatenate(([True], x[1:] != x[:-1]))] |= 1
@@ -117,12 +119,48 @@ def _sweep_device(points):
         items = ny * (len(sz) // 4)
         zs = p[:, 2]
     nz4 = (len(sz) // 4) if d == 3 else items
-    out = cla.empty(q, max(items, 1), np.float64)
     dev = [runtime.to_device(np.ascontiguousarray(a)) for a in (x, p[:, 1], zs, flags, sy, sz)]
-    runtime.kernel("star_discrepancy.cl", "star_sweep", {"DIM": d})(
-        q, (items,), None, *(a.data for a in dev[:4]), np.uint32(n), dev[4].data, dev[5].data,
-        np.uint32(ny), np.uint32(nz4), out.data)
+    head = [a.data for a in dev[:4]] + [np.uint32(n), dev[4].data, dev[5].data]
+    if runtime.current_device().fp64:
+        out = cla.empty(q, max(items, 1), np.float64)
+        runtime.kernel("star_discrepancy.cl", "star_sweep", {"DIM": d})(
+            q, (items,), None, *head, np.uint32(ny), np.uint32(nz4), out.data)
+        return float(out.get().max())
+    # without fp64: every box's float estimate, then the exact values of the boxes that
+    # could be the largest, in the work-items that hold them (the kernel's notes); in
+    # launches of a few points each where the device limits a work-item's loops (llvmpipe:
+    # the state carries the counts between them)
+    inverse_n = np.float32(1.0 / n)
+    limit = runtime.loop_limit()
+    estimates = cla.empty(q, items, np.float32)
+    state = np.zeros((items, 12), np.uint32)
+    state[:, 8:] = np.float32(-1.0).view(np.uint32)
+    state = runtime.to_device(state)
+    kernel = runtime.kernel("star_discrepancy.cl", "star_estimate", {"DIM": d})
+    for k0, k1 in _chunks(n, limit and limit // 2):
+        kernel(q, (items,), None, *head, np.uint32(items), np.uint32(nz4), inverse_n,
+               np.uint32(k0), np.uint32(k1), state.data, estimates.data)
+    estimates = estimates.get()
+    top = estimates.max()
+    picked = np.flatnonzero(estimates >= float(top) - 2 * ESTIMATE_ERROR).astype(np.uint32)
+    out = cla.empty(q, len(picked), np.float64)          # the bits of doubles
+    ratios = runtime.to_device(np.arange(n + 1) / n)     # fl(c / n), c = 0..n
+    state = np.zeros((len(picked), 12), np.uint32)
+    state[:, 10] = top.view(np.uint32)
+    state = runtime.to_device(state)
+    kernel = runtime.kernel("star_discrepancy.cl", "star_sweep", {"DIM": d})
+    picked_device = runtime.to_device(picked)
+    for k0, k1 in _chunks(n, limit and limit // 16):    # 9 iterations a point at most
+        kernel(q, (len(picked),), None, *head, picked_device.data,
+               np.uint32(len(picked)), np.uint32(nz4), ratios.data, inverse_n, np.uint32(k0),
+               np.uint32(k1), state.data, out.data)
     return float(out.get().max())
+
+
+def _chunks(n, size):
+    """[k0, k1) ranges of at most ``size`` points (all n at once for None)."""
+    size = size or n
+    return [(k, min(n, k + size)) for k in range(0, n, size)]
 
 
 class StarBounds(NamedTuple):
@@ -370,6 +408,13 @@ def star_discrepancy(points, bounds=False, backend="opencl", delta=None):
     work-item (de Clerck 1986 computes the 2-D case the same way; Dobkin, Eppstein and
     Mitchell 1996 bound the general case). In 1-D the known closed form is
     1/(2n) + max_i |x_(i) - (2i - 1)/(2n)|, which this gives too.
+
+    On a device without fp64 the exact value is the same double, bit for bit: each box's
+    value fl(fl(c/n) - fl(fl(t s) u)) is computed as its correctly rounded IEEE-754 bits in
+    integer arithmetic (``kernels/f64bits.h``), and since rounding is monotone the largest
+    is the double sweep's. A first pass estimates every box in float, within 2^-19 of its
+    value, and only boxes whose estimates come within twice that of the best are evaluated
+    so, which keeps the cost near the double sweep's (``kernels/star_discrepancy.cl``).
 
     References
     ----------

@@ -31,8 +31,8 @@ _build_count = 0
 CAPABILITIES = {
     "samplers": ("random.cl", "stratified.cl", "lowdiscrepancy.cl", "lattice.cl", "zsobol.cl",
                  "pmj.cl", "permutation.cl"),
-    # poisson_disk and ccvt: distances and energies in double precision (lloyd's integer
-    # kernels need 64-bit atomics instead, which runtime.require_extension checks)
+    # poisson_disk: distances in double precision; ccvt is exact integers (like lloyd's
+    # kernels it needs 64-bit atomics instead, which runtime.require_extension checks)
     "distance samplers": ("dart_throwing.cl", "ccvt.cl"),
     "spectra": ("spectrum.cl", "nufft.cl"),
     # without double precision (precision="float-float")
@@ -42,6 +42,8 @@ CAPABILITIES = {
     "experiments in float-float": ("experiments_ff.cl",),
     # comparisons only: exact on every device (bit patterns where there is no fp64)
     "certified star-discrepancy bounds": ("anchored_counts.cl",),
+    # the fp64 result's bits in integer arithmetic
+    "exact star discrepancy": ("star_discrepancy.cl",),
     "metrics": ("discrepancy.cl", "star_discrepancy.cl", "anchored_counts.cl", "neighbors.cl"),
     "experiments": ("integrands.cl", "fused_integrals.cl", "families.cl"),
     "render": ("render.cl",),

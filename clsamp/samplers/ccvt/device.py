@@ -95,12 +95,15 @@ def ccvt_device(sites, points, members, iterations, callback=None, fused=None, t
     Raises
     ------
     NoDeviceError
-        The current device has no fp64.
+        The current device lacks 64-bit integer atomics (``cl_khr_int64_base_atomics``: the
+        energy totals) or stops long loops (llvmpipe). fp64 is not needed: every quantity,
+        the pruning bounds included, is an exact integer (``kernels/ccvt.h``).
     """
     import pyopencl as cl
     import pyopencl.array as cla
     from tqdm import tqdm
-    runtime.require_fp64()
+    runtime.require_extension("cl_khr_int64_base_atomics", "ccvt")
+    runtime.require_short_loops("ccvt")
     q = runtime.queue()
     r, n, p = members.shape
     if fused is None:

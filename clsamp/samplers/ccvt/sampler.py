@@ -200,7 +200,10 @@ class CCVTSampler(OptimizerSampler):
     the buckets that can hold a candidate; pairs that cannot have changed since they last
     met are skipped. Every skip is exact: the NumPy reference, which reads everything,
     gives the same bits. Positions are integers on the 2^22 torus of
-    :mod:`clsamp.geometry.integer_torus`.
+    :mod:`clsamp.geometry.integer_torus`, and so is everything computed on them, the
+    bounds that skip included (integer upper bounds: radii rounded up by an exact integer
+    square root), so a device without fp64 gives the same bits; the device needs 64-bit
+    integer atomics (the energy totals) instead.
 
     *Density.* A site owns exactly p density points, so its cell's true area is the area
     those p points cover. With i.i.d. points that is a random count (relative spread
@@ -238,6 +241,9 @@ class CCVTSampler(OptimizerSampler):
 
     info = CCVTInfo
     rates = {"best": Rate(-3.0, PILLEBOUE), "worst": Rate(-1.5, PILLEBOUE)}
+    # exact integers on the torus, the pruning bounds too (kernels/ccvt.h): 64-bit atomics,
+    # no double
+    needs_fp64 = False
 
     def __init__(self, d=2, seed=0, points_per_site=1024, iterations=1000, backend="opencl",
                  density="jittered", relax=0, progress=True):

@@ -1,0 +1,187 @@
+"""The digital-net cubature's transform, butterfly, wavenumber ordering and bound terms on the
+device (``kernels/walsh.cl``), for :class:`clsamp.cubature.Cubature`.
+
+Once the host's state is loaded, the coefficients (in wavenumber order) and the ordering
+stay on the device from one doubling to the next, in arrays with room to grow; a doubling
+uploads the new values, transforms them, combines them with the coefficients already
+there in place, reorders the wavenumbers and reads back only the 2^(m-r-1) terms of the
+bound. The kernels do the NumPy twin's operations
+(:func:`clsamp.cubature.walsh_coefficients`, ``Cubature.step``, ``_order_wavenumbers``) in
+the same order: the same bits.
+"""
+
+import numpy as np
+
+from . import runtime
+
+
+class DeviceWalsh:
+    """The Walsh coefficients of a digital-net rule and their wavenumber ordering, on the
+    current device (fp64).
+
+    Parameters
+    ----------
+    limit : int, optional
+        The most coefficients the rule will hold (its ``max_n``): the arrays grow 4x at a
+        time, never past it.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clsamp.cubature import walsh_coefficients
+    >>> from clsamp.cubature_device import DeviceWalsh
+    >>> state = DeviceWalsh()
+    >>> state.load(walsh_coefficients(np.array([1.0, 2.0])), np.arange(2))
+    >>> state.double(np.array([3.0, 4.0]), 0)
+    >>> state.coefficients().tolist()
+    [2.5, -0.5, -1.0, 0.0]
+    >>> walsh_coefficients(np.array([1.0, 2.0, 3.0, 4.0])).tolist()
+    [2.5, -0.5, -1.0, 0.0]
+    """
+
+    def __init__(self, limit=None):
+        runtime.require_fp64()
+        self.q = runtime.queue()
+        self.limit = limit
+        self.n = 0
+        self.a = self.kappa = self.t = None     # a[i] = c[kappa[i]], room for 2 n or more
+
+    @staticmethod
+    def _kernel(name):
+        return runtime.kernel("walsh.cl", name)
+
+    def transform(self, y, out=None):
+        """The discrete Walsh coefficients of values, on the device.
+
+        Parameters
+        ----------
+        y : ndarray of float64
+            On the host, length a power of 2, in the net's natural order.
+        out : pyopencl.array.Array, optional
+            Room for them (float64, at least ``y.size``).
+
+        Returns
+        -------
+        pyopencl.array.Array of float64
+            :func:`clsamp.cubature.walsh_coefficients` of ``y``, bit for bit (its passes), in
+            the first ``y.size`` entries.
+        """
+        import pyopencl as cl
+        import pyopencl.array as cla
+        n = y.size
+        y = np.ascontiguousarray(y, dtype=np.float64)
+        t = out if out is not None else cla.empty(self.q, n, np.float64)
+        cl.enqueue_copy(self.q, t.data, y)
+        h = 1
+        while h < n:
+            if 4 * h <= n:
+                self._kernel("walsh_radix4")(self.q, (n // 4,), None, t.data, np.uint32(h))
+                h *= 4
+            else:
+                self._kernel("walsh_radix2")(self.q, (n // 2,), None, t.data, np.uint32(h))
+                h *= 2
+        self._kernel("walsh_scale")(self.q, (n,), None, t.data, np.float64(1.0 / n))
+        return t
+
+    def _order(self, top, bottom, m):
+        for level in range(top, bottom, -1):
+            nl = 2**level
+            # nl - 1 work-items padded to whole groups (an odd count leaves PoCL groups of a few)
+            local = min(nl, runtime.local_size(64))
+            self._kernel("walsh_order")(self.q, (-(-(nl - 1) // local) * local,), (local,),
+                                        self.kappa.data, self.a.data, np.uint32(nl),
+                                        np.uint32(2**m // (2 * nl)))
+
+    def _room(self, size):
+        """Arrays for ``size`` coefficients, the ones held kept (grown 4x at a time: each
+        growth is a copy, and fresh memory costs its first touch)."""
+        import pyopencl as cl
+        import pyopencl.array as cla
+        if self.a is not None and self.a.size >= size:
+            return
+        room = max(size, 4 * (self.a.size if self.a is not None else 0))
+        if self.limit is not None:
+            room = max(size, min(room, self.limit))
+        a, kappa = cla.empty(self.q, room, np.float64), cla.empty(self.q, room, np.uint32)
+        if self.n:
+            cl.enqueue_copy(self.q, a.data, self.a.data, byte_count=8 * self.n)
+            cl.enqueue_copy(self.q, kappa.data, self.kappa.data, byte_count=4 * self.n)
+        self.a, self.kappa = a, kappa
+        self.t = cla.empty(self.q, room // 2, np.float64)
+
+    def load(self, coefficients, kappa):
+        """Take over a state made on the host.
+
+        Parameters
+        ----------
+        coefficients : ndarray of float64
+            The Walsh coefficients of the first 2^m values.
+        kappa : ndarray of int
+            Their wavenumber ordering.
+        """
+        import pyopencl as cl
+        kappa = np.asarray(kappa)
+        self.n = 0
+        self._room(2 * kappa.size)
+        cl.enqueue_copy(self.q, self.a.data, np.ascontiguousarray(coefficients[kappa], dtype=np.float64))
+        cl.enqueue_copy(self.q, self.kappa.data, np.ascontiguousarray(kappa, dtype=np.uint32))
+        self.n = kappa.size
+
+    def double(self, y, bottom):
+        """Add the values of the next n points (n: the points so far).
+
+        Parameters
+        ----------
+        y : ndarray of float64
+            The values of points n .. 2n - 1 (host).
+        bottom : int
+            After the doubling's butterfly the ordering runs from level m - 1 down to
+            ``bottom`` + 1 (2^m = 2n).
+        """
+        n = self.n
+        if y.size != n:
+            raise ValueError(f"a doubling of {n} values, got {y.size}")
+        self._room(2 * n)
+        t = self.transform(y, self.t)
+        self._kernel("walsh_double")(self.q, (n,), None, self.a.data, t.data, self.kappa.data,
+                                     np.uint32(n))
+        self.n = 2 * n
+        m = self.n.bit_length() - 1
+        self._order(m - 1, bottom, m)
+
+    def terms(self, low):
+        """The terms of the error bound.
+
+        Parameters
+        ----------
+        low : int
+            2^(m-r-1).
+
+        Returns
+        -------
+        ndarray of float64
+            |c[kappa[low + i]]| for i < low, on the host (the bound sums them in NumPy).
+        """
+        return np.abs(self.a[low:2 * low].get())
+
+    def coefficients(self):
+        """The coefficients.
+
+        Returns
+        -------
+        ndarray of float64
+            On the host, in wavenumber order 0 .. 2^m - 1.
+        """
+        out = np.empty(self.n)
+        out[self.ordering()] = self.a[:self.n].get()
+        return out
+
+    def ordering(self):
+        """The wavenumber ordering.
+
+        Returns
+        -------
+        ndarray of int64
+            On the host.
+        """
+        return self.kappa[:self.n].get().astype(np.int64)
