@@ -20,8 +20,8 @@
  *
  * integrand_error_sums_ff: grid (groups * local, realizations), work-group (local, 1),
  * local a power of two; group g sums f(x_i) - integral over points g slice .. (g + 1)
- * slice - 1 (slice = per_item local, per_item <= 64 points a work-item, strided), then a tree of
- * float-float additions in local memory; out (realizations, groups) float2.
+ * slice - 1 (slice = per_item local: at most 64 points a work-item, strided), then a tree
+ * of float-float additions in local memory; out (realizations, groups) float2.
  * family_error_sums_ff: grid (members, realizations, chunks); each work-item sums its
  * member over `chunk` points (a multiple of 64: 2^16, fewer where the device limits a
  * work-item's loops) in blocks of 64 and superblocks of 64 blocks; out (realizations,
@@ -204,7 +204,8 @@ inline float2 integrand_ff(const float2 *x, const ulong *bits, __global const fl
         s = ff2_add(s, ff2_mul(x[j], p[1 + j]));
     return (float2)(ff2_less(s, p[0]) ? 1.0f : 0.0f, 0.0f);
 #elif INTEGRAND == PMJ_DISK
-    return (float2)(ff2_less(ff2_add(ff2_mul(x[0], x[0]), ff2_mul(x[1], x[1])), c[C_2_PI]) ? 1.0f : 0.0f, 0.0f);
+    const float2 q = ff2_add(ff2_mul(x[0], x[0]), ff2_mul(x[1], x[1]));
+    return (float2)(ff2_less(q, c[C_2_PI]) ? 1.0f : 0.0f, 0.0f);
 #elif INTEGRAND == PMJ_GAUSSIAN
     return ff2_exp0(-ff2_add(ff2_mul(x[0], x[0]), ff2_mul(x[1], x[1])), c);
 #elif INTEGRAND == PMJ_BILINEAR
