@@ -25,6 +25,7 @@ import copy
 import numpy as np
 
 from . import runtime
+from .experiments_ff import FamilyKernelFF, IntegrandKernelFF
 from .families import FamilyKernel, errors_numpy
 from .geometry import torus
 from .integrand_kernel import IntegrandKernel, combine_sums
@@ -42,12 +43,13 @@ class _Estimator:
     """What both estimators share: the sampler, the experiment's flags, and the kernel,
     built on first use and never pickled (a task carries the estimator to a worker)."""
 
-    def __init__(self, sampler, target, homogenize, seed, backend):
+    def __init__(self, sampler, target, homogenize, seed, backend, precision="double"):
         self.sampler = sampler
         self.target = target
         self.homogenize = bool(homogenize)
         self.seed = seed
         self.backend = backend
+        self.precision = precision
         self._kernel = None
 
     def __getstate__(self):
@@ -89,13 +91,17 @@ class IntegrandErrors(_Estimator):
     seed : int
         Seed of the homogenizing shifts.
     backend : {"opencl", "numpy"}
+    precision : {"double", "float-float"}
+        What the OpenCL path computes in (:mod:`clsamp.experiments_ff` for float-float,
+        within :func:`clsamp.experiments_ff.error_bound` of the fp64 errors).
     """
 
     width = 1            # errors per realization
     cost = 1             # work of a point, in units of one point's generation
 
     def _make_kernel(self):
-        return IntegrandKernel(self.target, self.homogenize, self.seed)
+        make = IntegrandKernelFF if self.precision == "float-float" else IntegrandKernel
+        return make(self.target, self.homogenize, self.seed)
 
     def block(self, n, lo, hi):
         """The errors of realizations lo .. hi - 1 at n, which do not depend on the block.
@@ -135,7 +141,8 @@ class FamilyErrors(_Estimator):
         return 1 + self.target.members / 100
 
     def _make_kernel(self):
-        return FamilyKernel(self.target, self.homogenize, self.seed)
+        make = FamilyKernelFF if self.precision == "float-float" else FamilyKernel
+        return make(self.target, self.homogenize, self.seed)
 
     def block(self, n, lo, hi):
         """Every member's errors, shape (hi - lo, members); see :meth:`IntegrandErrors.block`."""

@@ -26,6 +26,8 @@ import numpy as np
 from . import runtime
 from .cubature import M_MIN, Cubature, check_periodization, combine
 from .errors import InvalidArgumentError
+from .experiments_ff import IntegrandKernelFF
+from .float_float import check_precision
 from .fused import FusedRule, fused_randomization
 from .integrand_kernel import IntegrandKernel, combine_sums, offset
 from .integrands import Integrand, make_integrand
@@ -167,7 +169,7 @@ def _guaranteed(f, d, method, periodization, abs_tol, rel_tol, max_n, seed, prog
 
 def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**24, replications=16,
               confidence=0.95, seed=0, n_start=1024, progress=True, method="replications",
-              periodization=None):
+              periodization=None, precision=None):
     """The integral of ``f`` over [0, 1)^d, with a confidence interval, to a tolerance.
 
     Parameters
@@ -216,6 +218,13 @@ def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**2
     periodization : {"none", "baker", "sidi"}, optional
         ``method="lattice"`` only: integrate f(ψ(x)) prod ψ'(x_j) with Baker's tent
         (the default) or Sidi's sin^2 transform, or f itself (``"none"``).
+    precision : {"double", "float-float"}, optional
+        What the device evaluates and sums an :mod:`clsamp.integrands` integrand in;
+        default ``"double"`` where the device has fp64, ``"float-float"`` where it has not.
+        Float-float (``method="replications"`` only) evaluates it at the sampler's points,
+        never in the fused kernel, each replication's mean within
+        :func:`clsamp.experiments_ff.error_bound` of the fp64 one. A Python callable is
+        evaluated in float64 on the host either way.
 
     Returns
     -------
@@ -224,9 +233,12 @@ def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**2
     Raises
     ------
     InvalidArgumentError
-        No tolerance or a non-positive one; a deterministic sampler; an unknown method or
-        periodization; ``f`` returning the wrong shape, NaN or infinities (the message
-        says which and where).
+        No tolerance or a non-positive one; a deterministic sampler; an unknown method,
+        periodization or precision; ``f`` returning the wrong shape, NaN or infinities
+        (the message says which and where); float-float with an integrand and ``method=
+        "digital" | "lattice"``, or with an integrand written in OpenCL C.
+    NoDeviceError
+        ``precision="double"`` on a device without fp64.
 
     Notes
     -----
@@ -253,6 +265,11 @@ def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**2
     if abs_tol == 0.0 and rel_tol == 0.0:
         raise InvalidArgumentError("give 'abs_tol' or 'rel_tol' (or both): the half-width to reach")
     max_n = check_int(max_n, "max_n", minimum=2)
+    precision = check_precision(precision)
+    if method != "replications" and precision == "float-float" and isinstance(f, (str, Integrand)):
+        raise InvalidArgumentError(
+            f"'method' {method!r} evaluates an integrand in double (its fused kernel); in "
+            "float-float (the default on a device without fp64) use method='replications'")
     if method != "replications":
         return _guaranteed(f, d, method, periodization, abs_tol, rel_tol, max_n, check_seed(seed),
                            progress, t0)
@@ -281,7 +298,9 @@ def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**2
             raise InvalidArgumentError(
                 f"integrand {integrand.name!r} is {integrand.d}-dimensional, 'd' is {d}")
         fused = fused_randomization(sampler) if isinstance(sampler, str) else None
-        if fused is not None:           # its points made in the kernel that evaluates f
+        if precision == "float-float":
+            kernel = IntegrandKernelFF(integrand, False, seed)
+        elif fused is not None:         # its points made in the kernel that evaluates f
             kernel = FusedRule(integrand, "sobol", seed, fused)
         else:
             kernel = IntegrandKernel(integrand, False, seed)

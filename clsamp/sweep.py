@@ -11,6 +11,8 @@ import numpy as np
 from . import families, parallel, runtime
 from .errors import InvalidArgumentError
 from .estimates import FamilyErrors, IntegrandErrors, errors_block
+from .experiments_ff import check_target
+from .float_float import check_precision
 from .integrands import Integrand, make_integrand
 from .results import ConvergenceResult, FamilyResult
 from .samplers import Sampler, make_sampler
@@ -23,7 +25,7 @@ __all__ = ["convergence", "parse_ns", "sampler_rates"]
 
 
 def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed=0, progress=True,
-                backend="opencl", members=None, client=None, checkpoint=None):
+                backend="opencl", members=None, client=None, checkpoint=None, precision=None):
     """MSE, bias^2 and variance of a sampler's integral estimates for every n in ``ns``;
     over a family of integrands, the spread of the MSE across its members.
 
@@ -65,6 +67,13 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
     checkpoint : str or Path, optional
         A folder that keeps every finished block; calling again with the same sweep
         resumes from it (with or without a client).
+    precision : {"double", "float-float"}, optional
+        What the device computes the errors in; default ``"double"`` where the device has
+        fp64, ``"float-float"`` where it has not (:mod:`clsamp.experiments_ff`: every
+        error e_k within :func:`clsamp.experiments_ff.error_bound` of the fp64 one, about
+        1e-12 of the integrand's scale; an integrand written in OpenCL C has no
+        float-float form; the result's ``device`` ends in ``" (float-float)"``). The NumPy
+        backend computes in float64 whatever it says.
 
     Returns
     -------
@@ -78,7 +87,9 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
     InvalidArgumentError
         Empty or repeated ``ns``; an n the sampler cannot make (naming the sampler and
         the nearest valid n); ``realizations`` < 2; an unknown integrand (listing the
-        known ones); dimensions that do not match.
+        known ones); dimensions that do not match; an unknown ``precision``.
+    NoDeviceError
+        ``precision="double"`` on a device without fp64.
 
     Notes
     -----
@@ -100,7 +111,11 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
     r = check_int(realizations, "realizations", minimum=2, maximum=MAX_UINT32)
     if not isinstance(homogenize, (bool, np.bool_)):
         raise InvalidArgumentError(f"'homogenize' must be True or False, got {homogenize!r}")
+    precision = check_precision(precision, backend)
     estimator, label = _estimator(sampler, integrand, seed, backend, members, homogenize)
+    estimator.precision = precision
+    if precision == "float-float" and backend == "opencl":
+        check_target(estimator.target)
     s = estimator.sampler
     values = _check_ns(ns, s, label)
     what = f"{r} realizations x {estimator.width} members" if estimator.width > 1 else f"{r} realizations"
@@ -242,6 +257,8 @@ def _result(estimator, label, values, errors, seconds, r):
     traits = {"smooth": bool(f.smooth and (f.periodic or not homogenize)), "periodic": f.periodic,
               "edges": edges}
     device = str(runtime.current_device()) if estimator.backend == "opencl" else "numpy"
+    if estimator.backend == "opencl" and estimator.precision == "float-float":
+        device += " (float-float)"
     common = dict(ns=values, errors=errors, seconds=seconds, realizations=r, d=f.d,
                   homogenize=homogenize, seed=estimator.seed, backend=estimator.backend,
                   device=device, kind=s.label, traits=traits, rates=sampler_rates(s))

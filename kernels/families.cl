@@ -16,6 +16,7 @@
 #include "torus.h"
 #include "two_sum.h"
 #include "inline_builtins.h"
+#include "experiment_codes.h"
 
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -26,11 +27,6 @@
 #error "FAMILY must be defined"
 #endif
 
-#define GAUSSIANS 0
-#define HEAVISIDES 1
-#define DISKS 2
-#define BOXES 3
-#define CLIPPED 4
 
 typedef double4 vec;
 

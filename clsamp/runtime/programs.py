@@ -40,6 +40,7 @@ CAPABILITIES = {
     "spectra in float-float": ("spectrum_ff.cl",),
     "discrepancies in float-float": ("discrepancy_ff.cl",),
     "pair correlation and nearest neighbours in float-float": ("neighbors_ff.cl",),
+    "experiments in float-float": ("experiments_ff.cl",),
     # comparisons only: exact on every device (bit patterns where there is no fp64)
     "certified star-discrepancy bounds": ("anchored_counts.cl",),
     # the fp64 result's bits in integer arithmetic
