@@ -52,8 +52,8 @@ PERIODIZATIONS = ("none", "baker", "sidi")
 _ONE_BELOW = 1.0 - 2.0**-53
 CHUNK = 2**20            # points sampled and evaluated at a time
 # a digital net's state moves to the device at the doubling of this many points: below it
-# the launches cost more than the NumPy passes (docs/performance.md, "Integrands on the
-# device: fused points (issue 38)")
+# the launches cost more than the NumPy passes (docs/performance.md, "The Walsh state on
+# the device (issue 38)")
 DEVICE_FROM = 2**16
 
 __all__ = ["fudge", "walsh_coefficients", "fourier_coefficients", "Cubature", "PERIODIZATIONS"]
