@@ -1,5 +1,6 @@
 /* The digital-net cubature's state on the device: the fast Walsh transform of a doubling's
- * values, the doubling's butterfly, the wavenumber ordering and the terms of the bound.
+ * values, the doubling's butterfly and the wavenumber ordering (clsamp/cubature_device.py
+ * reads the bound's terms back from the coefficients, which it keeps in wavenumber order).
  * NumPy twin: clsamp/cubature.py (walsh_coefficients, Cubature.step, _order_wavenumbers),
  * the same operations in the same order, so the same bits (only additions, subtractions,
  * halvings, comparisons and exact scalings by powers of 2).
@@ -24,8 +25,8 @@ __kernel void walsh_radix4(__global double *y, const uint h)
     a[3 * h] = d0 - d1;
 }
 
-/* One butterfly level over bit log2(h) (radix 2), with the scaling by `scale` (1/n, a power
- * of 2: exact) folded in where `last`. Grid: n / 2. */
+/* One butterfly level over bit log2(h) (radix 2), as walsh_coefficients' reshape(-1, 2, h)
+ * pass. Grid: n / 2. */
 __kernel void walsh_radix2(__global double *y, const uint h)
 {
     const uint g = get_global_id(0);
