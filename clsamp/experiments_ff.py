@@ -36,7 +36,8 @@ the tests' sets).
 So errors are resolved down to about 1e-12·S_f (:func:`error_bound` at n = 4096: 4.4e-13
 to 7.1e-13·S_f for an indicator or a family of them, 5e-13 to 1.2e-11·S_f for the smooth
 integrands and families up to 8-D, Keister's 9e-12·S_f in 2-D to 2.7e-10·S_f in 64-D;
-measured errors are 1e-3 to 1e-4 of these, docs/performance.md). The float-float MSE, a
+docs/performance.md, "Convergence experiments in float-float (issue 39)", sets these
+beside the measured errors). The float-float MSE, a
 mean of e_k², is within 2·B·sqrt(MSE) + B² of the fp64 one (B the bound), so an MSE of
 1e-12·S_f² (a good sampler at large n) keeps about six correct digits; where the rms
 error falls to 10·B (an MSE near 1e-22·S_f²) one digit is left, and below B none.

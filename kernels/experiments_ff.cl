@@ -177,9 +177,9 @@ inline float2 integrand_ff(const float2 *x, const ulong *bits, __global const fl
                            __global const float2 *c)
 {
 #if INTEGRAND == GAUSSIAN
-    /* images at |w|, 1 - |w|, 1 + |w|: E0 (1 + B + exp(2s) / B), as the fp64 kernel; where
-     * exp(2s) is below float's range (sigma < 0.076) the far image, at most exp(s) <
-     * e^-43, is left out */
+    /* the images at |w|, 1 - |w| and 1 + |w| sum to E0 (1 + B + exp(2s) / B), the fp64
+     * kernel's form; where exp(2s) underflows float (sigma < 0.076) the far image, below
+     * exp(s) < e^-43, is dropped */
     const float2 s = p[0], e2s = p[1 + DIM];
     float2 f = (float2)(1.0f, 0.0f);
     for (int j = 0; j < DIM; ++j) {

@@ -46,9 +46,9 @@ def defines(d=2):
 
 def site_grid_size(n, d=2):
     """Cells per axis of the site grid: the largest power of two G with G^d <= n (1 to 2^d
-    sites a cell); a power of two makes every cell exactly 2^BITS / G wide. (In 3-D and 4-D
-    a finer grid was slower: the 3^d cells around a point cost more to visit than their
-    sites to test.)
+    sites a cell); a power of two makes every cell exactly 2^BITS / G wide. A finer grid
+    costs more in visiting the 3^d cells around a point than it saves in sites to test
+    (docs/performance.md, "Lloyd in 3-D and 4-D (issue 37)").
 
     Parameters
     ----------
