@@ -37,12 +37,3 @@ __kernel void f64bits_ops(__global const ulong *x, __global const ulong *y,
     o[14] = f64_from_int(torus_closer_bits(p, q, 2, o[10]));
     o[15] = f64_from_int(torus_closer_bits(p, q, 2, f64_next_up(o[10])));
 }
-
-/* Per i: x[i] - y[i] for x[i] >= y[i]. */
-__kernel void f64bits_sub(__global const ulong *x, __global const ulong *y, __global ulong *out,
-                          const uint n)
-{
-    const uint i = get_global_id(0);
-    if (i < n)
-        out[i] = f64_sub(x[i], y[i]);
-}

@@ -177,14 +177,7 @@ __kernel void fused_integrals(const uint n, const uint start, const uint realiza
         sum = s;
         err = err + e;
 #else
-        __global double *values = (__global double *)out;
-        values[k0] = v.s0;
-        if (k0 + 1u < end)
-            values[k0 + 1u] = v.s1;
-        if (k0 + 2u < end)
-            values[k0 + 2u] = v.s2;
-        if (k0 + 3u < end)
-            values[k0 + 3u] = v.s3;
+        integrand_store4((__global double *)out, k0, end, v);
 #endif
     }
 #if FUSED_SUMS

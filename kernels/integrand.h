@@ -154,6 +154,18 @@ inline double2 dd_add(double2 a, double2 b)
     return (double2)(hi, e - (hi - s));
 }
 
+/* The four lanes of v to out[i .. i + 3], those below end (i < end). */
+inline void integrand_store4(__global double *out, const uint i, const uint end, const vec v)
+{
+    out[i] = v.s0;
+    if (i + 1u < end)
+        out[i + 1u] = v.s1;
+    if (i + 2u < end)
+        out[i + 2u] = v.s2;
+    if (i + 3u < end)
+        out[i + 3u] = v.s3;
+}
+
 /* A work-group's double-double total of its lanes' (sum, err) pairs (per-lane TwoSum
  * sums, Ogita, Rump and Oishi's Sum2), added in a fixed tree in local memory: the order
  * depends on the local size only. scratch holds a double2 per work-item. */

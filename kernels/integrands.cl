@@ -101,12 +101,5 @@ __kernel void integrand_values(__global const double *points, const uint n,
     for (int j = 0; j < DIM; ++j)
         x[j] = (vec)(points[(size_t)i * DIM + j], points[(size_t)i1 * DIM + j],
                      points[(size_t)i2 * DIM + j], points[(size_t)i3 * DIM + j]);
-    const vec v = integrand(x, params);
-    out[i] = v.s0;
-    if (i + 1u < n)
-        out[i + 1u] = v.s1;
-    if (i + 2u < n)
-        out[i + 2u] = v.s2;
-    if (i + 3u < n)
-        out[i + 3u] = v.s3;
+    integrand_store4(out, i, n, integrand(x, params));
 }
