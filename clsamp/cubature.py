@@ -171,8 +171,9 @@ class Cubature:
     d : int
         The dimension.
     method : {"digital", "lattice"}
-        A Sobol' sequence (Joe-Kuo) with Matoušek's linear matrix scrambling and a digital
-        shift (``make_sampler("sobol", randomize="lms+shift")``, qmcpy's default) and Walsh
+        A Sobol' net (Joe-Kuo) in natural order with Matoušek's linear matrix scrambling and
+        a digital shift (``make_sampler("digital_net", randomize="lms+shift")``, qmcpy's
+        ``DigitalNetB2`` default; the points of ``sobol:lms+shift``, reordered) and Walsh
         coefficients, or a shifted rank-1 lattice in
         radical-inverse order (``make_sampler("lattice", randomize="shift")``, Kuo's
         vector) and Fourier coefficients.
@@ -204,7 +205,8 @@ class Cubature:
     def __init__(self, values, d, method, seed, periodization="none", block=None, device=None,
                  max_n=None):
         if method == "digital":
-            self.sampler = make_sampler("sobol", d=d, seed=seed, randomize="lms+shift")
+            # natural order, which the transform reads: point i is L C i xor the shift
+            self.sampler = make_sampler("digital_net", d=d, seed=seed, randomize="lms+shift")
         else:
             self.sampler = make_sampler("lattice", d=d, seed=seed, randomize="shift")
         self.values, self.method, self.periodization = values, method, periodization
@@ -243,17 +245,9 @@ class Cubature:
     def _chunk(self, start, count):
         if self.method == "lattice":
             return _periodize(self.values, self.sampler.sample(count, start=start), self.periodization)
-        # the sampler runs in Gray-code order (point p is C g(p)): natural index i sits at
-        # p = g^-1(i); an aligned block of 2^k indices maps onto an aligned block of 2^k
-        # positions (the bits above k of g^-1(i) depend on those of i only)
-        p = np.arange(start, start + count, dtype=np.uint32)
-        for s in (1, 2, 4, 8, 16):
-            p ^= p >> np.uint32(s)
-        first = int(p.min())
         with warnings.catch_warnings():     # a chunk alone is no net; the 2^m points together are
             warnings.filterwarnings("ignore", "the balance properties of", UserWarning)
-            x = self.sampler.sample(count, start=first)
-        return self.values(x[p.astype(np.int64) - first])
+            return self.values(self.sampler.sample(count, start=start))
 
     def _transform(self, y):
         return walsh_coefficients(y) if self.method == "digital" else fourier_coefficients(y)
