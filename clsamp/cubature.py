@@ -18,9 +18,9 @@ The algorithm, its constants and the wavenumber ordering are those of the author
 
 The Walsh transform, the doubling's butterfly and the wavenumber ordering of a digital net
 run on the device where it has fp64 (:mod:`clsamp.cubature_device`, the same bits as the
-NumPy here); the lattice's ``np.fft`` runs on the host. The points come from the samplers
-(on the device), or, for an integrand with a kernel, are made in the kernel that
-evaluates it (:mod:`clsamp.fused`).
+NumPy here); the lattice's spectrum is a real FFT (``scipy.fft``) of all its values on the
+host. The points come from the samplers (on the device), or, for an integrand with a
+kernel, are made in the kernel that evaluates it (:mod:`clsamp.fused`).
 
 References
 ----------
@@ -39,7 +39,6 @@ import warnings
 
 import numpy as np
 
-from . import number_theory as nt
 from . import runtime
 from .cubature_device import DeviceWalsh
 from .errors import InvalidArgumentError
@@ -129,14 +128,34 @@ def fourier_coefficients(y):
     ndarray of complex128
         (n,); entry 0 is the mean.
     """
+    half = _half_spectrum(y)
+    # the rest from the conjugate symmetry of a real sequence's transform, c_(n-k) = conj(c_k)
+    return np.concatenate([half, np.conj(half[1:y.size - y.size // 2][::-1])])
+
+
+def _half_spectrum(y):
+    """fourier_coefficients(y) for k = 0 .. n/2: a real FFT of the values in lattice order."""
+    import scipy.fft
     n = y.size
-    m = n.bit_length() - 1
-    natural = y[_bit_reverse(np.arange(n), m)]
-    return np.fft.fft(natural) / n
+    half = scipy.fft.rfft(y[_bit_reversal(n.bit_length() - 1)])
+    half *= 1.0 / n                        # exact: n is a power of 2
+    return half
 
 
-def _bit_reverse(i, m):
-    return (nt.reverse_bits32(i) >> np.uint32(32 - m)).astype(np.int64) if m else np.zeros_like(i)
+def _fourier_magnitudes(y):
+    """|fourier_coefficients(y)|, from the half spectrum (|c_(n-k)| = |c_k|)."""
+    half = np.abs(_half_spectrum(y))
+    return np.concatenate([half, half[1:y.size - y.size // 2][::-1]])
+
+
+def _bit_reversal(m):
+    """The permutation of 0 .. 2^m - 1 that reverses each index's m bits (int64)."""
+    r = np.zeros(2**m, dtype=np.int64)
+    for level in range(m):            # r_(l+1) = (2 r_l, 2 r_l + 1)
+        h = 2**level
+        r[:h] *= 2
+        np.add(r[:h], 1, out=r[h:2 * h])
+    return r
 
 
 def _order_wavenumbers(kappa, size, top, bottom, m):
@@ -147,8 +166,11 @@ def _order_wavenumbers(kappa, size, top, bottom, m):
         nl = 2**level
         flip = np.flatnonzero(size[kappa[nl + 1:2 * nl]] > size[kappa[1:nl]]) + 1
         if flip.size:
-            at = (flip[None, :] + np.arange(0, 2**m - 1, 2 * nl)[:, None]).ravel()
-            kappa[at], kappa[at + nl] = kappa[at + nl], kappa[at].copy()
+            # the same swaps in every block of 2 nl wavenumbers
+            blocks = kappa[:2**m].reshape(-1, 2 * nl)
+            held = blocks[:, flip]
+            blocks[:, flip] = blocks[:, flip + nl]
+            blocks[:, flip + nl] = held
     return kappa
 
 
@@ -156,7 +178,8 @@ def _periodize(values, x, periodization):
     if periodization == "none":
         return values(np.minimum(x, _ONE_BELOW))
     if periodization == "baker":
-        return values(np.minimum(tent(x), _ONE_BELOW))
+        y = tent(x)
+        return values(np.minimum(y, _ONE_BELOW, out=y))
     psi, weight = sidi(x, 2)
     return values(np.minimum(psi, _ONE_BELOW)) * np.prod(weight, axis=1)
 
@@ -196,10 +219,12 @@ class Cubature:
 
     Notes
     -----
-    :meth:`step` evaluates the next 2^m points (the first 2^10 on the first call),
-    updates the coefficients in O(n log n) from those of the points already seen (the
-    butterfly of the doubling, with twiddles e^(-pi i k / n) for the lattice) and
-    returns (mean, bound). See the module's references.
+    :meth:`step` evaluates the next 2^m points (the first 2^10 on the first call) and
+    returns (mean, bound). A net's Walsh coefficients are updated in O(n log n) from those
+    of the points already seen (the new half's transform and the doubling's butterfly); a
+    lattice's spectrum is one real FFT of all the values held (O(n log n) as well, and
+    cheaper than the new half's complex FFT with the doubling's twiddles). See the
+    module's references.
     """
 
     def __init__(self, values, d, method, seed, periodization="none", block=None, device=None,
@@ -212,7 +237,7 @@ class Cubature:
         self.values, self.method, self.periodization = values, method, periodization
         self.fused = block
         self.n, self.total = 0, 0.0
-        self._coefficients = self._kappa = None
+        self._coefficients = self._kappa = self._values = None
         if device is None:
             device = runtime.current_device().fp64
         self.walsh = DeviceWalsh(max_n) if device and method == "digital" else None
@@ -220,6 +245,8 @@ class Cubature:
     @property
     def coefficients(self):
         """The discrete Walsh (Fourier) coefficients of the 2^m values so far, on the host."""
+        if self.method == "lattice":
+            return fourier_coefficients(self._values)
         return self._coefficients if self._coefficients is not None else self.walsh.coefficients()
 
     @property
@@ -249,9 +276,6 @@ class Cubature:
             warnings.filterwarnings("ignore", "the balance properties of", UserWarning)
             return self.values(self.sampler.sample(count, start=start))
 
-    def _transform(self, y):
-        return walsh_coefficients(y) if self.method == "digital" else fourier_coefficients(y)
-
     def step(self):
         """Evaluate the next points (2^10 at first, then as many as are done) and bound the error.
 
@@ -262,33 +286,37 @@ class Cubature:
         """
         if self.walsh is not None and self.n >= DEVICE_FROM:
             return self._device_step()
-        if self.n == 0:
-            n = 2**M_MIN
-            y = self._block(0, n)
-            self._coefficients = self._transform(y)
-            m = M_MIN
-            self._kappa = _order_wavenumbers(np.arange(n), np.abs(self._coefficients), m - 1, 0, m)
+        first = self.n == 0
+        n = 2**M_MIN if first else self.n
+        y = self._block(self.n, n)
+        size = n if first else 2 * n
+        m = size.bit_length() - 1
+        if self.method == "lattice":
+            # the whole spectrum afresh: a real FFT of all 2^m values costs less than the
+            # new half's complex FFT and the doubling's twiddles
+            self._values = y if first else np.concatenate([self._values, y])
+            magnitudes = _fourier_magnitudes(self._values)
         else:
-            n = self.n
-            y = self._block(n, n)
-            new = self._transform(y)
-            if self.method == "lattice":
-                new = new * np.exp(-1j * np.pi * np.arange(n) / n)
-            # the doubling's butterfly, (c + new, c - new) / 2, written into one new array
-            both = np.empty(2 * n, dtype=np.result_type(self._coefficients, new))
-            np.add(self._coefficients, new, out=both[:n])
-            np.subtract(self._coefficients, new, out=both[n:])
-            both *= 0.5
-            self._coefficients = both
-            m = (2 * n).bit_length() - 1
+            new = walsh_coefficients(y)
+            if not first:
+                # the doubling's butterfly, (c + new, c - new) / 2, written into one new array
+                both = np.empty(2 * n)
+                np.add(self._coefficients, new, out=both[:n])
+                np.subtract(self._coefficients, new, out=both[n:])
+                both *= 0.5
+                new = both
+            self._coefficients = new
+            magnitudes = np.abs(new)
+        if first:
+            self._kappa = _order_wavenumbers(np.arange(n), magnitudes, m - 1, 0, m)
+        else:
             self._kappa = _order_wavenumbers(np.concatenate([self._kappa, n + self._kappa]),
-                                             np.abs(self._coefficients), m - 1, m - R_LAG - 1, m)
-            n = 2 * n
+                                             magnitudes, m - 1, m - R_LAG - 1, m)
         self.total += float(np.sum(y))
-        self.n = n
+        self.n = size
         low = 2**(m - R_LAG - 1)
-        bound = fudge(m) * float(np.sum(np.abs(self._coefficients[self._kappa[low:2 * low]])))
-        return self.total / n, bound
+        bound = fudge(m) * float(np.sum(magnitudes[self._kappa[low:2 * low]]))
+        return self.total / size, bound
 
     def _device_step(self):
         """:meth:`step` with the coefficients and the ordering on the device from the doubling
@@ -296,7 +324,7 @@ class Cubature:
         bits."""
         if self._coefficients is not None:                 # the host's state moves over once
             self.walsh.load(self._coefficients, self._kappa)
-            self._coefficients = self._kappa = None
+            self._coefficients = self._kappa = self._values = None
         y = self._block(self.n, self.n)
         n = 2 * self.n
         self.walsh.double(y, n.bit_length() - 1 - R_LAG - 1)

@@ -146,8 +146,12 @@ def tent(u):
     >>> tent([0.0, 0.25, 0.5, 0.75]).tolist()
     [0.0, 0.5, 1.0, 0.5]
     """
-    x = np.asarray(u, dtype=np.float64)
-    return 1.0 - np.abs(2.0 * x - 1.0)
+    y = np.array(u, dtype=np.float64)
+    y *= 2.0
+    y -= 1.0
+    np.abs(y, out=y)
+    np.subtract(1.0, y, out=y)
+    return y if y.ndim else y[()]
 
 
 def sidi(u, k=2):
