@@ -75,9 +75,7 @@ __kernel void gbn_pairs(__global const double *pts,
     if (gi >= total)
         return;
     const uint r = gi / n;
-    uint total_cells = 1;
-    for (int k = 0; k < D; ++k)
-        total_cells *= (uint)G;
+    const uint total_cells = cells_count(G);
     double x[D], f[D], w[D];
     for (int k = 0; k < D; ++k) {
         x[k] = pts[(size_t)gi * D + k];
@@ -88,11 +86,8 @@ __kernel void gbn_pairs(__global const double *pts,
     const double ti = t[gi];
     double width = 0.0;
 #endif
-    int c[D];                   /* the cell, as clsamp.geometry.cells.sorted_by_cell finds it */
-    for (int k = 0; k < D; ++k) {
-        const int v = (int)(x[k] * (double)G);
-        c[k] = v < G - 1 ? v : G - 1;
-    }
+    int c[D];
+    cell_of(x, G, c);
     const double inv_G = 1.0 / (double)G;
     for (uint o = 0; o < noff; ++o) {
 #if D >= 3

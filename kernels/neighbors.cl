@@ -179,9 +179,7 @@ __kernel void nearest_neighbor(__global const double *pts, __global const uint *
     if (gi >= total)
         return;
     const uint r = gi / n;
-    uint total_cells = 1;
-    for (int k = 0; k < D; ++k)
-        total_cells *= (uint)G;
+    const uint total_cells = cells_count(G);
     double x[D];
     for (int k = 0; k < D; ++k)
         x[k] = pts[(size_t)gi * D + k];

@@ -46,9 +46,7 @@ __kernel void nearest_neighbor_ff(__global const float2 *pts, __global const uin
     if (gi >= total)
         return;
     const uint r = gi / n;
-    uint total_cells = 1;
-    for (int k = 0; k < D; ++k)
-        total_cells *= (uint)G;
+    const uint total_cells = cells_count(G);
     float2 x[D];
     for (int k = 0; k < D; ++k)
         x[k] = pts[(size_t)gi * D + k];
@@ -106,9 +104,7 @@ __kernel void pcf_sums_ff(__global const float2 *pts, __global const uint *cell,
     float2 hist[NR];
     for (int k = 0; k < NR; ++k)
         hist[k] = (float2)(0.0f);
-    uint total_cells = 1;
-    for (int k = 0; k < D; ++k)
-        total_cells *= (uint)G;
+    const uint total_cells = cells_count(G);
     const uint centre = (noff - 1) / 2;
     const size_t base = (size_t)r * n;
     const uint stop = (w + 1) * PPI < n ? (w + 1) * PPI : n;

@@ -29,15 +29,6 @@
 #pragma OPENCL FP_CONTRACT OFF
 #include "cells.h"
 
-/* the cell of x as clsamp.geometry.cells.sorted_by_cell finds it */
-inline void se_cell(const double *x, const int G, int *c)
-{
-    for (int k = 0; k < D; ++k) {
-        const int v = (int)(x[k] * (double)G);
-        c[k] = v < G - 1 ? v : G - 1;
-    }
-}
-
 inline double se_r2(const double *x, __global const double *y)
 {
     double r2 = 0.0;
@@ -71,14 +62,12 @@ __kernel void se_count(__global const double *pts, __global const uint *start, c
     const uint gi = get_global_id(0);
     if (gi >= total)
         return;
-    uint total_cells = 1;
-    for (int k = 0; k < D; ++k)
-        total_cells *= (uint)G;
+    const uint total_cells = cells_count(G);
     double x[D];
     for (int k = 0; k < D; ++k)
         x[k] = pts[(size_t)gi * D + k];
     int c[D];
-    se_cell(x, G, c);
+    cell_of(x, G, c);
     uint found = 0;
     for (uint o = 0; o < noff; ++o) {
         const size_t slot = (size_t)(gi / n) * total_cells + neighbour(c, o, G);
@@ -98,14 +87,12 @@ __kernel void se_pairs(__global const double *pts, __global const uint *start, c
     const uint gi = get_global_id(0);
     if (gi >= total)
         return;
-    uint total_cells = 1;
-    for (int k = 0; k < D; ++k)
-        total_cells *= (uint)G;
+    const uint total_cells = cells_count(G);
     double x[D];
     for (int k = 0; k < D; ++k)
         x[k] = pts[(size_t)gi * D + k];
     int c[D];
-    se_cell(x, G, c);
+    cell_of(x, G, c);
     ulong at = offset[gi];
     double sum = 0.0;
     for (uint o = 0; o < noff; ++o) {
