@@ -49,7 +49,7 @@ M_MIN = 10               # the first 2^10 points (qmcpy's n_init)
 R_LAG = 4                # r: the bound sums the coefficients of wavenumbers 2^(m-r-1) .. 2^(m-r) - 1
 PERIODIZATIONS = ("none", "baker", "sidi")
 _ONE_BELOW = 1.0 - 2.0**-53
-CHUNK = 2**20            # points sampled and evaluated at a time
+CHUNK = 2**22            # coordinates sampled and evaluated at a time: 2^20 points in 3-D or 4-D
 # a digital net's state moves to the device at the doubling of this many points: below it
 # the launches cost more than the NumPy passes (docs/performance.md, "The Walsh state on
 # the device (issue 38)")
@@ -263,10 +263,11 @@ class Cubature:
 
     def _block(self, start, count):
         """f at the points start .. start + count - 1, in natural order for the transform,
-        CHUNK points at a time (count and start are multiples of a power of 2 >= the chunk)."""
+        a power of 2 of points at a time, at most CHUNK coordinates (count and start are
+        multiples of a power of 2 >= the chunk)."""
         if self.fused is not None:
             return self.fused(start, count)
-        chunk = min(count, CHUNK)
+        chunk = min(count, 1 << max(0, (CHUNK // self.sampler.d).bit_length() - 1))
         return np.concatenate([self._chunk(base, chunk) for base in range(start, start + count, chunk)])
 
     def _chunk(self, start, count):

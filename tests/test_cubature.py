@@ -78,6 +78,18 @@ def test_sampling_in_chunks_changes_nothing(method, monkeypatch):
     assert runs[0] == runs[1]
 
 
+@pytest.mark.parametrize("method", ["digital", "lattice"])
+def test_a_chunk_holds_at_most_chunk_coordinates(method, monkeypatch):
+    # in many dimensions the host holds CHUNK coordinates at a time, not 2^20 points
+    from clsamp import cubature
+    monkeypatch.setattr(cubature, "CHUNK", 2**12)
+    sizes = []
+    rule = Cubature(lambda x: sizes.append(x.shape) or np.zeros(len(x)), 100, method, 1, "none")
+    rule.step()
+    rule.step()
+    assert max(rows * d for rows, d in sizes) == 32 * 100       # 2^12 // 100 = 40 -> 32 points
+    assert sum(rows for rows, _ in sizes) == 2048
+
 def test_the_digital_points_are_in_natural_order():
     # x_(2^k) xor x_0 is column k of the generating matrix (in Gray-code order it would be
     # columns k and k - 1 together)
