@@ -46,6 +46,17 @@ def test_a_run_gives_the_same_bits_on_the_device_and_in_numpy(d, projections):
     assert np.array_equal(info.cost_history, info_r.cost_history)
 
 
+@pytest.mark.parametrize("lanes", [1, 4, 8, 16])
+def test_each_lane_width_solves_the_twins_quantiles(lanes):
+    # odd and even n, fewer quantiles than lanes, directions with dropped components
+    theta = sot.directions(5, np.arange(2), 1, 5, 4).reshape(-1, 4)
+    theta[0] = [1.0, 1e-9, 0.0, -1e-12]
+    for n in (1, 2, 7, 100, 257):
+        sl = sot.Slice.of(theta)
+        assert np.array_equal(sot._quantiles_device(sl, n, lanes=lanes),
+                              sot.quantiles_reference(sl, n))
+
+
 @pytest.mark.parametrize("d", [2, 3, 5])
 def test_the_quantiles_are_the_projected_cubes(d):
     # against the quantiles of a million uniform points projected (error ~ 1e-3), and the

@@ -266,9 +266,19 @@ def move_reference(x, theta, q, rank, proj, scale):
     return np.where(y > TOP, TOP, y), cost
 
 
-def _launch(name, d, items, *args):
+def _defines(d, lanes=None):
+    """The build options of ``kernels/sot.cl`` in ``d`` dimensions: ``sot_quantiles`` solves
+    ``lanes`` quantiles a work-item (default: the device's vector width, one on GPUs)."""
+    return {"D": d, "LANES": lanes or runtime.shape().vector_width, **DEFINES}
+
+
+def _quantile_items(K, n, lanes):
+    return K * -(-((n + 1) // 2) // lanes)
+
+
+def _launch(name, d, items, *args, lanes=None):
     """Run kernel ``name`` of ``kernels/sot.cl`` over ``items`` work-items."""
-    kernel = runtime.kernel("sot.cl", name, {"D": d, **DEFINES})
+    kernel = runtime.kernel("sot.cl", name, _defines(d, lanes))
     local = runtime.local_size(64)
     kernel(runtime.queue(), (-(-items // local) * local,), (local,), *args)
 
@@ -277,12 +287,13 @@ def _output(shape, dtype, host):
     return runtime.Output(shape, dtype, host=np.empty(shape, dtype) if host else None)
 
 
-def _quantiles_device(sl, n, host=True):
+def _quantiles_device(sl, n, host=True, lanes=None):
     K = sl.m.shape[0]
+    lanes = lanes or runtime.shape().vector_width
     out = _output((K, n), np.float64, host)
-    _launch("sot_quantiles", int(round(math.log2(sl.c.shape[1]))), K * ((n + 1) // 2),
+    _launch("sot_quantiles", int(round(math.log2(sl.c.shape[1]))), _quantile_items(K, n, lanes),
             *(runtime.to_device(a).data for a in (sl.c, sl.sign, sl.m, sl.norm, sl.total, sl.base)),
-            np.uint32(n), np.uint32(K), out.buffer)
+            np.uint32(n), np.uint32(K), out.buffer, lanes=lanes)
     return out.finish()
 
 
@@ -328,7 +339,7 @@ def _local_sort(d, items, L2, key, index, P):
     """``sot_bitonic_local`` over rows of P pairs, work-groups of L2 items, as a function of
     (kmin, kmax, jtop)."""
     import pyopencl as cl
-    kernel = runtime.kernel("sot.cl", "sot_bitonic_local", {"D": d, **DEFINES})
+    kernel = runtime.kernel("sot.cl", "sot_bitonic_local", _defines(d))
 
     def run(kmin, kmax, jtop):
         kernel(runtime.queue(), (items,), (L2,), key.data, index.data, np.uint32(P),
@@ -409,7 +420,8 @@ class _HostSortBatches:
         self.rank = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, rows * n * 4)
         self.out = _output((sets, n, d), np.float64, True)
         self.cost = _output((sets, n), np.float64, True)
-        self.kernels = {name: runtime.kernel("sot.cl", name, {"D": d, **DEFINES})
+        self.lanes = runtime.shape().vector_width
+        self.kernels = {name: runtime.kernel("sot.cl", name, _defines(d, self.lanes))
                         for name in ("sot_quantiles", "sot_rank", "sot_move")}
         self.local = runtime.local_size(64)
         self.shape = (sets, n, d, K)
@@ -430,7 +442,7 @@ class _HostSortBatches:
         slices = (sl.c, sl.sign, sl.m, sl.norm, sl.total, sl.base)
         for buffer, host in zip(self.inputs[:6], slices, strict=True):
             cl.enqueue_copy(queue, buffer, host, is_blocking=False)
-        self._launch("sot_quantiles", sets * K * ((n + 1) // 2), c, sign, m, norm, total, base,
+        self._launch("sot_quantiles", _quantile_items(sets * K, n, self.lanes), c, sign, m, norm, total, base,
                      u32(n), u32(sets * K), self.q)
         queue.flush()
         proj = project_reference(x, theta)
