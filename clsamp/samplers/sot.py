@@ -5,10 +5,12 @@ with the projective variant that optimizes chosen coordinate projections as well
 One batch is four passes -- the 1-D targets of each direction (the quantiles of the cube's
 projection), the projections of the points, their ranks, the move -- in ``kernels/sot.cl``
 on the device and in :func:`quantiles_reference`, :func:`project_reference`, a stable sort
-and :func:`move_reference` here (:func:`batch_reference`), the same bits. The ranks come
-from a bitonic sort on GPUs and from NumPy's sort on CPU devices, where it is faster; both
-order ties by index. The directions and their CDFs (:class:`Slice`) are host code both
-backends share (:func:`sot_optimize`).
+and :func:`move_reference` here (:func:`batch_reference`), the same bits. On GPUs the
+projections and a bitonic sort run on the device; on CPU devices the host, which must sort
+them anyway (NumPy's sort beats the network there), projects the points with the twin's
+code and sorts them (:class:`_HostSortBatches`); both order ties by index. The directions
+and their CDFs (:class:`Slice`) are host code both backends share, drawn for blocks of
+batches at once (:func:`sot_optimize`).
 """
 
 import dataclasses
@@ -398,10 +400,10 @@ class _HostSortBatches:
     """The batches of one run on a CPU device (``Shape.host_sort``), the same bits as
     :func:`batch_reference`.
 
-    The device buffers and kernels are made once a run (again only when the active sets
-    change) and every upload is enqueued without waiting, so a batch waits once, for its
-    moved points. The quantiles run on the device while the host projects the points (the
-    twin's :func:`project_reference`: the host holds the points and sorts their
+    The buffers and kernels, their arguments set, are made once a run (again only when the
+    active sets change); every upload is enqueued without waiting, and a batch waits once,
+    for its moved points. The quantiles run on the device while the host projects the
+    points (the twin's :func:`project_reference`: the host holds the points and sorts their
     projections, so they need not cross twice) and sorts them (:func:`_order`); the device
     turns the order into ranks (``sot_rank``) and moves the points.
     """
@@ -409,49 +411,57 @@ class _HostSortBatches:
     def __init__(self):
         self.shape = None
 
-    def _allocate(self, sets, n, d, K):
-        import pyopencl as cl
-        ctx, flags = runtime.context(), cl.mem_flags.READ_ONLY
-        rows = sets * K
-        self.inputs = [cl.Buffer(ctx, flags, size) for size in (
-            rows * 8 << d, rows * 8 << d, rows * 4, rows * 8, rows * 8, rows * 8,   # the slices
-            sets * n * d * 8, rows * d * 8, rows * n * 8, rows * n * 4)]           # x .. order
-        self.q = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, rows * n * 8)
-        self.rank = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, rows * n * 4)
-        self.out = _output((sets, n, d), np.float64, True)
-        self.cost = _output((sets, n), np.float64, True)
-        self.lanes = runtime.shape().vector_width
-        self.kernels = {name: runtime.kernel("sot.cl", name, _defines(d, self.lanes))
-                        for name in ("sot_quantiles", "sot_rank", "sot_move")}
-        self.local = runtime.local_size(64)
-        self.shape = (sets, n, d, K)
+    def _allocate(self, sets, n, d, K, scale):
+        u32, f64, rows = np.uint32, np.float64, sets * K
+        # device arrays, kept here: a kernel's arguments do not keep their buffers alive
+        self.arrays = [_output(shape, dtype, False) for shape, dtype in (
+            ((rows, 2 ** d), f64), ((rows, 2 ** d), f64), (rows, np.int32), (rows, f64),
+            (rows, f64), (rows, f64),                                            # the slices
+            ((sets, n, d), f64), ((sets, K, d), f64), ((sets, K, n), f64),       # x, theta, proj
+            ((sets, K, n), u32), ((sets, K, n), f64), ((sets, K, n), u32))]      # order, q, rank
+        self.inputs = [a.buffer for a in self.arrays[:10]]
+        q, rank = (a.buffer for a in self.arrays[10:])
+        self.out = _output((sets, n, d), f64, True)
+        self.cost = _output((sets, n), f64, True)
+        lanes = runtime.shape().vector_width
+        x, theta, proj, order = self.inputs[6:]
+        args = {"sot_quantiles": (*self.inputs[:6], u32(n), u32(rows), q),
+                "sot_rank": (order, u32(n), u32(n), u32(rows), rank),
+                "sot_move": (x, theta, q, rank, proj, u32(n), u32(K), u32(sets), f64(scale),
+                             self.out.buffer, self.cost.buffer)}
+        items = {"sot_quantiles": _quantile_items(rows, n, lanes), "sot_rank": rows * n,
+                 "sot_move": sets * n}
+        local = runtime.local_size(64)
+        self.launches = {}
+        for name, a in args.items():
+            kernel = runtime.kernel("sot.cl", name, _defines(d, lanes), instance="host-sort")
+            kernel.set_args(*a)
+            self.launches[name] = (kernel, (-(-items[name] // local) * local,), (local,))
+        self.shape = (sets, n, d, K, scale)
 
-    def _launch(self, name, items, *args):
-        size = -(-items // self.local) * self.local
-        self.kernels[name](runtime.queue(), (size,), (self.local,), *args)
+    def _launch(self, name):
+        import pyopencl as cl
+        cl.enqueue_nd_range_kernel(runtime.queue(), *self.launches[name])
 
     def __call__(self, x, theta, sl, scale):
         """One batch: :func:`batch_reference`'s (points, cost)."""
         import pyopencl as cl
         sets, n, d = x.shape
         K = theta.shape[1]
-        if self.shape != (sets, n, d, K):
-            self._allocate(sets, n, d, K)
-        queue, u32 = runtime.queue(), np.uint32
-        c, sign, m, norm, total, base, xb, thetab, projb, orderb = self.inputs
+        if self.shape != (sets, n, d, K, scale):
+            self._allocate(sets, n, d, K, scale)
+        queue = runtime.queue()
         slices = (sl.c, sl.sign, sl.m, sl.norm, sl.total, sl.base)
         for buffer, host in zip(self.inputs[:6], slices, strict=True):
             cl.enqueue_copy(queue, buffer, host, is_blocking=False)
-        self._launch("sot_quantiles", _quantile_items(sets * K, n, self.lanes), c, sign, m, norm, total, base,
-                     u32(n), u32(sets * K), self.q)
+        self._launch("sot_quantiles")
         queue.flush()
         proj = project_reference(x, theta)
         order = _order(proj).astype(np.uint32)
-        for buffer, host in ((xb, x), (thetab, theta), (projb, proj), (orderb, order)):
+        for buffer, host in zip(self.inputs[6:], (x, theta, proj, order), strict=True):
             cl.enqueue_copy(queue, buffer, host, is_blocking=False)
-        self._launch("sot_rank", sets * K * n, orderb, u32(n), u32(n), u32(sets * K), self.rank)
-        self._launch("sot_move", sets * n, xb, thetab, self.q, self.rank, projb, u32(n), u32(K),
-                     u32(sets), np.float64(scale), self.out.buffer, self.cost.buffer)
+        self._launch("sot_rank")
+        self._launch("sot_move")
         return self.out.finish(), self.cost.finish()
 
 
@@ -702,8 +712,10 @@ class SOTSampler(Sampler):
 
     Points stay in the cube [0, 1)^d (a move outside is clamped; the target measure is the
     cube's, not the torus's). Directions and each direction's vertex sums are host code; the
-    quantiles, projections, the sort (a bitonic network; NumPy's on CPU devices) and the
-    moves run on the device (``kernels/sot.cl``), and the NumPy twin gives the same bits.
+    quantiles (in vector lanes on CPUs) and the moves run on the device
+    (``kernels/sot.cl``), as do the projections and the sort (a bitonic network) on GPUs;
+    CPU devices project and sort on the host (NumPy's sort). The NumPy twin gives the same
+    bits.
 
     References
     ----------
