@@ -13,7 +13,8 @@
  * q_(n-1-i) = base + (total - t_i); an odd n's middle is base + total / 2. The solver is
  * Newton's step kept inside a bisection bracket (Numerical Recipes' rtsafe), stopped when
  * Newton's step (taken) or the step made is at most QTOL total, or after QMAX steps.
- * Launch: grid (directions, n / 2) as one axis, directions * ((n + 1) / 2) work-items.
+ * A work-item solves LANES consecutive quantiles of one direction in vector lanes.
+ * Launch: directions * ceil(((n + 1) / 2) / LANES) work-items.
  *
  * sot_project: proj[set, k, i] = sum_j theta[set, k, j] x[set, i, j], j in order.
  * Launch: one work-item per (set, k, i).
@@ -35,72 +36,106 @@
  * rank[row, index[row, j]] = j for j < n. Lexicographic order on distinct (key, index)
  * pairs is total, so the sorted order is unique: the same as the stable sort's.
  *
- * Build options: D (dimensions), QTOL, QMAX.
+ * Build options: D (dimensions), QTOL, QMAX, LANES (sot_quantiles; 1, 4, 8 or 16).
  */
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #pragma OPENCL FP_CONTRACT OFF
 
 #define VERTS (1 << D)
 
+/* LANES quantiles of one direction a work-item, in vector lanes (1, 4, 8 or 16): each lane
+ * runs the scalar solver's operations on its own quantile (a comparison a mask of -1 or 0,
+ * a branch a select), and stops changing once its own test stops it. Operators only (no
+ * built-in function takes a vector: PoCL warns where a call passes double8 without
+ * AVX-512); |x| compared is x or -x, which compares as fabs(x) does. */
+#define CAT_(a, b) a##b
+#define CAT(a, b) CAT_(a, b)
+#define SEL(a, b, c) ((c) ? (b) : (a))
+#define ABS(x) ((x) < 0.0 ? -(x) : (x))
+#define OR2(x) ((x).lo | (x).hi)
+#if LANES == 1
+typedef double real_v;
+typedef long mask_v;
+#define MASK(c) ((c) ? -1L : 0L)
+#define ANY(live) ((live) != 0)
+#define LANE_INDEX 0.0
+#else
+typedef CAT(double, LANES) real_v;
+typedef CAT(long, LANES) mask_v;
+#define MASK(c) (c)
+#if LANES == 4
+#define LANE_INDEX ((real_v)(0.0, 1.0, 2.0, 3.0))
+#define ANY(live) (OR2(OR2(live)) != 0)
+#elif LANES == 8
+#define LANE_INDEX ((real_v)(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0))
+#define ANY(live) (OR2(OR2(OR2(live))) != 0)
+#else
+#define LANE_INDEX ((real_v)(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 11.0, \
+                             12.0, 13.0, 14.0, 15.0))
+#define ANY(live) (OR2(OR2(OR2(OR2(live)))) != 0)
+#endif
+#endif
+
 __kernel void sot_quantiles(__global const double *c, __global const double *sign,
                             __global const int *m_of, __global const double *norm_of,
                             __global const double *total_of, __global const double *base_of,
                             const uint n, const uint dirs, __global double *q)
 {
-    const uint nh = (n + 1) / 2;
+    const uint nh = (n + 1) / 2, groups = (nh + LANES - 1) / LANES;
     const uint gid = get_global_id(0);
-    if (gid >= dirs * nh)
+    if (gid >= dirs * groups)
         return;
-    const uint k = gid / nh, i = gid % nh;
+    const uint k = gid / groups, i0 = (gid % groups) * LANES;
     const double total = total_of[k], base = base_of[k], norm = norm_of[k];
     __global double *row = q + (size_t)k * n;
-    if (2 * i + 1 == n) {
-        row[i] = base + total * 0.5;
-        return;
-    }
     const int m = m_of[k];
     const uint nv = 1u << m;
     __global const double *ck = c + (size_t)k * VERTS;
     __global const double *sk = sign + (size_t)k * VERTS;
-    const double p = ((double)i + 0.5) / (double)n;
-    double lo = 0.0, hi = total * 0.5;
-    double t = hi * 0.5, dx_old = hi;
-    for (int it = 0; it < QMAX; ++it) {
-        double F = 0.0, dF = 0.0;
+    const real_v i = (double)i0 + LANE_INDEX;
+    const real_v p = (i + 0.5) / (double)n;
+    const double tol = QTOL * total;
+    real_v lo = 0.0, hi = total * 0.5;
+    real_v t = hi * 0.5, dx_old = hi;
+    /* the lanes past the half and an odd n's middle solve nothing */
+    mask_v live = MASK(i < (double)nh) & MASK(2.0 * i + 1.0 != (double)n);
+    for (int it = 0; it < QMAX && ANY(live); ++it) {
+        real_v F = 0.0, dF = 0.0;
         for (uint v = 0; v < nv; ++v) {
-            const double u = t - ck[v];
-            if (u > 0.0) {
-                double w = 1.0;
-                for (int j = 1; j < m; ++j)
-                    w = w * u;
-                F = F + sk[v] * (w * u);
-                dF = dF + sk[v] * w;
-            }
+            const real_v u = t - ck[v];
+            real_v w = 1.0;
+            for (int j = 1; j < m; ++j)
+                w = w * u;
+            const mask_v on = MASK(u > 0.0);
+            F = SEL(F, F + sk[v] * (w * u), on);
+            dF = SEL(dF, dF + sk[v] * w, on);
         }
-        const double f = F * norm - p;
-        const double df = dF * norm * (double)m;
-        if (f < 0.0)
-            lo = t;
-        else
-            hi = t;
-        const double tn = t - f / df;
-        if (df > 0.0 && fabs(tn - t) <= QTOL * total) {
-            t = tn;
-            break;
-        }
-        double next;
-        if (df > 0.0 && tn > lo && tn < hi && fabs(tn - t) < 0.5 * fabs(dx_old))
-            next = tn;
-        else
-            next = lo + (hi - lo) * 0.5;
-        const double dx = next - t;
-        dx_old = dx;
-        t = next;
-        if (fabs(dx) <= QTOL * total)
-            break;
+        const real_v f = F * norm - p;
+        const real_v df = dF * norm * (double)m;
+        const mask_v below = MASK(f < 0.0);
+        const real_v lo_t = SEL(lo, t, below), hi_t = SEL(t, hi, below);
+        const real_v tn = t - f / df, step = tn - t;
+        const mask_v done = MASK(df > 0.0) & MASK(ABS(step) <= tol);
+        const mask_v newton = MASK(df > 0.0) & MASK(tn > lo_t) & MASK(tn < hi_t)
+                              & MASK(ABS(step) < 0.5 * ABS(dx_old));
+        const real_v next = SEL(lo_t + (hi_t - lo_t) * 0.5, tn, newton);
+        const real_v dx = next - t;
+        t = SEL(t, SEL(next, tn, done), live);
+        lo = SEL(lo, lo_t, live);
+        hi = SEL(hi, hi_t, live);
+        dx_old = SEL(dx_old, dx, live);
+        live = live & ~done & ~MASK(ABS(dx) <= tol);
     }
-    row[i] = base + t;
-    row[n - 1 - i] = base + (total - t);
+    const double *tl = (const double *)&t;
+    for (uint l = 0; l < LANES && i0 + l < nh; ++l) {
+        const uint j = i0 + l;
+        if (2 * j + 1 == n) {
+            row[j] = base + total * 0.5;
+        } else {
+            row[j] = base + tl[l];
+            row[n - 1 - j] = base + (total - tl[l]);
+        }
+    }
 }
 
 __kernel void sot_project(__global const double *x, __global const double *theta, const uint n,

@@ -427,6 +427,20 @@ def _sot_bitonic():
     _same_bits(sot._ranks_device(proj, 2), sot._ranks(proj))
 
 
+@check("sot-lanes-host-sort")
+def _sot_lanes_host_sort():
+    # the quantiles in 8 lanes (a CPU's width; the simulator's own shape solves one a
+    # work-item) and a batch as CPU devices run it: host sort, ranks by sot_rank
+    from clsamp.samplers import sot
+    theta = sot.directions(4, np.arange(2), 0, 3, 3)
+    sl = sot.Slice.of(theta.reshape(-1, 3))
+    _same_bits(sot._quantiles_device(sl, 21, lanes=8), sot.quantiles_reference(sl, 21))
+    x = clsamp.make_sampler("random", d=3, seed=4, backend="numpy").sample(21, realizations=2)
+    for got, want in zip(sot._HostSortBatches()(x, theta, sl, 1.0 / 3),
+                         sot.batch_reference(x, theta, sl, 1.0 / 3), strict=True):
+        _same_bits(got, want)
+
+
 @check("spectrum-direct-1d-3d")
 def _spectrum_direct_other_d():
     for d, resolution in ((1, 32), (3, 6)):

@@ -5,6 +5,8 @@ in the same test; 4-D sets spread far better than random ones; the projective va
 2-D projections are blue. The contract matrix (test_sampler_contract.py) covers shapes,
 seeds, realizations and chunks."""
 
+import math
+
 import numpy as np
 import pytest
 from test_gbn import low_frequency_power
@@ -44,6 +46,17 @@ def test_a_run_gives_the_same_bits_on_the_device_and_in_numpy(d, projections):
     assert np.array_equal(info.cost_history, info_r.cost_history)
 
 
+@pytest.mark.parametrize("lanes", [1, 4, 8, 16])
+def test_each_lane_width_solves_the_twins_quantiles(lanes):
+    # odd and even n, fewer quantiles than lanes, directions with dropped components
+    theta = sot.directions(5, np.arange(2), 1, 5, 4).reshape(-1, 4)
+    theta[0] = [1.0, 1e-9, 0.0, -1e-12]
+    for n in (1, 2, 7, 100, 257):
+        sl = sot.Slice.of(theta)
+        assert np.array_equal(sot._quantiles_device(sl, n, lanes=lanes),
+                              sot.quantiles_reference(sl, n))
+
+
 @pytest.mark.parametrize("d", [2, 3, 5])
 def test_the_quantiles_are_the_projected_cubes(d):
     # against the quantiles of a million uniform points projected (error ~ 1e-3), and the
@@ -72,6 +85,66 @@ def test_the_device_sort_ranks_ties_by_index(n):
     proj[0, 0, ::2] = -0.0
     proj[0, 0, 1::2] = 0.0
     assert np.array_equal(sot._ranks_device(proj, 2), sot._ranks(proj))
+
+
+def test_the_host_order_is_the_stable_sorts():
+    # distinct keys (the fast sort's order kept) and rows with ties, -0.0 beside 0.0
+    rng = np.random.default_rng(7)
+    proj = rng.normal(size=(2, 5, 300))
+    proj[0, 1] = np.round(proj[0, 1], 1)
+    proj[1, 3, ::2], proj[1, 3, 1::2] = -0.0, 0.0
+    assert np.array_equal(sot._order(proj), np.argsort(proj, axis=-1, kind="stable"))
+
+
+def _slice_by_the_recurrences(theta):
+    # the class docstring's definition, one direction and one component at a time
+    K, d = theta.shape
+    c, sign = np.zeros((K, 2 ** d)), np.zeros((K, 2 ** d))
+    m_of, norm, total, base = np.zeros(K, np.int32), np.zeros(K), np.zeros(K), np.zeros(K)
+    for k in range(K):
+        a = sorted((abs(float(v)) for v in theta[k]), reverse=True)
+        low = 0.0
+        for v in theta[k]:
+            low = low + min(float(v), 0.0)
+        m = d
+        while m > 1 and sot._cancellation(a[:m]) > sot.CANCEL:
+            low, m = low + a[m - 1] * 0.5, m - 1
+        for v in range(2 ** m):
+            s, odd = 0.0, 0
+            for j in range(m):
+                if v >> j & 1:
+                    s, odd = s + a[j], odd ^ 1
+            c[k, v], sign[k, v] = s, -1.0 if odd else 1.0
+        prod, t = 1.0, 0.0
+        for v in a[:m]:
+            prod, t = prod * v, t + v
+        m_of[k], norm[k], total[k], base[k] = m, 1.0 / (math.factorial(m) * prod), t, low
+    return c, sign, m_of, norm, total, base
+
+
+@pytest.mark.parametrize("d", [2, 3, 5, 8])
+def test_the_slices_are_the_scalar_recurrences_bits(d):
+    # components spread over twelve decades (some dropped), zeros and -0.0
+    rng = np.random.default_rng(d)
+    theta = rng.normal(size=(200, d)) * 10.0 ** -rng.uniform(0, 12, size=(200, d))
+    theta[rng.random(theta.shape) < 0.1] = 0.0
+    theta[rng.random(theta.shape) < 0.05] = -0.0
+    theta[:, 0] = 1.0
+    theta /= np.linalg.norm(theta, axis=1, keepdims=True)
+    sl = sot.Slice.of(theta)
+    assert len(set(sl.m)) > 1
+    for got, want in zip((sl.c, sl.sign, sl.m, sl.norm, sl.total, sl.base),
+                         _slice_by_the_recurrences(theta), strict=True):
+        assert got.dtype == want.dtype and np.array_equal(got.view(np.uint8), want.view(np.uint8))
+
+
+def test_batches_drawn_in_blocks_give_the_same_bits(monkeypatch):
+    kw = dict(d=3, seed=2, iterations=9, projections="pairs")
+    pts = clsamp.make_sampler("sot", **kw).sample(30, realizations=2)
+    assert np.array_equal(sot.directions(2, np.arange(2), 4, 32, 3, count=3)[:, 2],
+                          sot.directions(2, np.arange(2), 6, 32, 3))
+    monkeypatch.setattr(sot, "BLOCK_BYTES", 1)          # one batch a block
+    assert np.array_equal(clsamp.make_sampler("sot", **kw).sample(30, realizations=2), pts)
 
 
 def test_small_components_are_replaced_by_their_mean():

@@ -5,10 +5,12 @@ with the projective variant that optimizes chosen coordinate projections as well
 One batch is four passes -- the 1-D targets of each direction (the quantiles of the cube's
 projection), the projections of the points, their ranks, the move -- in ``kernels/sot.cl``
 on the device and in :func:`quantiles_reference`, :func:`project_reference`, a stable sort
-and :func:`move_reference` here (:func:`batch_reference`), the same bits. The ranks come
-from a bitonic sort on GPUs and from NumPy's sort on CPU devices, where it is faster; both
-order ties by index. The directions and their CDFs (:class:`Slice`) are host code both
-backends share (:func:`sot_optimize`).
+and :func:`move_reference` here (:func:`batch_reference`), the same bits. On GPUs the
+projections and a bitonic sort run on the device; on CPU devices the host, which must sort
+them anyway (NumPy's sort beats the network there), projects the points with the twin's
+code and sorts them (:class:`_HostSortBatches`); both order ties by index. The directions
+and their CDFs (:class:`Slice`) are host code both backends share, drawn for blocks of
+batches at once (:func:`sot_optimize`).
 """
 
 import dataclasses
@@ -33,6 +35,7 @@ QMAX = 200
 CANCEL = 1e-8        # the most relative error the CDF's alternating sum may carry
 EPS = 2.0 ** -52
 TOP = 1.0 - 2.0 ** -53
+BLOCK_BYTES = 1 << 23   # the most memory a block of batches' slices takes
 DEFINES = {"QTOL": repr(QTOL), "QMAX": QMAX}
 
 
@@ -75,37 +78,74 @@ class Slice:
         Returns
         -------
         Slice
+
+        Notes
+        -----
+        Every sum and product runs over the components in the same order, one array
+        operation a component, so each row's values are those of the scalar recurrences
+        the class docstring states.
         """
         K, d = theta.shape
+        a = np.sort(np.abs(theta), axis=1)[:, ::-1]
+        low = np.zeros(K)
+        for j in range(d):
+            low = low + np.minimum(theta[:, j], 0.0)
+        m = np.full(K, d, dtype=np.int32)
+        for top in range(d, 1, -1):           # drop the smallest kept component while it cancels
+            drop = (m == top) & _cancels(a, top)
+            low = np.where(drop, low + a[:, top - 1] * 0.5, low)
+            m = np.where(drop, top - 1, m).astype(np.int32)
         c = np.zeros((K, 2 ** d))
         sign = np.zeros((K, 2 ** d))
-        m_of = np.zeros(K, dtype=np.int32)
-        norm, total, base = np.zeros(K), np.zeros(K), np.zeros(K)
-        for k in range(K):
-            a = sorted((abs(float(v)) for v in theta[k]), reverse=True)
-            low = 0.0
-            for v in theta[k]:
-                low = low + min(float(v), 0.0)
-            m = d
-            while m > 1 and _cancellation(a[:m]) > CANCEL:
-                low = low + a[m - 1] * 0.5
-                m -= 1
-            kept = a[:m]
-            for v in range(2 ** m):
-                s, odd = 0.0, 0
-                for j in range(m):
-                    if v >> j & 1:
-                        s, odd = s + kept[j], odd ^ 1
-                c[k, v], sign[k, v] = s, -1.0 if odd else 1.0
-            prod = 1.0
-            for v in kept:
-                prod = prod * v
-            m_of[k], norm[k], base[k] = m, 1.0 / (math.factorial(m) * prod), low
-            t = 0.0
-            for v in kept:
-                t = t + v
-            total[k] = t
-        return cls(c, sign, m_of, norm, total, base)
+        for v in range(2 ** d):
+            s, odd = np.zeros(K), 0
+            for j in range(d):
+                if v >> j & 1:
+                    s, odd = s + a[:, j], odd ^ 1
+            used = v < (1 << m)
+            c[:, v] = np.where(used, s, 0.0)
+            sign[:, v] = np.where(used, -1.0 if odd else 1.0, 0.0)
+        prod, total = np.ones(K), np.zeros(K)
+        for j in range(d):
+            prod = np.where(j < m, prod * a[:, j], prod)
+            total = np.where(j < m, total + a[:, j], total)
+        factorial = np.array([math.factorial(k) for k in range(d + 1)], dtype=np.float64)
+        return cls(c, sign, m, 1.0 / (factorial[m] * prod), total, low)
+
+    def take(self, rows):
+        """The slices of directions ``rows`` (an index array), in that order.
+
+        Parameters
+        ----------
+        rows : ndarray of int
+
+        Returns
+        -------
+        Slice
+        """
+        return Slice(*(getattr(self, f.name)[rows] for f in dataclasses.fields(self)))
+
+
+def _cancels(a, m):
+    """Per row of ``a`` (components sorted decreasing), whether keeping the first ``m``
+    lets the alternating vertex sum cancel to more than ``CANCEL`` (:func:`_cancellation`).
+
+    The bound is computed for all rows at once; a row within a relative 1e-9 of ``CANCEL``
+    is decided by :func:`_cancellation` itself, so the decision does not depend on how
+    the array power rounds.
+    """
+    kept = a[:, :m]
+    s = np.zeros(a.shape[0])
+    prod = np.ones(a.shape[0])
+    for j in range(m):
+        s, prod = s + kept[:, j], prod * kept[:, j]
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        bound = EPS * 2.0 ** m * np.power(s, float(m)) / (math.factorial(m) * prod)
+    bound = np.where(kept[:, -1] <= 0.0, math.inf, bound)
+    close = np.flatnonzero(np.abs(bound - CANCEL) <= 1e-9 * CANCEL)
+    out = bound > CANCEL
+    out[close] = [_cancellation([float(v) for v in kept[k]]) > CANCEL for k in close]
+    return out
 
 
 def _cancellation(a):
@@ -228,9 +268,19 @@ def move_reference(x, theta, q, rank, proj, scale):
     return np.where(y > TOP, TOP, y), cost
 
 
-def _launch(name, d, items, *args):
+def _defines(d, lanes=None):
+    """The build options of ``kernels/sot.cl`` in ``d`` dimensions: ``sot_quantiles`` solves
+    ``lanes`` quantiles a work-item (default: the device's vector width, one on GPUs)."""
+    return {"D": d, "LANES": lanes or runtime.shape().vector_width, **DEFINES}
+
+
+def _quantile_items(K, n, lanes):
+    return K * -(-((n + 1) // 2) // lanes)
+
+
+def _launch(name, d, items, *args, lanes=None):
     """Run kernel ``name`` of ``kernels/sot.cl`` over ``items`` work-items."""
-    kernel = runtime.kernel("sot.cl", name, {"D": d, **DEFINES})
+    kernel = runtime.kernel("sot.cl", name, _defines(d, lanes))
     local = runtime.local_size(64)
     kernel(runtime.queue(), (-(-items // local) * local,), (local,), *args)
 
@@ -239,12 +289,13 @@ def _output(shape, dtype, host):
     return runtime.Output(shape, dtype, host=np.empty(shape, dtype) if host else None)
 
 
-def _quantiles_device(sl, n, host=True):
+def _quantiles_device(sl, n, host=True, lanes=None):
     K = sl.m.shape[0]
+    lanes = lanes or runtime.shape().vector_width
     out = _output((K, n), np.float64, host)
-    _launch("sot_quantiles", int(round(math.log2(sl.c.shape[1]))), K * ((n + 1) // 2),
+    _launch("sot_quantiles", int(round(math.log2(sl.c.shape[1]))), _quantile_items(K, n, lanes),
             *(runtime.to_device(a).data for a in (sl.c, sl.sign, sl.m, sl.norm, sl.total, sl.base)),
-            np.uint32(n), np.uint32(K), out.buffer)
+            np.uint32(n), np.uint32(K), out.buffer, lanes=lanes)
     return out.finish()
 
 
@@ -290,7 +341,7 @@ def _local_sort(d, items, L2, key, index, P):
     """``sot_bitonic_local`` over rows of P pairs, work-groups of L2 items, as a function of
     (kmin, kmax, jtop)."""
     import pyopencl as cl
-    kernel = runtime.kernel("sot.cl", "sot_bitonic_local", {"D": d, **DEFINES})
+    kernel = runtime.kernel("sot.cl", "sot_bitonic_local", _defines(d))
 
     def run(kmin, kmax, jtop):
         kernel(runtime.queue(), (items,), (L2,), key.data, index.data, np.uint32(P),
@@ -345,6 +396,75 @@ def _batch_device(x, theta, sl, scale):
     return _move_device(x, theta, q, rank, proj, scale)
 
 
+class _HostSortBatches:
+    """The batches of one run on a CPU device (``Shape.host_sort``), the same bits as
+    :func:`batch_reference`.
+
+    The buffers and kernels, their arguments set, are made once a run (again only when the
+    active sets change); every upload is enqueued without waiting, and a batch waits once,
+    for its moved points. The quantiles run on the device while the host projects the
+    points (the twin's :func:`project_reference`: the host holds the points and sorts their
+    projections, so they need not cross twice) and sorts them (:func:`_order`); the device
+    turns the order into ranks (``sot_rank``) and moves the points.
+    """
+
+    def __init__(self):
+        self.shape = None
+
+    def _allocate(self, sets, n, d, K, scale):
+        u32, f64, rows = np.uint32, np.float64, sets * K
+        # device arrays, kept here: a kernel's arguments do not keep their buffers alive
+        self.arrays = [_output(shape, dtype, False) for shape, dtype in (
+            ((rows, 2 ** d), f64), ((rows, 2 ** d), f64), (rows, np.int32), (rows, f64),
+            (rows, f64), (rows, f64),                                            # the slices
+            ((sets, n, d), f64), ((sets, K, d), f64), ((sets, K, n), f64),       # x, theta, proj
+            ((sets, K, n), u32), ((sets, K, n), f64), ((sets, K, n), u32))]      # order, q, rank
+        self.inputs = [a.buffer for a in self.arrays[:10]]
+        q, rank = (a.buffer for a in self.arrays[10:])
+        self.out = _output((sets, n, d), f64, True)
+        self.cost = _output((sets, n), f64, True)
+        lanes = runtime.shape().vector_width
+        x, theta, proj, order = self.inputs[6:]
+        args = {"sot_quantiles": (*self.inputs[:6], u32(n), u32(rows), q),
+                "sot_rank": (order, u32(n), u32(n), u32(rows), rank),
+                "sot_move": (x, theta, q, rank, proj, u32(n), u32(K), u32(sets), f64(scale),
+                             self.out.buffer, self.cost.buffer)}
+        items = {"sot_quantiles": _quantile_items(rows, n, lanes), "sot_rank": rows * n,
+                 "sot_move": sets * n}
+        local = runtime.local_size(64)
+        self.launches = {}
+        for name, a in args.items():
+            kernel = runtime.kernel("sot.cl", name, _defines(d, lanes), instance="host-sort")
+            kernel.set_args(*a)
+            self.launches[name] = (kernel, (-(-items[name] // local) * local,), (local,))
+        self.shape = (sets, n, d, K, scale)
+
+    def _launch(self, name):
+        import pyopencl as cl
+        cl.enqueue_nd_range_kernel(runtime.queue(), *self.launches[name])
+
+    def __call__(self, x, theta, sl, scale):
+        """One batch: :func:`batch_reference`'s (points, cost)."""
+        import pyopencl as cl
+        sets, n, d = x.shape
+        K = theta.shape[1]
+        if self.shape != (sets, n, d, K, scale):
+            self._allocate(sets, n, d, K, scale)
+        queue = runtime.queue()
+        slices = (sl.c, sl.sign, sl.m, sl.norm, sl.total, sl.base)
+        for buffer, host in zip(self.inputs[:6], slices, strict=True):
+            cl.enqueue_copy(queue, buffer, host, is_blocking=False)
+        self._launch("sot_quantiles")
+        queue.flush()
+        proj = project_reference(x, theta)
+        order = _order(proj).astype(np.uint32)
+        for buffer, host in zip(self.inputs[6:], (x, theta, proj, order), strict=True):
+            cl.enqueue_copy(queue, buffer, host, is_blocking=False)
+        self._launch("sot_rank")
+        self._launch("sot_move")
+        return self.out.finish(), self.cost.finish()
+
+
 def subspaces(projections, d):
     """The coordinate subspaces a projective run also optimizes.
 
@@ -377,7 +497,7 @@ def subspaces(projections, d):
     return spaces
 
 
-def directions(seed, realizations, batch, K, d, spaces=()):
+def directions(seed, realizations, batch, K, d, spaces=(), count=None):
     """The unit directions of one batch: K in the full space, then K // 2 (at least 1) in
     each subspace, each a normalized Gaussian vector (Box-Muller on Philox (seed,
     ``Stream.DIRECTIONS``, realization, batch-local index)) restricted to its axes.
@@ -391,10 +511,13 @@ def directions(seed, realizations, batch, K, d, spaces=()):
     K : int
     d : int
     spaces : tuple of tuple of int
+    count : int, optional
+        Give the directions of ``count`` batches from ``batch`` on, in one call.
 
     Returns
     -------
     ndarray (sets, K + len(spaces) max(K // 2, 1), d)
+        Or (sets, count, K + ..., d) with ``count``; each batch's the same bits either way.
     """
     per = max(K // 2, 1)
     total = K + per * len(spaces)
@@ -402,10 +525,11 @@ def directions(seed, realizations, batch, K, d, spaces=()):
     for s, axes in enumerate(spaces):
         mask[K + s * per:K + (s + 1) * per] = 0.0
         mask[K + s * per:K + (s + 1) * per, list(axes)] = 1.0
-    r = np.asarray(realizations, dtype=np.uint32)[:, None, None]
-    index = (np.uint64(batch) * np.uint64(total) + np.arange(total, dtype=np.uint64))
-    index = index.astype(np.uint32)[None, :, None]
-    dim = np.arange(d, dtype=np.uint32)[None, None, :]
+    r = np.asarray(realizations, dtype=np.uint32)[:, None, None, None]
+    batches = np.uint64(batch) + np.arange(1 if count is None else count, dtype=np.uint64)
+    index = batches[:, None] * np.uint64(total) + np.arange(total, dtype=np.uint64)
+    index = index.astype(np.uint32)[None, :, :, None]
+    dim = np.arange(d, dtype=np.uint32)
     u1 = philox.uniform(seed, philox.Stream.DIRECTIONS, r, index, 2 * dim)
     u2 = philox.uniform(seed, philox.Stream.DIRECTIONS, r, index, 2 * dim + 1)
     g = np.sqrt(-2.0 * np.log1p(-u1)) * np.cos(2.0 * math.pi * u2) * mask
@@ -413,7 +537,8 @@ def directions(seed, realizations, batch, K, d, spaces=()):
     # a vector of zeros (every u1 of it 0) becomes the first axis of its subspace
     first = np.zeros((total, d))
     first[np.arange(total), np.argmax(mask, axis=1)] = 1.0
-    return np.where(norm > 0.0, g / np.where(norm > 0.0, norm, 1.0), first)
+    theta = np.where(norm > 0.0, g / np.where(norm > 0.0, norm, 1.0), first)
+    return theta[:, 0] if count is None else theta
 
 
 @dataclasses.dataclass(frozen=True)
@@ -439,11 +564,34 @@ class SOTInfo(SampleInfo):
     converged: np.ndarray = info_field()
 
 
+def _order(proj):
+    """Each row's argsort, ties by index: the order of a stable sort.
+
+    NumPy's default sort (introsort, in SIMD where the CPU has it) is several times faster
+    than its stable one on doubles; where a row's sorted values hold no two equal
+    neighbours its order is the only one, hence the stable sort's, and only the rows with a
+    tie are sorted again stably.
+
+    Parameters
+    ----------
+    proj : ndarray (..., n)
+
+    Returns
+    -------
+    ndarray of intp (..., n)
+    """
+    order = np.argsort(proj, axis=-1)
+    key = np.take_along_axis(proj, order, axis=-1)
+    tied = np.any(key[..., 1:] == key[..., :-1], axis=-1)
+    if tied.any():
+        order[tied] = np.argsort(proj[tied], axis=-1, kind="stable")
+    return order
+
+
 def _ranks(proj):
     """The rank of each projection in its row, ties by index (a stable sort)."""
-    order = np.argsort(proj, axis=-1, kind="stable")
     rank = np.empty(proj.shape, dtype=np.uint32)
-    np.put_along_axis(rank, order, np.arange(proj.shape[-1], dtype=np.uint32)[None, None, :]
+    np.put_along_axis(rank, _order(proj), np.arange(proj.shape[-1], dtype=np.uint32)[None, None, :]
                       * np.ones(proj.shape[:-1] + (1,), dtype=np.uint32), axis=-1)
     return rank
 
@@ -478,7 +626,10 @@ def sot_optimize(start_points, seed, directions_per_batch=DIRECTIONS, iterations
     """
     if backend != "numpy":
         runtime.require_fp64()
-    batch = batch_reference if backend == "numpy" else _batch_device
+    if backend == "numpy":
+        batch = batch_reference
+    else:
+        batch = _HostSortBatches() if runtime.shape().host_sort else _batch_device
     x = np.array(start_points, dtype=np.float64)
     r, n, d = x.shape
     index = np.arange(r) if realizations is None else np.asarray(realizations)
@@ -487,14 +638,21 @@ def sot_optimize(start_points, seed, directions_per_batch=DIRECTIONS, iterations
     ran = np.zeros(r, dtype=np.int64)
     history = []
     cost = np.zeros(r)
+    K = directions_per_batch + max(directions_per_batch // 2, 1) * len(spaces)
+    # the directions and slices of a block of batches come from one call each
+    chunk = int(np.clip(BLOCK_BYTES // (r * K * (16 << d) + 1), 1, 64))
     for it in range(iterations):
         idx = np.flatnonzero(active)
         if idx.size == 0:
             break
-        theta = directions(seed, index[idx], it, directions_per_batch, d, spaces)
-        K = theta.shape[1]
-        y, per_point = batch(np.ascontiguousarray(x[idx]), theta, Slice.of(theta.reshape(-1, d)),
-                             step / K)
+        if it % chunk == 0:
+            count = min(chunk, iterations - it)
+            block = directions(seed, index, it, directions_per_batch, d, spaces, count)
+            slices = Slice.of(block.reshape(-1, d))
+        b = it % chunk
+        theta = np.ascontiguousarray(block[idx, b])
+        rows = ((idx[:, None] * count + b) * K + np.arange(K)).ravel()
+        y, per_point = batch(np.ascontiguousarray(x[idx]), theta, slices.take(rows), step / K)
         x[idx] = y
         cost[idx] = [math.fsum(row) / (n * K) for row in per_point]
         ran[idx] += 1
@@ -554,8 +712,10 @@ class SOTSampler(Sampler):
 
     Points stay in the cube [0, 1)^d (a move outside is clamped; the target measure is the
     cube's, not the torus's). Directions and each direction's vertex sums are host code; the
-    quantiles, projections, the sort (a bitonic network; NumPy's on CPU devices) and the
-    moves run on the device (``kernels/sot.cl``), and the NumPy twin gives the same bits.
+    quantiles (in vector lanes on CPUs) and the moves run on the device
+    (``kernels/sot.cl``), as do the projections and the sort (a bitonic network) on GPUs;
+    CPU devices project and sort on the host (NumPy's sort). The NumPy twin gives the same
+    bits.
 
     References
     ----------
