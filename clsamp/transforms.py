@@ -51,12 +51,13 @@ def _horner(coefficients, x):
 def _tail(p, q):
     """AS 241 outside the central region: the quantile of p (q = p - 1/2)."""
     tail = np.sqrt(-np.log(np.where(q < 0, p, 1.0 - p)))
-    value = _horner(_C, tail - 1.6)
-    value /= _horner(_D, tail - 1.6)
+    t = tail - 1.6
+    value = _horner(_C, t)
+    value /= _horner(_D, t)
     far = tail > 5.0
     if far.any():
-        t = tail[far] - 5.0
-        value[far] = _horner(_E, t) / _horner(_F, t)
+        r = tail[far] - 5.0
+        value[far] = _horner(_E, r) / _horner(_F, r)
     return np.where(q < 0, -value, value)
 
 
