@@ -209,6 +209,10 @@ class Cubature:
         (start, count) -> the (periodized) values at points start .. start + count - 1 in
         natural order, made without the sampler: :meth:`clsamp.fused.FusedRule.values`,
         whose kernel makes the same points. ``values`` is not called then.
+    fill : callable, optional
+        With ``block``, for a digital net's state on the device: (start, count, out) writes
+        those values into the device array ``out`` (:meth:`clsamp.fused.FusedRule.fill`), so
+        that they never cross to the host.
     device : bool, optional
         Digital only: from the doubling of :data:`DEVICE_FROM` points on, keep the Walsh
         coefficients and their ordering on the device and transform there
@@ -228,14 +232,14 @@ class Cubature:
     """
 
     def __init__(self, values, d, method, seed, periodization="none", block=None, device=None,
-                 max_n=None):
+                 max_n=None, fill=None):
         if method == "digital":
             # natural order, which the transform reads: point i is L C i xor the shift
             self.sampler = make_sampler("digital_net", d=d, seed=seed, randomize="lms+shift")
         else:
             self.sampler = make_sampler("lattice", d=d, seed=seed, randomize="shift")
         self.values, self.method, self.periodization = values, method, periodization
-        self.fused = block
+        self.fused, self.fill = block, fill
         self.n, self.total = 0, 0.0
         self._coefficients = self._kappa = self._values = None
         if device is None:
@@ -283,7 +287,9 @@ class Cubature:
         Returns
         -------
         mean, bound : float
-            The sample mean of the 2^m points and C(m) S~_(m-r, m).
+            The sample mean of the 2^m points and C(m) S~_(m-r, m). A net's mean is its
+            Walsh coefficient of wavenumber 0 (the transform's sum, on the host or the
+            device alike), a lattice's the values' ``np.sum`` over n.
         """
         if self.walsh is not None and self.n >= DEVICE_FROM:
             return self._device_step()
@@ -313,11 +319,15 @@ class Cubature:
         else:
             self._kappa = _order_wavenumbers(np.concatenate([self._kappa, n + self._kappa]),
                                              magnitudes, m - 1, m - R_LAG - 1, m)
-        self.total += float(np.sum(y))
+        if self.method == "lattice":
+            self.total += float(np.sum(y))
+            mean = self.total / size
+        else:
+            mean = float(self._coefficients[0])
         self.n = size
         low = 2**(m - R_LAG - 1)
         bound = fudge(m) * float(np.sum(magnitudes[self._kappa[low:2 * low]]))
-        return self.total / size, bound
+        return mean, bound
 
     def _device_step(self):
         """:meth:`step` with the coefficients and the ordering on the device from the doubling
@@ -326,14 +336,17 @@ class Cubature:
         if self._coefficients is not None:                 # the host's state moves over once
             self.walsh.load(self._coefficients, self._kappa)
             self._coefficients = self._kappa = self._values = None
-        y = self._block(self.n, self.n)
+        if self.fill is not None:           # the values stay on the device
+            self.fill(self.n, self.n, self.walsh.values_buffer())
+            y = None
+        else:
+            y = self._block(self.n, self.n)
         n = 2 * self.n
         self.walsh.double(y, n.bit_length() - 1 - R_LAG - 1)
         m = n.bit_length() - 1
-        self.total += float(np.sum(y))
         self.n = n
         bound = fudge(m) * float(np.sum(self.walsh.terms(2**(m - R_LAG - 1))))
-        return self.total / n, bound
+        return self.walsh.mean(), bound
 
 
 def combine(mean, bound, abs_tol, rel_tol):

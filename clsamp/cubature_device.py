@@ -2,17 +2,20 @@
 device (``kernels/walsh.cl``), for :class:`clsamp.cubature.Cubature`.
 
 Once the host's state is loaded, the coefficients (in wavenumber order) and the ordering
-stay on the device from one doubling to the next, in arrays with room to grow; a doubling
-uploads the new values, transforms them, combines them with the coefficients already
-there in place, reorders the wavenumbers and reads back only the 2^(m-r-1) terms of the
-bound. The kernels do the NumPy twin's operations
-(:func:`clsamp.cubature.walsh_coefficients`, ``Cubature.step``, ``_order_wavenumbers``) in
-the same order: the same bits.
+stay on the device from one doubling to the next, in arrays with room to grow. A doubling
+takes the new values (uploaded from the host, or written on the device by the kernel that
+evaluates the integrand: :meth:`DeviceWalsh.values_buffer`), transforms them, combines
+them with the coefficients already there in place, reorders the wavenumbers and reads
+back only the 2^(m-r-1) terms of the bound and the mean (coefficient 0). The kernels do
+the NumPy twin's operations (:func:`clsamp.cubature.walsh_coefficients`,
+``Cubature.step``, ``_order_wavenumbers``) in the same order: the same bits.
 """
 
 import numpy as np
 
 from . import runtime
+
+PASS_BITS = 5            # butterfly levels a pass of the transform applies (kernels/walsh.cl)
 
 
 class DeviceWalsh:
@@ -47,8 +50,8 @@ class DeviceWalsh:
         self.a = self.kappa = self.t = None     # a[i] = c[kappa[i]], room for 2 n or more
 
     @staticmethod
-    def _kernel(name):
-        return runtime.kernel("walsh.cl", name)
+    def _kernel(name, bits=None):
+        return runtime.kernel("walsh.cl", name, defines=None if bits is None else {"WALSH_BITS": bits})
 
     def transform(self, y, out=None):
         """The discrete Walsh coefficients of values, on the device.
@@ -68,20 +71,22 @@ class DeviceWalsh:
         """
         import pyopencl as cl
         import pyopencl.array as cla
-        n = y.size
         y = np.ascontiguousarray(y, dtype=np.float64)
-        t = out if out is not None else cla.empty(self.q, n, np.float64)
+        t = out if out is not None else cla.empty(self.q, y.size, np.float64)
         cl.enqueue_copy(self.q, t.data, y)
-        h = 1
-        while h < n:
-            if 4 * h <= n:
-                self._kernel("walsh_radix4")(self.q, (n // 4,), None, t.data, np.uint32(h))
-                h *= 4
-            else:
-                self._kernel("walsh_radix2")(self.q, (n // 2,), None, t.data, np.uint32(h))
-                h *= 2
-        self._kernel("walsh_scale")(self.q, (n,), None, t.data, np.float64(1.0 / n))
+        self._transform(t, y.size)
         return t
+
+    def _transform(self, t, n):
+        """:meth:`transform` of the n values in the device array t, in place."""
+        levels = n.bit_length() - 1
+        passes = -(-levels // PASS_BITS)
+        h = 1
+        for p in range(passes):              # levels split evenly over the passes, the last scaled
+            bits = (levels + p) // passes
+            self._kernel("walsh_pass", bits)(self.q, (n >> bits,), None, t.data, np.uint32(h),
+                                             np.float64(1.0 / n if p == passes - 1 else 1.0))
+            h <<= bits
 
     def _order(self, top, bottom, m):
         for level in range(top, bottom, -1):
@@ -127,27 +132,52 @@ class DeviceWalsh:
         cl.enqueue_copy(self.q, self.kappa.data, np.ascontiguousarray(kappa, dtype=np.uint32))
         self.n = kappa.size
 
+    def values_buffer(self):
+        """Where a kernel may write the next doubling's values before :meth:`double` (None).
+
+        Returns
+        -------
+        pyopencl.array.Array of float64
+            At least n entries (n: the points so far), of which :meth:`double` reads the
+            first n.
+        """
+        self._room(2 * self.n)
+        return self.t
+
     def double(self, y, bottom):
         """Add the values of the next n points (n: the points so far).
 
         Parameters
         ----------
-        y : ndarray of float64
-            The values of points n .. 2n - 1 (host).
+        y : ndarray of float64 or None
+            The values of points n .. 2n - 1 on the host, or None where they were written
+            into :meth:`values_buffer`.
         bottom : int
             After the doubling's butterfly the ordering runs from level m - 1 down to
             ``bottom`` + 1 (2^m = 2n).
         """
         n = self.n
-        if y.size != n:
+        if y is not None and y.size != n:
             raise ValueError(f"a doubling of {n} values, got {y.size}")
         self._room(2 * n)
-        t = self.transform(y, self.t)
-        self._kernel("walsh_double")(self.q, (n,), None, self.a.data, t.data, self.kappa.data,
+        if y is None:
+            self._transform(self.t, n)
+        else:
+            self.transform(y, self.t)
+        self._kernel("walsh_double")(self.q, (n,), None, self.a.data, self.t.data, self.kappa.data,
                                      np.uint32(n))
         self.n = 2 * n
         m = self.n.bit_length() - 1
         self._order(m - 1, bottom, m)
+
+    def mean(self):
+        """The mean of the values so far: the coefficient of wavenumber 0 (always first).
+
+        Returns
+        -------
+        float
+        """
+        return float(self.a[:1].get()[0])
 
     def terms(self, low):
         """The terms of the error bound.

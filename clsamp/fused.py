@@ -14,10 +14,11 @@ A :class:`FusedRule` makes the points of one sequence of the samplers, bit for b
 * ``"lattice"``: the shifted rank-1 lattice (Kuo's vector) in radical-inverse order with
   a periodization.
 
-The last two give the values :meth:`FusedRule.values` (the Walsh and Fourier transforms need
-every value; they run on the host, docs/performance.md). Device memory is O(1) in n: a
-launch covers at most :data:`CHUNK` points of a realization, and its output (sums or values)
-is read back before the next.
+The last two give the values: :meth:`FusedRule.values` reads them back (the lattice's
+Fourier transform runs on the host), :meth:`FusedRule.fill` writes them into a device array
+(the digital net's Walsh state, :mod:`clsamp.cubature_device`). A launch covers at most
+:data:`CHUNK` points of a realization; the sums and :meth:`FusedRule.values` read each
+launch's output back before the next, so their device memory is O(1) in n.
 """
 
 import numpy as np
@@ -175,3 +176,22 @@ class FusedRule:
             self._launch(kernel, part, start + a, range(0, 1), buffer)
             buffer[:part].get(ary=out[a:a + part])
         return out
+
+    def fill(self, start, count, out):
+        """:meth:`values` written into a device array instead of read back.
+
+        Parameters
+        ----------
+        start, count : int
+        out : pyopencl.array.Array of float64
+            At least ``count`` entries; the first ``count`` get f at points
+            start .. start + count - 1.
+        """
+        import pyopencl.array as cla
+        kernel = self._kernel(False)
+        for a in range(0, count, CHUNK):
+            part = min(CHUNK, count - a)
+            # a launch writes from its buffer's start: past the first, a region of `out` from entry a
+            region = out.base_data.get_sub_region(8 * a, 8 * part) if a else out.data
+            self._launch(kernel, part, start + a, range(0, 1),
+                         cla.Array(runtime.queue(), (part,), np.float64, data=region))

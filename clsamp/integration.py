@@ -137,10 +137,10 @@ def _guaranteed(f, d, method, periodization, abs_tol, rel_tol, max_n, seed, prog
             f"'f' must be a callable, an Integrand or an integrand name, got {f!r}")
     if max_n < 2**M_MIN:
         raise InvalidArgumentError(f"'max_n' must be at least {2**M_MIN} for method={method!r}, got {max_n}")
-    block = (FusedRule(f, method, seed, periodization=periodization).values
-             if isinstance(f, Integrand) else None)
-    rule = Cubature(lambda x: _blocked_values(f, x), d, method, seed, periodization, block,
-                    max_n=max_n)
+    fused = FusedRule(f, method, seed, periodization=periodization) if isinstance(f, Integrand) else None
+    rule = Cubature(lambda x: _blocked_values(f, x), d, method, seed, periodization,
+                    None if fused is None else fused.values, max_n=max_n,
+                    fill=None if fused is None else fused.fill)
     from tqdm import tqdm
     bar = tqdm(desc=f"integrate ({method})", unit="round", disable=not progress, delay=2)
     history = []

@@ -9,38 +9,38 @@
  * (MCQMC 2014); the ordering is GAIL's kappanumap, as qmcpy's CubQMCNetG. */
 #pragma OPENCL FP_CONTRACT OFF
 
-/* Two butterfly levels over bits log2(h) and log2(h) + 1 of the index (radix 4), as
- * walsh_coefficients' reshape(-1, 4, h) pass: s0 = p + q, d0 = p - q, s1 = r + s, d1 = r - s,
- * then (s0 + s1, d0 + d1, s0 - s1, d0 - d1). Grid: n / 4. */
-__kernel void walsh_radix4(__global double *y, const uint h)
+#ifndef WALSH_BITS
+#define WALSH_BITS 2
+#endif
+#define WALSH_SIZE (1 << WALSH_BITS)
+
+/* WALSH_BITS butterfly levels over bits log2(h) .. log2(h) + WALSH_BITS - 1 of the index, as
+ * that many of walsh_coefficients' radix-2 levels (its radix-4 pass is two of them, the same
+ * additions): a work-item loads the 2^WALSH_BITS values b 2^WALSH_BITS h + j + r h
+ * (r < 2^WALSH_BITS), applies the levels in order (level s: p + q and p - q over the pairs
+ * r, r + 2^s), and writes them back times `scale` (1, or 1/n on the transform's last pass:
+ * walsh_coefficients' final division by a power of 2, the same bits). Grid: n / 2^WALSH_BITS. */
+__kernel void walsh_pass(__global double *y, const uint h, const double scale)
 {
     const uint g = get_global_id(0);
     const uint j = g % h, b = g / h;
-    __global double *a = y + (size_t)b * 4 * h + j;
-    const double p = a[0], q = a[h], r = a[2 * h], s = a[3 * h];
-    const double s0 = p + q, d0 = p - q, s1 = r + s, d1 = r - s;
-    a[0] = s0 + s1;
-    a[h] = d0 + d1;
-    a[2 * h] = s0 - s1;
-    a[3 * h] = d0 - d1;
-}
-
-/* One butterfly level over bit log2(h) (radix 2), as walsh_coefficients' reshape(-1, 2, h)
- * pass. Grid: n / 2. */
-__kernel void walsh_radix2(__global double *y, const uint h)
-{
-    const uint g = get_global_id(0);
-    const uint j = g % h, b = g / h;
-    __global double *a = y + (size_t)b * 2 * h + j;
-    const double p = a[0], q = a[h];
-    a[0] = p + q;
-    a[h] = p - q;
-}
-
-/* y *= scale (a power of 2). Grid: n. */
-__kernel void walsh_scale(__global double *y, const double scale)
-{
-    y[get_global_id(0)] *= scale;
+    __global double *a = y + (size_t)b * WALSH_SIZE * h + j;
+    double v[WALSH_SIZE];
+#pragma unroll
+    for (int r = 0; r < WALSH_SIZE; ++r)
+        v[r] = a[(size_t)r * h];
+#pragma unroll
+    for (int s = 1; s < WALSH_SIZE; s *= 2)
+#pragma unroll
+        for (int r = 0; r < WALSH_SIZE; ++r)
+            if (!(r & s)) {
+                const double p = v[r], q = v[r + s];
+                v[r] = p + q;
+                v[r + s] = p - q;
+            }
+#pragma unroll
+    for (int r = 0; r < WALSH_SIZE; ++r)
+        a[(size_t)r * h] = v[r] * scale;
 }
 
 /* The doubling, in place in arrays of room for 2n: the coefficients are kept in wavenumber

@@ -125,6 +125,23 @@ def test_user_integrand_fuses_with_a_chunked_launch(monkeypatch):
     np.testing.assert_allclose(FusedRule(f, "digital", 4).values(0, 2048), cube, rtol=1e-15)
 
 
+def test_values_written_on_the_device_equal_those_read_back(monkeypatch):
+    # FusedRule.fill (the values stay on the device for the Walsh state) against
+    # FusedRule.values uploaded again: the same steps, bit for bit, with launches of 2^11
+    # points writing into regions of one buffer
+    from clsamp import cubature
+    monkeypatch.setattr(fused, "CHUNK", 2**11)
+    monkeypatch.setattr(cubature, "DEVICE_FROM", 2**11)
+    f = genz("oscillatory", 4, seed=3)
+    rule = FusedRule(f, "digital", 6)
+    runs = []
+    for fill in (None, rule.fill):
+        c = Cubature(None, 4, "digital", 6, block=rule.values, device=True, fill=fill)
+        runs.append([c.step() for _ in range(6)])
+        assert c.walsh is not None and c.n == 2**15
+    assert runs[0] == runs[1]
+
+
 # -- integrate with them -----------------------------------------------------------------
 @pytest.mark.parametrize("method", ["digital", "lattice", "replications"])
 def test_integrate_device_integrand_matches_numpy(method):

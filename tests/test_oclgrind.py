@@ -462,6 +462,23 @@ def _spectrum_ff_copies():
     assert np.max(np.abs(one - three)) <= 1e-9 * max(1.0, np.max(np.abs(one)))
 
 
+@check("fused-values-into-the-walsh-state")
+def _fused_fill():
+    # a device integrand's values written into the Walsh state's array (fused_integrals.cl
+    # in 3-D with keister's normal quantile; launches of 2^9 points into regions of the
+    # array) against the same values read back and uploaded
+    from clsamp import cubature, fused
+    from clsamp.cubature import Cubature
+    from clsamp.integrands import keister
+    cubature.DEVICE_FROM, fused.CHUNK = 2**10, 2**9
+    rule = fused.FusedRule(keister(3), "digital", 2)
+    steps = []
+    for fill in (None, rule.fill):
+        c = Cubature(None, 3, "digital", 2, block=rule.values, device=True, fill=fill)
+        steps.append([c.step() for _ in range(2)])
+    assert steps[0] == steps[1]
+
+
 @check("integrand-from-opencl-values")
 def _integrand_values():
     f = clsamp.Integrand.from_opencl("exp(-x[0]) * x[1]", 2)
