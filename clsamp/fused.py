@@ -54,6 +54,14 @@ def fused_randomization(name):
     return variant if base == "sobol" and variant in RANDOMIZE else None
 
 
+def _room(d):
+    """The row length of the Sobol' tables in the kernel: d, or the next power of 2 for
+    d = 3 .. 16 (rows of zeros past d). Rows that load as whole vectors keep PoCL's code
+    for the state's update vectorized; some widths (3, 6, 11, ..) made the kernel 2-3x
+    slower (docs/performance.md)."""
+    return 1 << (d - 1).bit_length() if 3 <= d <= 16 else d
+
+
 class FusedRule:
     """One integrand and one sequence, fused in one kernel.
 
@@ -94,12 +102,16 @@ class FusedRule:
             gray = kind == "sobol"
             # "digital": LMS + digital shift, realization 0's matrices L_j C_j (as the sampler's)
             lms = seed if kind == "digital" else None
+            room = _room(d)
 
             def columns():
                 v = nt.sobol_matrices(d)              # (d, 32)
                 if lms is not None:
                     v = gm.lms_apply(gm.lms_row_masks(lms, [0], d), v[None])[0]
-                return nt.reverse_bits32(v.T) if owen else v.T
+                v = nt.reverse_bits32(v.T) if owen else v.T
+                padded = np.zeros((32, room), dtype=v.dtype)   # rows of zeros past d
+                padded[:, :d] = v
+                return padded
 
             self.columns = runtime.table(("fused sobol", d, owen, lms), columns)
             self.steps = (self.columns if gray else runtime.table(
@@ -112,7 +124,8 @@ class FusedRule:
         self.local = runtime.local_size(64)
         self.defines = {"DIM": d, "INTEGRAND": f.kernel_code, "POINTS": int(kind == "lattice"),
                         "GRAY": int(kind == "sobol"), "RANDOMIZE": RANDOMIZE[self.randomize],
-                        "PERIODIZE": PERIODIZE[periodization], "FUSED_BLOCK": self.block}
+                        "PERIODIZE": PERIODIZE[periodization], "FUSED_BLOCK": self.block,
+                        "FUSED_ROOM": _room(d) if kind != "lattice" else d}
 
     def _kernel(self, sums):
         return runtime.kernel("fused_integrals.cl", "fused_integrals",

@@ -9,7 +9,8 @@
  *   POINTS           FUSED_SOBOL: x_i = xor of columns[c] over the set bits c of
  *                    (GRAY ? i ^ (i >> 1) : i), and x_(i+1) = x_i ^ steps[ctz(i + 1)]
  *                    (Gray order: steps = columns; natural order: the prefix xors
- *                    columns[0] ^ .. ^ columns[c]); columns arrive bit-reversed for LD_OWEN.
+ *                    columns[0] ^ .. ^ columns[c]); columns arrive bit-reversed for LD_OWEN,
+ *                    as (32, FUSED_ROOM).
  *                    FUSED_LATTICE: frac(reverse_bits32(i) z_j 2^-32 + u_j), z = columns.
  *   GRAY             (FUSED_SOBOL) 1: the sampler's Gray-code order; 0: natural order
  *   RANDOMIZE        LD_SHIFT, LD_XOR or LD_OWEN (lowdiscrepancy.h): realization r's, with
@@ -20,6 +21,9 @@
  *   FUSED_SUMS       1: out is (realizations, groups) double-double sums of f - integral,
  *                    as integrand_error_sums gives them; 0: out is the n values of f
  *   FUSED_BLOCK      consecutive points per work-item (a multiple of 4)
+ *   FUSED_ROOM       (FUSED_SOBOL) the length of a row of columns and steps, >= DIM (zeros
+ *                    past DIM: whole-vector rows keep the state's update vectorized); the
+ *                    state carries FUSED_ROOM words, of which the points read DIM
  *
  * Grid (groups * local, realizations), work-group (local, 1), local a power of two; work-item
  * g makes points start + g FUSED_BLOCK .. start + (g + 1) FUSED_BLOCK - 1 (those below
@@ -47,6 +51,9 @@
 #define FUSED_BLOCK 64
 #endif
 
+#ifndef FUSED_ROOM
+#define FUSED_ROOM DIM
+#endif
 #define FUSED_ONE_BELOW 0x1.fffffffffffffp-1
 #define FUSED_PI 3.141592653589793115997963468544185161590576171875
 #define FUSED_TWO_PI 6.28318530717958623199592693708837032318115234375
@@ -76,8 +83,8 @@ inline double fused_coordinate(const uint x, const ulong random)
                 x[j].lane = fused_coordinate(state[j], random[j]);                  \
             if (k + 1u < end) {                                                     \
                 const uint c = ld_ctz(start + k + 1u);                              \
-                for (int j = 0; j < DIM; ++j)                                       \
-                    state[j] ^= steps[c * DIM + j];                                 \
+                for (int j = 0; j < FUSED_ROOM; ++j)                                \
+                    state[j] ^= steps[c * FUSED_ROOM + j];                          \
             }                                                                       \
         } else {                                                                    \
             for (int j = 0; j < DIM; ++j)                                           \
@@ -91,7 +98,7 @@ inline double fused_coordinate(const uint x, const ulong random)
         if (k < end) {                                                              \
             const uint radical = reverse_bits32(start + k);                         \
             for (int j = 0; j < DIM; ++j)                                           \
-                x[j].lane = fused_coordinate(radical * columns[j], random[j]);     \
+                x[j].lane = fused_coordinate(radical * columns[j], random[j]);      \
         } else {                                                                    \
             for (int j = 0; j < DIM; ++j)                                           \
                 x[j].lane = x[j].s0;                                                \
@@ -100,7 +107,7 @@ inline double fused_coordinate(const uint x, const ulong random)
     } while (0)
 #endif
 
-/* Sobol: columns and steps are (32, DIM); lattice: columns is z (DIM), steps unused.
+/* Sobol: columns and steps are (32, FUSED_ROOM); lattice: columns is z (DIM), steps unused.
  * params: the integrand's (integrand.h); integral: subtracted from every value when
  * FUSED_SUMS (the sums keep their relative accuracy). */
 __kernel void fused_integrals(const uint n, const uint start, const uint realization0,
@@ -124,16 +131,16 @@ __kernel void fused_integrals(const uint n, const uint start, const uint realiza
 #endif
     }
 #if POINTS == FUSED_SOBOL
-    uint state[DIM];
-    for (int j = 0; j < DIM; ++j)
+    uint state[FUSED_ROOM];
+    for (int j = 0; j < FUSED_ROOM; ++j)
         state[j] = 0u;
     if (first < end) {
         const uint i = start + first;
         uint bits = GRAY ? i ^ (i >> 1) : i;
         while (bits) {
             const uint c = ld_ctz(bits);
-            for (int j = 0; j < DIM; ++j)
-                state[j] ^= columns[c * DIM + j];
+            for (int j = 0; j < FUSED_ROOM; ++j)
+                state[j] ^= columns[c * FUSED_ROOM + j];
             bits &= bits - 1u;
         }
     }

@@ -112,6 +112,25 @@ def test_fused_values_equal_the_cubature_points(method, periodization):
     assert np.all(np.abs(got - want) <= TOL * (np.abs(want) + f.scale))
 
 
+@pytest.mark.parametrize("d", [3, 6, 11, 17])
+def test_fused_points_with_padded_rows_are_the_samplers(d):
+    # the kernel's Sobol' tables have rows of 4, 8, 16 words for d = 3, 6, 11 (zeros past
+    # d), 17 unpadded: every coordinate still the sampler's, in both orders
+    f = Integrand.from_opencl(" + ".join(f"{j + 1}.0 * x[{j}]" for j in range(d)), d)
+    weights = np.arange(1, d + 1, dtype=np.float64)
+    for kind, randomize in (("digital", "xor"), ("sobol", "owen")):
+        if kind == "digital":
+            x = clsamp.make_sampler("digital_net", d=d, seed=3, randomize="lms+shift").sample(
+                512, start=512)
+            got = FusedRule(f, kind, 3).values(512, 512)
+        else:
+            x = clsamp.make_sampler("sobol", d=d, seed=3, randomize=randomize).sample(512)
+            got = FusedRule(f, kind, 3, randomize).sums(512, 0, range(1)) / 512
+            np.testing.assert_allclose(got, [np.mean(x @ weights)], rtol=1e-13)
+            continue
+        np.testing.assert_allclose(got, np.minimum(x, 1.0 - 2.0**-53) @ weights, rtol=1e-14)
+
+
 def test_user_integrand_fuses_with_a_chunked_launch(monkeypatch):
     monkeypatch.setattr(fused, "CHUNK", 512)
     f = Integrand.from_opencl("x[0] * x[1] + x[2] * x[2]", 3)
