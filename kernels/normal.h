@@ -8,11 +8,12 @@
 #define CLSAMP_HORNER8(x, c0, c1, c2, c3, c4, c5, c6, c7) \
     ((((((((c0) * (x) + (c1)) * (x) + (c2)) * (x) + (c3)) * (x) + (c4)) * (x) + (c5)) * (x) + (c6)) * (x) + (c7))
 
-/* One definition for double and double4 (T), without branches: every lane evaluates the
- * central rational function and the tail's, then selects (as clsamp.transforms.to_normal
- * does with np.where), so four lanes run in SIMD. Each lane's operations are the scalar
- * algorithm's, in its order. */
-#define CLSAMP_TO_NORMAL(name, T)                                                              \
+/* One definition for double and double4 (T), without branches between lanes: every lane
+ * evaluates the central rational function and, unless every lane is central (ALL: the
+ * test over the lanes), the tail's, then selects (as clsamp.transforms.to_normal does with
+ * np.where), so four lanes run in SIMD. Each lane's operations are the scalar algorithm's,
+ * in its order. */
+#define CLSAMP_TO_NORMAL(name, T, ALL)                                                         \
     inline T name(const T u)                                                                   \
     {                                                                                          \
         const T p = u > 0x1p-1022 ? u : (T)(0x1p-1022);                                        \
@@ -26,6 +27,8 @@
                              3.9307895800092710610e+4, 2.1213794301586595867e+4,                \
                              5.3941960214247511077e+3, 6.8718700749205790830e+2,                \
                              4.2313330701600911252e+1, 1.0);                                    \
+        if (ALL(fabs(q) <= 0.425))                                                             \
+            return middle;                                                                     \
         const T tail = sqrt(-log(q < 0.0 ? p : 1.0 - p));                                      \
         const T t_near = tail - 1.6, t_far = tail - 5.0;                                       \
         const T near = CLSAMP_HORNER8(t_near, 7.74545014278341407640e-4, 2.27238449892691845833e-2, \
@@ -48,7 +51,8 @@
         return fabs(q) <= 0.425 ? middle : (q < 0.0 ? -value : value);                         \
     }
 
-CLSAMP_TO_NORMAL(clsamp_to_normal, double)
-CLSAMP_TO_NORMAL(clsamp_to_normal4, double4)
+#define CLSAMP_SCALAR_TRUE(x) (x)
+CLSAMP_TO_NORMAL(clsamp_to_normal, double, CLSAMP_SCALAR_TRUE)
+CLSAMP_TO_NORMAL(clsamp_to_normal4, double4, all)
 
 #endif
