@@ -67,10 +67,12 @@ def _qmcpy(f, d, tol, method):
     else:
         solver = qmcpy.CubQMCLatticeG(qmcpy.CustomFun(qmcpy.Uniform(qmcpy.Lattice(d, seed=7)), g=f),
                                       abs_tol=tol, n_limit=2**20)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
+    from qmcpy.util import MaxSamplesWarning
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
         estimate, data = solver.integrate()
-    return float(np.asarray(estimate).reshape(-1)[0]), int(data.n_total)
+    converged = not any(issubclass(w.category, MaxSamplesWarning) for w in caught)
+    return float(np.asarray(estimate).reshape(-1)[0]), int(data.n_total), converged
 
 
 def _timed(fn, quick=False):
@@ -95,19 +97,22 @@ def run(devices, quick):
             g = f.__call__                          # the NumPy integrand, the same for both
             for method, peer_name in METHODS.items():
                 for tol in TOLERANCES[label][:1] if quick else TOLERANCES[label]:
-                    peer, t_peer, peer_quality = "", None, ""
+                    peer, t_peer, peer_quality, extra = "", None, "", {}
                     if have_qmcpy:
-                        t_peer, (estimate, n) = _timed(
+                        t_peer, (estimate, n, converged) = _timed(
                             lambda g=g, f=f, tol=tol, m=method: _qmcpy(g, f.d, tol, m), quick)
                         peer = f"qmcpy {peer_name}"
-                        peer_quality = f"; qmcpy {n} points, error {abs(estimate - f.integral):.1e}"
+                        peer_quality = (f"; qmcpy {n} points, error {abs(estimate - f.integral):.1e}"
+                                        + ("" if converged else " (stopped at its n_limit, unconverged)"))
+                        # a peer that gave up is no comparison of speed (run.py's summary skips it)
+                        extra = {} if converged else {"peer_unconverged": True}
                     for integrand, kind in ((g, "NumPy integrand"), (f, "device integrand")):
                         t, res = _timed(lambda h=integrand, f=f, tol=tol, m=method: clsamp.integrate(
                             h, f.d, abs_tol=tol, method=m, max_n=2**26, progress=False), quick)
                         quality = (f"clsamp {res.n} points, error {abs(res.estimate - f.integral):.1e}, "
                                    f"bound {res.half_width:.1e}{peer_quality}")
                         rows.append(Row(f"integrate {method} {label}, abs_tol {tol:g}", kind,
-                                        dev, t, peer, t_peer, quality))
+                                        dev, t, peer, t_peer, quality, dict(extra)))
     return rows + _walsh_rows(devices, quick)
 
 
@@ -190,7 +195,7 @@ def ceiling(tolerances=(1e-3, 1e-4)):
     for name, f in _cases():
         for tol in tolerances:
             for method in METHODS:
-                qmcpy_seconds, (_, n) = timed(lambda: _qmcpy(f.__call__, f.d, tol, method), repeats=3)
+                qmcpy_seconds, (_, n, _) = timed(lambda: _qmcpy(f.__call__, f.d, tol, method), repeats=3)
                 x = np.random.default_rng(0).random((n, f.d))
                 chunks = [x[:min(n, 1024)]] + [x[2**m:2**(m + 1)] for m in range(10, n.bit_length() - 1)]
                 f_seconds = timed(lambda: [f(c) for c in chunks], repeats=3)[0]

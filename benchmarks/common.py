@@ -445,19 +445,24 @@ def measured_line(command, cpu, m, versions, peers):
             + "; ".join(m["devices"]) + ".")
 
 
-# Comparisons inside clsamp (its NumPy twins, another of its samplers or settings, a
-# published figure): the full table has them, the summary keeps the outside peers.
-INTERNAL_PEERS = ("numpy reference", "numpy, same algorithm", "combined", "random",
-                  "sobol:owen render", "balzer")
+# Comparisons inside clsamp (its NumPy twins, another of its samplers or settings, its
+# double path against float-float, its launch shapes, a published figure): the full table
+# has them, the summary keeps the outside peers.
+INTERNAL_PEERS = ("numpy reference", "numpy, same algorithm", "numpy twin", "combined", "random",
+                  "sobol:owen render", "balzer", "clsamp ", "double (same device)", "gpu shape",
+                  "host shape")
 
 
 def summary_table(rows, measured):
     """The README's summary of one run: one line per capability and outside peer, with how
     many cases and the range of the ratios (peer seconds / clsamp seconds), under the
-    ``measured`` line of the full table (docs/benchmarks.md)."""
+    ``measured`` line of the full table (docs/benchmarks.md). Rows against clsamp itself
+    (:data:`INTERNAL_PEERS`) and rows whose peer stopped without its result
+    (``extra["peer_unconverged"]``) stay in the full table only."""
     groups = {}
     for r in rows:
-        if r.ratio is None or r.peer in ("", "-") or r.peer.lower().startswith(INTERNAL_PEERS):
+        if (r.ratio is None or r.peer in ("", "-") or r.peer.lower().startswith(INTERNAL_PEERS)
+                or r.extra.get("peer_unconverged")):
             continue
         groups.setdefault((r.capability or "-", r.peer), []).append(r.ratio)
     lines = [measured, "", "| capability | peer | cases | ratio, peer s / clsamp s (> 1: clsamp faster) |",

@@ -153,3 +153,16 @@ def test_several_devices_are_put_side_by_side(tmp_path):
     common.write_markdown(str(readme), rows)
     assert "fastest on [3] Intel" in readme.read_text()
     assert "## Side by side" in (tmp_path / common.FULL_TABLE).read_text()
+
+
+def test_the_summary_keeps_outside_peers_that_finished():
+    rows = [common.Row("a", "1", "cpu", 1.0, "scipy Sobol scrambled", 3.0, capability="lowdiscrepancy"),
+            common.Row("b", "1", "cpu", 1.0, "clsamp fast in double", 0.1, capability="spectrum"),
+            common.Row("c", "1", "cpu", 1.0, "numpy twin", 9.0, capability="gbn"),
+            common.Row("d", "1", "cpu", 4.0, "qmcpy CubQMCLatticeG", 0.5, capability="cubature",
+                       extra={"peer_unconverged": True}),
+            common.Row("e", "1", "cpu", 1.0, "qmcpy CubQMCLatticeG", 2.0, capability="cubature")]
+    table = common.summary_table(rows, "measured")
+    assert "| lowdiscrepancy | scipy Sobol scrambled | 1 | 3× |" in table
+    assert "| cubature | qmcpy CubQMCLatticeG | 1 | 2× |" in table          # not the 0.125x
+    assert "in double" not in table and "numpy twin" not in table
