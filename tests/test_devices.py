@@ -157,6 +157,32 @@ def test_a_convergence_experiment_gives_the_same_bits(device):
 
 
 @pytest.mark.parametrize("device", WITH_FP64, ids=_label)
+def test_the_walsh_state_and_a_device_integrand_agree(device, monkeypatch):
+    # kernels/walsh.cl from the host's values: the same bits; a device integrand's values
+    # (fused_integrals.cl in 3-D, normal.h) written into it: the libm's last bits apart
+    from clsamp import cubature
+    from clsamp.cubature import Cubature
+    from clsamp.integrands import keister
+    monkeypatch.setattr(cubature, "DEVICE_FROM", 2**11)
+
+    def walsh():
+        rule = Cubature(lambda x: np.exp(np.sum(x, axis=1)) * np.cos(9.0 * x[:, 0]), 3, "digital", 4,
+                        device=True)
+        return [rule.step() for _ in range(5)], rule.coefficients, rule.kappa
+
+    def fused():
+        res = clsamp.integrate(keister(3), 3, abs_tol=1e-4, method="digital", seed=2, progress=False)
+        return res.n, res.estimate, res.half_width
+
+    here, there = walsh(), on(device, walsh)
+    assert here[0] == there[0] and np.array_equal(here[2], there[2])
+    assert np.array_equal(here[1].view(np.uint64), there[1].view(np.uint64))
+    here, there = fused(), on(device, fused)
+    assert here[0] == there[0]
+    np.testing.assert_allclose(here[1:], there[1:], rtol=1e-12)
+
+
+@pytest.mark.parametrize("device", WITH_FP64, ids=_label)
 def test_spectra_and_metrics_agree_to_their_stated_tolerance(device):
     pts = clsamp.make_sampler("jittered", seed=3).sample(1024, realizations=4)
     n = pts.shape[1]
