@@ -345,8 +345,8 @@ class Cubature:
         self.walsh.double(y, n.bit_length() - 1 - R_LAG - 1)
         m = n.bit_length() - 1
         self.n = n
-        bound = fudge(m) * float(np.sum(self.walsh.terms(2**(m - R_LAG - 1))))
-        return self.walsh.mean(), bound
+        mean, terms = self.walsh.summary(2**(m - R_LAG - 1))
+        return mean, fudge(m) * float(np.sum(terms))
 
 
 def combine(mean, bound, abs_tol, rel_tol):

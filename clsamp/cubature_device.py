@@ -6,9 +6,10 @@ stay on the device from one doubling to the next, in arrays with room to grow. A
 takes the new values (uploaded from the host, or written on the device by the kernel that
 evaluates the integrand: :meth:`DeviceWalsh.values_buffer`), transforms them, combines
 them with the coefficients already there in place, reorders the wavenumbers and reads
-back only the 2^(m-r-1) terms of the bound and the mean (coefficient 0). The kernels do
-the NumPy twin's operations (:func:`clsamp.cubature.walsh_coefficients`,
-``Cubature.step``, ``_order_wavenumbers``) in the same order: the same bits.
+back only the first 2^(m-r) of them, in one transfer: the mean (coefficient 0) and the
+bound's 2^(m-r-1) terms. The kernels do the NumPy twin's operations
+(:func:`clsamp.cubature.walsh_coefficients`, ``Cubature.step``, ``_order_wavenumbers``) in
+the same order: the same bits.
 """
 
 import numpy as np
@@ -170,29 +171,23 @@ class DeviceWalsh:
         m = self.n.bit_length() - 1
         self._order(m - 1, bottom, m)
 
-    def mean(self):
-        """The mean of the values so far: the coefficient of wavenumber 0 (always first).
-
-        Returns
-        -------
-        float
-        """
-        return float(self.a[:1].get()[0])
-
-    def terms(self, low):
-        """The terms of the error bound.
+    def summary(self, low):
+        """The mean and the terms of the error bound, in one read from the device.
 
         Parameters
         ----------
         low : int
-            2^(m-r-1).
+            2^(m-r-1) (at least 1).
 
         Returns
         -------
-        ndarray of float64
+        mean : float
+            The mean of the values so far: the coefficient of wavenumber 0 (always first).
+        terms : ndarray of float64
             |c[kappa[low + i]]| for i < low, on the host (the bound sums them in NumPy).
         """
-        return np.abs(self.a[low:2 * low].get())
+        head = self.a[:2 * low].get()
+        return float(head[0]), np.abs(head[low:])
 
     def coefficients(self):
         """The coefficients.

@@ -94,6 +94,7 @@ class FusedRule:
         self.f, self.kind, self.seed = f, kind, seed
         self.randomize = {"digital": "xor", "lattice": "shift"}.get(kind, randomize)
         d = f.d
+        room = d if kind == "lattice" else _room(d)
         if kind == "lattice":
             self.columns = runtime.table(("fused lattice", d), lambda: kuo_vector(d))
             self.steps = self.columns
@@ -102,7 +103,6 @@ class FusedRule:
             gray = kind == "sobol"
             # "digital": LMS + digital shift, realization 0's matrices L_j C_j (as the sampler's)
             lms = seed if kind == "digital" else None
-            room = _room(d)
 
             def columns():
                 v = nt.sobol_matrices(d)              # (d, 32)
@@ -125,7 +125,7 @@ class FusedRule:
         self.defines = {"DIM": d, "INTEGRAND": f.kernel_code, "POINTS": int(kind == "lattice"),
                         "GRAY": int(kind == "sobol"), "RANDOMIZE": RANDOMIZE[self.randomize],
                         "PERIODIZE": PERIODIZE[periodization], "FUSED_BLOCK": self.block,
-                        "FUSED_ROOM": _room(d) if kind != "lattice" else d}
+                        "FUSED_ROOM": room}
 
     def _kernel(self, sums):
         return runtime.kernel("fused_integrals.cl", "fused_integrals",

@@ -51,8 +51,8 @@
         return fabs(q) <= 0.425 ? middle : (q < 0.0 ? -value : value);                         \
     }
 
-#define CLSAMP_SCALAR_TRUE(x) (x)
-CLSAMP_TO_NORMAL(clsamp_to_normal, double, CLSAMP_SCALAR_TRUE)
+#define CLSAMP_ALL_SCALAR(x) (x)
+CLSAMP_TO_NORMAL(clsamp_to_normal, double, CLSAMP_ALL_SCALAR)
 CLSAMP_TO_NORMAL(clsamp_to_normal4, double4, all)
 
 #endif
