@@ -19,8 +19,9 @@ The algorithm, its constants and the wavenumber ordering are those of the author
 The Walsh transform, the doubling's butterfly and the wavenumber ordering of a digital net
 run on the device where it has fp64 (:mod:`clsamp.cubature_device`, the same bits as the
 NumPy here); the lattice's spectrum is a real FFT (``scipy.fft``) of all its values on the
-host. The points come from the samplers (on the device), or, for an integrand with a
-kernel, are made in the kernel that evaluates it (:mod:`clsamp.fused`).
+host, its wavenumber ordering on the device as the net's. The points come from the
+samplers (on the device), or, for an integrand with a kernel, are made in the kernel that
+evaluates it (:mod:`clsamp.fused`).
 
 References
 ----------
@@ -128,24 +129,36 @@ def fourier_coefficients(y):
     ndarray of complex128
         (n,); entry 0 is the mean.
     """
-    half = _half_spectrum(y)
-    # the rest from the conjugate symmetry of a real sequence's transform, c_(n-k) = conj(c_k)
-    return np.concatenate([half, np.conj(half[1:y.size - y.size // 2][::-1])])
+    return _spectrum(_half_spectrum(y[_bit_reversal(y.size.bit_length() - 1)]))
 
 
-def _half_spectrum(y):
-    """fourier_coefficients(y) for k = 0 .. n/2: a real FFT of the values in lattice order."""
+def _spectrum(half):
+    """The whole spectrum of a real sequence of n values from its half, k = 0 .. n/2, by the
+    conjugate symmetry c_(n-k) = conj(c_k)."""
+    n = 2 * (half.size - 1)
+    return np.concatenate([half, np.conj(half[1:n - n // 2][::-1])])
+
+
+def _half_spectrum(values):
+    """The Fourier coefficients k = 0 .. n/2 of values in lattice order (entry j at the
+    lattice's point j / n): a real FFT, scaled by 1/n."""
     import scipy.fft
-    n = y.size
-    half = scipy.fft.rfft(y[_bit_reversal(n.bit_length() - 1)])
-    half *= 1.0 / n                        # exact: n is a power of 2
+    half = scipy.fft.rfft(values)
+    half *= 1.0 / values.size              # exact: n is a power of 2
     return half
 
 
-def _fourier_magnitudes(y):
-    """|fourier_coefficients(y)|, from the half spectrum (|c_(n-k)| = |c_k|)."""
-    half = np.abs(_half_spectrum(y))
-    return np.concatenate([half, half[1:y.size - y.size // 2][::-1]])
+def _lattice_order(y, held=None):
+    """Values in radical-inverse order (point i at the lattice's point Φ_2(i) n) put in lattice
+    order; with ``held``, the values of the first n points already in lattice order, and y
+    those of points n .. 2n - 1: point n + k is the lattice's point 2 Φ_2(k) n + 1 of 2n,
+    so the new values fill the odd places in bit-reversed order, the held ones the even."""
+    if held is None:
+        return y[_bit_reversal(y.size.bit_length() - 1)]
+    out = np.empty(2 * y.size)
+    out[0::2] = held
+    out[1::2] = y[_bit_reversal(y.size.bit_length() - 1)]
+    return out
 
 
 def _bit_reversal(m):
@@ -214,10 +227,11 @@ class Cubature:
         those values into the device array ``out`` (:meth:`clsamp.fused.FusedRule.fill`), so
         that they never cross to the host.
     device : bool, optional
-        Digital only: from the doubling of :data:`DEVICE_FROM` points on, keep the Walsh
-        coefficients and their ordering on the device and transform there
-        (:class:`clsamp.cubature_device.DeviceWalsh`, the same bits). None: where the
-        current device has fp64.
+        From the doubling of :data:`DEVICE_FROM` points on, keep the state on the device
+        (:class:`clsamp.cubature_device.DeviceWalsh`, the same bits): a net's Walsh
+        coefficients and ordering, transformed there; a lattice's ordering, reordered there
+        by the magnitudes of the spectrum the host computes. None: where the current device
+        has fp64.
     max_n : int, optional
         The most points the run will take (sizes the device's arrays).
 
@@ -244,13 +258,13 @@ class Cubature:
         self._coefficients = self._kappa = self._values = None
         if device is None:
             device = runtime.current_device().fp64
-        self.walsh = DeviceWalsh(max_n) if device and method == "digital" else None
+        self.walsh = DeviceWalsh(max_n) if device else None
 
     @property
     def coefficients(self):
         """The discrete Walsh (Fourier) coefficients of the 2^m values so far, on the host."""
         if self.method == "lattice":
-            return fourier_coefficients(self._values)
+            return _spectrum(_half_spectrum(self._values))
         return self._coefficients if self._coefficients is not None else self.walsh.coefficients()
 
     @property
@@ -301,8 +315,9 @@ class Cubature:
         if self.method == "lattice":
             # the whole spectrum afresh: a real FFT of all 2^m values costs less than the
             # new half's complex FFT and the doubling's twiddles
-            self._values = y if first else np.concatenate([self._values, y])
-            magnitudes = _fourier_magnitudes(self._values)
+            self._values = _lattice_order(y, None if first else self._values)
+            half = np.abs(_half_spectrum(self._values))
+            magnitudes = np.concatenate([half, half[1:size - size // 2][::-1]])
         else:
             new = walsh_coefficients(y)
             if not first:
@@ -330,12 +345,23 @@ class Cubature:
         return mean, bound
 
     def _device_step(self):
-        """:meth:`step` with the coefficients and the ordering on the device from the doubling
-        of :data:`DEVICE_FROM` points on: the same operations (kernels/walsh.cl), the same
-        bits."""
-        if self._coefficients is not None:                 # the host's state moves over once
+        """:meth:`step` with the coefficients (a lattice's magnitudes) and the ordering on the
+        device from the doubling of :data:`DEVICE_FROM` points on: the same operations
+        (kernels/walsh.cl), the same bits."""
+        if self._kappa is not None:                 # the host's state moves over once
             self.walsh.load(self._coefficients, self._kappa)
-            self._coefficients = self._kappa = self._values = None
+            self._coefficients = self._kappa = None
+        if self.method == "lattice":        # the values stay on the host, for the FFT
+            y = self._block(self.n, self.n)
+            self._values = _lattice_order(y, self._values)
+            self.total += float(np.sum(y))
+            n = 2 * self.n
+            self.walsh.double_lattice(np.abs(_half_spectrum(self._values)),
+                                      n.bit_length() - 1 - R_LAG - 1)
+            m = n.bit_length() - 1
+            self.n = n
+            _, terms = self.walsh.summary(2**(m - R_LAG - 1))
+            return self.total / n, fudge(m) * float(np.sum(terms))
         if self.fill is not None:           # the values stay on the device
             self.fill(self.n, self.n, self.walsh.values_buffer())
             y = None

@@ -1,13 +1,16 @@
-"""The digital-net cubature's transform, butterfly, wavenumber ordering and bound terms on the
-device (``kernels/walsh.cl``), for :class:`clsamp.cubature.Cubature`.
+"""The adaptive cubature's state on the device (``kernels/walsh.cl``), for
+:class:`clsamp.cubature.Cubature`: a digital net's transform, butterfly, wavenumber ordering
+and bound terms; a lattice's wavenumber ordering and bound terms.
 
 Once the host's state is loaded, the coefficients (in wavenumber order) and the ordering
-stay on the device from one doubling to the next, in arrays with room to grow. A doubling
-takes the new values (uploaded from the host, or written on the device by the kernel that
-evaluates the integrand: :meth:`DeviceWalsh.values_buffer`), transforms them, combines
-them with the coefficients already there in place, reorders the wavenumbers and reads
-back only the first 2^(m-r) of them, in one transfer: the mean (coefficient 0) and the
-bound's 2^(m-r-1) terms. The kernels do the NumPy twin's operations
+stay on the device from one doubling to the next, in arrays with room to grow. A net's
+doubling takes the new values (uploaded from the host, or written on the device by the
+kernel that evaluates the integrand: :meth:`DeviceWalsh.values_buffer`), transforms them,
+combines them with the coefficients already there in place, reorders the wavenumbers and
+reads back only the first 2^(m-r) of them, in one transfer: the mean (coefficient 0) and
+the bound's 2^(m-r-1) terms. A lattice's doubling (:meth:`DeviceWalsh.double_lattice`)
+takes the magnitudes of the spectrum the host computed, puts them in the ordering's order
+and reorders, the same way. The kernels do the NumPy twin's operations
 (:func:`clsamp.cubature.walsh_coefficients`, ``Cubature.step``, ``_order_wavenumbers``) in
 the same order: the same bits.
 """
@@ -20,8 +23,8 @@ PASS_BITS = 5            # butterfly levels a pass of the transform applies (ker
 
 
 class DeviceWalsh:
-    """The Walsh coefficients of a digital-net rule and their wavenumber ordering, on the
-    current device (fp64).
+    """The Walsh coefficients of a digital-net rule (or a lattice's Fourier magnitudes) and
+    their wavenumber ordering, on the current device (fp64).
 
     Parameters
     ----------
@@ -113,15 +116,17 @@ class DeviceWalsh:
             cl.enqueue_copy(self.q, a.data, self.a.data, byte_count=8 * self.n)
             cl.enqueue_copy(self.q, kappa.data, self.kappa.data, byte_count=4 * self.n)
         self.a, self.kappa = a, kappa
-        self.t = cla.empty(self.q, room // 2, np.float64)
+        # a net's new values, or a lattice's half spectrum (one more)
+        self.t = cla.empty(self.q, room // 2 + 1, np.float64)
 
     def load(self, coefficients, kappa):
         """Take over a state made on the host.
 
         Parameters
         ----------
-        coefficients : ndarray of float64
-            The Walsh coefficients of the first 2^m values.
+        coefficients : ndarray of float64 or None
+            The Walsh coefficients of the first 2^m values (None for a lattice, whose
+            doublings bring their whole spectrum: :meth:`double_lattice`).
         kappa : ndarray of int
             Their wavenumber ordering.
         """
@@ -129,7 +134,9 @@ class DeviceWalsh:
         kappa = np.asarray(kappa)
         self.n = 0
         self._room(2 * kappa.size)
-        cl.enqueue_copy(self.q, self.a.data, np.ascontiguousarray(coefficients[kappa], dtype=np.float64))
+        if coefficients is not None:
+            cl.enqueue_copy(self.q, self.a.data,
+                            np.ascontiguousarray(coefficients[kappa], dtype=np.float64))
         cl.enqueue_copy(self.q, self.kappa.data, np.ascontiguousarray(kappa, dtype=np.uint32))
         self.n = kappa.size
 
@@ -171,6 +178,29 @@ class DeviceWalsh:
         m = self.n.bit_length() - 1
         self._order(m - 1, bottom, m)
 
+    def double_lattice(self, half, bottom):
+        """A lattice's doubling: the ordering extended to 2n wavenumbers (n: the points so
+        far) and reordered by the magnitudes of the 2n values' Fourier coefficients.
+
+        Parameters
+        ----------
+        half : ndarray of float64
+            |c_k| for k = 0 .. n, on the host (a real sequence's |c_(2n-k)| = |c_k|).
+        bottom : int
+            The ordering runs from level m - 1 down to ``bottom`` + 1 (2^m = 2n).
+        """
+        import pyopencl as cl
+        n = self.n
+        if half.size != n + 1:
+            raise ValueError(f"a lattice's doubling of {n} values takes {n + 1} magnitudes, got {half.size}")
+        self._room(2 * n)
+        cl.enqueue_copy(self.q, self.t.data, np.ascontiguousarray(half, dtype=np.float64))
+        self._kernel("lattice_sizes")(self.q, (n,), None, self.a.data, self.t.data, self.kappa.data,
+                                      np.uint32(n))
+        self.n = 2 * n
+        m = self.n.bit_length() - 1
+        self._order(m - 1, bottom, m)
+
     def summary(self, low):
         """The mean and the terms of the error bound, in one read from the device.
 
@@ -182,7 +212,8 @@ class DeviceWalsh:
         Returns
         -------
         mean : float
-            The mean of the values so far: the coefficient of wavenumber 0 (always first).
+            The mean of the values so far: the coefficient of wavenumber 0 (always first; a
+            lattice's: its magnitude).
         terms : ndarray of float64
             |c[kappa[low + i]]| for i < low, on the host (the bound sums them in NumPy).
         """

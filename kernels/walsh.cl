@@ -1,12 +1,15 @@
-/* The digital-net cubature's state on the device: the fast Walsh transform of a doubling's
- * values, the doubling's butterfly and the wavenumber ordering (clsamp/cubature_device.py
- * reads the bound's terms back from the coefficients, which it keeps in wavenumber order).
- * NumPy twin: clsamp/cubature.py (walsh_coefficients, Cubature.step, _order_wavenumbers),
- * the same operations in the same order, so the same bits (only additions, subtractions,
- * halvings, comparisons and exact scalings by powers of 2).
+/* The adaptive cubature's state on the device: the fast Walsh transform of a digital net's
+ * doubling, the doubling's butterfly, a lattice's Fourier magnitudes put in wavenumber order,
+ * and the wavenumber ordering (clsamp/cubature_device.py reads the bound's terms back from
+ * the values it keeps in wavenumber order). NumPy twin: clsamp/cubature.py
+ * (walsh_coefficients, Cubature.step, _order_wavenumbers), the same operations in the same
+ * order, so the same bits (only additions, subtractions, halvings, comparisons, copies and
+ * exact scalings by powers of 2).
  *
- * Hickernell and Jiménez Rugama, "Reliable adaptive cubature using digital sequences"
- * (MCQMC 2014); the ordering is GAIL's kappanumap, as qmcpy's CubQMCNetG. */
+ * Hickernell and Jiménez Rugama, "Reliable adaptive cubature using digital sequences" and
+ * Jiménez Rugama and Hickernell, "Adaptive multidimensional integration based on rank-1
+ * lattices" (MCQMC 2014); the ordering is GAIL's kappanumap, as qmcpy's CubQMCNetG and
+ * CubQMCLatticeG. */
 #pragma OPENCL FP_CONTRACT OFF
 
 #ifndef WALSH_BITS
@@ -57,6 +60,21 @@ __kernel void walsh_double(__global double *a, __global const double *t, __globa
     a[i] = (c + v) * 0.5;
     a[n + i] = (c - v) * 0.5;
     kappa[n + i] = n + k;
+}
+
+/* A lattice's doubling, in place in arrays of room for 2n: kappa becomes (kappa, n + kappa)
+ * and a holds the magnitudes of the 2n values' Fourier coefficients in that order,
+ * a[i] = |c[kappa[i]]|, from those of the half spectrum (sizes[k] = |c[k]|, k <= n; a real
+ * sequence's |c[2n - k]| = |c[k]|). The host recomputes the whole spectrum each doubling,
+ * so every entry is written afresh. Grid: n. */
+__kernel void lattice_sizes(__global double *a, __global const double *sizes, __global uint *kappa,
+                            const uint n)
+{
+    const uint i = get_global_id(0);
+    const uint k = kappa[i], k2 = n + k, size = 2u * n;
+    a[i] = sizes[min(k, size - k)];
+    a[n + i] = sizes[min(k2, size - k2)];
+    kappa[n + i] = k2;
 }
 
 /* One level of the ordering: for j in [1, nl) the first block decides (|a[j + nl]| > |a[j]|,

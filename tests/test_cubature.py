@@ -47,20 +47,22 @@ def test_doubling_updates_equal_a_fresh_transform(method):
         assert mean == rule.coefficients[0]
 
 
-def test_the_device_walsh_state_has_the_numpy_bits(monkeypatch):
+@pytest.mark.parametrize("method", ["digital", "lattice"])
+def test_the_device_state_has_the_numpy_bits(monkeypatch, method):
     # kernels/walsh.cl does walsh_coefficients, the butterfly and _order_wavenumbers in the
-    # NumPy order: the same coefficients, ordering and bounds, bit for bit
+    # NumPy order (a lattice: its magnitudes put in wavenumber order, then the ordering): the
+    # same coefficients, ordering and bounds, bit for bit
     from clsamp import cubature
     monkeypatch.setattr(cubature, "DEVICE_FROM", 2**11)      # on the device from 4096 points
 
     def f(x):
         return np.exp(np.sum(x, axis=1)) * np.cos(9.0 * x[:, 0]) + (x[:, 1] > 0.3)
 
-    rules = [Cubature(f, 3, "digital", 6, device=device) for device in (False, True)]
+    rules = [Cubature(f, 3, method, 6, device=device) for device in (False, True)]
     assert rules[0].walsh is None and rules[1].walsh is not None
     for _ in range(6):
         assert rules[0].step() == rules[1].step()
-    assert rules[1]._coefficients is None                     # the state is on the device
+    assert rules[1]._kappa is None                            # the ordering is on the device
     assert rules[1].n == 2**15
     host, device = rules[0].coefficients, rules[1].coefficients
     assert np.array_equal(host.view(np.uint64), device.view(np.uint64))

@@ -165,8 +165,8 @@ def test_the_walsh_state_and_a_device_integrand_agree(device, monkeypatch):
     from clsamp.integrands import keister
     monkeypatch.setattr(cubature, "DEVICE_FROM", 2**11)
 
-    def walsh():
-        rule = Cubature(lambda x: np.exp(np.sum(x, axis=1)) * np.cos(9.0 * x[:, 0]), 3, "digital", 4,
+    def walsh(method):
+        rule = Cubature(lambda x: np.exp(np.sum(x, axis=1)) * np.cos(9.0 * x[:, 0]), 3, method, 4,
                         device=True)
         return [rule.step() for _ in range(5)], rule.coefficients, rule.kappa
 
@@ -174,9 +174,10 @@ def test_the_walsh_state_and_a_device_integrand_agree(device, monkeypatch):
         res = clsamp.integrate(keister(3), 3, abs_tol=1e-4, method="digital", seed=2, progress=False)
         return res.n, res.estimate, res.half_width
 
-    here, there = walsh(), on(device, walsh)
-    assert here[0] == there[0] and np.array_equal(here[2], there[2])
-    assert np.array_equal(here[1].view(np.uint64), there[1].view(np.uint64))
+    for method in ("digital", "lattice"):            # a lattice: its ordering on the device
+        here, there = walsh(method), on(device, lambda m=method: walsh(m))
+        assert here[0] == there[0] and np.array_equal(here[2], there[2])
+        assert np.array_equal(here[1].view(np.uint64), there[1].view(np.uint64))
     here, there = fused(), on(device, fused)
     assert here[0] == there[0]
     np.testing.assert_allclose(here[1:], there[1:], rtol=1e-12)

@@ -317,3 +317,17 @@ def test_the_oclgrind_bit_reversal_gives_the_same_bits(monkeypatch):
     assert programs.build_count() > built                      # the other form was built
     for a, b in zip(plain, swapped, strict=True):
         assert np.array_equal(a.view(np.uint64), b.view(np.uint64))
+
+
+def test_remembered_shifts_are_the_streams_and_fresh_arrays():
+    # shift_vectors keeps the shifts of a few realizations (a sequence sampled in chunks
+    # asks for them again): the same philox values, in an array the caller may change
+    from clsamp import philox
+    from clsamp.samplers.lowdiscrepancy import shift_vectors
+    stream = philox.uniform(5, philox.Stream.SHIFT, np.arange(2, 5, dtype=np.uint32)[:, None], 0,
+                            np.arange(3, dtype=np.uint32)[None, :])
+    first = shift_vectors(5, range(2, 5), 3)
+    assert np.array_equal(first, stream)
+    first[:] = 0.0
+    assert np.array_equal(shift_vectors(5, np.arange(2, 5), 3), stream)
+    assert np.array_equal(shift_vectors(5, np.arange(100), 3)[2:5], stream)   # not remembered

@@ -334,11 +334,12 @@ def _walsh():
 
     def f(x):
         return np.exp(np.sum(x, axis=1)) * np.cos(9.0 * x[:, 0])
-    rules = [Cubature(f, 2, "digital", 3, device=device) for device in (False, True)]
-    for _ in range(3):
-        assert rules[0].step() == rules[1].step()
-    _same_bits(rules[0].coefficients, rules[1].coefficients)
-    _same_bits(rules[0].kappa, rules[1].kappa)
+    for method in ("digital", "lattice"):
+        rules = [Cubature(f, 2, method, 3, device=device) for device in (False, True)]
+        for _ in range(3):
+            assert rules[0].step() == rules[1].step()
+        _same_bits(rules[0].coefficients, rules[1].coefficients)
+        _same_bits(rules[0].kappa, rules[1].kappa)
 
 
 @check("render")

@@ -18,6 +18,7 @@ depend on how many realizations were asked for, and the OpenCL kernels
 :mod:`clsamp.number_theory`) give bit-identical points.
 """
 
+import functools
 import warnings
 
 import numpy as np
@@ -73,7 +74,15 @@ def shift_vectors(seed, realizations, d):
     ndarray of float64
         (len(realizations), d), from ``Stream.SHIFT``.
     """
-    r = np.asarray(realizations, dtype=np.uint32)[:, None]
+    r = np.asarray(realizations, dtype=np.uint32)
+    if r.size <= 64:       # a sequence sampled in chunks asks for the same few shifts again
+        return _few_shifts(int(seed), tuple(r.tolist()), int(d)).copy()
+    return philox.uniform(seed, philox.Stream.SHIFT, r[:, None], 0, np.arange(d, dtype=np.uint32)[None, :])
+
+
+@functools.lru_cache(maxsize=64)
+def _few_shifts(seed, realizations, d):
+    r = np.array(realizations, dtype=np.uint32)[:, None]
     return philox.uniform(seed, philox.Stream.SHIFT, r, 0, np.arange(d, dtype=np.uint32)[None, :])
 
 
