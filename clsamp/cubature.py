@@ -18,8 +18,9 @@ The algorithm, its constants and the wavenumber ordering are those of the author
 
 The Walsh transform, the doubling's butterfly and the wavenumber ordering of a digital net
 run on the device where it has fp64 (:mod:`clsamp.cubature_device`, the same bits as the
-NumPy here); the lattice's spectrum is a real FFT (``scipy.fft``) of all its values on the
-host, its wavenumber ordering on the device as the net's. The points come from the
+NumPy here); the lattice's spectrum is built on the host a doubling at a time (a real FFT,
+``scipy.fft``, of the new values and the radix-2 step), its wavenumber ordering on the
+device as the net's. The points come from the
 samplers (on the device), or, for an integrand with a kernel, are made in the kernel that
 evaluates it (:mod:`clsamp.fused`).
 
@@ -36,6 +37,7 @@ References
    (the estimate that meets a relative tolerance).
 """
 
+import math
 import warnings
 
 import numpy as np
@@ -148,17 +150,50 @@ def _half_spectrum(values):
     return half
 
 
-def _lattice_order(y, held=None):
-    """Values in radical-inverse order (point i at the lattice's point Φ_2(i) n) put in lattice
-    order; with ``held``, the values of the first n points already in lattice order, and y
-    those of points n .. 2n - 1: point n + k is the lattice's point 2 Φ_2(k) n + 1 of 2n,
-    so the new values fill the odd places in bit-reversed order, the held ones the even."""
-    if held is None:
-        return y[_bit_reversal(y.size.bit_length() - 1)]
-    out = np.empty(2 * y.size)
-    out[0::2] = held
-    out[1::2] = y[_bit_reversal(y.size.bit_length() - 1)]
-    return out
+class _LatticeSpectrum:
+    """A lattice's half spectrum, c_k for k = 0 .. n/2, kept from one doubling to the next.
+
+    The first 2^m values: one real FFT in lattice order. A doubling: point n + k of the
+    sequence is the lattice's point 2 Φ_2(k) n + 1 of 2n, so the held values are the even
+    points of the 2n and the new ones the odd, and the radix-2 step of the FFT gives
+    c_k = (E_k + w^k O_k) / 2 and c_(n-k) = conj(E_k - w^k O_k) / 2 for k <= n/2, with
+    E the held half spectrum, O the new values' (a real FFT of n values in their lattice
+    order) and w = e^(-i pi / n). The twiddles w^k are kept too: a doubling's even ones are
+    the last doubling's, its odd ones those times w (:meth:`twiddles`).
+    """
+
+    def __init__(self):
+        self.half = self._w = None
+
+    def add(self, y):
+        """Take the values of the next points (the first 2^m, or as many as are held)."""
+        n = y.size
+        new = _half_spectrum(y[_bit_reversal(n.bit_length() - 1)])
+        if self.half is None:
+            self.half = new
+            return
+        new *= self.twiddles(n)
+        out = np.empty(n + 1, dtype=np.complex128)
+        np.add(self.half[:n // 2], new[:n // 2], out=out[:n // 2])
+        top = out[n // 2:][::-1]                        # top[k] is c_(n - k), k <= n/2
+        np.subtract(self.half, new, out=top)
+        np.conjugate(top, out=top)
+        out *= 0.5
+        self.half = out
+
+    def twiddles(self, n):
+        """e^(-i pi k / n) for k = 0 .. n/2 (n a power of 2, each call's n twice the last's)."""
+        if self._w is None or 2 * (self._w.size - 1) * 2 != n:
+            k = np.arange(n // 2 + 1) * (-math.pi / n)
+            w = np.empty(k.size, dtype=np.complex128)
+            np.cos(k, out=w.real)
+            np.sin(k, out=w.imag)
+        else:
+            w = np.empty(n // 2 + 1, dtype=np.complex128)
+            w[0::2] = self._w
+            w[1::2] = self._w[:-1] * complex(math.cos(math.pi / n), -math.sin(math.pi / n))
+        self._w = w
+        return w
 
 
 def _bit_reversal(m):
@@ -240,9 +275,8 @@ class Cubature:
     :meth:`step` evaluates the next 2^m points (the first 2^10 on the first call) and
     returns (mean, bound). A net's Walsh coefficients are updated in O(n log n) from those
     of the points already seen (the new half's transform and the doubling's butterfly); a
-    lattice's spectrum is one real FFT of all the values held (O(n log n) as well, and
-    cheaper than the new half's complex FFT with the doubling's twiddles). See the
-    module's references.
+    lattice's half spectrum likewise (the new half's real FFT and the radix-2 step with
+    its twiddles, :class:`_LatticeSpectrum`). See the module's references.
     """
 
     def __init__(self, values, d, method, seed, periodization="none", block=None, device=None,
@@ -255,7 +289,8 @@ class Cubature:
         self.values, self.method, self.periodization = values, method, periodization
         self.fused, self.fill = block, fill
         self.n, self.total = 0, 0.0
-        self._coefficients = self._kappa = self._values = None
+        self._coefficients = self._kappa = None
+        self._spectrum = _LatticeSpectrum() if method == "lattice" else None
         if device is None:
             device = runtime.current_device().fp64
         self.walsh = DeviceWalsh(max_n) if device else None
@@ -264,7 +299,7 @@ class Cubature:
     def coefficients(self):
         """The discrete Walsh (Fourier) coefficients of the 2^m values so far, on the host."""
         if self.method == "lattice":
-            return _spectrum(_half_spectrum(self._values))
+            return _spectrum(self._spectrum.half)
         return self._coefficients if self._coefficients is not None else self.walsh.coefficients()
 
     @property
@@ -313,10 +348,8 @@ class Cubature:
         size = n if first else 2 * n
         m = size.bit_length() - 1
         if self.method == "lattice":
-            # the whole spectrum afresh: a real FFT of all 2^m values costs less than the
-            # new half's complex FFT and the doubling's twiddles
-            self._values = _lattice_order(y, None if first else self._values)
-            half = np.abs(_half_spectrum(self._values))
+            self._spectrum.add(y)
+            half = np.abs(self._spectrum.half)
             magnitudes = np.concatenate([half, half[1:size - size // 2][::-1]])
         else:
             new = walsh_coefficients(y)
@@ -353,10 +386,10 @@ class Cubature:
             self._coefficients = self._kappa = None
         if self.method == "lattice":        # the values stay on the host, for the FFT
             y = self._block(self.n, self.n)
-            self._values = _lattice_order(y, self._values)
+            self._spectrum.add(y)
             self.total += float(np.sum(y))
             n = 2 * self.n
-            self.walsh.double_lattice(np.abs(_half_spectrum(self._values)),
+            self.walsh.double_lattice(np.abs(self._spectrum.half),
                                       n.bit_length() - 1 - R_LAG - 1)
             m = n.bit_length() - 1
             self.n = n

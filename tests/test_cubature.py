@@ -47,6 +47,24 @@ def test_doubling_updates_equal_a_fresh_transform(method):
         assert mean == rule.coefficients[0]
 
 
+def test_the_lattice_spectrum_keeps_its_twiddles_accurate():
+    # a doubling's odd twiddles are the last doubling's times e^(-i pi / n): after 14
+    # doublings still within a few ulps of e^(-i pi k / n), and the spectrum of 2^16 values
+    # built by doublings equals one FFT of them all
+    from clsamp.cubature import _LatticeSpectrum
+    spectrum = _LatticeSpectrum()
+    y = np.random.default_rng(5).random(2**16)
+    spectrum.add(y[:4])
+    n = 4
+    while n < y.size:
+        spectrum.add(y[n:2 * n])
+        n *= 2
+    exact = np.exp(-1j * np.pi * np.arange(n // 4 + 1) / (n // 2))
+    assert np.max(np.abs(spectrum._w - exact)) <= 1e-15
+    np.testing.assert_allclose(np.concatenate([spectrum.half, np.conj(spectrum.half[1:-1][::-1])]),
+                               fourier_coefficients(y), rtol=0, atol=1e-15)
+
+
 @pytest.mark.parametrize("method", ["digital", "lattice"])
 def test_the_device_state_has_the_numpy_bits(monkeypatch, method):
     # kernels/walsh.cl does walsh_coefficients, the butterfly and _order_wavenumbers in the
