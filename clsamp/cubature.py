@@ -57,6 +57,9 @@ CHUNK = 2**22            # coordinates sampled and evaluated at a time: 2^20 poi
 # the launches cost more than the NumPy passes (docs/performance.md, "The Walsh state on
 # the device (issue 38)")
 DEVICE_FROM = 2**16
+# a lattice's chunks of at most this many coordinates come from the sampler's NumPy twin
+# (the same bits), below the cost of a launch and a read-back (docs/performance.md)
+HOST_LATTICE = 2**14
 
 __all__ = ["fudge", "walsh_coefficients", "fourier_coefficients", "Cubature", "PERIODIZATIONS"]
 
@@ -286,6 +289,7 @@ class Cubature:
             self.sampler = make_sampler("digital_net", d=d, seed=seed, randomize="lms+shift")
         else:
             self.sampler = make_sampler("lattice", d=d, seed=seed, randomize="shift")
+            self._twin = make_sampler("lattice", d=d, seed=seed, randomize="shift", backend="numpy")
         self.values, self.method, self.periodization = values, method, periodization
         self.fused, self.fill = block, fill
         self.n, self.total = 0, 0.0
@@ -325,7 +329,8 @@ class Cubature:
 
     def _chunk(self, start, count):
         if self.method == "lattice":
-            return _periodize(self.values, self.sampler.sample(count, start=start), self.periodization)
+            sampler = self._twin if count * self.sampler.d <= HOST_LATTICE else self.sampler
+            return _periodize(self.values, sampler.sample(count, start=start), self.periodization)
         with warnings.catch_warnings():     # a chunk alone is no net; the 2^m points together are
             warnings.filterwarnings("ignore", "the balance properties of", UserWarning)
             return self.values(self.sampler.sample(count, start=start))
