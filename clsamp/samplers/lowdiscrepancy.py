@@ -72,18 +72,16 @@ def shift_vectors(seed, realizations, d):
     Returns
     -------
     ndarray of float64
-        (len(realizations), d), from ``Stream.SHIFT``.
+        (len(realizations), d), from ``Stream.SHIFT`` (remembered for up to 64 realizations).
     """
-    r = np.asarray(realizations, dtype=np.uint32)
-    if r.size <= 64:       # a sequence sampled in chunks asks for the same few shifts again
-        return _few_shifts(int(seed), tuple(r.tolist()), int(d)).copy()
-    return philox.uniform(seed, philox.Stream.SHIFT, r[:, None], 0, np.arange(d, dtype=np.uint32)[None, :])
+    r = tuple(np.asarray(realizations, dtype=np.uint32).tolist())
+    return (_few_shifts if len(r) <= 64 else _few_shifts.__wrapped__)(int(seed), r, int(d)).copy()
 
 
 @functools.lru_cache(maxsize=64)
-def _few_shifts(seed, realizations, d):
-    r = np.array(realizations, dtype=np.uint32)[:, None]
-    return philox.uniform(seed, philox.Stream.SHIFT, r, 0, np.arange(d, dtype=np.uint32)[None, :])
+def _few_shifts(seed, r, d):
+    return philox.uniform(seed, philox.Stream.SHIFT, np.array(r, dtype=np.uint32)[:, None], 0,
+                          np.arange(d, dtype=np.uint32)[None, :])
 
 
 OWEN_TABLE_ENTRIES_PER_DIGIT = 2**15   # a depth's table: at most this times b entries
@@ -194,12 +192,11 @@ class LowDiscrepancySampler(Sampler):
 
     @staticmethod
     def _block():
-        # A work-item makes `block` consecutive points by cheap increments, after a start
-        # that costs about as much as a few dozen of them (the index's digits: m dependent
-        # divisions per dimension); on a CPU 256 points of 16 dimensions still fit its L1
-        # while the item fills them column by column; on a GPU one point an item keeps the
-        # most items in flight (runtime.shape). At most 4 where the device stops long loops
-        # (runtime.loop_limit). The bits do not depend on it.
+        # A work-item makes `block` consecutive points by cheap increments, after a start that costs about as
+        # much as a few dozen of them (the index's digits: m dependent divisions per dimension); on a CPU 256
+        # points of 16 dimensions still fit its L1 while the item fills them column by column; on a GPU one
+        # point an item keeps the most items in flight (runtime.shape). At most 4 where the device stops long
+        # loops (runtime.loop_limit). The bits do not depend on it.
         block = runtime.shape().block
         return block if runtime.loop_limit() is None else min(block, 4)
 
