@@ -32,6 +32,10 @@
   (:mod:`clsamp.cubature_device`) against its NumPy twin, the same bits.
 - ``--ceiling``: qmcpy's seconds over the NumPy integrand's own seconds on qmcpy's points,
   the most any code that evaluates that integrand on those points can gain.
+- :func:`clsamp.transforms.to_normal` (AS 241 in NumPy, the device's bits), which the
+  Keister integrand calls once a coordinate, against ``scipy.special.ndtri`` on the same
+  2^21 uniform values (2^18 with ``--quick``), on the host: median of 5 after a warm-up,
+  and the largest relative difference.
 """
 
 import argparse
@@ -113,7 +117,20 @@ def run(devices, quick):
                                    f"bound {res.half_width:.1e}{peer_quality}")
                         rows.append(Row(f"integrate {method} {label}, abs_tol {tol:g}", kind,
                                         dev, t, peer, t_peer, quality, dict(extra)))
-    return rows + _walsh_rows(devices, quick)
+    return rows + _walsh_rows(devices, quick) + [_to_normal_row(short_name(devices[0]), quick)]
+
+
+def _to_normal_row(dev, quick):
+    """to_normal against scipy's ndtri, both on the host (the row names the first device)."""
+    from scipy.special import ndtri
+
+    from clsamp.transforms import to_normal
+    u = np.random.default_rng(3).random(2**18 if quick else 2**21)
+    t, z = timed(lambda: to_normal(u))
+    t_peer, reference = timed(lambda: ndtri(u))
+    rel = float(np.max(np.abs(z - reference) / np.maximum(np.abs(reference), 1e-300)))
+    return Row("to_normal on the host (AS 241 in NumPy)", f"{u.size} values", dev, t,
+               "scipy.special.ndtri", t_peer, f"max relative difference {rel:.1e}")
 
 
 def _walsh_rows(devices, quick):

@@ -15,7 +15,7 @@ from .errors import InvalidArgumentError
 __all__ = ["to_normal", "tent", "sidi", "SMALLEST"]
 
 SMALLEST = 2.0**-1022        # u = 0 is taken as this (the smallest normal double): finite z
-_BLOCK = 32768               # points a block of to_normal (its temporaries stay in L2)
+BLOCK = 32768                # values a block of to_normal (its temporaries stay in L2)
 
 # AS 241 (PPND16): numerator and denominator coefficients, highest degree first (Horner)
 _A = (2.5090809287301226727e+3, 3.3430575583588128105e+4, 6.7265770927008700853e+4,
@@ -96,30 +96,63 @@ def to_normal(u):
     [0.0, 1.95996398454, -1.95996398454]
     """
     x = np.asarray(u, dtype=np.float64)
-    if x.size and not (x.min() >= 0 and x.max() < 1):       # NaN fails both comparisons
-        raise InvalidArgumentError("'u' must hold finite values in [0, 1)")
+    check_unit(x, "u")
     out = np.empty(x.shape)
     flat, result = x.reshape(-1), out.reshape(-1)
     # blocks that stay in cache: the temporaries are reused instead of faulted in afresh
-    for start in range(0, flat.size, _BLOCK):
-        result[start:start + _BLOCK] = _quantile(flat[start:start + _BLOCK])
+    for start in range(0, flat.size, BLOCK):
+        result[start:start + BLOCK] = quantile_block(flat[start:start + BLOCK])
     return out
 
 
-def _quantile(x):
-    """AS 241 on a 1-D block: each region's formula on its own points (the same operations,
-    so the same bits, as over all of them)."""
+def check_unit(x, name):
+    """Check that every value of an array is finite and in [0, 1).
+
+    Parameters
+    ----------
+    x : ndarray of float64
+    name : str
+        The argument's name, for the message.
+
+    Raises
+    ------
+    InvalidArgumentError
+        A value outside [0, 1) or not finite.
+    """
+    if x.size and not (x.min() >= 0 and x.max() < 1):       # NaN fails both comparisons
+        raise InvalidArgumentError(f"'{name}' must hold finite values in [0, 1)")
+
+
+def quantile_block(x):
+    """:func:`to_normal` of a block of values already checked (:func:`check_unit`), for
+    callers that work a block at a time.
+
+    Parameters
+    ----------
+    x : ndarray of float64
+        1-D, in [0, 1); about :data:`BLOCK` values, so that the temporaries stay in cache.
+
+    Returns
+    -------
+    ndarray of float64
+        Φ^-1(x), the bits of :func:`to_normal`.
+
+    Notes
+    -----
+    AS 241's central formula runs at every value (its denominator stays above 0.002 for
+    every |q| <= 1/2, so the tails' values are finite, and replaced), the tails' formulas
+    at theirs: the same operations, so the same bits, as each region alone.
+    """
     p = np.maximum(x, SMALLEST)
     q = p - 0.5
-    central = np.abs(q) <= 0.425
-    out = np.empty_like(q)
-    qc = q[central]
-    r = 0.180625 - qc * qc
-    middle = qc * _horner(_A, r)
-    middle /= _horner(_B, r)
-    out[central] = middle
-    outside = ~central
-    out[outside] = _tail(p[outside], q[outside])
+    r = q * q
+    np.subtract(0.180625, r, out=r)
+    out = _horner(_A, r)
+    out *= q
+    out /= _horner(_B, r)
+    # integer indices: a boolean mask's gathers and scatter cost more than the formulas
+    outside = np.flatnonzero(np.abs(q) > 0.425)
+    out.put(outside, _tail(p.take(outside), q.take(outside)))
     return out
 
 
