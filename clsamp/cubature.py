@@ -20,9 +20,9 @@ The Walsh transform, the doubling's butterfly and the wavenumber ordering of a d
 run on the device where it has fp64 (:mod:`clsamp.cubature_device`, the same bits as the
 NumPy here); the lattice's spectrum is built on the host a doubling at a time (a real FFT,
 ``scipy.fft``, of the new values and the radix-2 step), its wavenumber ordering on the
-device as the net's. The points come from the
-samplers (on the device), or, for an integrand with a kernel, are made in the kernel that
-evaluates it (:mod:`clsamp.fused`).
+device as the net's. The points come from the samplers (on the device; a lattice's first
+few thousand from the sampler's NumPy twin, the same bits), or, for an integrand with a
+kernel, are made in the kernel that evaluates it (:mod:`clsamp.fused`).
 
 References
 ----------
@@ -389,7 +389,7 @@ class Cubature:
         if self._kappa is not None:                 # the host's state moves over once
             self.walsh.load(self._coefficients, self._kappa)
             self._coefficients = self._kappa = None
-        if self.method == "lattice":        # the values stay on the host, for the FFT
+        if self.method == "lattice":        # the values come to the host, for the FFT
             y = self._block(self.n, self.n)
             self._spectrum.add(y)
             self.total += float(np.sum(y))

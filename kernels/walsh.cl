@@ -65,8 +65,8 @@ __kernel void walsh_double(__global double *a, __global const double *t, __globa
 /* A lattice's doubling, in place in arrays of room for 2n: kappa becomes (kappa, n + kappa)
  * and a holds the magnitudes of the 2n values' Fourier coefficients in that order,
  * a[i] = |c[kappa[i]]|, from those of the half spectrum (sizes[k] = |c[k]|, k <= n; a real
- * sequence's |c[2n - k]| = |c[k]|). The host recomputes the whole spectrum each doubling,
- * so every entry is written afresh. Grid: n. */
+ * sequence's |c[2n - k]| = |c[k]|). Every coefficient changes with a doubling (the host
+ * updates the whole spectrum), so every entry is written afresh. Grid: n. */
 __kernel void lattice_sizes(__global double *a, __global const double *sizes, __global uint *kappa,
                             const uint n)
 {
