@@ -389,27 +389,22 @@ class Cubature:
         if self._kappa is not None:                 # the host's state moves over once
             self.walsh.load(self._coefficients, self._kappa)
             self._coefficients = self._kappa = None
+        n = 2 * self.n
+        m = n.bit_length() - 1
         if self.method == "lattice":        # the values come to the host, for the FFT
             y = self._block(self.n, self.n)
             self._spectrum.add(y)
             self.total += float(np.sum(y))
-            n = 2 * self.n
-            self.walsh.double_lattice(np.abs(self._spectrum.half),
-                                      n.bit_length() - 1 - R_LAG - 1)
-            m = n.bit_length() - 1
-            self.n = n
-            _, terms = self.walsh.summary(2**(m - R_LAG - 1))
-            return self.total / n, fudge(m) * float(np.sum(terms))
-        if self.fill is not None:           # the values stay on the device
+            self.walsh.double_lattice(np.abs(self._spectrum.half), m - R_LAG - 1)
+        elif self.fill is not None:         # the values stay on the device
             self.fill(self.n, self.n, self.walsh.values_buffer())
-            y = None
+            self.walsh.double(None, m - R_LAG - 1)
         else:
-            y = self._block(self.n, self.n)
-        n = 2 * self.n
-        self.walsh.double(y, n.bit_length() - 1 - R_LAG - 1)
-        m = n.bit_length() - 1
+            self.walsh.double(self._block(self.n, self.n), m - R_LAG - 1)
         self.n = n
         mean, terms = self.walsh.summary(2**(m - R_LAG - 1))
+        if self.method == "lattice":
+            mean = self.total / n
         return mean, fudge(m) * float(np.sum(terms))
 
 

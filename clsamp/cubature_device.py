@@ -174,9 +174,7 @@ class DeviceWalsh:
             self.transform(y, self.t)
         self._kernel("walsh_double")(self.q, (n,), None, self.a.data, self.t.data, self.kappa.data,
                                      np.uint32(n))
-        self.n = 2 * n
-        m = self.n.bit_length() - 1
-        self._order(m - 1, bottom, m)
+        self._doubled(bottom)
 
     def double_lattice(self, half, bottom):
         """A lattice's doubling: the ordering extended to 2n wavenumbers (n: the points so
@@ -197,7 +195,12 @@ class DeviceWalsh:
         cl.enqueue_copy(self.q, self.t.data, np.ascontiguousarray(half, dtype=np.float64))
         self._kernel("lattice_sizes")(self.q, (n,), None, self.a.data, self.t.data, self.kappa.data,
                                       np.uint32(n))
-        self.n = 2 * n
+        self._doubled(bottom)
+
+    def _doubled(self, bottom):
+        """After a doubling's kernel: 2n entries held, reordered from level m - 1 down to
+        ``bottom`` + 1 (2^m = 2n)."""
+        self.n *= 2
         m = self.n.bit_length() - 1
         self._order(m - 1, bottom, m)
 
