@@ -10,7 +10,8 @@ Two rows per case, each timed on the device (median of 3) against the NumPy twin
 * ``neighbours + weights``: the part that runs on the device, the neighbour search over
   the grid of cells and the weights of the M candidates;
 * ``sample_elimination``: the whole sampler, the candidates, that part and the heap
-  elimination on the host, which both backends share.
+  elimination (on the device one work-item a set, ``se_eliminate``; in the twin Python's
+  heapq).
 
 The quality column gives the set's rho and, in 2-D, its low-frequency power (mean
 periodogram over the integer frequencies 0 < |w| < sqrt(n) / 2) beside Poisson disk's

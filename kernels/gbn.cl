@@ -88,29 +88,11 @@ __kernel void gbn_pairs(__global const double *pts,
 #endif
     int c[D];
     cell_of(x, G, c);
-    const double inv_G = 1.0 / (double)G;
     for (uint o = 0; o < noff; ++o) {
 #if D >= 3
-        if (G > 1) {
-            /* a neighbouring cell wholly beyond the reach holds no partner: skip it (from 3-D
-             * on, where most of the 3^D cells' corners lie beyond the reach). A lower
-             * bound of the squared distance from x to the cell's box, each axis's gap less
-             * a margin far above the rounding of x G and of r2 (on the torus too: with
-             * G >= 3 the cell's nearest image is the one next to c) */
-            double lb = 0.0;
-            uint digits = o;
-            for (int k = D - 1; k >= 0; --k) {
-                const int digit = (int)(digits % 3) - 1;
-                digits /= 3;
-                double gap = digit > 0 ? (double)(c[k] + 1) * inv_G - x[k]
-                           : digit < 0 ? x[k] - (double)c[k] * inv_G : 0.0;
-                gap = gap - 1e-12;
-                gap = gap > 0.0 ? gap : 0.0;
-                lb = lb + gap * gap;
-            }
-            if (lb > skip2 * 1.000001)
-                continue;
-        }
+        /* a neighbouring cell wholly beyond the reach holds no partner */
+        if (G > 1 && cell_beyond(x, c, o, G, skip2))
+            continue;
 #endif
         const size_t slot = (size_t)r * total_cells + neighbour(c, o, G);
         const uint s1 = start[slot + 1];

@@ -2,8 +2,8 @@
  * O(M k) part of eliminating M candidates down to n. NumPy twin: neighbour_weights_reference
  * in clsamp/samplers/sample_elimination.py, the same bits: exactly rounded double
  * operations (the square root and the division included) in the same order, no
- * contraction, the power by squaring. The elimination itself, a heap, is host code both
- * backends share.
+ * contraction, the power by squaring. The elimination itself, a heap walked one removal
+ * at a time, is se_eliminate, one work-item a set; its twin is eliminate() there.
  *
  * The candidates of every set come sorted by (set, cell) of a G^D grid in pts (total, D)
  * (each point's cell found again here from its coordinates), and start (sets G^D + 1)
@@ -11,7 +11,8 @@
  * distinct, each at least d_max wide) or G == 1 (every pair). The neighbours of sorted
  * point i are the j != i of its set in its 3^D neighbouring cells with squared distance
  * r2 < R2 = d_max^2 (wrapped on the torus when PERIODIC), in stencil order then sorted
- * order; the weight of a pair is
+ * order (from 3-D on the cells wholly beyond d_max skipped, cells.h's cell_beyond: the
+ * same pairs in the same order); the weight of a pair is
  *     w_ij = (1 - max(sqrt(r2), d_min) / d_max)^ALPHA,
  * which is symmetric to the bit (the wrapped differences of i - j and j - i have one
  * magnitude).
@@ -20,10 +21,15 @@
  * se_pairs: with offset = the exclusive prefix sum of count (host), writes the neighbours
  *     (their sorted indices) and their weights to nbr[offset[i] ..] and w[offset[i] ..],
  *     and the sum of the weights in that order to weight[i].
+ * se_eliminate: per set, removes the candidate of the largest weight (the lowest index
+ *     among equal ones), subtracts its pair weights from its neighbours' weights, and
+ *     again, `removals` times; writes the removed candidates (indices within the set) in
+ *     order to gone and leaves the final weights in weight.
  *
  * Build options: D (dimensions), PERIODIC (1: the unit torus; 0: the unit cube), ALPHA
  * (the weight's exponent, a positive integer).
- * Launch: one work-item per sorted point, grid (total,).
+ * Launch: se_count and se_pairs one work-item per sorted point, grid (total,);
+ * se_eliminate one work-item per set, grid (sets,).
  */
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #pragma OPENCL FP_CONTRACT OFF
@@ -70,6 +76,10 @@ __kernel void se_count(__global const double *pts, __global const uint *start, c
     cell_of(x, G, c);
     uint found = 0;
     for (uint o = 0; o < noff; ++o) {
+#if D >= 3
+        if (G > 1 && cell_beyond(x, c, o, G, R2))
+            continue;
+#endif
         const size_t slot = (size_t)(gi / n) * total_cells + neighbour(c, o, G);
         const uint s1 = start[slot + 1];
         for (uint j = start[slot]; j < s1; ++j)
@@ -96,6 +106,10 @@ __kernel void se_pairs(__global const double *pts, __global const uint *start, c
     ulong at = offset[gi];
     double sum = 0.0;
     for (uint o = 0; o < noff; ++o) {
+#if D >= 3
+        if (G > 1 && cell_beyond(x, c, o, G, R2))
+            continue;
+#endif
         const size_t slot = (size_t)(gi / n) * total_cells + neighbour(c, o, G);
         const uint s1 = start[slot + 1];
         for (uint j = start[slot]; j < s1; ++j) {
@@ -113,4 +127,77 @@ __kernel void se_pairs(__global const double *pts, __global const uint *start, c
         }
     }
     weight[gi] = sum;
+}
+
+/* whether heap entry (ka, ia) comes before (kb, ib): the larger weight, then the lower index */
+inline bool se_before(double ka, uint ia, double kb, uint ib)
+{
+    return ka > kb || (ka == kb && ia < ib);
+}
+
+/* restores the heap below entry `at`, whose key may have fallen */
+inline void se_sift(__global double *key, __global uint *idx, uint size, uint at)
+{
+    const double k = key[at];
+    const uint i = idx[at];
+    for (;;) {
+        uint child = 2 * at + 1;
+        if (child >= size)
+            break;
+        if (child + 1 < size && se_before(key[child + 1], idx[child + 1], key[child], idx[child]))
+            child += 1;
+        if (!se_before(key[child], idx[child], k, i))
+            break;
+        key[at] = key[child];
+        idx[at] = idx[child];
+        at = child;
+    }
+    key[at] = k;
+    idx[at] = i;
+}
+
+/* The elimination of set s (its m sorted candidates from s m on; nbr holds sorted indices
+ * over all sets). The heap (key, idx: m entries a set, scratch) keeps one entry per
+ * remaining candidate whose key is at least its weight, refreshed when it surfaces
+ * (weights only fall): an entry that surfaces with its exact weight is the next to go, as
+ * an eagerly updated heap gives it. Each entry is unique, so the order of removals does
+ * not depend on how the heap is laid out: eliminate() in Python's heapq gives the same. */
+__kernel void se_eliminate(__global const ulong *offset, __global const uint *nbr,
+                           __global const double *w, __global double *weight, const uint m,
+                           const uint sets, const uint removals, __global double *key,
+                           __global uint *idx, __global uint *gone)
+{
+    const uint s = get_global_id(0);
+    if (s >= sets)
+        return;
+    const size_t base = (size_t)s * m;
+    __global double *current = weight + base;
+    __global double *hk = key + base;
+    __global uint *hi = idx + base;
+    for (uint i = 0; i < m; ++i) {
+        hk[i] = current[i];
+        hi[i] = i;
+    }
+    for (uint at = m / 2; at-- > 0;)
+        se_sift(hk, hi, m, at);
+    uint size = m;
+    uint removed = 0;
+    while (removed < removals) {
+        const uint i = hi[0];
+        const double now = current[i];
+        if (hk[0] != now) {
+            hk[0] = now;
+            se_sift(hk, hi, size, 0);
+            continue;
+        }
+        size -= 1;
+        hk[0] = hk[size];
+        hi[0] = hi[size];
+        se_sift(hk, hi, size, 0);
+        gone[(size_t)s * removals + removed] = i;
+        removed += 1;
+        const ulong stop = offset[base + i + 1];
+        for (ulong a = offset[base + i]; a < stop; ++a)
+            weight[nbr[a]] = weight[nbr[a]] - w[a];
+    }
 }

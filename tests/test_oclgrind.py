@@ -137,6 +137,17 @@ def _gbn_adaptive():
         64, realizations=range(1, 3)))
 
 
+@check("sample-elimination-3d")
+def _sample_elimination_3d():
+    # from 3-D on the neighbour passes skip the cells beyond d_max (cells.h's cell_beyond),
+    # which the registry's 2-D run does not build; 64 points in 3-D make a grid of 3 cells
+    # a side; progressive: the heap kernel again on each halving
+    made = clsamp.make_sampler("sample_elimination", d=3, seed=3, progressive=True).sample(
+        64, realizations=range(1, 3))
+    _same_bits(made, clsamp.make_sampler("sample_elimination", d=3, seed=3, progressive=True,
+                                         backend="numpy").sample(64, realizations=range(1, 3)))
+
+
 @check("spectrum-direct")
 def _spectrum_direct():
     pts = _points()

@@ -18,6 +18,7 @@ from clsamp.metrics import max_min_distance, nearest_neighbor_distances, relativ
 from clsamp.samplers.sample_elimination import (
     Weighting,
     eliminate,
+    eliminate_device,
     neighbour_weights_device,
     neighbour_weights_reference,
 )
@@ -90,6 +91,39 @@ def test_the_heap_removes_what_a_from_scratch_elimination_removes(seed):
     expect, order = _eliminate_from_scratch(adjacency, 20)
     assert survivors.tolist() == expect.tolist() and gone.tolist() == order
     assert last == adjacency[np.ix_(expect, expect)].sum(axis=1).max()
+
+
+def _grid_candidates(sets, side, d):
+    # every candidate has the same neighbours at the same distances: the weights tie
+    axes = np.meshgrid(*[(np.arange(side) + 0.5) / side] * d, indexing="ij")
+    grid = np.stack([a.ravel() for a in axes], axis=1)
+    return np.broadcast_to(grid, (sets, *grid.shape)).copy()
+
+
+@pytest.mark.parametrize("d, periodic, grid", [(1, True, False), (2, True, False),
+                                               (2, False, False), (3, True, False),
+                                               (2, True, True), (2, False, True),
+                                               (3, True, True)])
+def test_the_elimination_kernel_removes_what_the_heap_removes(d, periodic, grid):
+    sets = 3
+    cand = _grid_candidates(sets, 16 if d < 3 else 7, d) if grid else _candidates(sets, 500, d)
+    m = cand.shape[1]
+    keep = m // 4
+    weighting = Weighting.for_counts(m, keep, d, periodic=periodic)
+    cells = weighting.cells(m, d)
+    pts, _, start, _ = sorted_by_cell(cand, cells)
+    gone, weight = eliminate_device(pts, start, m, cells, weighting, keep)
+    offset, nbr, w, first = neighbour_weights_reference(pts, start, m, cells, weighting)
+    assert gone.shape == (sets, m - keep) and weight.shape == (sets, m)
+    for s in range(sets):
+        lo, hi = s * m, (s + 1) * m
+        a, b = offset[lo], offset[hi]
+        survivors, order, last = eliminate(first[lo:hi], offset[lo:hi + 1] - a,
+                                           nbr[a:b].astype(np.int64) - lo, w[a:b], keep)
+        assert gone[s].tolist() == order.tolist()
+        assert weight[s, survivors].max(initial=0.0) == last
+    if grid:       # the ties were there, and went to the lower index
+        assert np.unique(first[:m]).size < m // 4
 
 
 def test_n_of_the_candidates_reproducibly():
@@ -187,9 +221,9 @@ def test_realizations_split_across_launches_give_the_same_sets(monkeypatch):
 
     def spy(pts, *args):
         launches.append(len(pts))
-        return neighbour_weights_device(pts, *args)
+        return eliminate_device(pts, *args)
     # room for the 3 sets of output (the base's chunk) but for one realization's pair lists
     monkeypatch.setattr(memory, "work_budget", lambda: 3 * 100 * 3 * 8 + 1)
-    monkeypatch.setattr(sample_elimination, "neighbour_weights_device", spy)
+    monkeypatch.setattr(sample_elimination, "eliminate_device", spy)
     assert np.array_equal(s.sample(100, realizations=3), whole)
     assert launches[:3] == [500] * 3           # the candidates, one realization a launch

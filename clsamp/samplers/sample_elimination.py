@@ -6,7 +6,9 @@ The neighbour search and the weights are the O(M k) part: ``se_count`` and ``se_
 in ``kernels/sample_elimination.cl`` on the device, :func:`neighbour_weights_reference`
 here in NumPy, the same bits, over the grid of cells of :mod:`clsamp.geometry.cells`. The
 elimination -- take the heaviest candidate, lower its neighbours' weights, again -- is a
-heap walked one candidate at a time, host code both backends share (:func:`eliminate`).
+heap walked one candidate at a time: ``se_eliminate`` on the device, one work-item a set,
+where the pair lists already are (:func:`eliminate_device`), and :func:`eliminate` in
+Python's heapq, the same removals in the same order.
 """
 
 import dataclasses
@@ -179,6 +181,41 @@ def _loop_bound(d, cells, start):
     return stencil * (2 * d + 8) * (most + 1)
 
 
+def _pairs_on_device(pts, start, m, cells, weighting, host):
+    """Launch ``se_count`` and ``se_pairs``: the offsets (int64, total + 1) on the host and
+    as a device buffer of uint64, the outputs ``nbr``, ``w``, ``weight``
+    (:class:`clsamp.runtime.Output`: over host arrays where ``host``, else on the device,
+    ``weight`` read-write for ``se_eliminate``) and the kernels' defines."""
+    runtime.require_fp64()
+    total, d = pts.shape
+    limit = runtime.loop_limit()
+    if limit is not None and _loop_bound(d, cells, start) > limit:
+        runtime.require_short_loops("sample elimination's neighbour search")
+    defines = {"D": d, "PERIODIC": int(weighting.periodic), "ALPHA": int(weighting.alpha)}
+    queue = runtime.queue()
+    local = runtime.local_size(64)
+    grid = (-(-total // local) * local,)
+    stencil = np.uint32(3 ** d if cells > 1 else 1)
+    R2 = np.float64(weighting.d_max * weighting.d_max)
+    pts_dev, start_dev = runtime.input_buffer(pts), runtime.input_buffer(start)
+    count = runtime.Output((total,), np.uint32, host=np.empty(total, dtype=np.uint32))
+    runtime.kernel("sample_elimination.cl", "se_count", defines)(
+        queue, grid, (local,), pts_dev, start_dev, np.uint32(m), np.uint32(total),
+        np.int32(cells), stencil, R2, count.buffer)
+    offset = np.concatenate(([0], np.cumsum(count.finish(), dtype=np.int64)))
+    pairs = max(int(offset[-1]), 1)
+    nbr = runtime.Output((pairs,), np.uint32,
+                         host=np.empty(pairs, dtype=np.uint32) if host else None)
+    w = runtime.Output((pairs,), np.float64, host=np.empty(pairs) if host else None)
+    weight = runtime.Output((total,), np.float64, host=np.empty(total), read_write=not host)
+    offset_dev = runtime.input_buffer(offset.astype(np.uint64))
+    runtime.kernel("sample_elimination.cl", "se_pairs", defines)(
+        queue, grid, (local,), pts_dev, start_dev, np.uint32(m), np.uint32(total),
+        np.int32(cells), stencil, R2, np.float64(weighting.d_min), np.float64(weighting.d_max),
+        offset_dev, nbr.buffer, w.buffer, weight.buffer)
+    return offset, offset_dev, nbr, w, weight, defines
+
+
 def neighbour_weights_device(pts, start, m, cells, weighting):
     """``se_count`` and ``se_pairs`` on the current device: the result of
     :func:`neighbour_weights_reference`, the same bits.
@@ -199,33 +236,57 @@ def neighbour_weights_device(pts, start, m, cells, weighting):
         A device without fp64, or one that stops long loops where a work-item's loops
         would pass its limit.
     """
-    runtime.require_fp64()
-    total, d = pts.shape
-    limit = runtime.loop_limit()
-    if limit is not None and _loop_bound(d, cells, start) > limit:
-        runtime.require_short_loops("sample elimination's neighbour search")
-    defines = {"D": d, "PERIODIC": int(weighting.periodic), "ALPHA": int(weighting.alpha)}
-    queue = runtime.queue()
-    local = runtime.local_size(64)
-    grid = (-(-total // local) * local,)
-    stencil = np.uint32(3 ** d if cells > 1 else 1)
-    R2 = np.float64(weighting.d_max * weighting.d_max)
-    pts_dev, start_dev = runtime.to_device(pts), runtime.to_device(start)
-    count = runtime.Output((total,), np.uint32, host=np.empty(total, dtype=np.uint32))
-    runtime.kernel("sample_elimination.cl", "se_count", defines)(
-        queue, grid, (local,), pts_dev.data, start_dev.data, np.uint32(m), np.uint32(total),
-        np.int32(cells), stencil, R2, count.buffer)
-    offset = np.concatenate(([0], np.cumsum(count.finish(), dtype=np.int64)))
-    pairs = max(int(offset[-1]), 1)
-    nbr = runtime.Output((pairs,), np.uint32, host=np.empty(pairs, dtype=np.uint32))
-    w = runtime.Output((pairs,), np.float64, host=np.empty(pairs))
-    weight = runtime.Output((total,), np.float64, host=np.empty(total))
-    runtime.kernel("sample_elimination.cl", "se_pairs", defines)(
-        queue, grid, (local,), pts_dev.data, start_dev.data, np.uint32(m), np.uint32(total),
-        np.int32(cells), stencil, R2, np.float64(weighting.d_min), np.float64(weighting.d_max),
-        runtime.to_device(offset.astype(np.uint64)).data, nbr.buffer, w.buffer, weight.buffer)
+    offset, _, nbr, w, weight, _ = _pairs_on_device(pts, start, m, cells, weighting, host=True)
     size = int(offset[-1])
     return offset, nbr.finish()[:size], w.finish()[:size], weight.finish()
+
+
+def eliminate_device(pts, start, m, cells, weighting, keep):
+    """The neighbours, their weights and the elimination of every set on the current
+    device (``se_count``, ``se_pairs``, then ``se_eliminate``, one work-item a set): what
+    :func:`neighbour_weights_reference` and :func:`eliminate` give, the same bits, without
+    the pair lists leaving the device.
+
+    Parameters
+    ----------
+    pts, start, m, cells, weighting
+        As :func:`neighbour_weights_reference` takes them: the sets of m candidates, sorted
+        by (set, cell).
+    keep : int
+        Candidates left in each set, 1..m.
+
+    Returns
+    -------
+    gone : ndarray of uint32 (sets, m - keep)
+        Each set's removed candidates (sorted indices within the set) in the order they
+        went.
+    weight : ndarray of float64 (sets, m)
+        The weights at the end (those of the removed candidates included).
+
+    Raises
+    ------
+    NoDeviceError
+        As :func:`neighbour_weights_device`.
+    """
+    total = len(pts)
+    sets = total // m
+    removals = m - keep
+    offset, offset_dev, nbr, w, weight, defines = _pairs_on_device(pts, start, m, cells,
+                                                                   weighting, host=False)
+    limit = runtime.loop_limit()
+    if limit is not None and (removals + int(offset[-1])) * (int(m).bit_length() + 1) > limit:
+        runtime.require_short_loops("sample elimination's heap")
+    gone = runtime.Output((sets * max(removals, 1),), np.uint32,
+                          host=np.empty(sets * max(removals, 1), dtype=np.uint32))
+    key = runtime.Output((total,), np.float64)
+    idx = runtime.Output((total,), np.uint32)
+    local = min(runtime.local_size(64), sets)
+    runtime.kernel("sample_elimination.cl", "se_eliminate", defines)(
+        runtime.queue(), (-(-sets // local) * local,), (local,),
+        offset_dev, nbr.buffer, w.buffer, weight.buffer, np.uint32(m), np.uint32(sets),
+        np.uint32(removals), key.buffer, idx.buffer, gone.buffer)
+    gone = gone.finish()[:sets * removals].reshape(sets, removals)
+    return gone, weight.finish().reshape(sets, m)
 
 
 def eliminate(weight, offset, nbr, w, keep):
@@ -303,15 +364,24 @@ def _eliminate_sets(points, keep, weighting, backend):
         # the device holds the candidates and their pair lists: a realization's neighbours
         # are about M V_d d_max^d (here with a margin of 4)
         pairs = min(m, math.ceil(4 * m * ball_volume(d, weighting.d_max)))
-        ranges = runtime.chunk_ranges(sets, m * (8 * d + 40) + 12 * m * pairs)
+        ranges = runtime.chunk_ranges(sets, m * (8 * d + 52) + 12 * m * pairs)
         if len(ranges) > 1:
             return [result for lo, hi in ranges
                     for result in _eliminate_sets(points[lo:hi], keep, weighting, backend)]
     cells = weighting.cells(m, d)
     pts, _, start, order = sorted_by_cell(points, cells)
-    run = neighbour_weights_reference if backend == "numpy" else neighbour_weights_device
-    offset, nbr, w, weight = run(pts, start, m, cells, weighting)
     original = order.reshape(sets, m) - (np.arange(sets) * m)[:, None]   # sorted -> set index
+    if backend != "numpy":
+        gone, weight = eliminate_device(pts, start, m, cells, weighting, keep)
+        results = []
+        for s in range(sets):
+            alive = np.ones(m, dtype=bool)
+            alive[gone[s]] = False
+            survivors = np.flatnonzero(alive)
+            last = float(weight[s, survivors].max(initial=0.0))
+            results.append((np.sort(original[s, survivors]), original[s, gone[s]], last))
+        return results
+    offset, nbr, w, weight = neighbour_weights_reference(pts, start, m, cells, weighting)
     results = []
     for s in range(sets):
         lo, hi = s * m, (s + 1) * m
@@ -395,8 +465,8 @@ class SampleEliminationSampler(Sampler):
     The neighbours and weights run on the device (``kernels/sample_elimination.cl``,
     over :mod:`clsamp.geometry.cells`' grid); its NumPy twin gives the same bits. The
     elimination is sequential -- each removal changes the next choice -- and runs as a
-    heap on the host for both backends; ties go to the lower index, so every device
-    gives the same points.
+    heap on the device, one work-item a realization, beside the pair lists; ties go to
+    the lower index, so every device and the NumPy twin give the same points.
 
     References
     ----------
