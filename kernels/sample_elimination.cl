@@ -18,13 +18,16 @@
  * magnitude).
  *
  * se_count: count[i] = the neighbours of i.
- * se_pairs: with offset = the exclusive prefix sum of count (host), writes the neighbours
- *     (their sorted indices) and their weights to nbr[offset[i] ..] and w[offset[i] ..],
- *     and the sum of the weights in that order to weight[i].
+ * se_pairs: writes the neighbours (their sorted indices) and their weights to
+ *     nbr[offset[i] ..] and w[offset[i] ..], offset the exclusive prefix sum of the counts
+ *     (host), and the sum of the weights in that order to weight[i]. With cap > 0 it
+ *     needs no count pass: i's list goes to the cap slots from i cap on, and count[i]
+ *     gets the neighbours found (more than cap: the host runs the passes with offsets).
  * se_eliminate: per set, removes the candidate of the largest weight (the lowest index
- *     among equal ones), subtracts its pair weights from its neighbours' weights, and
- *     again, `removals` times; writes the removed candidates (indices within the set) in
- *     order to gone and leaves the final weights in weight.
+ *     among equal ones), subtracts its pair weights (count[i] of them from first[i] in nbr
+ *     and w) from its neighbours' weights, and again, `removals` times; writes the
+ *     removed candidates (indices within the set) in order to gone and leaves the final
+ *     weights in weight.
  *
  * Build options: D (dimensions), PERIODIC (1: the unit torus; 0: the unit cube), ALPHA
  * (the weight's exponent, a positive integer).
@@ -91,8 +94,8 @@ __kernel void se_count(__global const double *pts, __global const uint *start, c
 __kernel void se_pairs(__global const double *pts, __global const uint *start, const uint n,
                        const uint total, const int G, const uint noff, const double R2,
                        const double d_min, const double d_max,
-                       __global const ulong *offset, __global uint *nbr, __global double *w,
-                       __global double *weight)
+                       __global const ulong *offset, const uint cap, __global uint *nbr,
+                       __global double *w, __global double *weight, __global uint *count)
 {
     const uint gi = get_global_id(0);
     if (gi >= total)
@@ -103,7 +106,11 @@ __kernel void se_pairs(__global const double *pts, __global const uint *start, c
         x[k] = pts[(size_t)gi * D + k];
     int c[D];
     cell_of(x, G, c);
-    ulong at = offset[gi];
+    /* the slots of gi's list: offset[gi] .. offset[gi + 1], or with cap > 0 cap slots
+     * from gi cap on (the neighbours past them counted, not written) */
+    ulong at = cap > 0 ? (ulong)gi * cap : offset[gi];
+    const ulong end = cap > 0 ? at + cap : offset[gi + 1];
+    uint found = 0;
     double sum = 0.0;
     for (uint o = 0; o < noff; ++o) {
 #if D >= 3
@@ -120,13 +127,18 @@ __kernel void se_pairs(__global const double *pts, __global const uint *start, c
                 continue;
             const double dist = sqrt(r2);
             const double e = se_power(1.0 - (dist > d_min ? dist : d_min) / d_max);
-            nbr[at] = j;
-            w[at] = e;
-            at += 1;
+            if (at < end) {
+                nbr[at] = j;
+                w[at] = e;
+                at += 1;
+            }
+            found += 1;
             sum = sum + e;
         }
     }
     weight[gi] = sum;
+    if (cap > 0)
+        count[gi] = found;
 }
 
 /* whether heap entry (ka, ia) comes before (kb, ib): the larger weight, then the lower index */
@@ -162,7 +174,8 @@ inline void se_sift(__global double *key, __global uint *idx, uint size, uint at
  * (weights only fall): an entry that surfaces with its exact weight is the next to go, as
  * an eagerly updated heap gives it. Each entry is unique, so the order of removals does
  * not depend on how the heap is laid out: eliminate() in Python's heapq gives the same. */
-__kernel void se_eliminate(__global const ulong *offset, __global const uint *nbr,
+__kernel void se_eliminate(__global const ulong *first, __global const uint *count,
+                           __global const uint *nbr,
                            __global const double *w, __global double *weight, const uint m,
                            const uint sets, const uint removals, __global double *key,
                            __global uint *idx, __global uint *gone)
@@ -196,8 +209,9 @@ __kernel void se_eliminate(__global const ulong *offset, __global const uint *nb
         se_sift(hk, hi, size, 0);
         gone[(size_t)s * removals + removed] = i;
         removed += 1;
-        const ulong stop = offset[base + i + 1];
-        for (ulong a = offset[base + i]; a < stop; ++a)
+        const ulong a0 = first[base + i];
+        const ulong stop = a0 + count[base + i];
+        for (ulong a = a0; a < stop; ++a)
             weight[nbr[a]] = weight[nbr[a]] - w[a];
     }
 }

@@ -148,6 +148,25 @@ def _sample_elimination_3d():
                                          backend="numpy").sample(64, realizations=range(1, 3)))
 
 
+@check("sample-elimination-two-passes")
+def _sample_elimination_two_passes():
+    # the count pass and the lists at offsets (a sampler's run takes them only where a
+    # candidate's list overflows its slots)
+    from clsamp.geometry.cells import sorted_by_cell
+    from clsamp.samplers.sample_elimination import (
+        Weighting,
+        neighbour_weights_device,
+        neighbour_weights_reference,
+    )
+    m = 200
+    weighting = Weighting.for_counts(m, 40, 2)
+    cells = weighting.cells(m, 2)
+    pts, _, start, _ = sorted_by_cell(_points(m, 2, seed=4), cells)
+    for a, b in zip(neighbour_weights_device(pts, start, m, cells, weighting),
+                    neighbour_weights_reference(pts, start, m, cells, weighting), strict=True):
+        _same_bits(a, b)
+
+
 @check("spectrum-direct")
 def _spectrum_direct():
     pts = _points()

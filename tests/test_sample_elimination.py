@@ -21,6 +21,7 @@ from clsamp.samplers.sample_elimination import (
     eliminate_device,
     neighbour_weights_device,
     neighbour_weights_reference,
+    slab_width,
 )
 
 
@@ -100,11 +101,17 @@ def _grid_candidates(sets, side, d):
     return np.broadcast_to(grid, (sets, *grid.shape)).copy()
 
 
-@pytest.mark.parametrize("d, periodic, grid", [(1, True, False), (2, True, False),
-                                               (2, False, False), (3, True, False),
-                                               (2, True, True), (2, False, True),
-                                               (3, True, True)])
-def test_the_elimination_kernel_removes_what_the_heap_removes(d, periodic, grid):
+@pytest.mark.parametrize("d, periodic, grid, slab", [
+    (1, True, False, None), (2, True, False, None), (2, False, False, None),
+    (3, True, False, None), (2, True, True, None), (2, False, True, None),
+    (3, True, True, None),
+    (2, True, False, 3),        # every list overflows its slots: the two-pass lists
+    (3, False, False, 10**6)])  # slots for every candidate
+def test_the_elimination_kernel_removes_what_the_heap_removes(d, periodic, grid, slab,
+                                                              monkeypatch):
+    from clsamp.samplers import sample_elimination
+    if slab is not None:
+        monkeypatch.setattr(sample_elimination, "slab_width", lambda m, d, w: min(slab, m - 1))
     sets = 3
     cand = _grid_candidates(sets, 16 if d < 3 else 7, d) if grid else _candidates(sets, 500, d)
     m = cand.shape[1]
@@ -124,6 +131,19 @@ def test_the_elimination_kernel_removes_what_the_heap_removes(d, periodic, grid)
         assert weight[s, survivors].max(initial=0.0) == last
     if grid:       # the ties were there, and went to the lower index
         assert np.unique(first[:m]).size < m // 4
+
+
+def test_the_slots_hold_uniform_candidates_lists():
+    # one pass writes each candidate's neighbours into slab_width slots; for uniform
+    # candidates no list should need more (else the two passes run: right, but slower)
+    for d, n in [(1, 512), (2, 1024), (3, 512), (4, 256), (8, 64)]:
+        m = 5 * n
+        weighting = Weighting.for_counts(m, n, d)
+        cells = weighting.cells(m, d)
+        pts, _, start, _ = sorted_by_cell(_candidates(4, m, d, seed=d), cells)
+        offset = neighbour_weights_reference(pts, start, m, cells, weighting)[0]
+        most = int(np.diff(offset).max())
+        assert most <= slab_width(m, d, weighting) < 4 * np.diff(offset).mean() + 16, (d, most)
 
 
 def test_n_of_the_candidates_reproducibly():

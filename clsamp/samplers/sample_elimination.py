@@ -181,11 +181,32 @@ def _loop_bound(d, cells, start):
     return stencil * (2 * d + 8) * (most + 1)
 
 
-def _pairs_on_device(pts, start, m, cells, weighting, host):
-    """Launch ``se_count`` and ``se_pairs``: the offsets (int64, total + 1) on the host and
-    as a device buffer of uint64, the outputs ``nbr``, ``w``, ``weight``
-    (:class:`clsamp.runtime.Output`: over host arrays where ``host``, else on the device,
-    ``weight`` read-write for ``se_eliminate``) and the kernels' defines."""
+def slab_width(m, d, weighting):
+    """Slots a candidate for the one-pass neighbour lists of :func:`eliminate_device`: the
+    expected neighbours of a uniform candidate, lambda = (m - 1) V_d d_max^d, plus
+    6 sqrt(lambda) + 8, at most m - 1 (a set whose list overflows takes the two-pass path).
+
+    Parameters
+    ----------
+    m, d : int
+        Candidates per set, dimensions.
+    weighting : Weighting
+
+    Returns
+    -------
+    int
+    """
+    lam = (m - 1) * min(1.0, ball_volume(d, weighting.d_max))
+    return max(1, min(m - 1, math.ceil(lam + 6.0 * math.sqrt(lam) + 8.0)))
+
+
+def _pairs_on_device(pts, start, m, cells, weighting, host, cap=0):
+    """Launch the neighbour passes: ``se_pairs`` into ``cap`` slots a candidate where
+    ``cap`` > 0 and no list overflows, else ``se_count``, the offsets on the host and
+    ``se_pairs`` into them. Returns each list's first slot (uint64, total) and length
+    (uint32), the outputs ``nbr``, ``w``, ``weight`` (:class:`clsamp.runtime.Output`: over
+    host arrays where ``host``, else on the device, ``weight`` read-write for
+    ``se_eliminate``) and the kernels' defines."""
     runtime.require_fp64()
     total, d = pts.shape
     limit = runtime.loop_limit()
@@ -195,25 +216,35 @@ def _pairs_on_device(pts, start, m, cells, weighting, host):
     queue = runtime.queue()
     local = runtime.local_size(64)
     grid = (-(-total // local) * local,)
-    stencil = np.uint32(3 ** d if cells > 1 else 1)
-    R2 = np.float64(weighting.d_max * weighting.d_max)
-    pts_dev, start_dev = runtime.input_buffer(pts), runtime.input_buffer(start)
-    count = runtime.Output((total,), np.uint32, host=np.empty(total, dtype=np.uint32))
-    runtime.kernel("sample_elimination.cl", "se_count", defines)(
-        queue, grid, (local,), pts_dev, start_dev, np.uint32(m), np.uint32(total),
-        np.int32(cells), stencil, R2, count.buffer)
-    offset = np.concatenate(([0], np.cumsum(count.finish(), dtype=np.int64)))
-    pairs = max(int(offset[-1]), 1)
-    nbr = runtime.Output((pairs,), np.uint32,
-                         host=np.empty(pairs, dtype=np.uint32) if host else None)
-    w = runtime.Output((pairs,), np.float64, host=np.empty(pairs) if host else None)
+    geometry = (runtime.input_buffer(pts), runtime.input_buffer(start), np.uint32(m),
+                np.uint32(total), np.int32(cells), np.uint32(3 ** d if cells > 1 else 1),
+                np.float64(weighting.d_max * weighting.d_max))
     weight = runtime.Output((total,), np.float64, host=np.empty(total), read_write=not host)
-    offset_dev = runtime.input_buffer(offset.astype(np.uint64))
-    runtime.kernel("sample_elimination.cl", "se_pairs", defines)(
-        queue, grid, (local,), pts_dev, start_dev, np.uint32(m), np.uint32(total),
-        np.int32(cells), stencil, R2, np.float64(weighting.d_min), np.float64(weighting.d_max),
-        offset_dev, nbr.buffer, w.buffer, weight.buffer)
-    return offset, offset_dev, nbr, w, weight, defines
+    count = runtime.Output((total,), np.uint32, host=np.empty(total, dtype=np.uint32))
+
+    def pairs(offset, cap, slots):
+        nbr = runtime.Output((slots,), np.uint32,
+                             host=np.empty(slots, dtype=np.uint32) if host else None)
+        w = runtime.Output((slots,), np.float64, host=np.empty(slots) if host else None)
+        runtime.kernel("sample_elimination.cl", "se_pairs", defines)(
+            queue, grid, (local,), *geometry, np.float64(weighting.d_min),
+            np.float64(weighting.d_max), runtime.input_buffer(offset), np.uint32(cap),
+            nbr.buffer, w.buffer, weight.buffer, count.buffer)
+        return nbr, w
+
+    if cap > 0:
+        nbr, w = pairs(np.zeros(1, dtype=np.uint64), cap, total * cap)
+        found = count.finish()
+        if int(found.max(initial=0)) <= cap:
+            return np.arange(total, dtype=np.uint64) * np.uint64(cap), found, nbr, w, weight, defines
+    else:
+        runtime.kernel("sample_elimination.cl", "se_count", defines)(
+            queue, grid, (local,), *geometry, count.buffer)
+        found = count.finish()
+    offset = np.zeros(total + 1, dtype=np.uint64)
+    np.cumsum(found, dtype=np.uint64, out=offset[1:])
+    nbr, w = pairs(offset, 0, max(int(offset[-1]), 1))
+    return offset[:-1], found.copy(), nbr, w, weight, defines
 
 
 def neighbour_weights_device(pts, start, m, cells, weighting):
@@ -236,16 +267,17 @@ def neighbour_weights_device(pts, start, m, cells, weighting):
         A device without fp64, or one that stops long loops where a work-item's loops
         would pass its limit.
     """
-    offset, _, nbr, w, weight, _ = _pairs_on_device(pts, start, m, cells, weighting, host=True)
+    first, found, nbr, w, weight, _ = _pairs_on_device(pts, start, m, cells, weighting, host=True)
+    offset = np.concatenate((first.astype(np.int64), [int(first[-1]) + int(found[-1])]))
     size = int(offset[-1])
     return offset, nbr.finish()[:size], w.finish()[:size], weight.finish()
 
 
 def eliminate_device(pts, start, m, cells, weighting, keep):
     """The neighbours, their weights and the elimination of every set on the current
-    device (``se_count``, ``se_pairs``, then ``se_eliminate``, one work-item a set): what
-    :func:`neighbour_weights_reference` and :func:`eliminate` give, the same bits, without
-    the pair lists leaving the device.
+    device (``se_pairs`` into :func:`slab_width` slots a candidate, then ``se_eliminate``,
+    one work-item a set): what :func:`neighbour_weights_reference` and :func:`eliminate`
+    give, the same bits, without the pair lists leaving the device.
 
     Parameters
     ----------
@@ -268,13 +300,13 @@ def eliminate_device(pts, start, m, cells, weighting, keep):
     NoDeviceError
         As :func:`neighbour_weights_device`.
     """
-    total = len(pts)
+    total, d = pts.shape
     sets = total // m
     removals = m - keep
-    offset, offset_dev, nbr, w, weight, defines = _pairs_on_device(pts, start, m, cells,
-                                                                   weighting, host=False)
+    first, found, nbr, w, weight, defines = _pairs_on_device(
+        pts, start, m, cells, weighting, host=False, cap=slab_width(m, d, weighting))
     limit = runtime.loop_limit()
-    if limit is not None and (removals + int(offset[-1])) * (int(m).bit_length() + 1) > limit:
+    if limit is not None and (removals + int(found.sum())) * (int(m).bit_length() + 1) > limit:
         runtime.require_short_loops("sample elimination's heap")
     gone = runtime.Output((sets * max(removals, 1),), np.uint32,
                           host=np.empty(sets * max(removals, 1), dtype=np.uint32))
@@ -282,9 +314,9 @@ def eliminate_device(pts, start, m, cells, weighting, keep):
     idx = runtime.Output((total,), np.uint32)
     local = min(runtime.local_size(64), sets)
     runtime.kernel("sample_elimination.cl", "se_eliminate", defines)(
-        runtime.queue(), (-(-sets // local) * local,), (local,),
-        offset_dev, nbr.buffer, w.buffer, weight.buffer, np.uint32(m), np.uint32(sets),
-        np.uint32(removals), key.buffer, idx.buffer, gone.buffer)
+        runtime.queue(), (-(-sets // local) * local,), (local,), runtime.input_buffer(first),
+        runtime.input_buffer(found), nbr.buffer, w.buffer, weight.buffer, np.uint32(m),
+        np.uint32(sets), np.uint32(removals), key.buffer, idx.buffer, gone.buffer)
     gone = gone.finish()[:sets * removals].reshape(sets, removals)
     return gone, weight.finish().reshape(sets, m)
 
@@ -363,8 +395,9 @@ def _eliminate_sets(points, keep, weighting, backend):
     if backend != "numpy" and sets > 1:
         # the device holds the candidates and their pair lists: a realization's neighbours
         # are about M V_d d_max^d (here with a margin of 4)
-        pairs = min(m, math.ceil(4 * m * ball_volume(d, weighting.d_max)))
-        ranges = runtime.chunk_ranges(sets, m * (8 * d + 52) + 12 * m * pairs)
+        pairs = max(min(m, math.ceil(4 * m * ball_volume(d, weighting.d_max))),
+                    slab_width(m, d, weighting))
+        ranges = runtime.chunk_ranges(sets, m * (8 * d + 64) + 12 * m * pairs)
         if len(ranges) > 1:
             return [result for lo, hi in ranges
                     for result in _eliminate_sets(points[lo:hi], keep, weighting, backend)]
