@@ -148,23 +148,27 @@ def _sample_elimination_3d():
                                          backend="numpy").sample(64, realizations=range(1, 3)))
 
 
-@check("sample-elimination-two-passes")
-def _sample_elimination_two_passes():
-    # the count pass and the lists at offsets (a sampler's run takes them only where a
-    # candidate's list overflows its slots)
+@check("sample-elimination-heap")
+def _sample_elimination_heap():
+    # se_eliminate, which a sampler runs only on devices that share the host's memory
     from clsamp.geometry.cells import sorted_by_cell
     from clsamp.samplers.sample_elimination import (
         Weighting,
-        neighbour_weights_device,
+        eliminate,
+        eliminate_device,
         neighbour_weights_reference,
     )
-    m = 200
-    weighting = Weighting.for_counts(m, 40, 2)
+    m, keep = 150, 30
+    weighting = Weighting.for_counts(m, keep, 2)
     cells = weighting.cells(m, 2)
-    pts, _, start, _ = sorted_by_cell(_points(m, 2, seed=4), cells)
-    for a, b in zip(neighbour_weights_device(pts, start, m, cells, weighting),
-                    neighbour_weights_reference(pts, start, m, cells, weighting), strict=True):
-        _same_bits(a, b)
+    pts, _, start, _ = sorted_by_cell(_points(m, 2, seed=5), cells)
+    gone, _ = eliminate_device(pts, start, m, cells, weighting, keep)
+    offset, nbr, w, weight = neighbour_weights_reference(pts, start, m, cells, weighting)
+    for s in range(2):
+        a, b = offset[s * m], offset[(s + 1) * m]
+        order = eliminate(weight[s * m:(s + 1) * m], offset[s * m:(s + 1) * m + 1] - a,
+                          nbr[a:b].astype(np.int64) - s * m, w[a:b], keep)[1]
+        assert gone[s].tolist() == order.tolist()
 
 
 @check("spectrum-direct")

@@ -146,6 +146,20 @@ def test_the_slots_hold_uniform_candidates_lists():
         assert most <= slab_width(m, d, weighting) < 4 * np.diff(offset).mean() + 16, (d, most)
 
 
+def test_a_discrete_gpu_runs_the_heap_on_the_host_with_the_same_bits(monkeypatch):
+    import dataclasses
+
+    from clsamp import runtime
+    device = runtime.current_device()
+    s = clsamp.make_sampler("sample_elimination", d=2, seed=4, progressive=True)
+    here = s.sample(200, realizations=2)
+    monkeypatch.setattr(runtime, "current_device",
+                        lambda: dataclasses.replace(device, host_memory=False))
+    from clsamp.samplers import sample_elimination
+    monkeypatch.setattr(sample_elimination, "eliminate_device", None)     # not called
+    assert np.array_equal(s.sample(200, realizations=2), here)
+
+
 def test_n_of_the_candidates_reproducibly():
     n = 300
     s = clsamp.make_sampler("sample_elimination", d=2, seed=11, ratio=4)

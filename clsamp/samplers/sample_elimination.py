@@ -6,9 +6,10 @@ The neighbour search and the weights are the O(M k) part: ``se_count`` and ``se_
 in ``kernels/sample_elimination.cl`` on the device, :func:`neighbour_weights_reference`
 here in NumPy, the same bits, over the grid of cells of :mod:`clsamp.geometry.cells`. The
 elimination -- take the heaviest candidate, lower its neighbours' weights, again -- is a
-heap walked one candidate at a time: ``se_eliminate`` on the device, one work-item a set,
-where the pair lists already are (:func:`eliminate_device`), and :func:`eliminate` in
-Python's heapq, the same removals in the same order.
+heap walked one candidate at a time: ``se_eliminate`` on a device that shares the host's
+cores, one work-item a set, where the pair lists already are (:func:`eliminate_device`),
+and :func:`eliminate` in Python's heapq (the twin's, and on discrete GPUs), the same
+removals in the same order.
 """
 
 import dataclasses
@@ -404,7 +405,9 @@ def _eliminate_sets(points, keep, weighting, backend):
     cells = weighting.cells(m, d)
     pts, _, start, order = sorted_by_cell(points, cells)
     original = order.reshape(sets, m) - (np.arange(sets) * m)[:, None]   # sorted -> set index
-    if backend != "numpy":
+    if backend != "numpy" and runtime.current_device().host_memory:
+        # a device on the host's cores: the heap beside the lists (on a discrete GPU one
+        # work-item's heap walk is unmeasured; the lists come to the host's heapq there)
         gone, weight = eliminate_device(pts, start, m, cells, weighting, keep)
         results = []
         for s in range(sets):
@@ -414,7 +417,8 @@ def _eliminate_sets(points, keep, weighting, backend):
             last = float(weight[s, survivors].max(initial=0.0))
             results.append((np.sort(original[s, survivors]), original[s, gone[s]], last))
         return results
-    offset, nbr, w, weight = neighbour_weights_reference(pts, start, m, cells, weighting)
+    run = neighbour_weights_reference if backend == "numpy" else neighbour_weights_device
+    offset, nbr, w, weight = run(pts, start, m, cells, weighting)
     results = []
     for s in range(sets):
         lo, hi = s * m, (s + 1) * m
@@ -498,8 +502,9 @@ class SampleEliminationSampler(Sampler):
     The neighbours and weights run on the device (``kernels/sample_elimination.cl``,
     over :mod:`clsamp.geometry.cells`' grid); its NumPy twin gives the same bits. The
     elimination is sequential -- each removal changes the next choice -- and runs as a
-    heap on the device, one work-item a realization, beside the pair lists; ties go to
-    the lower index, so every device and the NumPy twin give the same points.
+    heap, on a CPU device one work-item a realization beside the pair lists, on a GPU
+    on the host; ties go to the lower index, so every device and the NumPy twin give
+    the same points.
 
     References
     ----------
