@@ -409,24 +409,23 @@ def _eliminate_sets(points, keep, weighting, backend):
         # a device on the host's cores: the heap beside the lists (on a discrete GPU one
         # work-item's heap walk is unmeasured; the lists come to the host's heapq there)
         gone, weight = eliminate_device(pts, start, m, cells, weighting, keep)
-        results = []
+        per_set = []
         for s in range(sets):
             alive = np.ones(m, dtype=bool)
             alive[gone[s]] = False
             survivors = np.flatnonzero(alive)
-            last = float(weight[s, survivors].max(initial=0.0))
-            results.append((np.sort(original[s, survivors]), original[s, gone[s]], last))
-        return results
-    run = neighbour_weights_reference if backend == "numpy" else neighbour_weights_device
-    offset, nbr, w, weight = run(pts, start, m, cells, weighting)
-    results = []
-    for s in range(sets):
-        lo, hi = s * m, (s + 1) * m
-        a, b = offset[lo], offset[hi]
-        survivors, gone, last = eliminate(weight[lo:hi], offset[lo:hi + 1] - a,
-                                          nbr[a:b].astype(np.int64) - lo, w[a:b], keep)
-        results.append((np.sort(original[s, survivors]), original[s, gone], last))
-    return results
+            per_set.append((survivors, gone[s], float(weight[s, survivors].max(initial=0.0))))
+    else:
+        run = neighbour_weights_reference if backend == "numpy" else neighbour_weights_device
+        offset, nbr, w, weight = run(pts, start, m, cells, weighting)
+        per_set = []
+        for s in range(sets):
+            lo, hi = s * m, (s + 1) * m
+            a, b = offset[lo], offset[hi]
+            per_set.append(eliminate(weight[lo:hi], offset[lo:hi + 1] - a,
+                                     nbr[a:b].astype(np.int64) - lo, w[a:b], keep))
+    return [(np.sort(original[s, survivors]), original[s, gone], last)
+            for s, (survivors, gone, last) in enumerate(per_set)]
 
 
 @dataclasses.dataclass(frozen=True)
