@@ -121,15 +121,18 @@ def test_the_cost_never_rises():
 
 
 @pytest.mark.slow
-def test_quality_against_poisson_disk():
+@pytest.mark.parametrize("cells", ["points", "exact"])
+def test_quality_against_poisson_disk(cells):
     # the figure: rho >= 0.75 and low-frequency power at most a seventh of
     # Poisson disk's, n = 1024, three seeds, Poisson disk measured here too
     n = 1024
     pd = np.mean([low_frequency_power(clsamp.make_sampler("poisson_disk", seed=s).sample(n))
                   for s in (1, 2, 3)])
     for seed in (1, 2, 3):
-        pts, info = clsamp.make_sampler("bnot", seed=seed).sample(n, return_info=True)
-        assert np.all(info.capacities == bnot.POINTS_PER_SITE)
+        pts, info = clsamp.make_sampler("bnot", seed=seed, cells=cells,
+                                        progress=False).sample(n, return_info=True)
+        if cells == "points":
+            assert np.all(info.capacities == bnot.POINTS_PER_SITE)
         assert relative_radius(pts) >= 0.75, seed
         assert low_frequency_power(pts) <= pd / 7, seed
 

@@ -96,6 +96,20 @@ def test_every_sampler_gives_the_same_bits(device, name, d, randomize):
     assert np.array_equal(here.view(np.uint64), there.view(np.uint64)), (name, randomize, str(device))
 
 
+@pytest.mark.parametrize("device", OTHERS, ids=_label)
+def test_bnot_exact_cells_give_the_same_bits(device):
+    """bnot's cells="exact" clips its cells in double (kernels/bnot_cells.cl): the same
+    sets on every fp64 device, a refusal by name elsewhere."""
+    def points():
+        return clsamp.make_sampler("bnot", seed=5, cells="exact", iterations=4,
+                                   progress=False).sample(300, realizations=range(1, 3))
+    if not device.fp64:
+        with pytest.raises(NoDeviceError, match="fp64|double"):
+            on(device, points)
+        return
+    assert np.array_equal(points().view(np.uint64), on(device, points).view(np.uint64))
+
+
 # many dimensions, or permutations longer than 65535: a work-item's loops exceed llvmpipe's
 # loop limit unless the runtime splits them (runtime.dimension_split, the swaps in pieces)
 WIDE = [("halton", 300, None, 256), ("halton", 300, "owen", 256), ("halton", 300, "permute", 64),

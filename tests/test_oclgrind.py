@@ -171,6 +171,21 @@ def _sample_elimination_heap():
         assert gone[s].tolist() == order.tolist()
 
 
+@check("bnot-exact-cells")
+def _bnot_exact_cells():
+    # bnot's cells="exact": the clipping kernel on a grid of 8 x 8 cells (one stencil ring,
+    # then a wider one where a heavy site's cell is not certified) and on 5 sites (G == 1)
+    from clsamp.samplers.bnot_cells import PowerCells
+    rng = np.random.default_rng(3)
+    for n in (5, 300):
+        sites = rng.random((n, 2))
+        w = rng.normal(0.0, 0.1 / n, n)
+        w[0] = 3.0 / n
+        a, b = PowerCells(sites, "opencl")(w), PowerCells(sites, "numpy")(w)
+        assert all(np.array_equal(x, y) for x, y in zip(a[:3], b[:3], strict=True))
+        assert (a[3] != b[3]).nnz == 0
+
+
 @check("spectrum-direct")
 def _spectrum_direct():
     pts = _points()

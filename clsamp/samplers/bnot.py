@@ -20,6 +20,7 @@ from ..errors import InvalidArgumentError
 from ..geometry import integer_torus as it
 from ..validation import check_bool, check_choice, check_int, check_positive_int, check_real
 from .base import SampleInfo, info_field, register
+from .bnot_cells import exact_optimize
 from .ccvt.density import DENSITIES, density_points, density_points_device
 from .ccvt.pairs import MAX_POINTS_PER_SITE, NO_OWNER
 from .ccvt.power import PowerPass, start_grid_size
@@ -35,6 +36,7 @@ BAND = 0.25             # margin band, in squared site spacings, that measures t
 REGULAR = 0.5           # least diagonal of the Hessian, in p / spacing^2 (a cell with no boundary)
 SLACK = 1 / 128         # Newton stops when every count is within SLACK p of p (the rest: relay)
 TOL = 1e-5              # stop when an iteration lowers the cost by at most this fraction
+CELLS = ("points", "exact")     # the cells' measure: CCVT's density points, or exact areas
 
 
 @dataclasses.dataclass(frozen=True)
@@ -47,8 +49,9 @@ class BNOTInfo(SampleInfo):
         The realization indices.
     energy_history : ndarray (r, iterations)
         The transport cost after each iteration: the mean squared toroidal distance of the
-        density points to the site whose cell holds them, after the sites moved to their
-        cells' centroids. Never rising; a realization that converged before the others
+        density points (``cells="exact"``: of the torus) to the site whose cell holds
+        them, after the sites moved to their cells' centroids. Never rising (exact cells:
+        within the capacities' tolerance); a realization that converged before the others
         repeats its final value.
     dual_history : ndarray (r, iterations)
         The dual F(w) of each iteration's weight solve at its end, per density point
@@ -58,7 +61,8 @@ class BNOTInfo(SampleInfo):
         Newton steps taken in all.
     capacities : ndarray (r, n)
         Density points in each site's final cell, counted from the assignment: all equal
-        to ``points_per_site``.
+        to ``points_per_site``. With ``cells="exact"``, each final cell's area times n
+        (floats within 1e-5 of 1).
     iterations : ndarray (r,)
         Iterations each realization ran.
     converged : ndarray (r,) of bool
@@ -305,18 +309,25 @@ def bnot_optimize(sites, points, p, iterations=ITERATIONS, tol=TOL, backend="ope
                           else np.zeros(n, dtype=np.int64))
         converged.append(done)
     bar.close()
+    index = np.arange(r) if realizations is None else np.asarray(realizations)
+    return out, _info(index, histories, duals, steps, counts,
+                      np.asarray(capacities, dtype=np.int64).reshape(r, n), converged)
+
+
+def _info(realizations, histories, duals, steps, counts, capacities, converged):
+    """A :class:`BNOTInfo` from per-realization lists, the histories padded with their
+    last values to the longest."""
     length = max((len(h) for h in histories), default=0)
 
     def padded(rows):
-        return np.array([h + [h[-1]] * (length - len(h)) for h in rows]).reshape(r, length)
+        return np.array([h + [h[-1]] * (length - len(h)) for h in rows]).reshape(
+            len(rows), length)
 
-    index = np.arange(r) if realizations is None else np.asarray(realizations)
-    info = BNOTInfo(realizations=index.astype(np.int64), energy_history=padded(histories),
-                    dual_history=padded(duals), newton_steps=np.asarray(steps, dtype=np.int64),
-                    capacities=np.asarray(capacities, dtype=np.int64).reshape(r, n),
+    return BNOTInfo(realizations=np.asarray(realizations, dtype=np.int64),
+                    energy_history=padded(histories), dual_history=padded(duals),
+                    newton_steps=np.asarray(steps, dtype=np.int64), capacities=capacities,
                     iterations=np.asarray(counts, dtype=np.int64),
                     converged=np.asarray(converged, dtype=bool))
-    return out, info
 
 
 IMAGE_SIDE = 256        # a callable density is sampled on this many pixels a side
@@ -420,8 +431,9 @@ class BNOTSampler(OptimizerSampler):
     tol : float
         Stop once an iteration lowers the transport cost by at most this fraction of it
         (default 1e-5; 0 runs every iteration).
-    density : {"jittered", "random"}, image or callable
-        The density points, as ``ccvt`` draws them (:func:`clsamp.samplers.ccvt.density.
+    density : {"jittered", "random"}, image or callable, optional
+        With ``cells="points"`` (default ``"jittered"``): the density points, as
+        ``ccvt`` draws them (:func:`clsamp.samplers.ccvt.density.
         density_points`): one per cell of an equal-area partition of the torus, shifted
         at random per realization (default), or i.i.d. uniform. An image (h, w) or a
         callable ``f(x, y)`` (:func:`check_density`) gives adaptive sampling: the
@@ -429,6 +441,11 @@ class BNOTSampler(OptimizerSampler):
         cell holds an equal share of its mass and the sites crowd where it is high.
     newton : int
         Cap on the Newton steps of one weight solve (default 16).
+    cells : {"points", "exact"}
+        How the cells are measured: by CCVT's density points (default; capacities exact
+        in whole points, any density), or exactly, as polygons of the uniform density
+        (de Goes et al.'s exact areas; ``points_per_site`` and ``density`` do not apply;
+        needs a device with fp64). See Notes.
     backend : {"opencl", "numpy"}
     progress : bool
         Show a progress bar over the iterations (after 2 s; default True).
@@ -464,12 +481,25 @@ class BNOTSampler(OptimizerSampler):
     :class:`BNOTInfo`: the cost after every iteration, the dual, the Newton steps, the
     capacities, the iterations and whether each realization converged.
 
+    ``cells="exact"`` takes de Goes et al.'s measure itself, the uniform density of the
+    torus, with the cells as exact polygons: every site's power cell is clipped from the
+    square of its own images by the bisectors of the nearby sites
+    (:mod:`clsamp.samplers.bnot_cells`, one work-item a site on the device), which gives
+    its area, centroid and second moment and the exact Hessian (|edge| / (2 |x_i - x_j|))
+    without sampling. Each iteration solves the weights by the damped Newton method of
+    Kitagawa, Merigot and Thibert [3] until every area is within 1e-5 of 1/n
+    (:func:`clsamp.samplers.bnot_cells.solve_exact_weights`), then moves every site to its
+    cell's centroid. The kernel and its NumPy twin give the same bits, and the rest is
+    host arithmetic on identical inputs, so every fp64 device gives the same sets.
+
     References
     ----------
     .. [1] F. de Goes, K. Breeden, V. Ostromoukhov, M. Desbrun, "Blue noise through
        optimal transport", ACM Trans. Graph. 31(6) (SIGGRAPH Asia), 2012.
     .. [2] F. Aurenhammer, F. Hoffmann, B. Aronov, "Minkowski-type theorems and
        least-squares clustering", Algorithmica 20, 1998.
+    .. [3] J. Kitagawa, Q. Merigot, B. Thibert, "Convergence of a Newton algorithm for
+       semi-discrete optimal transport", J. Eur. Math. Soc. 21(9), 2019.
 
     Examples
     --------
@@ -480,6 +510,10 @@ class BNOTSampler(OptimizerSampler):
     (32, 32)
     >>> bool(info.energy_history[0, -1] <= info.energy_history[0, 0])
     True
+    >>> pts, info = clsamp.make_sampler("bnot", seed=3, cells="exact").sample(
+    ...     256, return_info=True)
+    >>> bool(abs(info.capacities - 1).max() < 1e-5)
+    True
     """
 
     info = BNOTInfo
@@ -488,19 +522,26 @@ class BNOTSampler(OptimizerSampler):
     needs_fp64 = False
 
     def __init__(self, d=2, seed=0, points_per_site=POINTS_PER_SITE, iterations=ITERATIONS,
-                 tol=TOL, density="jittered", newton=NEWTON, backend="opencl", progress=True):
+                 tol=TOL, density=None, newton=NEWTON, cells="points", backend="opencl",
+                 progress=True):
         super().__init__(d=d, seed=seed, backend=backend)
         self.progress = check_bool(progress, "progress")
         self.points_per_site = check_positive_int(points_per_site, "points_per_site",
                                                   maximum=MAX_POINTS_PER_SITE)
         self.iterations = check_positive_int(iterations, "iterations")
         self.tol = check_real(tol, "tol", minimum=0.0, maximum=1.0)
-        self.density = check_density(density)
+        self.cells = check_choice(cells, "cells", CELLS)
+        if self.cells == "exact" and density is not None:
+            raise InvalidArgumentError(
+                "'density' applies to cells='points'; cells='exact' is the uniform density")
+        self.density = check_density("jittered" if density is None else density)
         self.newton = check_int(newton, "newton", minimum=0, maximum=64)
 
     def _optimize(self, sites, realizations, backend):
         n, p = sites.shape[1], self.points_per_site
         index = np.arange(realizations.start, realizations.stop, dtype=np.int64)
+        if self.cells == "exact":
+            return self._optimize_exact(it.to_unit(sites), index, backend)
         name = self.density if isinstance(self.density, str) else "jittered"
         if backend == "numpy":
             points = density_points(self.seed, index, n * p, name)
@@ -513,3 +554,10 @@ class BNOTSampler(OptimizerSampler):
         out, info = bnot_optimize(sites, points, p, self.iterations, self.tol, backend, index,
                                   self.newton, self.progress)
         return it.to_unit(out), info
+
+    def _optimize_exact(self, sites, index, backend):
+        if backend == "opencl":
+            runtime.require_fp64()
+        out, *lists, areas, converged = exact_optimize(
+            sites, self.iterations, self.tol, backend, self.newton, self.progress)
+        return out, _info(index, *lists, areas, converged)

@@ -1,0 +1,470 @@
+"""Exact power cells on the unit torus and BNOT over them: ``bnot``'s ``cells="exact"``.
+
+de Goes, Breeden, Ostromoukhov and Desbrun (2012) solve for the power weights with the
+exact areas of the power cells of the uniform measure, their centroids and the Hessian
+of the dual (|edge| / (2 |x_i - x_j|) between neighbouring cells), from a regular
+triangulation. Here each cell is clipped on its own (``bnot_cells`` in
+``kernels/bnot_cells.cl``, one work-item a site; NumPy twin :func:`power_cells_reference`,
+the same bits), and the weights come from damped Newton steps on the host, the same
+arithmetic for both backends.
+"""
+
+import numpy as np
+
+from .. import runtime
+from ..errors import SamplingError
+from ..geometry.cells import sorted_by_cell
+
+VMAX = 32               # vertices a cell may have (status 2 beyond)
+LMAX = 64               # lines that cut a cell on the way (status 2 beyond)
+SITES_PER_CELL = 4      # the grid's cells hold about this many sites
+NEWTON = 16             # cap on the Newton steps of one weight solve
+HALVINGS = 12           # step halvings before a Newton step gives up
+CAPACITY_TOL = 1e-5     # a solve stops once every area is within this fraction of 1/n
+MAX_IMAGES = 4          # the widest stencil of images of the torus (G == 1)
+
+
+def grid(n, R):
+    """The grid of cells for the clipping kernel's candidates.
+
+    Parameters
+    ----------
+    n : int
+        Sites.
+    R : int
+        The stencil's radius in cells.
+
+    Returns
+    -------
+    G : int
+        Cells per axis: about sqrt(n / SITES_PER_CELL) when that is at least 2 R + 1,
+        else 1 (every site, in the (2 R + 1)^2 images of the torus).
+    reach : float
+        The least distance from a site to a site no candidate of it: R / G, or R.
+    """
+    G = int(np.sqrt(n / SITES_PER_CELL))
+    if G < 2 * R + 1:
+        return 1, float(R)
+    return G, R / G
+
+
+def _stencil(R):
+    """The kernel's order of the (2 R + 1)^2 neighbouring cells: by ring, then first axis."""
+    return [(ox, oy) for ring in range(R + 1) for ox in range(-ring, ring + 1)
+            for oy in range(-ring, ring + 1) if max(abs(ox), abs(oy)) == ring]
+
+
+def power_cells_reference(sites, w, start, G, R, reach, wmax):
+    """NumPy twin of the ``bnot_cells`` kernel (``kernels/bnot_cells.cl``): the same
+    candidates in the same order, the same operations, the same bits.
+
+    Parameters
+    ----------
+    sites : ndarray (n, 2) of float64
+        Sorted by cell (:func:`clsamp.geometry.cells.sorted_by_cell`).
+    w : ndarray (n,) of float64
+        Their weights, in the same order.
+    start : ndarray (G * G + 1,) of uint32
+        Each cell's first sorted index.
+    G, R : int
+        Cells per axis, stencil radius in cells.
+    reach, wmax : float
+        The least distance of a site outside the stencil; the largest weight.
+
+    Returns
+    -------
+    out : ndarray (n, 4)
+        Area, centroid offset (x, y), second moment about the site.
+    nbr : ndarray (n, VMAX) of int32
+        The neighbours across each edge (-1: none).
+    coef : ndarray (n, VMAX)
+        |edge| / (2 |d|) of each.
+    status : ndarray (n,) of int32
+        0 certified, 1 needs a wider stencil, 2 too many vertices or lines.
+    """
+    n = sites.shape[0]
+    rows = np.arange(n)
+    px = np.zeros((n, VMAX))
+    py = np.zeros((n, VMAX))
+    lab = np.full((n, VMAX), -1, dtype=np.int64)
+    px[:, :4] = [-0.5, 0.5, 0.5, -0.5]
+    py[:, :4] = [-0.5, -0.5, 0.5, 0.5]
+    cnt = np.full(n, 4, dtype=np.int64)
+    lines = np.zeros(n, dtype=np.int64)
+    tj = np.zeros((n, LMAX), dtype=np.int64)
+    tn = np.zeros((n, LMAX))
+    st = np.zeros(n, dtype=np.int64)
+    r2 = np.full(n, 0.5)
+    xi, yi = sites[:, 0], sites[:, 1]
+    if G > 1:
+        cx = np.minimum((xi * float(G)).astype(np.int64), G - 1)
+        cy = np.minimum((yi * float(G)).astype(np.int64), G - 1)
+    else:
+        cx = cy = np.zeros(n, dtype=np.int64)
+    starts = start.astype(np.int64)
+    a = np.arange(VMAX)
+    for ox, oy in _stencil(R):
+        if G == 1:
+            shx = np.full(n, ox)
+            shy = np.full(n, oy)
+            cell = np.zeros(n, dtype=np.int64)
+        else:
+            gx, gy = cx + ox, cy + oy
+            shx = np.where(gx < 0, -1, np.where(gx >= G, 1, 0))
+            shy = np.where(gy < 0, -1, np.where(gy >= G, 1, 0))
+            cell = (gx - shx * G) * G + (gy - shy * G)
+        first, count = starts[cell], starts[cell + 1] - starts[cell]
+        for slot in range(int(count.max(initial=0))):
+            j = first + slot
+            live = (slot < count) & (cnt > 0) & (st == 0) & (j != rows)
+            r = np.flatnonzero(live)
+            if r.size == 0:
+                continue
+            jr = j[r]
+            dx = (sites[jr, 0] + shx[r].astype(np.float64)) - xi[r]
+            dy = (sites[jr, 1] + shy[r].astype(np.float64)) - yi[r]
+            dd = dx * dx + dy * dy
+            h = 0.5 * ((dd + w[r]) - w[jr])
+            near = ~((h > 0.0) & (h * h >= r2[r] * dd))
+            r, jr, dx, dy, h = r[near], jr[near], dx[near], dy[near], h[near]
+            inside = a[None, :] < cnt[r, None]
+            s = (px[r] * dx[:, None] + py[r] * dy[:, None]) - h[:, None]
+            cut = ((s > 0.0) & inside).any(axis=1)
+            r, jr, dx, dy, s, inside = r[cut], jr[cut], dx[cut], dy[cut], s[cut], inside[cut]
+            full = lines[r] == LMAX
+            st[r[full]] = 2
+            keep = ~full
+            r, jr, dx, dy, s, inside = r[keep], jr[keep], dx[keep], dy[keep], s[keep], inside[keep]
+            if r.size == 0:
+                continue
+            _clip(r, jr, dx, dy, s, inside, px, py, lab, cnt, lines, tj, tn, st, r2)
+    return _moments(px, py, lab, cnt, tj, tn, st, w, reach, wmax, r2)
+
+
+def _clip(r, jr, dx, dy, s, inside, px, py, lab, cnt, lines, tj, tn, st, r2):
+    """One Sutherland-Hodgman clip of the cells of rows r, in place (the kernel's loop)."""
+    a = np.arange(VMAX)
+    b = np.where(a[None, :] + 1 < cnt[r, None], a[None, :] + 1, 0)
+    sb = np.take_along_axis(s, b, axis=1)
+    ina = s <= 0.0
+    inb = sb <= 0.0
+    e1 = ina & inside
+    e2 = (ina != inb) & inside
+    total = (e1.astype(np.int64) + e2).sum(axis=1)
+    over = total > VMAX
+    st[r[over]] = 2
+    ok = ~over
+    r, jr, dx, dy, s, sb, b, ina, e1, e2, total = (
+        r[ok], jr[ok], dx[ok], dy[ok], s[ok], sb[ok], b[ok], ina[ok], e1[ok], e2[ok], total[ok])
+    if r.size == 0:
+        return
+    emitted = e1.astype(np.int64) + e2
+    off = np.cumsum(emitted, axis=1) - emitted
+    ax, ay, al = px[r], py[r], lab[r]
+    bx = np.take_along_axis(ax, b, axis=1)
+    by = np.take_along_axis(ay, b, axis=1)
+    nx = np.zeros_like(ax)
+    ny = np.zeros_like(ay)
+    nl = np.full_like(al, -1)
+    k, v = np.nonzero(e1)
+    p = off[k, v]
+    nx[k, p], ny[k, p], nl[k, p] = ax[k, v], ay[k, v], al[k, v]
+    k, v = np.nonzero(e2)
+    p = off[k, v] + e1[k, v]
+    t = s[k, v] / (s[k, v] - sb[k, v])
+    nx[k, p] = ax[k, v] + t * (bx[k, v] - ax[k, v])
+    ny[k, p] = ay[k, v] + t * (by[k, v] - ay[k, v])
+    nl[k, p] = np.where(ina[k, v], lines[r][k], al[k, v])
+    tj[r, lines[r]] = jr
+    tn[r, lines[r]] = np.sqrt(dx * dx + dy * dy)
+    lines[r] += 1
+    px[r], py[r], lab[r] = nx, ny, nl
+    cnt[r] = total
+    ra = nx * nx + ny * ny
+    r2[r] = np.where(a[None, :] < total[:, None], ra, 0.0).max(axis=1, initial=0.0)
+
+
+def _moments(px, py, lab, cnt, tj, tn, st, w, reach, wmax, r2):
+    """Area, centroid, second moment, edges and status of clipped cells (the kernel's
+    last loops, in its order)."""
+    n = px.shape[0]
+    A2, mx, my, second = (np.zeros(n) for _ in range(4))
+    for a in range(VMAX):
+        on = a < cnt
+        if not on.any():
+            break
+        b = np.where(a + 1 < cnt, a + 1, 0)
+        xa, ya = px[:, a], py[:, a]
+        xb, yb = px[np.arange(n), b], py[np.arange(n), b]
+        cr = xa * yb - ya * xb
+        A2 = np.where(on, A2 + cr, A2)
+        mx = np.where(on, mx + cr * (xa + xb), mx)
+        my = np.where(on, my + cr * (ya + yb), my)
+        second = np.where(on, second + cr * (((xa * xa + ya * ya) + (xb * xb + yb * yb))
+                                             + (xa * xb + ya * yb)), second)
+    a = np.arange(VMAX)
+    b = np.where(a[None, :] + 1 < cnt[:, None], a[None, :] + 1, 0)
+    edge = (lab >= 0) & (a[None, :] < cnt[:, None])
+    k, v = np.nonzero(edge)
+    slot = (np.cumsum(edge, axis=1) - 1)[k, v]
+    ex = px[k, b[k, v]] - px[k, v]
+    ey = py[k, b[k, v]] - py[k, v]
+    nbr = np.full((n, VMAX), -1, dtype=np.int32)
+    coef = np.zeros((n, VMAX))
+    nbr[k, slot] = tj[k, lab[k, v]]
+    coef[k, slot] = np.sqrt(ex * ex + ey * ey) / (2.0 * tn[k, lab[k, v]])
+    rr = np.sqrt(r2)
+    certified = (rr < reach) & ((reach * reach - 2.0 * rr * reach) + (w - wmax) >= 0.0)
+    status = np.where(st != 0, st, np.where(certified, 0, 1)).astype(np.int32)
+    out = np.empty((n, 4))
+    out[:, 0] = 0.5 * A2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out[:, 1] = np.where(A2 > 0.0, mx / (3.0 * A2), 0.0)
+        out[:, 2] = np.where(A2 > 0.0, my / (3.0 * A2), 0.0)
+    out[:, 3] = second / 12.0
+    return out, nbr, coef, status
+
+
+def power_cells_device(sites, w, start, G, R, reach, wmax):
+    """:func:`power_cells_reference` by the ``bnot_cells`` kernel (the same bits).
+
+    Parameters
+    ----------
+    sites, w, start, G, R, reach, wmax
+        As :func:`power_cells_reference` takes them; ``sites`` and ``start`` may be
+        buffers already on the device (:class:`PowerCells` keeps them for the passes
+        over the same sites).
+
+    Returns
+    -------
+    out, nbr, coef, status
+        As :func:`power_cells_reference` returns them.
+
+    Raises
+    ------
+    NoDeviceError
+        A device without fp64.
+    """
+    runtime.require_fp64()
+    n = int(w.shape[0])
+    kernel = runtime.kernel("bnot_cells.cl", "bnot_cells", {"VMAX": VMAX, "LMAX": LMAX})
+    floats = runtime.Output((n, 4 + VMAX), np.float64, host=np.empty((n, 4 + VMAX)))
+    ints = runtime.Output((n, 1 + VMAX), np.int32, host=np.empty((n, 1 + VMAX), dtype=np.int32))
+    local = runtime.local_size(64)
+    sites, start = (a if not isinstance(a, np.ndarray) else runtime.input_buffer(a)
+                    for a in (sites, start))
+    kernel(runtime.queue(), (-(-n // local) * local,), (local,), sites, runtime.input_buffer(w),
+           start, np.uint32(n), np.int32(G), np.int32(R), np.float64(reach), np.float64(wmax),
+           floats.buffer, ints.buffer)
+    f, i = floats.finish(), ints.finish()
+    return f[:, :4], i[:, 1:], f[:, 4:], i[:, 0]
+
+
+class PowerCells:
+    """The exact power cells of fixed sites, for any weights: ``cells(w)`` -> (area,
+    centroid offset, second moment, the edges' coefficients), in the sites' order.
+
+    The sites are sorted by a grid of cells; a call clips every cell with the stencil of
+    R cells around it (R = 1 first, or every site's 5 x 5 images for small n), widening
+    the stencil while some cell is not certified (``bnot_cells.cl``), so that every cell
+    is exact.
+
+    Parameters
+    ----------
+    sites : ndarray (n, 2) of float64
+        In [0, 1).
+    backend : {"opencl", "numpy"}
+    """
+
+    def __init__(self, sites, backend):
+        self.sites = np.asarray(sites, dtype=np.float64)
+        self.n = self.sites.shape[0]
+        self.run = power_cells_device if backend == "opencl" else power_cells_reference
+        self._stencil(1 if grid(self.n, 1)[0] > 1 else 2)
+
+    def _stencil(self, R):
+        self.R = R
+        self.G, self.reach = grid(self.n, R)
+        self.pts, _, self.start, self.order = sorted_by_cell(self.sites[None], self.G)
+        if self.run is power_cells_device:      # the same sites for every pass: upload once
+            self.pts, self.start = runtime.input_buffer(self.pts), runtime.input_buffer(self.start)
+
+    def __call__(self, w):
+        import scipy.sparse as sp
+        n = self.n
+        while True:
+            ws = np.ascontiguousarray(np.asarray(w, dtype=np.float64)[self.order])
+            out, nbr, coef, status = self.run(self.pts, ws, self.start, self.G, self.R,
+                                              self.reach, float(ws.max(initial=0.0)))
+            if (status == 2).any():
+                raise SamplingError("bnot: a power cell with more than "
+                                     f"{VMAX} vertices or {LMAX} cutting lines")
+            if not status.any():
+                break
+            if self.G == 1 and self.R >= MAX_IMAGES:
+                raise SamplingError("bnot: weights too far apart for exact power cells")
+            self._stencil(self.R + 1)
+        order = self.order
+        back = np.empty(n, dtype=np.int64)
+        back[order] = np.arange(n)
+        res = out[back]
+        rows = np.repeat(order, VMAX)
+        flat = nbr.ravel()
+        ok = flat >= 0
+        edge = sp.coo_matrix((coef.ravel()[ok], (rows[ok], order[flat[ok]])),
+                             shape=(n, n)).tocsr()
+        return res[:, 0], res[:, 1:3], res[:, 3], edge
+
+
+def _laplacian(edge, n):
+    """The Jacobian of the areas in the weights: the symmetric graph Laplacian of the
+    edges' coefficients, regularized along the constants (to which the gradient is
+    orthogonal) by a diagonal 1e-9 of the mean degree."""
+    import scipy.sparse as sp
+    sym = (edge + edge.T) * 0.5
+    degree = np.asarray(sym.sum(axis=1)).ravel()
+    return (sp.diags(degree + 1e-9 * max(float(degree.mean()), 1e-300)) - sym).tocsc()
+
+
+class LaplacianSolver:
+    """Solves L x = b for the Laplacians of one optimization, which change little from
+    one Newton step or iteration to the next: conjugate gradients preconditioned by the
+    LU factors of an earlier L (SuperLU, symmetric mode), factored anew when they take
+    more than ``steps`` iterations to reach ``rtol``. The same arithmetic on every
+    backend, so the same bits."""
+
+    def __init__(self, rtol=1e-10, steps=8):
+        self.rtol, self.steps, self.lu = rtol, steps, None
+
+    def _factor(self, L):
+        from scipy.sparse.linalg import splu
+        self.lu = splu(L, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                       options={"SymmetricMode": True})
+
+    def __call__(self, L, b):
+        from scipy.sparse.linalg import LinearOperator, cg
+        if self.lu is not None:
+            M = LinearOperator(L.shape, matvec=self.lu.solve, dtype=np.float64)
+            x, info = cg(L, b, rtol=self.rtol, atol=0.0, maxiter=self.steps, M=M)
+            if info == 0:
+                return x
+        self._factor(L)
+        return self.lu.solve(b)
+
+
+def solve_exact_weights(cells, w, solver, newton=NEWTON, tol=CAPACITY_TOL):
+    """Weights whose exact power cells all have area 1/n, by the damped Newton method of
+    Kitagawa, Merigot and Thibert (2019) on the dual of the semi-discrete transport
+    problem (de Goes et al. 2012, section 4).
+
+    The dual F(w) = sum_i (integral over Pow_i(w) of |y - x_i|^2 - w_i) + sum_i w_i / n is
+    concave; its gradient is 1/n - A(w) (A: the cells' areas) and its Hessian minus the
+    Laplacian L of the cells' adjacency weighted by |edge| / (2 |x_i - x_j|). A step
+    w + alpha delta, L delta = 1/n - A, is accepted for the first alpha in 1, 1/2, ...
+    (``HALVINGS`` tries) that keeps every area at least half the least area (or 1/n) at
+    the start and lowers the gradient's norm to (1 - alpha / 2) of its value. It starts
+    from ``w``, or from zero weights (Voronoi cells) where ``w`` leaves a cell empty.
+
+    Parameters
+    ----------
+    cells : PowerCells
+        The sites' cells.
+    w : ndarray (n,)
+        The weights to start from.
+    solver : LaplacianSolver
+        Solves L delta = 1/n - A.
+    newton : int
+        Cap on the steps.
+    tol : float
+        Stop once every area is within ``tol`` / n of 1 / n.
+
+    Returns
+    -------
+    w : ndarray (n,)
+    cells : tuple
+        ``cells(w)``: area, centroid offset, second moment, edges.
+    steps : int
+        Newton steps taken.
+    """
+    n = cells.n
+    m = 1.0 / n
+    state = cells(w)
+    if w.any() and not state[0].min() > 0.0:
+        w = np.zeros(n)
+        state = cells(w)
+    least = 0.5 * min(float(state[0].min()), m)
+    steps = 0
+    for _ in range(newton):
+        grad = m - state[0]
+        if n == 1 or np.abs(grad).max() <= tol * m:
+            break
+        delta = solver(_laplacian(state[3], n), grad)
+        delta -= delta.mean()
+        norm, alpha, taken = np.linalg.norm(grad), 1.0, None
+        for _ in range(HALVINGS):
+            trial = w + alpha * delta
+            out = cells(trial)
+            if out[0].min() >= least and np.linalg.norm(m - out[0]) <= (1.0 - alpha / 2) * norm:
+                taken = trial, out
+                break
+            alpha *= 0.5
+        if taken is None:
+            break
+        (w, state), steps = taken, steps + 1
+    return w, state, steps
+
+
+def exact_optimize(sites, iterations, tol, backend, newton=NEWTON, progress=False):
+    """BNOT over exact power cells from given sites (both backends: the same bits).
+
+    Parameters
+    ----------
+    sites : ndarray (r, n, 2) of float64
+        Starting sites in [0, 1).
+    iterations, tol, backend, newton, progress
+        As :func:`clsamp.samplers.bnot.bnot_optimize` takes them.
+
+    Returns
+    -------
+    sites : ndarray (r, n, 2)
+    history, duals : list of lists
+        The cost after each iteration (the cells' mean squared distance to their
+        centroids) and the dual at each weight solve's end.
+    steps, counts : list of int
+        Newton steps and iterations of each realization.
+    areas : ndarray (r, n)
+        The final cells' areas times n.
+    converged : list of bool
+    """
+    from tqdm import tqdm
+    r, n, _ = sites.shape
+    out = np.array(sites, dtype=np.float64)
+    histories, duals, steps, counts, areas, converged = [], [], [], [], [], []
+    bar = tqdm(total=r * iterations, desc=f"bnot {r} x {n} sites", unit="it",
+               disable=not progress, delay=2)
+    for k in range(r):
+        x, w, solver = out[k], np.zeros(n), LaplacianSolver()
+        history, dual_history, taken, done, area = [], [], 0, False, np.full(n, 1.0 / n)
+        for _ in range(iterations):
+            w, (area, centroid, moment, _), used = solve_exact_weights(
+                PowerCells(x, backend), w, solver, newton)
+            taken += used
+            history.append(float(np.sum(moment - area * (centroid * centroid).sum(axis=1))))
+            dual_history.append(float(np.sum(moment - w * area) + np.sum(w) / n))
+            x = x + centroid
+            x -= np.floor(x)
+            x[x >= 1.0] = 0.0
+            bar.update()
+            if len(history) > 1 and history[-2] - history[-1] <= tol * history[-1]:
+                done = True
+                break
+        bar.update(iterations - len(history))
+        out[k] = x
+        histories.append(history)
+        duals.append(dual_history)
+        steps.append(taken)
+        counts.append(len(history))
+        areas.append(area * n)
+        converged.append(done)
+    bar.close()
+    return out, histories, duals, steps, counts, np.asarray(areas).reshape(r, n), converged
