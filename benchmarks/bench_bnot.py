@@ -12,7 +12,8 @@ The iterations are the first of 8, 16, 32, 64 (``tol=0``: every iteration runs u
 the cost stops falling) whose set has that quality; the row times that call on the
 device (median of 3) and the NumPy twin's (``backend="numpy"``, once), which gives the
 same bits (checked). The peer column is the twin; the ratio is twin seconds over device
-seconds.
+seconds. The rows "bnot exact to quality" do the same with ``cells="exact"`` (the power
+cells as polygons of the uniform density), over 8, 16, 32, 64, 128 iterations.
 """
 
 from bench_gbn import _quality, low_frequency_power
@@ -21,6 +22,7 @@ from common import main, on_device, short_name, to_quality
 import clsamp
 
 LADDER = (8, 16, 32, 64)
+EXACT_LADDER = (8, 16, 32, 64, 128)
 
 
 def run(devices, quick):
@@ -34,6 +36,10 @@ def run(devices, quick):
         for n in sizes:
             rows.append(to_quality("bnot", 2, n, LADDER,
                                    lambda pts, n=n: _quality(pts, n, 2, disk[n]), dev, tol=0.0))
+            rows.append(to_quality("bnot", 2, n, EXACT_LADDER,
+                                   lambda pts, n=n: _quality(pts, n, 2, disk[n]), dev,
+                                   title="bnot exact to quality", tol=0.0, cells="exact",
+                                   progress=False))
     return rows
 
 

@@ -31,8 +31,9 @@ Cases (``--quick``: n = 1024 only):
   (stopped after 600 s: the row then says so and its ratio is a lower bound).
   ``gbn`` at the first of ``bench_gbn.LADDER`` whose set has the uniform start's rho and
   low-frequency power or better (without it: ``bench_gbn``'s quality), ``ccvt`` and
-  ``bnot`` at their defaults; clsamp's calls follow UTK's (median of 3 after a warm-up;
-  ``bnot`` once).
+  ``bnot`` at their defaults, ``bnot`` with ``cells="exact"`` ("bnot exact") at the
+  first of ``bench_bnot.EXACT_LADDER`` whose set has the uniform start's rho and power
+  (as gbn); clsamp's calls follow UTK's (median of 3 after a warm-up; ``bnot`` once).
 * ``faure`` and ``niederreiter`` against UTK's ``Faure`` and ``Niederreiter``
   (unscrambled, the first n points) in 2-D and 4-D: n = 1024, 4096 and 65536 (Faure in
   4-D, base 5: 625, 3125 and 78125; ``--quick``: the first); the quality column says
@@ -52,6 +53,7 @@ import tempfile
 import time
 
 import numpy as np
+from bench_bnot import EXACT_LADDER as BNOT_EXACT_LADDER
 from bench_gbn import LADDER as GBN_LADDER
 from bench_gbn import low_frequency_power
 from bench_sot import LADDER as SOT_LADDER
@@ -226,6 +228,12 @@ def _bnot_rows(binaries, sizes, disk, dev):
         ours.append(("ccvt", "default", clsamp.make_sampler("ccvt", seed=1, progress=False), 3))
         if "bnot" in clsamp.sampler_names():
             ours.append(("bnot", "default", clsamp.make_sampler("bnot", seed=1, progress=False), 1))
+            iterations, _, ok = _first(BNOT_EXACT_LADDER, lambda it, n=n: clsamp.make_sampler(
+                "bnot", seed=1, iterations=it, tol=0.0, cells="exact", progress=False).sample(n),
+                lambda pts: _at_least(pts, goal))
+            ours.append(("bnot exact", f"{iterations} it{'' if ok else ' (quality not reached)'}",
+                         clsamp.make_sampler("bnot", seed=1, iterations=iterations, tol=0.0,
+                                             cells="exact", progress=False), 3))
         for name, setting, sampler, repeats in ours:
             seconds, pts = timed(lambda s=sampler, n=n: s.sample(n), repeats=repeats)
             figures = _figures(pts)

@@ -163,7 +163,7 @@ def timed(fn, repeats=5, warmup=1, min_time=0.0):
     return statistics.median(times), result
 
 
-def to_quality(name, d, n, ladder, quality, device, unit="iterations", **params):
+def to_quality(name, d, n, ladder, quality, device, unit="iterations", title=None, **params):
     """An iterating sampler timed where it first reaches a quality: climb ``ladder`` (its
     ``iterations``) until ``quality(points)`` gives (True, text), then time that setting
     against its NumPy twin (which must give the same bits).
@@ -171,7 +171,8 @@ def to_quality(name, d, n, ladder, quality, device, unit="iterations", **params)
     Returns
     -------
     Row
-        "<name> to quality"; its extra holds the iterations and whether the quality was met.
+        ``title`` (default "<name> to quality"); its extra holds the iterations and whether
+        the quality was met.
     """
     import numpy as np
     for iterations in ladder:
@@ -184,7 +185,8 @@ def to_quality(name, d, n, ladder, quality, device, unit="iterations", **params)
     t_np, ref = timed(lambda: twin.sample(n), repeats=1, warmup=0)
     same = "bit-identical" if np.array_equal(ref, pts) else "DIFFERS"
     reached = "" if met else f"quality not reached in {iterations} {unit}: "
-    return Row(f"{name} to quality", f"{n}x{d}D, {iterations} it", device, t_cl, "numpy twin", t_np,
+    return Row(title or f"{name} to quality", f"{n}x{d}D, {iterations} it", device, t_cl,
+               "numpy twin", t_np,
                f"{reached}{text}, {same}", {"iterations": iterations, "reached": met})
 
 

@@ -21,6 +21,7 @@ SITES_PER_CELL = 4      # the grid's cells hold about this many sites
 NEWTON = 16             # cap on the Newton steps of one weight solve
 HALVINGS = 12           # step halvings before a Newton step gives up
 CAPACITY_TOL = 1e-5     # a solve stops once every area is within this fraction of 1/n
+COARSE = 1e-2           # the loosest capacities of an iteration before the last
 MAX_IMAGES = 4          # the widest stencil of images of the torus (G == 1)
 
 
@@ -225,7 +226,7 @@ def _moments(px, py, lab, cnt, tj, tn, st, w, reach, wmax, r2):
     return out, nbr, coef, status
 
 
-def power_cells_device(sites, w, start, G, R, reach, wmax):
+def power_cells_device(sites, w, start, G, R, reach, wmax, outputs=None):
     """:func:`power_cells_reference` by the ``bnot_cells`` kernel (the same bits).
 
     Parameters
@@ -234,11 +235,14 @@ def power_cells_device(sites, w, start, G, R, reach, wmax):
         As :func:`power_cells_reference` takes them; ``sites`` and ``start`` may be
         buffers already on the device (:class:`PowerCells` keeps them for the passes
         over the same sites).
+    outputs : tuple, optional
+        The two :class:`clsamp.runtime.Output` the kernel writes (n, 4 + VMAX) float64 and
+        (n, 1 + VMAX) int32, kept by the caller for its passes; new ones by default.
 
     Returns
     -------
     out, nbr, coef, status
-        As :func:`power_cells_reference` returns them.
+        As :func:`power_cells_reference` returns them (views of the outputs).
 
     Raises
     ------
@@ -248,8 +252,7 @@ def power_cells_device(sites, w, start, G, R, reach, wmax):
     runtime.require_fp64()
     n = int(w.shape[0])
     kernel = runtime.kernel("bnot_cells.cl", "bnot_cells", {"VMAX": VMAX, "LMAX": LMAX})
-    floats = runtime.Output((n, 4 + VMAX), np.float64, host=np.empty((n, 4 + VMAX)))
-    ints = runtime.Output((n, 1 + VMAX), np.int32, host=np.empty((n, 1 + VMAX), dtype=np.int32))
+    floats, ints = outputs or cell_outputs(n)
     local = runtime.local_size(64)
     sites, start = (a if not isinstance(a, np.ndarray) else runtime.input_buffer(a)
                     for a in (sites, start))
@@ -260,9 +263,27 @@ def power_cells_device(sites, w, start, G, R, reach, wmax):
     return f[:, :4], i[:, 1:], f[:, 4:], i[:, 0]
 
 
+def cell_outputs(n):
+    """The two outputs :func:`power_cells_device` writes, over host arrays.
+
+    Parameters
+    ----------
+    n : int
+        Sites.
+
+    Returns
+    -------
+    tuple of clsamp.runtime.Output
+        (n, 4 + VMAX) float64 and (n, 1 + VMAX) int32.
+    """
+    return (runtime.Output((n, 4 + VMAX), np.float64, host=np.empty((n, 4 + VMAX))),
+            runtime.Output((n, 1 + VMAX), np.int32, host=np.empty((n, 1 + VMAX), dtype=np.int32)))
+
+
 class PowerCells:
     """The exact power cells of fixed sites, for any weights: ``cells(w)`` -> (area,
-    centroid offset, second moment, the edges' coefficients), in the sites' order.
+    centroid offset, second moment, L), in the sites' order, L the Jacobian of the areas
+    in the weights (:func:`laplacian`).
 
     The sites are sorted by a grid of cells; a call clips every cell with the stencil of
     R cells around it (R = 1 first, or every site's 5 x 5 images for small n), widening
@@ -279,51 +300,72 @@ class PowerCells:
     def __init__(self, sites, backend):
         self.sites = np.asarray(sites, dtype=np.float64)
         self.n = self.sites.shape[0]
-        self.run = power_cells_device if backend == "opencl" else power_cells_reference
+        self.device = backend == "opencl"
+        self.outputs = cell_outputs(self.n) if self.device else None
         self._stencil(1 if grid(self.n, 1)[0] > 1 else 2)
 
     def _stencil(self, R):
         self.R = R
         self.G, self.reach = grid(self.n, R)
         self.pts, _, self.start, self.order = sorted_by_cell(self.sites[None], self.G)
-        if self.run is power_cells_device:      # the same sites for every pass: upload once
+        self.back = np.empty(self.n, dtype=np.int64)
+        self.back[self.order] = np.arange(self.n)
+        if self.device:         # the same sites for every pass: upload once
             self.pts, self.start = runtime.input_buffer(self.pts), runtime.input_buffer(self.start)
 
     def __call__(self, w):
-        import scipy.sparse as sp
-        n = self.n
         while True:
             ws = np.ascontiguousarray(np.asarray(w, dtype=np.float64)[self.order])
-            out, nbr, coef, status = self.run(self.pts, ws, self.start, self.G, self.R,
-                                              self.reach, float(ws.max(initial=0.0)))
+            args = (self.pts, ws, self.start, self.G, self.R, self.reach, float(ws.max(initial=0.0)))
+            out, nbr, coef, status = (power_cells_device(*args, outputs=self.outputs)
+                                      if self.device else power_cells_reference(*args))
             if (status == 2).any():
                 raise SamplingError("bnot: a power cell with more than "
-                                     f"{VMAX} vertices or {LMAX} cutting lines")
+                                    f"{VMAX} vertices or {LMAX} cutting lines")
             if not status.any():
                 break
             if self.G == 1 and self.R >= MAX_IMAGES:
                 raise SamplingError("bnot: weights too far apart for exact power cells")
             self._stencil(self.R + 1)
-        order = self.order
-        back = np.empty(n, dtype=np.int64)
-        back[order] = np.arange(n)
+        back = self.back
         res = out[back]
-        rows = np.repeat(order, VMAX)
-        flat = nbr.ravel()
-        ok = flat >= 0
-        edge = sp.coo_matrix((coef.ravel()[ok], (rows[ok], order[flat[ok]])),
-                             shape=(n, n)).tocsr()
-        return res[:, 0], res[:, 1:3], res[:, 3], edge
+        return res[:, 0], res[:, 1:3], res[:, 3], laplacian(nbr[back], coef[back], self.order)
 
 
-def _laplacian(edge, n):
-    """The Jacobian of the areas in the weights: the symmetric graph Laplacian of the
-    edges' coefficients, regularized along the constants (to which the gradient is
-    orthogonal) by a diagonal 1e-9 of the mean degree."""
+def laplacian(nbr, coef, order):
+    """The Jacobian of the cells' areas in the weights, L_ij = dA_i / dw_j: minus the
+    edges' coefficients off the diagonal, their sum on it, plus 1e-9 of the mean degree
+    there (the Laplacian is singular along the constants, to which the gradient is
+    orthogonal). Built as CSR from the kernel's rows (symmetric to rounding: each
+    boundary's length is measured from both sides).
+
+    Parameters
+    ----------
+    nbr, coef : ndarray (n, VMAX)
+        The kernel's rows in the sites' order, neighbours as sorted indices (-1: none,
+        after the live slots).
+    order : ndarray (n,)
+        Sorted index -> site.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix (n, n)
+    """
     import scipy.sparse as sp
-    sym = (edge + edge.T) * 0.5
-    degree = np.asarray(sym.sum(axis=1)).ravel()
-    return (sp.diags(degree + 1e-9 * max(float(degree.mean()), 1e-300)) - sym).tocsc()
+    n = nbr.shape[0]
+    live = nbr >= 0
+    degree = coef.sum(axis=1)
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(live.sum(axis=1) + 1, out=indptr[1:])
+    cols = np.empty(indptr[-1], dtype=np.int64)
+    vals = np.empty(indptr[-1])
+    diagonal = np.zeros(indptr[-1], dtype=bool)
+    diagonal[indptr[:-1]] = True
+    cols[diagonal] = np.arange(n)
+    vals[diagonal] = degree + 1e-9 * max(float(degree.mean()), 1e-300)
+    cols[~diagonal] = order[nbr[live]]
+    vals[~diagonal] = -coef[live]
+    return sp.csr_matrix((vals, cols, indptr), shape=(n, n))
 
 
 class LaplacianSolver:
@@ -333,12 +375,12 @@ class LaplacianSolver:
     more than ``steps`` iterations to reach ``rtol``. The same arithmetic on every
     backend, so the same bits."""
 
-    def __init__(self, rtol=1e-10, steps=8):
+    def __init__(self, rtol=1e-6, steps=12):
         self.rtol, self.steps, self.lu = rtol, steps, None
 
     def _factor(self, L):
         from scipy.sparse.linalg import splu
-        self.lu = splu(L, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+        self.lu = splu(L.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                        options={"SymmetricMode": True})
 
     def __call__(self, L, b):
@@ -398,7 +440,7 @@ def solve_exact_weights(cells, w, solver, newton=NEWTON, tol=CAPACITY_TOL):
         grad = m - state[0]
         if n == 1 or np.abs(grad).max() <= tol * m:
             break
-        delta = solver(_laplacian(state[3], n), grad)
+        delta = solver(state[3], grad)
         delta -= delta.mean()
         norm, alpha, taken = np.linalg.norm(grad), 1.0, None
         for _ in range(HALVINGS):
@@ -445,9 +487,11 @@ def exact_optimize(sites, iterations, tol, backend, newton=NEWTON, progress=Fals
     for k in range(r):
         x, w, solver = out[k], np.zeros(n), LaplacianSolver()
         history, dual_history, taken, done, area = [], [], 0, False, np.full(n, 1.0 / n)
-        for _ in range(iterations):
+        loose = 0.0
+        for t in range(iterations):
             w, (area, centroid, moment, _), used = solve_exact_weights(
-                PowerCells(x, backend), w, solver, newton)
+                PowerCells(x, backend), w, solver, newton,
+                CAPACITY_TOL if t == iterations - 1 else max(CAPACITY_TOL, loose))
             taken += used
             history.append(float(np.sum(moment - area * (centroid * centroid).sum(axis=1))))
             dual_history.append(float(np.sum(moment - w * area) + np.sum(w) / n))
@@ -455,9 +499,14 @@ def exact_optimize(sites, iterations, tol, backend, newton=NEWTON, progress=Fals
             x -= np.floor(x)
             x[x >= 1.0] = 0.0
             bar.update()
-            if len(history) > 1 and history[-2] - history[-1] <= tol * history[-1]:
-                done = True
-                break
+            if len(history) > 1:
+                drop = (history[-2] - history[-1]) / history[-1]
+                if drop <= tol and loose <= CAPACITY_TOL:
+                    done = True
+                    break
+                # while the sites move far, the weights need not be exact (the run's last
+                # solve, and the one that stops it, are)
+                loose = min(COARSE, drop) if drop > tol else 0.0
         bar.update(iterations - len(history))
         out[k] = x
         histories.append(history)
