@@ -21,7 +21,7 @@ BLUE_NOISE = (
     ("poisson_disk", {"rho": 0.75}),
     ("lloyd", {"iterations": 100}),
     ("ccvt", {"points_per_site": 128}),
-    ("bnot", {"points_per_site": 128, "iterations": 16}),
+    ("bnot", {"cells": "exact", "iterations": 32}),
     ("sample_elimination", {}),
     ("sot", {}),
     ("gbn", {}),
