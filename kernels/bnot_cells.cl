@@ -7,15 +7,17 @@
  * bisectors with i's own images, whose weight is w_i) and is clipped, one candidate image
  * d = x_j + shift - x_i at a time, by the half-plane z . d <= h, h = (|d|^2 + w_i - w_j) / 2
  * (Sutherland-Hodgman on a convex polygon), unless h > 0 and h^2 >= r^2 |d|^2, r the
- * farthest vertex from x_i so far (then no vertex can lie beyond the line). The candidates are the sites of the
- * (2 R + 1)^2 cells of a G x G grid around i's cell (the points sorted by cell as
- * clsamp.geometry.cells.sorted_by_cell sorts them: start holds each cell's first sorted
- * index), ring by ring (the cells at Chebyshev distance 0, 1, .., R, so that the near
- * sites cut first), within a ring the first axis outer, then in sorted order; with
- * G == 1 every other site, in the (2 R + 1)^2 images of the torus, by the same rings. A site no candidate lies at least reach from x_i;
- * the cell is certified (status 0) when its farthest vertex, at r, leaves no such site a
- * cut: r < reach and reach^2 - 2 r reach + w_i - wmax >= 0; otherwise status 1 (the host
- * takes a wider stencil). Status 2: more than VMAX vertices or LMAX cutting lines.
+ * farthest vertex from x_i so far (then no vertex can lie beyond the line).
+ *
+ * The candidates are the sites of the (2 R + 1)^2 cells of a G x G grid around i's cell
+ * (the points sorted by cell as clsamp.geometry.cells.sorted_by_cell sorts them: start
+ * holds each cell's first sorted index), ring by ring (the cells at Chebyshev distance
+ * 0, 1, .., R, so that the near sites cut first), within a ring the first axis outer,
+ * then in sorted order; with G == 1 every other site, in the (2 R + 1)^2 images of the
+ * torus, by the same rings. A site no candidate lies at least reach from x_i; the cell is
+ * certified (status 0) when its farthest vertex, at r, leaves no such site a cut:
+ * r < reach and reach^2 - 2 r reach + w_i - wmax >= 0; otherwise status 1 (the host takes
+ * a wider stencil). Status 2: more than VMAX vertices or LMAX cutting lines.
  *
  * Row i of out (n, 4 + VMAX): the area A, the centroid's offset from x_i (cx, cy), the
  * second moment about x_i (the integral of |z|^2 over the cell), then coef; row i of

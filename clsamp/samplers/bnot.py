@@ -62,7 +62,7 @@ class BNOTInfo(SampleInfo):
     capacities : ndarray (r, n)
         Density points in each site's final cell, counted from the assignment: all equal
         to ``points_per_site``. With ``cells="exact"``, each final cell's area times n
-        (floats within 1e-5 of 1).
+        (floats, within 1e-5 of 1 wherever the last weight solve converged).
     iterations : ndarray (r,)
         Iterations each realization ran.
     converged : ndarray (r,) of bool

@@ -424,7 +424,7 @@ def solve_exact_weights(cells, w, solver, newton=NEWTON, tol=CAPACITY_TOL):
     -------
     w : ndarray (n,)
     cells : tuple
-        ``cells(w)``: area, centroid offset, second moment, edges.
+        ``cells(w)``: area, centroid offset, second moment, L.
     steps : int
         Newton steps taken.
     """
