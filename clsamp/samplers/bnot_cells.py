@@ -127,15 +127,15 @@ def power_cells_reference(sites, w, start, G, R, reach, wmax):
             dd = dx * dx + dy * dy
             h = 0.5 * ((dd + w[r]) - w[jr])
             near = ~((h > 0.0) & (h * h >= r2[r] * dd))
-            r, jr, dx, dy, h = r[near], jr[near], dx[near], dy[near], h[near]
+            r, jr, dx, dy, h = (a[near] for a in (r, jr, dx, dy, h))
             inside = a[None, :] < cnt[r, None]
             s = (px[r] * dx[:, None] + py[r] * dy[:, None]) - h[:, None]
             cut = ((s > 0.0) & inside).any(axis=1)
-            r, jr, dx, dy, s, inside = r[cut], jr[cut], dx[cut], dy[cut], s[cut], inside[cut]
+            r, jr, dx, dy, s, inside = (a[cut] for a in (r, jr, dx, dy, s, inside))
             full = lines[r] == LMAX
             st[r[full]] = 2
             keep = ~full
-            r, jr, dx, dy, s, inside = r[keep], jr[keep], dx[keep], dy[keep], s[keep], inside[keep]
+            r, jr, dx, dy, s, inside = (a[keep] for a in (r, jr, dx, dy, s, inside))
             if r.size == 0:
                 continue
             _clip(r, jr, dx, dy, s, inside, px, py, lab, cnt, lines, tj, tn, st, r2)
@@ -156,7 +156,7 @@ def _clip(r, jr, dx, dy, s, inside, px, py, lab, cnt, lines, tj, tn, st, r2):
     st[r[over]] = 2
     ok = ~over
     r, jr, dx, dy, s, sb, b, ina, e1, e2, total = (
-        r[ok], jr[ok], dx[ok], dy[ok], s[ok], sb[ok], b[ok], ina[ok], e1[ok], e2[ok], total[ok])
+        a[ok] for a in (r, jr, dx, dy, s, sb, b, ina, e1, e2, total))
     if r.size == 0:
         return
     emitted = e1.astype(np.int64) + e2
@@ -252,7 +252,7 @@ def power_cells_device(sites, w, start, G, R, reach, wmax, outputs=None):
     runtime.require_fp64()
     n = int(w.shape[0])
     kernel = runtime.kernel("bnot_cells.cl", "bnot_cells", {"VMAX": VMAX, "LMAX": LMAX})
-    floats, ints = outputs or cell_outputs(n)
+    floats, ints = outputs or _outputs(n)
     local = runtime.local_size(64)
     sites, start = (a if not isinstance(a, np.ndarray) else runtime.input_buffer(a)
                     for a in (sites, start))
@@ -263,19 +263,9 @@ def power_cells_device(sites, w, start, G, R, reach, wmax, outputs=None):
     return f[:, :4], i[:, 1:], f[:, 4:], i[:, 0]
 
 
-def cell_outputs(n):
-    """The two outputs :func:`power_cells_device` writes, over host arrays.
-
-    Parameters
-    ----------
-    n : int
-        Sites.
-
-    Returns
-    -------
-    tuple of clsamp.runtime.Output
-        (n, 4 + VMAX) float64 and (n, 1 + VMAX) int32.
-    """
+def _outputs(n):
+    """The two outputs of the kernel for n sites, over host arrays: (n, 4 + VMAX) float64
+    and (n, 1 + VMAX) int32."""
     return (runtime.Output((n, 4 + VMAX), np.float64, host=np.empty((n, 4 + VMAX))),
             runtime.Output((n, 1 + VMAX), np.int32, host=np.empty((n, 1 + VMAX), dtype=np.int32)))
 
@@ -301,10 +291,10 @@ class PowerCells:
         self.sites = np.asarray(sites, dtype=np.float64)
         self.n = self.sites.shape[0]
         self.device = backend == "opencl"
-        self.outputs = cell_outputs(self.n) if self.device else None
-        self._stencil(1 if grid(self.n, 1)[0] > 1 else 2)
+        self.outputs = _outputs(self.n) if self.device else None
+        self._sort(1 if grid(self.n, 1)[0] > 1 else 2)
 
-    def _stencil(self, R):
+    def _sort(self, R):
         self.R = R
         self.G, self.reach = grid(self.n, R)
         self.pts, _, self.start, self.order = sorted_by_cell(self.sites[None], self.G)
@@ -326,7 +316,7 @@ class PowerCells:
                 break
             if self.G == 1 and self.R >= MAX_IMAGES:
                 raise SamplingError("bnot: weights too far apart for exact power cells")
-            self._stencil(self.R + 1)
+            self._sort(self.R + 1)
         back = self.back
         res = out[back]
         return res[:, 0], res[:, 1:3], res[:, 3], laplacian(nbr[back], coef[back], self.order)
