@@ -22,8 +22,8 @@ Cases (``--quick``: n = 1024 only):
   whose set reaches ``bench_sot``'s quality (2-D: low-frequency power at most half of
   Poisson disk's; 4-D: mean nearest-neighbour distance in the cube at least 1.2 times
   white noise's, both measured in the run): clsamp's batches of 32 directions
-  (``bench_sot.LADDER``), UTK's iterations of 64 directions (its default batch) from 32
-  up to 4096 (its default).
+  (``bench_sot.LADDER``), UTK's iterations of 64 directions (its default batch) on the
+  same ladder continued up to 4096 (its default).
 * ``gbn``, ``ccvt`` and ``bnot`` (where registered) against UTK's ``PeriodicBNOT``, n =
   1024 and 4096, 2-D, two peers: UTK's sampler as shipped (its start is drawn in
   [0, 0.1)^2, which its default 20 outer iterations leave clustered) and the same code
@@ -70,7 +70,7 @@ BINARIES = {"SOT": "utk_sot", "PeriodicBNOT": "utk_periodic_bnot",
 PEER_NAMES = {"PeriodicBNOT": "UTK PeriodicBNOT",
               "PeriodicBNOT uniform": "UTK PeriodicBNOT, uniform start"}
 UTK_SOT_BATCH = 64                                   # UTK's default directions a batch
-UTK_SOT_LADDER = (32, 64, 128, 256, 512, 1024, 2048, 4096)
+UTK_SOT_LADDER = SOT_LADDER + (768, 1024, 1536, 2048, 3072, 4096)
 LONG = 10.0          # seconds: a call longer than this is timed once a side, not three times
 BNOT_LIMIT = 600.0   # seconds: a PeriodicBNOT call stopped here gives a lower bound
 
