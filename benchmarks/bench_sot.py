@@ -11,10 +11,10 @@ the defaults (32 directions a batch, step d). The quality asked of a set:
 * 4-D: a mean nearest-neighbour distance in the cube at least 1.2 times white noise's
   (measured in the same run, seed 1).
 
-The batches are the first of ``LADDER`` (16 to 512, steps of 1.5 and 4/3) whose set has that quality; the row
-times that call on the device (median of 3) and the NumPy twin's (``backend="numpy"``,
-once), which gives the same bits (checked). The peer column is the twin; the ratio is twin
-seconds over device seconds.
+The batches are the first of ``LADDER`` (16 to 512, steps of 1.5 and 4/3) whose set has
+that quality; the row times that call on the device (median of 3) and the NumPy twin's
+(``backend="numpy"``, once), which gives the same bits (checked). The peer column is the
+twin; the ratio is twin seconds over device seconds.
 """
 
 from bench_gbn import low_frequency_power
