@@ -39,18 +39,24 @@ inline long vor_d2_point(const uint *X, __global const uint *s)
  * themselves, every site outside rings 0..k is at least k * width + wall away, wall the
  * distance from X to the nearest face of its own cell, so a best below that square is
  * final (strictly below: an unvisited site at that distance with a smaller index would
- * win the tie). Ties to the smaller site index. */
+ * win the tie). Ties to the smaller site index.
+ * A cell at offset o is skipped where the squared distance from X to its box along o
+ * (per axis (|o| - 1) width plus X's distance to its own cell's face on that side)
+ * exceeds the best so far: no site in it can be nearer or tie. Where the rings wrap, a
+ * cell is visited at every offset that reaches it, the shortest way round among them, so
+ * a site is skipped only where it is farther than that bound the shortest way. */
 inline long vor_nearest_rings(const uint *X, __global const uint *s, const uint n,
                               const uint G, __global const uint *start,
                               __global const uint *list, uint *site_out)
 {
     const long width = (long)(VOR_SIZE / G);   /* G is a power of two */
     int own[VOR_DIM];
+    long low[VOR_DIM];
     long wall = width;
     for (int a = 0; a < VOR_DIM; ++a) {
         own[a] = (int)vor_cell(X[a], G);
-        const long low = (long)X[a] - (long)own[a] * width;
-        wall = min(wall, min(low, width - low));
+        low[a] = (long)X[a] - (long)own[a] * width;
+        wall = min(wall, min(low[a], width - low[a]));
     }
     long best = LONG_MAX;
     uint site = n;
@@ -62,14 +68,18 @@ inline long vor_nearest_rings(const uint *X, __global const uint *s, const uint 
         for (int t = 0; t < cube; ++t) {
             int rest = t, on_ring = 0;
             uint c = 0, stride = 1;
+            long box = 0;
             for (int a = 0; a < VOR_DIM; ++a) {
                 const int o = rest % side - k;
                 rest /= side;
                 on_ring |= o == k || o == -k;
                 c += (uint)(((own[a] + o) % (int)G + (int)G) % (int)G) * stride;
                 stride *= G;
+                const long gap = o > 0 ? (long)(o - 1) * width + width - low[a]
+                               : o < 0 ? (long)(-o - 1) * width + low[a] : 0;
+                box += gap * gap;
             }
-            if (!on_ring)
+            if (!on_ring || box > best)
                 continue;
             for (uint q = start[c]; q < start[c + 1]; ++q) {
                 const uint i = list[q];

@@ -148,6 +148,18 @@ def _sample_elimination_3d():
                                          backend="numpy").sample(64, realizations=range(1, 3)))
 
 
+@check("lloyd-rings-3d-4d")
+def _lloyd_rings():
+    # from 3-D on every density point searches rings of cells (voronoi.cl), skipping the
+    # cells whose box is farther than its best: 64 sites make a grid of 4 cells a side in
+    # 3-D and of 2 in 4-D, where ring 1 wraps onto itself
+    for d in (3, 4):
+        kw = dict(d=d, seed=3, iterations=2, density=8)
+        made = clsamp.make_sampler("lloyd", **kw).sample(64, realizations=range(1, 3))
+        _same_bits(made, clsamp.make_sampler("lloyd", backend="numpy", **kw).sample(
+            64, realizations=range(1, 3)))
+
+
 @check("sample-elimination-heap")
 def _sample_elimination_heap():
     # se_eliminate, which a sampler runs only on devices that share the host's memory
