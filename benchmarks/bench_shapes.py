@@ -6,7 +6,7 @@ On each device the samplers and the renderer whose launches the shape decides ar
 at the device's own shape (what ``runtime.shape()`` gives it: measured once, or a GPU's
 default) and, as peers in the same run, at the GPU's shape (one point a work-item, groups
 of 128, one sample a renderer lane, everything on the device) and at the host's unmeasured
-shape (16 points an item, blocks of 256, groups of 64, the host's sort and BLAS). The
+shape (16 points an item, blocks of 256, groups of 64, the CPU sort, the host BLAS). The
 shapes take turns call by call (medians), so a busy machine's drift falls on all alike.
 Every shape gives the same bits (the quality column checks it).
 """

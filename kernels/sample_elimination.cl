@@ -37,6 +37,7 @@
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #pragma OPENCL FP_CONTRACT OFF
 #include "cells.h"
+#include "heap.h"
 
 inline double se_r2(const double *x, __global const double *y)
 {
@@ -148,25 +149,7 @@ inline bool se_before(double ka, uint ia, double kb, uint ib)
 }
 
 /* restores the heap below entry `at`, whose key may have fallen */
-inline void se_sift(__global double *key, __global uint *idx, uint size, uint at)
-{
-    const double k = key[at];
-    const uint i = idx[at];
-    for (;;) {
-        uint child = 2 * at + 1;
-        if (child >= size)
-            break;
-        if (child + 1 < size && se_before(key[child + 1], idx[child + 1], key[child], idx[child]))
-            child += 1;
-        if (!se_before(key[child], idx[child], k, i))
-            break;
-        key[at] = key[child];
-        idx[at] = idx[child];
-        at = child;
-    }
-    key[at] = k;
-    idx[at] = i;
-}
+HEAP_SIFT(se_sift, se_before)
 
 /* The elimination of set s (its m sorted candidates from s m on; nbr holds sorted indices
  * over all sets). The heap (key, idx: m entries a set, scratch) keeps one entry per

@@ -1,45 +1,55 @@
-/* Sliced optimal transport sampling (Paulin et al. 2020): the three passes of one batch.
+/* Sliced optimal transport sampling (Paulin et al. 2020): the passes of one batch.
  * NumPy twins in clsamp/samplers/sot.py (quantiles_reference, project_reference,
- * move_reference), the same bits: exactly rounded double operations in the same order, no
- * contraction, no library function.
+ * displacements_reference, move_reference), the same bits: exactly rounded double
+ * operations in the same order, no contraction, no library function but sqrt (correctly
+ * rounded in double, as NumPy's).
  *
- * sot_quantiles: for each direction (set, k) the n targets of the 1-D transport, the
- * quantiles q_i = F^-1((i + 1/2) / n) of <theta, U>, U uniform in [0, 1)^D. The direction
- * comes as the CDF of a sum of m scaled uniforms t = sum a_j U_j (clsamp.samplers.sot.Slice):
+ * sot_quantiles: for each direction r of the launch (slice row first + r) the n targets of
+ * the 1-D transport, the quantiles q_i = F^-1((i + 1/2) / n) of <theta, U>, U uniform in
+ * [0, 1)^D. The direction comes as the CDF of a sum of m scaled uniforms t = sum a_j U_j
+ * (clsamp.samplers.sot.Slice):
  *     F(t) = norm sum_v sign_v (t - c_v)_+^m,   v over the 2^m vertices,
  * c (2^D per direction, the first 2^m used) the vertex sums, sign = (-1)^|v|,
  * norm = 1 / (m! prod a_j), total = sum a_j; the quantile is base + t. Only i < n/2 is solved
  * (t in [0, total / 2], where no cancellation beyond the one Slice bounds occurs) and mirrored:
- * q_(n-1-i) = base + (total - t_i); an odd n's middle is base + total / 2. The solver is
- * Newton's step kept inside a bisection bracket (Numerical Recipes' rtsafe), stopped when
- * Newton's step (taken) or the step made is at most QTOL total, or after QMAX steps.
- * A work-item solves LANES consecutive quantiles of one direction in vector lanes.
+ * q_(n-1-i) = base + (total - t_i); an odd n's middle is base + total / 2. Where m <= 2 the
+ * CDF is a trapezoid's (a1 = c_1 >= a2 = c_2, a2 = 0 where m = 1): t = sqrt(2 a1 a2 p) where
+ * 2 a1 p <= a2, else a1 p + a2 / 2. Otherwise the solver is Newton's step kept inside a
+ * bisection bracket (Numerical Recipes' rtsafe), stopped when Newton's step (taken) or the
+ * step made is at most QTOL total, or after QMAX steps. A work-item solves LANES
+ * consecutive quantiles of one direction in vector lanes.
  * Launch: directions * ceil(((n + 1) / 2) / LANES) work-items.
  *
  * sot_project: proj[set, k, i] = sum_j theta[set, k, j] x[set, i, j], j in order.
  * Launch: one work-item per (set, k, i).
  *
- * sot_move: point i of a set moves by scale sum_k (q[set, k, rank[set, k, i]] - proj) theta_k
- * (scale = step / K), clamped into [0, 1 - 2^-53]; cost[set, i] = sum_k (q - proj)^2, the
- * point's transport cost over the batch before the move.
- * Launch: one work-item per (set, i).
+ * The displacements disp[set, k, i] = q[set, k, rank] - proj[set, k, i], rank the place of
+ * point i's projection in its row sorted with ties by index (the order of a stable sort,
+ * NumPy's argsort(kind="stable")); lexicographic order on distinct (key, index) pairs is
+ * total, so the sorted order is unique. Two ways:
+ * - on GPUs a bitonic sort of rows of P = 2^e >= n (key, index) pairs in global memory:
+ *   sot_sort_init pads each row with (+inf, index) (projections are finite, so the padding
+ *   sorts last); each sot_bitonic launch is one compare-exchange stage (k, j) over
+ *   rows * P / 2 work-items, ascending by (key, index) where bit k of the lower position is
+ *   clear; sot_bitonic_local runs the stages with j < L, L = 2 get_local_size(0) (a power of
+ *   two dividing P), in local memory, a work-group per L consecutive pairs of a row: for k
+ *   from kmin to kmax, j from jtop (k == kmin) or k / 2 down to 1; sot_displace matches
+ *   the sorted row to q. Launch: rows * n work-items.
+ * - where the device's cores are the host's, sot_project_displace (below): one row a
+ *   work-item, the projections with it, by buckets.
  *
- * sot_sort_init, sot_bitonic, sot_rank: the rank of each projection in its row, ties by
- * index (the order of a stable sort, NumPy's argsort(kind="stable")), by a bitonic sort of
- * rows of P = 2^e >= n (key, index) pairs in global memory: sot_sort_init pads each row
- * with (+inf, index) (projections are finite, so the padding sorts last); each
- * sot_bitonic launch is one compare-exchange stage (k, j) over rows * P / 2 work-items,
- * ascending by (key, index) where bit k of the lower position is clear;
- * sot_bitonic_local runs the stages with j < L, L = 2 get_local_size(0) (a power of two
- * dividing P), in local memory, a work-group per L consecutive pairs of a row: for k from
- * kmin to kmax, j from jtop (k == kmin) or k / 2 down to 1; sot_rank scatters
- * rank[row, index[row, j]] = j for j < n. Lexicographic order on distinct (key, index)
- * pairs is total, so the sorted order is unique: the same as the stable sort's.
+ * sot_move: point i of a set moves by scale sum_k disp[set, k, i] theta_k (theta_k the row
+ * first + set K + k, scale = step / K), clamped into [0, 1 - 2^-53]; cost[set, i] =
+ * sum_k disp^2, the point's transport cost over the batch before the move.
+ * Launch: one work-item per (set, i).
  *
  * Build options: D (dimensions), QTOL, QMAX, LANES (sot_quantiles; 1, 4, 8 or 16).
  */
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #pragma OPENCL FP_CONTRACT OFF
+
+#include "heap.h"
+#include "in_order.h"
 
 #define VERTS (1 << D)
 
@@ -79,15 +89,15 @@ typedef CAT(long, LANES) mask_v;
 __kernel void sot_quantiles(__global const double *c, __global const double *sign,
                             __global const int *m_of, __global const double *norm_of,
                             __global const double *total_of, __global const double *base_of,
-                            const uint n, const uint dirs, __global double *q)
+                            const uint first, const uint n, const uint dirs, __global double *q)
 {
     const uint nh = (n + 1) / 2, groups = (nh + LANES - 1) / LANES;
     const uint gid = get_global_id(0);
     if (gid >= dirs * groups)
         return;
-    const uint k = gid / groups, i0 = (gid % groups) * LANES;
+    const uint r = gid / groups, i0 = (gid % groups) * LANES, k = first + r;
     const double total = total_of[k], base = base_of[k], norm = norm_of[k];
-    __global double *row = q + (size_t)k * n;
+    __global double *row = q + (size_t)r * n;
     const int m = m_of[k];
     const uint nv = 1u << m;
     __global const double *ck = c + (size_t)k * VERTS;
@@ -97,13 +107,15 @@ __kernel void sot_quantiles(__global const double *c, __global const double *sig
     const double tol = QTOL * total;
     real_v lo = 0.0, hi = total * 0.5;
     real_v t = hi * 0.5, dx_old = hi;
-    /* the lanes past the half and an odd n's middle solve nothing */
-    mask_v live = MASK(i < (double)nh) & MASK(2.0 * i + 1.0 != (double)n);
+    /* the lanes past the half and an odd n's middle solve nothing, nor m <= 2 (closed form) */
+    mask_v live = MASK(i < (double)nh) & MASK(2.0 * i + 1.0 != (double)n) & (m > 2 ? (mask_v)(-1L) : (mask_v)(0L));
     for (int it = 0; it < QMAX && ANY(live); ++it) {
         real_v F = 0.0, dF = 0.0;
+        IN_ORDER
         for (uint v = 0; v < nv; ++v) {
             const real_v u = t - ck[v];
             real_v w = 1.0;
+            IN_ORDER
             for (int j = 1; j < m; ++j)
                 w = w * u;
             const mask_v on = MASK(u > 0.0);
@@ -127,13 +139,19 @@ __kernel void sot_quantiles(__global const double *c, __global const double *sig
         live = live & ~done & ~MASK(ABS(dx) <= tol);
     }
     const double *tl = (const double *)&t;
+    const double a1 = ck[1], a2 = m == 2 ? ck[2] : 0.0;
     for (uint l = 0; l < LANES && i0 + l < nh; ++l) {
         const uint j = i0 + l;
+        double tj = tl[l];
+        if (m <= 2) {
+            const double pj = ((double)j + 0.5) / (double)n;
+            tj = 2.0 * a1 * pj <= a2 ? sqrt(2.0 * a1 * a2 * pj) : a1 * pj + 0.5 * a2;
+        }
         if (2 * j + 1 == n) {
             row[j] = base + total * 0.5;
         } else {
-            row[j] = base + tl[l];
-            row[n - 1 - j] = base + (total - tl[l]);
+            row[j] = base + tj;
+            row[n - 1 - j] = base + (total - tj);
         }
     }
 }
@@ -148,14 +166,14 @@ __kernel void sot_project(__global const double *x, __global const double *theta
     __global const double *xi = x + ((size_t)s * n + i) * D;
     __global const double *th = theta + (size_t)sk * D;
     double p = th[0] * xi[0];
+    IN_ORDER
     for (int j = 1; j < D; ++j)
         p = p + th[j] * xi[j];
     proj[gid] = p;
 }
 
-__kernel void sot_move(__global const double *x, __global const double *theta,
-                       __global const double *q, __global const uint *rank,
-                       __global const double *proj, const uint n, const uint K, const uint sets,
+__kernel void sot_move(__global const double *x, __global const double *theta, const uint first,
+                       __global const double *disp, const uint n, const uint K, const uint sets,
                        const double scale, __global double *out, __global double *cost)
 {
     const uint gid = get_global_id(0);
@@ -166,12 +184,13 @@ __kernel void sot_move(__global const double *x, __global const double *theta,
     for (int j = 0; j < D; ++j)
         shift[j] = 0.0;
     double c = 0.0;
+    IN_ORDER
     for (uint k = 0; k < K; ++k) {
         const size_t sk = (size_t)s * K + k;
-        const double disp = q[sk * n + rank[sk * n + i]] - proj[sk * n + i];
-        c = c + disp * disp;
+        const double dk = disp[sk * n + i];
+        c = c + dk * dk;
         for (int j = 0; j < D; ++j)
-            shift[j] = shift[j] + disp * theta[sk * D + j];
+            shift[j] = shift[j] + dk * theta[(first + sk) * D + j];
     }
     const double top = 1.0 - 0x1.0p-53;
     for (int j = 0; j < D; ++j) {
@@ -180,6 +199,22 @@ __kernel void sot_move(__global const double *x, __global const double *theta,
         out[(size_t)gid * D + j] = v > top ? top : v;
     }
     cost[gid] = c;
+}
+
+/* sot_cost: sums[slot, set] = the set's point costs summed in index order (from 0.0).
+ * Launch: one work-item a set. */
+__kernel void sot_cost(__global const double *cost, const uint n, const uint sets,
+                       const uint slot, __global double *sums)
+{
+    const uint s = get_global_id(0);
+    if (s >= sets)
+        return;
+    __global const double *c = cost + (size_t)s * n;
+    double t = 0.0;
+    IN_ORDER
+    for (uint i = 0; i < n; ++i)
+        t = t + c[i];
+    sums[(size_t)slot * sets + s] = t;
 }
 
 __kernel void sot_sort_init(__global const double *proj, const uint n, const uint P,
@@ -252,12 +287,127 @@ __kernel void sot_bitonic_local(__global double *key, __global uint *index, cons
     index[off + lid + L2] = li[lid + L2];
 }
 
-__kernel void sot_rank(__global const uint *index, const uint n, const uint P, const uint rows,
-                       __global uint *rank)
+__kernel void sot_displace(__global const uint *index, __global const double *q,
+                           __global const double *proj, const uint n, const uint P,
+                           const uint rows, __global double *disp)
 {
     const uint g = get_global_id(0);
     if (g >= rows * n)
         return;
     const uint row = g / n, j = g % n;
-    rank[(size_t)row * n + index[(size_t)row * P + j]] = j;
+    const size_t i = (size_t)row * n + index[(size_t)row * P + j];
+    disp[i] = q[g] - proj[i];
+}
+
+/* A long bucket's (key, index) pairs sorted in place by key then index (heapsort); the
+ * short ones by insertion, stable on indices that come in increasing order. Distinct
+ * pairs have one sorted order, so both give the stable sort's. */
+#define LONG_RUN 16
+
+/* whether (ka, ia) comes after (kb, ib) in sorted order: the heapsort's heap puts the
+ * largest pair first */
+static inline int sot_after(const double ka, const uint ia, const double kb, const uint ib)
+{
+    return ka > kb || (ka == kb && ia > ib);
+}
+
+HEAP_SIFT(sot_sift, sot_after)
+
+static void sot_heapsort(__global double *key, __global uint *idx, const uint len)
+{
+    for (uint r = len / 2; r-- > 0;)
+        sot_sift(key, idx, len, r);
+    for (uint end = len - 1; end > 0; --end) {
+        const double k = key[0];
+        const uint v = idx[0];
+        key[0] = key[end];
+        idx[0] = idx[end];
+        key[end] = k;
+        idx[end] = v;
+        sot_sift(key, idx, end, 0);
+    }
+}
+
+/* sot_project_displace: one work-item a row (set s, direction k), on devices that share the
+ * host's cores: the row's projections (sot_project's sums), sorted with ties by index by a
+ * bucket sort, matched to the row's targets q: disp[i] = q[rank of i] - p_i, as
+ * sot_project, a stable sort and sot_displace give. A key's bucket,
+ * floor((p - lo) n / (hi - lo)) clamped to n - 1 (all keys in bucket 0 where the row's
+ * range is 0 or n over it overflows), never falls as the key rises, so the buckets in
+ * turn, each sorted (sot_sort_run), are the row in sorted order; keys fill the buckets
+ * in index order. The projected cube's density is at most a few times its mean, so a
+ * bucket holds a few keys. Scratch: key (doubles), count and perm (uints), n a row.
+ * Launch: sets * K work-items, the rows of directions theta[first..first + sets K). */
+__kernel void sot_project_displace(__global const double *x, __global const double *theta,
+                                   const uint first, __global const double *q, const uint n,
+                                   const uint K, const uint sets, __global double *disp,
+                                   __global double *key, __global uint *count,
+                                   __global uint *perm)
+{
+    const uint row = get_global_id(0);
+    if (row >= sets * K)
+        return;
+    __global const double *restrict xs = x + (size_t)(row / K) * n * D;
+    __global const double *restrict th = theta + ((size_t)first + row) * D;
+    __global const double *restrict qr = q + (size_t)row * n;
+    __global double *restrict p = disp + (size_t)row * n;
+    __global double *restrict ks = key + (size_t)row * n;
+    __global uint *restrict cnt = count + (size_t)row * n;
+    __global uint *restrict pm = perm + (size_t)row * n;
+    double lo = INFINITY, hi = -INFINITY;
+    for (uint i = 0; i < n; ++i) {
+        double v = th[0] * xs[(size_t)i * D];
+        IN_ORDER
+        for (int j = 1; j < D; ++j)
+            v = v + th[j] * xs[(size_t)i * D + j];
+        p[i] = v;
+        lo = v < lo ? v : lo;
+        hi = v > hi ? v : hi;
+        cnt[i] = 0;
+    }
+    double scale = (double)n / (hi - lo);
+    scale = scale < INFINITY ? scale : 0.0;            /* a zero range (or its overflow) */
+    const double last = (double)(n - 1);
+    for (uint i = 0; i < n; ++i) {
+        const double f = (p[i] - lo) * scale;
+        cnt[(uint)(f < last ? f : last)] += 1;
+    }
+    uint start = 0;
+    for (uint b = 0; b < n; ++b) {
+        const uint c = cnt[b];
+        cnt[b] = start;
+        start += c;
+    }
+    for (uint i = 0; i < n; ++i) {                     /* cnt[b] ends as bucket b's end */
+        const double f = (p[i] - lo) * scale;
+        const uint at = cnt[(uint)(f < last ? f : last)]++;
+        ks[at] = p[i];
+        pm[at] = i;
+    }
+    /* long buckets by heapsort, then one insertion pass over the row: a key never moves
+     * past its bucket's start (every key of an earlier bucket is smaller), so the pass
+     * costs the short buckets' inversions and leaves the sorted ones alone */
+    start = 0;
+    for (uint b = 0; b < n; ++b) {
+        const uint end = cnt[b];
+        if (end - start > LONG_RUN)
+            sot_heapsort(ks + start, pm + start, end - start);
+        start = end;
+    }
+    for (uint a = 1; a < n; ++a) {
+        const double k = ks[a];
+        if (ks[a - 1] > k) {
+            const uint v = pm[a];
+            uint b = a;
+            do {
+                ks[b] = ks[b - 1];
+                pm[b] = pm[b - 1];
+                --b;
+            } while (b > 0 && ks[b - 1] > k);
+            ks[b] = k;
+            pm[b] = v;
+        }
+    }
+    for (uint j = 0; j < n; ++j)
+        p[pm[j]] = qr[j] - ks[j];
 }

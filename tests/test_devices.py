@@ -110,6 +110,25 @@ def test_bnot_exact_cells_give_the_same_bits(device):
     assert np.array_equal(points().view(np.uint64), on(device, points).view(np.uint64))
 
 
+@pytest.mark.parametrize("device", OTHERS, ids=_label)
+@pytest.mark.parametrize("name, params, n", [
+    ("sot", {"d": 3, "iterations": 6, "projections": "pairs"}, 513)])
+def test_float_optimizers_give_the_same_bits_past_a_groups_tail(device, name, params, n):
+    """Sizes where a work-group's tail holds a lone work-item: Intel's compiler summed such
+    an item's terms in partial sums until kernels/in_order.h forbade it; the histories
+    (sot's costs, gbn's energies) as well."""
+    def run():
+        pts, info = clsamp.make_sampler(name, seed=5, **params).sample(
+            n, realizations=2, return_info=True)
+        return pts, info.cost_history if name == "sot" else info.energy_history
+    if not device.fp64:
+        with pytest.raises(NoDeviceError, match="fp64|double"):
+            on(device, run)
+        return
+    for here, there in zip(run(), on(device, run), strict=True):
+        assert np.array_equal(here.view(np.uint64), there.view(np.uint64)), (name, str(device))
+
+
 # many dimensions, or permutations longer than 65535: a work-item's loops exceed llvmpipe's
 # loop limit unless the runtime splits them (runtime.dimension_split, the swaps in pieces)
 WIDE = [("halton", 300, None, 256), ("halton", 300, "owen", 256), ("halton", 300, "permute", 64),

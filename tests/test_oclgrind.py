@@ -483,24 +483,35 @@ def _lattice_natural():
 @check("sot-bitonic")
 def _sot_bitonic():
     # a row longer than a work-group's local sort: the global stages (sot_bitonic)
-    from clsamp.samplers import sot
+    from clsamp.samplers import sot, sot_device
     proj = np.random.default_rng(2).random((1, 2, 600))
     proj[0, 1, 100:200] = proj[0, 1, 50]                       # ties, ranked by index
-    _same_bits(sot._ranks_device(proj, 2), sot._ranks(proj))
+    q = np.zeros(proj.shape) + np.arange(600.0)
+    _same_bits(sot_device.displacements_device(proj, q, 2),
+               sot.displacements_reference(q, sot._ranks(proj), proj))
 
 
-@check("sot-lanes-host-sort")
-def _sot_lanes_host_sort():
+@check("sot-lanes-resident")
+def _sot_lanes_resident():
     # the quantiles in 8 lanes (a CPU's width; the simulator's own shape solves one a
-    # work-item) and a batch as CPU devices run it: host sort, ranks by sot_rank
-    from clsamp.samplers import sot
-    theta = sot.directions(4, np.arange(2), 0, 3, 3)
-    sl = sot.Slice.of(theta.reshape(-1, 3))
-    _same_bits(sot._quantiles_device(sl, 21, lanes=8), sot.quantiles_reference(sl, 21))
+    # work-item), and two batches as CPU devices run them: the points kept on the device,
+    # ranks by buckets (a cluster of ties in one of them: the heapsort)
+    from clsamp.samplers import sot, sot_device
+    theta = sot.directions(4, np.arange(2), 0, 3, 3, count=2)
+    sl = sot.Slice.of(theta.transpose(1, 0, 2, 3).reshape(-1, 3))
+    _same_bits(sot_device.quantiles_device(sl, 21, lanes=8), sot.quantiles_reference(sl, 21))
     x = clsamp.make_sampler("random", d=3, seed=4, backend="numpy").sample(21, realizations=2)
-    for got, want in zip(sot._HostSortBatches()(x, theta, sl, 1.0 / 3),
-                         sot.batch_reference(x, theta, sl, 1.0 / 3), strict=True):
-        _same_bits(got, want)
+    x[1, 3:] = 0.5
+    run = sot_device.ResidentBatches(x, 3, 1.0 / 3, 2)
+    run.block(theta.transpose(1, 0, 2, 3), sl)
+    want = []
+    for b in range(2):
+        run.batch(b)
+        x, cost = sot.batch_reference(x, theta[:, b], sl.take(np.arange(6 * b, 6 * b + 6)),
+                                      1.0 / 3)
+        want.append(sot.cost_sums(cost))
+    _same_bits(run.costs(), np.stack(want))
+    _same_bits(run.result(), x)
 
 
 @check("spectrum-direct-1d-3d")

@@ -14,7 +14,7 @@ from test_gbn import low_frequency_power
 import clsamp
 from clsamp.errors import InvalidArgumentError
 from clsamp.metrics import max_min_distance, nearest_neighbor_distances
-from clsamp.samplers import sot
+from clsamp.samplers import sot, sot_device
 
 
 @pytest.mark.parametrize("d, n", [(2, 101), (3, 64), (4, 50), (8, 33)])
@@ -22,16 +22,17 @@ def test_every_pass_gives_the_twins_bits(d, n):
     theta = sot.directions(3, np.arange(2), 5, 6, d)
     sl = sot.Slice.of(theta.reshape(-1, d))
     q = sot.quantiles_reference(sl, n)
-    assert np.array_equal(sot._quantiles_device(sl, n), q)
+    assert np.array_equal(sot_device.quantiles_device(sl, n), q)
     assert np.all(np.diff(q, axis=1) > 0)
     x = clsamp.make_sampler("random", d=d, seed=d).sample(n, realizations=2)
     proj = sot.project_reference(x, theta)
-    assert np.array_equal(sot._project_device(x, theta), proj)
-    rank = sot._ranks(proj)
-    assert np.array_equal(sot._ranks_device(proj, d), rank)
+    assert np.array_equal(sot_device.project_device(x, theta), proj)
     q = q.reshape(2, 6, n)
-    moved, cost = sot.move_reference(x, theta, q, rank, proj, 1.0 / 6)
-    moved_d, cost_d = sot._move_device(x, theta, q, rank, proj, 1.0 / 6)
+    disp = sot.displacements_reference(q, sot._ranks(proj), proj)
+    assert np.array_equal(sot_device.displacements_device(proj, q, d), disp)
+    assert np.array_equal(sot_device.project_displacements_device(x, theta, q), disp)
+    moved, cost = sot.move_reference(x, theta, disp, 1.0 / 6)
+    moved_d, cost_d = sot_device.move_device(x, theta, disp, 1.0 / 6)
     assert np.array_equal(moved, moved_d) and np.array_equal(cost, cost_d)
     assert np.all(moved >= 0.0) and np.all(moved < 1.0)
 
@@ -53,7 +54,7 @@ def test_each_lane_width_solves_the_twins_quantiles(lanes):
     theta[0] = [1.0, 1e-9, 0.0, -1e-12]
     for n in (1, 2, 7, 100, 257):
         sl = sot.Slice.of(theta)
-        assert np.array_equal(sot._quantiles_device(sl, n, lanes=lanes),
+        assert np.array_equal(sot_device.quantiles_device(sl, n, lanes=lanes),
                               sot.quantiles_reference(sl, n))
 
 
@@ -78,13 +79,38 @@ def test_the_quantiles_are_the_projected_cubes(d):
 
 
 @pytest.mark.parametrize("n", [1, 2, 5, 64, 1000])
-def test_the_device_sort_ranks_ties_by_index(n):
+def test_the_bitonic_sort_ranks_ties_by_index(n):
     # coarse keys: many ties, and -0.0 beside 0.0, ranked as a stable sort ranks them
     rng = np.random.default_rng(n)
     proj = np.round(rng.normal(size=(3, 4, n)), 1)
     proj[0, 0, ::2] = -0.0
     proj[0, 0, 1::2] = 0.0
-    assert np.array_equal(sot._ranks_device(proj, 2), sot._ranks(proj))
+    q = np.zeros(proj.shape) + np.arange(n)        # a target a rank
+    assert np.array_equal(sot_device.displacements_device(proj, q, 2),
+                          sot.displacements_reference(q, sot._ranks(proj), proj))
+
+
+@pytest.mark.parametrize("case", ["ties", "equal", "cluster", "one"])
+def test_the_bucket_sort_ranks_as_the_stable_sort(case):
+    # repeated points (ties, -0.0 beside 0.0), a row of one value (a zero range), a
+    # cluster that fills one bucket (heapsort) beside two far points, a single point
+    rng = np.random.default_rng(3)
+    x = rng.random((2, 300, 2))
+    if case == "ties":
+        x = np.round(x, 1)
+        x[0, :40] = [0.0, -0.0]
+    elif case == "equal":
+        x[:] = 0.25
+    elif case == "cluster":
+        x[:, 2:] = 0.5 + np.round(rng.random((2, 298, 2)), 2) * 1e-9
+    else:
+        x = x[:, :1]
+    theta = sot.directions(6, np.arange(2), 0, 5, 2)
+    theta[0, 0] = [-0.6, -0.8]
+    proj = sot.project_reference(x, theta)
+    q = np.zeros(proj.shape) + np.arange(x.shape[1])
+    assert np.array_equal(sot_device.project_displacements_device(x, theta, q),
+                          sot.displacements_reference(q, sot._ranks(proj), proj))
 
 
 def test_the_host_order_is_the_stable_sorts():

@@ -17,7 +17,7 @@ from . import discovery, programs
 __all__ = [
     'table', 'Output', 'is_device_array', 'to_device', 'to_host', 'bounds', 'device_block',
     'concatenate', 'host_memory_available', 'check_host_bytes', 'gib', 'work_budget', 'fit',
-    'chunk_ranges', 'wait', 'input_buffer']
+    'chunk_ranges', 'wait', 'input_buffer', 'work_buffer']
 
 
 _tables = {}            # (device index, key) -> pyopencl.array.Array, least recently used first
@@ -150,6 +150,29 @@ def input_buffer(array):
     cl = discovery._cl()
     flags = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
     return cl.Buffer(discovery.context(), flags, hostbuf=np.ascontiguousarray(array))
+
+
+def work_buffer(nbytes=0, array=None):
+    """A read-write buffer made in one call, for the state of a loop of launches that stays
+    on the device (sliced optimal transport's points and scratch rows): a copy of ``array``,
+    or ``nbytes`` bytes left uninitialized.
+
+    Parameters
+    ----------
+    nbytes : int
+        The size without ``array`` (at least one byte is allocated).
+    array : ndarray, optional
+
+    Returns
+    -------
+    pyopencl.Buffer
+    """
+    cl = discovery._cl()
+    flags = cl.mem_flags.READ_WRITE
+    if array is None:
+        return cl.Buffer(discovery.context(), flags, max(int(nbytes), 1))
+    return cl.Buffer(discovery.context(), flags | cl.mem_flags.COPY_HOST_PTR,
+                     hostbuf=np.ascontiguousarray(array))
 
 
 def wait(event=None):

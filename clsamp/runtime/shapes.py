@@ -58,8 +58,9 @@ class Shape:
     host_output : bool
         Samplers write their points straight into host memory (a buffer over it).
     host_sort : bool
-        Sliced optimal transport ranks its projections with NumPy's sort on the host, not
-        with the bitonic network on the device.
+        Sliced optimal transport sorts its projections the way a CPU does, one row a
+        work-item by buckets with its points kept on the device, not with the bitonic
+        network (the name is from when the host's NumPy sort did it).
     host_gemm : bool
         2-D direct spectra form their product in the host's BLAS, not in a kernel.
     prefetch : bool
@@ -114,7 +115,7 @@ def gpu_shape(device):
 def host_shape(device):
     """The shape a device that shares the host's memory and cores starts from, before it is
     measured: many points a work-item (in vector lanes), groups of 64, outputs over host
-    memory, and the host's sort and BLAS where they compete with a kernel.
+    memory, the CPU's way to sort and the host's BLAS where they compete with a kernel.
 
     Parameters
     ----------
@@ -276,7 +277,7 @@ def describe(found):
     -------
     str
     """
-    where = ("host's sort, BLAS and outputs" if found.host_sort and found.host_gemm
+    where = ("CPU sort, host BLAS and outputs" if found.host_sort and found.host_gemm
              else "outputs in host memory" if found.host_output else "everything on the device")
     return (f"{found.source}: {found.points_per_item} points a work-item, Sobol' blocks of "
             f"{found.block}, groups of {found.local}, render width {found.vector_width}, {where}")

@@ -3,14 +3,13 @@ toward the uniform measure on [0, 1)^d by 1-D optimal transports along random di
 with the projective variant that optimizes chosen coordinate projections as well.
 
 One batch is four passes -- the 1-D targets of each direction (the quantiles of the cube's
-projection), the projections of the points, their ranks, the move -- in ``kernels/sot.cl``
-on the device and in :func:`quantiles_reference`, :func:`project_reference`, a stable sort
-and :func:`move_reference` here (:func:`batch_reference`), the same bits. On GPUs the
-projections and a bitonic sort run on the device; on CPU devices the host, which must sort
-them anyway (NumPy's sort beats the network there), projects the points with the twin's
-code and sorts them (:class:`_HostSortBatches`); both order ties by index. The directions
-and their CDFs (:class:`Slice`) are host code both backends share, drawn for blocks of
-batches at once (:func:`sot_optimize`).
+projection), the projections of the points, their displacements to the targets of their
+ranks, the move -- in ``kernels/sot.cl`` on the device (:mod:`clsamp.samplers.sot_device`)
+and in :func:`quantiles_reference`, :func:`project_reference`, a stable sort with
+:func:`displacements_reference`, and :func:`move_reference` here (:func:`batch_reference`),
+the same bits; both order ties by index. The directions and their CDFs (:class:`Slice`)
+are host code both backends share, drawn for blocks of batches at once
+(:func:`sot_optimize`).
 """
 
 import dataclasses
@@ -22,7 +21,9 @@ import numpy as np
 from .. import philox, runtime
 from ..errors import InvalidArgumentError
 from ..validation import check_positive_int, check_real
+from . import sot_device
 from .base import SampleInfo, Sampler, info_field, make_sampler, register
+from .sot_device import QMAX, QTOL
 
 DIRECTIONS = 32      # directions a batch (full space), as the authors' code
 ITERATIONS = 256
@@ -30,14 +31,12 @@ STEP = None         # the dimension: the full step (see SOTSampler's Notes)
 MAX_STEP = 2        # times the dimension
 TOL = 0.0
 WINDOW = 16          # the cost is compared over windows of this many batches
+SETTLE = 8           # a resident run reads its batches' costs this many at a time
 MAX_D = 8
-QTOL = 1e-14         # quantile solver: stop when the step is at most QTOL times the range
-QMAX = 200
 CANCEL = 1e-8        # the most relative error the CDF's alternating sum may carry
 EPS = 2.0 ** -52
 TOP = 1.0 - 2.0 ** -53
 BLOCK_BYTES = 1 << 23   # the most memory a block of batches' slices takes
-DEFINES = {"QTOL": repr(QTOL), "QMAX": QMAX}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -179,7 +178,7 @@ def quantiles_reference(sl, n):
     hi = total * 0.5
     t = hi * 0.5
     dx_old = hi.copy()
-    live = np.arange(K * half)          # the quantiles still being solved
+    live = np.flatnonzero(m > 2)        # the quantiles still being solved (m <= 2: closed form)
     for _ in range(QMAX):
         if live.size == 0:
             break
@@ -208,6 +207,11 @@ def quantiles_reference(sl, n):
         t[live] = np.where(done, tn, nxt)
         lo[live], hi[live], dx_old[live] = lo_l, hi_l, dx
         live = live[~(done | (np.abs(dx) <= tol))]
+    closed = np.flatnonzero(m <= 2)
+    a1 = sl.c[row[closed], 1]
+    a2 = np.where(m[closed] == 2, sl.c[row[closed], 2], 0.0)
+    pc = p[closed]
+    t[closed] = np.where(2.0 * a1 * pc <= a2, np.sqrt(2.0 * a1 * a2 * pc), a1 * pc + 0.5 * a2)
     t = t.reshape(K, half)
     total = sl.total[:, None]
     q = np.empty((K, n))
@@ -236,7 +240,26 @@ def project_reference(x, theta):
     return p
 
 
-def move_reference(x, theta, q, rank, proj, scale):
+def displacements_reference(q, rank, proj):
+    """NumPy twin of ``sot_displace`` and ``sot_project_displace``: each projection's 1-D
+    displacement to the target of its rank.
+
+    Parameters
+    ----------
+    q : ndarray (sets, K, n)
+        The targets, sorted.
+    rank : ndarray of uint32 (sets, K, n)
+        The rank of each point's projection (:func:`_ranks`).
+    proj : ndarray (sets, K, n)
+
+    Returns
+    -------
+    ndarray (sets, K, n)
+    """
+    return np.take_along_axis(q, rank.astype(np.intp), axis=2) - proj
+
+
+def move_reference(x, theta, disp, scale):
     """NumPy twin of ``sot_move``: each point moved by ``scale`` times the sum over the
     batch of its 1-D displacements along their directions.
 
@@ -244,11 +267,8 @@ def move_reference(x, theta, q, rank, proj, scale):
     ----------
     x : ndarray (sets, n, d)
     theta : ndarray (sets, K, d)
-    q : ndarray (sets, K, n)
-        The targets, sorted.
-    rank : ndarray of uint32 (sets, K, n)
-        The rank of each point's projection.
-    proj : ndarray (sets, K, n)
+    disp : ndarray (sets, K, n)
+        :func:`displacements_reference`.
     scale : float
 
     Returns
@@ -258,7 +278,6 @@ def move_reference(x, theta, q, rank, proj, scale):
         Per point, the sum over the batch of its squared displacement.
     """
     sets, n, d = x.shape
-    disp = np.take_along_axis(q, rank.astype(np.intp), axis=2) - proj
     shift = np.zeros((sets, n, d))
     cost = np.zeros((sets, n))
     for k in range(theta.shape[1]):
@@ -269,100 +288,23 @@ def move_reference(x, theta, q, rank, proj, scale):
     return np.where(y > TOP, TOP, y), cost
 
 
-def _defines(d, lanes=None):
-    """The build options of ``kernels/sot.cl`` in ``d`` dimensions: ``sot_quantiles`` solves
-    ``lanes`` quantiles a work-item (default: the device's vector width, one on GPUs)."""
-    return {"D": d, "LANES": lanes or runtime.shape().vector_width, **DEFINES}
+def cost_sums(cost):
+    """NumPy twin of ``sot_cost``: each set's point costs summed in index order.
 
+    Parameters
+    ----------
+    cost : ndarray (sets, n)
 
-def _quantile_items(K, n, lanes):
-    return K * -(-((n + 1) // 2) // lanes)
-
-
-def _launch(name, d, items, *args, lanes=None):
-    """Run kernel ``name`` of ``kernels/sot.cl`` over ``items`` work-items."""
-    kernel = runtime.kernel("sot.cl", name, _defines(d, lanes))
-    local = runtime.local_size(64)
-    kernel(runtime.queue(), (-(-items // local) * local,), (local,), *args)
-
-
-def _output(shape, dtype, host):
-    return runtime.Output(shape, dtype, host=np.empty(shape, dtype) if host else None)
-
-
-def _quantiles_device(sl, n, host=True, lanes=None):
-    K = sl.m.shape[0]
-    lanes = lanes or runtime.shape().vector_width
-    out = _output((K, n), np.float64, host)
-    _launch("sot_quantiles", int(round(math.log2(sl.c.shape[1]))), _quantile_items(K, n, lanes),
-            *(runtime.to_device(a).data for a in (sl.c, sl.sign, sl.m, sl.norm, sl.total, sl.base)),
-            np.uint32(n), np.uint32(K), out.buffer, lanes=lanes)
-    return out.finish()
-
-
-def _project_device(x, theta, host=True):
-    sets, n, d = x.shape
-    K = theta.shape[1]
-    out = _output((sets, K, n), np.float64, host)
-    _launch("sot_project", d, sets * K * n, runtime.to_device(x).data,
-            runtime.to_device(theta).data, np.uint32(n), np.uint32(K), np.uint32(sets), out.buffer)
-    return out.finish()
-
-
-def _ranks_device(proj, d, host=True):
-    """:func:`_ranks` of projections (sets, K, n) by the device's bitonic sort."""
-    import pyopencl.array as cla
-    shape = proj.shape
-    rows, n = shape[0] * shape[1], shape[2]
-    P = 1 << max(n - 1, 1).bit_length()
-    q = runtime.queue()
-    key, index = cla.empty(q, rows * P, np.float64), cla.empty(q, rows * P, np.uint32)
-    _launch("sot_sort_init", d, rows * P, runtime.to_device(proj).data, np.uint32(n),
-            np.uint32(P), np.uint32(rows), key.data, index.data)
-    # stages with j < L in local memory, the longer ones one global launch each
-    L2 = 1 << (min(P // 2, runtime.local_size(256)).bit_length() - 1)
-    local = _local_sort(d, rows * P // 2, L2, key, index, P)
-    local(2, 2 * L2, 1)
-    k = 4 * L2
-    while k <= P:
-        j = k >> 1
-        while j >= 2 * L2:
-            _launch("sot_bitonic", d, rows * P // 2, key.data, index.data, np.uint32(P),
-                    np.uint32(rows), np.uint32(k), np.uint32(j))
-            j >>= 1
-        local(k, k, L2)
-        k <<= 1
-    out = _output(shape, np.uint32, host)
-    _launch("sot_rank", d, rows * n, index.data, np.uint32(n), np.uint32(P), np.uint32(rows),
-            out.buffer)
-    return out.finish()
-
-
-def _local_sort(d, items, L2, key, index, P):
-    """``sot_bitonic_local`` over rows of P pairs, work-groups of L2 items, as a function of
-    (kmin, kmax, jtop)."""
-    import pyopencl as cl
-    kernel = runtime.kernel("sot.cl", "sot_bitonic_local", _defines(d))
-
-    def run(kmin, kmax, jtop):
-        kernel(runtime.queue(), (items,), (L2,), key.data, index.data, np.uint32(P),
-               np.uint32(kmin), np.uint32(kmax), np.uint32(jtop), cl.LocalMemory(16 * L2),
-               cl.LocalMemory(8 * L2))
-    return run
-
-
-def _move_device(x, theta, q, rank, proj, scale):
-    sets, n, d = x.shape
-    K = theta.shape[1]
-    out, cost = _output((sets, n, d), np.float64, True), _output((sets, n), np.float64, True)
-    _launch("sot_move", d, sets * n, *(runtime.to_device(a).data for a in (x, theta, q, rank, proj)),
-            np.uint32(n), np.uint32(K), np.uint32(sets), np.float64(scale), out.buffer, cost.buffer)
-    return out.finish(), cost.finish()
+    Returns
+    -------
+    ndarray (sets,)
+    """
+    return np.cumsum(cost, axis=1)[:, -1]
 
 
 def batch_reference(x, theta, sl, scale):
-    """One batch in NumPy: the targets, projections, ranks and move (:func:`move_reference`'s
-    result).
+    """One batch in NumPy: the targets, projections, displacements and move
+    (:func:`move_reference`'s result).
 
     Parameters
     ----------
@@ -380,90 +322,7 @@ def batch_reference(x, theta, sl, scale):
     sets, n, _ = x.shape
     q = quantiles_reference(sl, n).reshape(sets, theta.shape[1], n)
     proj = project_reference(x, theta)
-    return move_reference(x, theta, q, _ranks(proj), proj, scale)
-
-
-def _batch_device(x, theta, sl, scale):
-    q = _quantiles_device(sl, x.shape[1], host=False)
-    if runtime.shape().host_sort:
-        # on a CPU device NumPy's sort beats the bitonic network (docs/performance.md);
-        # both give the stable sort's ranks
-        proj = _project_device(x, theta)
-        rank = _ranks(proj)
-    else:
-        proj = _project_device(x, theta, host=False)
-        rank = _ranks_device(proj.reshape(theta.shape[:2] + (x.shape[1],)), x.shape[2],
-                             host=False)
-    return _move_device(x, theta, q, rank, proj, scale)
-
-
-class _HostSortBatches:
-    """The batches of one run on a CPU device (``Shape.host_sort``), the same bits as
-    :func:`batch_reference`.
-
-    The buffers and kernels, their arguments set, are made once a run (again only when the
-    active sets change); every upload is enqueued without waiting, and a batch waits once,
-    for its moved points. The quantiles run on the device while the host projects the
-    points (the twin's :func:`project_reference`: the host holds the points and sorts their
-    projections, so they need not cross twice) and sorts them (:func:`_order`); the device
-    turns the order into ranks (``sot_rank``) and moves the points.
-    """
-
-    def __init__(self):
-        self.shape = None
-
-    def _allocate(self, sets, n, d, K, scale):
-        u32, f64, rows = np.uint32, np.float64, sets * K
-        # device arrays, kept here: a kernel's arguments do not keep their buffers alive
-        self.arrays = [_output(shape, dtype, False) for shape, dtype in (
-            ((rows, 2 ** d), f64), ((rows, 2 ** d), f64), (rows, np.int32), (rows, f64),
-            (rows, f64), (rows, f64),                                            # the slices
-            ((sets, n, d), f64), ((sets, K, d), f64), ((sets, K, n), f64),       # x, theta, proj
-            ((sets, K, n), u32), ((sets, K, n), f64), ((sets, K, n), u32))]      # order, q, rank
-        self.inputs = [a.buffer for a in self.arrays[:10]]
-        q, rank = (a.buffer for a in self.arrays[10:])
-        self.out = _output((sets, n, d), f64, True)
-        self.cost = _output((sets, n), f64, True)
-        lanes = runtime.shape().vector_width
-        x, theta, proj, order = self.inputs[6:]
-        args = {"sot_quantiles": (*self.inputs[:6], u32(n), u32(rows), q),
-                "sot_rank": (order, u32(n), u32(n), u32(rows), rank),
-                "sot_move": (x, theta, q, rank, proj, u32(n), u32(K), u32(sets), f64(scale),
-                             self.out.buffer, self.cost.buffer)}
-        items = {"sot_quantiles": _quantile_items(rows, n, lanes), "sot_rank": rows * n,
-                 "sot_move": sets * n}
-        local = runtime.local_size(64)
-        self.launches = {}
-        for name, a in args.items():
-            kernel = runtime.kernel("sot.cl", name, _defines(d, lanes), instance="host-sort")
-            kernel.set_args(*a)
-            self.launches[name] = (kernel, (-(-items[name] // local) * local,), (local,))
-        self.shape = (sets, n, d, K, scale)
-
-    def _launch(self, name):
-        import pyopencl as cl
-        cl.enqueue_nd_range_kernel(runtime.queue(), *self.launches[name])
-
-    def __call__(self, x, theta, sl, scale):
-        """One batch: :func:`batch_reference`'s (points, cost)."""
-        import pyopencl as cl
-        sets, n, d = x.shape
-        K = theta.shape[1]
-        if self.shape != (sets, n, d, K, scale):
-            self._allocate(sets, n, d, K, scale)
-        queue = runtime.queue()
-        slices = (sl.c, sl.sign, sl.m, sl.norm, sl.total, sl.base)
-        for buffer, host in zip(self.inputs[:6], slices, strict=True):
-            cl.enqueue_copy(queue, buffer, host, is_blocking=False)
-        self._launch("sot_quantiles")
-        queue.flush()
-        proj = project_reference(x, theta)
-        order = _order(proj).astype(np.uint32)
-        for buffer, host in zip(self.inputs[6:], (x, theta, proj, order), strict=True):
-            cl.enqueue_copy(queue, buffer, host, is_blocking=False)
-        self._launch("sot_rank")
-        self._launch("sot_move")
-        return self.out.finish(), self.cost.finish()
+    return move_reference(x, theta, displacements_reference(q, _ranks(proj), proj), scale)
 
 
 def subspaces(projections, d):
@@ -625,12 +484,12 @@ def sot_optimize(start_points, seed, directions_per_batch=DIRECTIONS, iterations
     points : ndarray (r, n, d)
     info : SOTInfo
     """
-    if backend != "numpy":
-        runtime.require_fp64()
+    resident = False
     if backend == "numpy":
         batch = batch_reference
     else:
-        batch = _HostSortBatches() if runtime.shape().host_sort else _batch_device
+        runtime.require_fp64()
+        batch, resident = sot_device.batch_device, runtime.shape().host_sort
     x = np.array(start_points, dtype=np.float64)
     r, n, d = x.shape
     step = float(d) if step is None else step
@@ -643,27 +502,50 @@ def sot_optimize(start_points, seed, directions_per_batch=DIRECTIONS, iterations
     K = directions_per_batch + max(directions_per_batch // 2, 1) * len(spaces)
     # the directions and slices of a block of batches come from one call each
     chunk = int(np.clip(BLOCK_BYTES // (r * K * (16 << d) + 1), 1, 64))
+    runner, held = None, None           # resident: the batches of the sets ``held``
+    pending = []                        # (sets, per-point costs or None) not yet summed
     for it in range(iterations):
         idx = np.flatnonzero(active)
         if idx.size == 0:
             break
-        if it % chunk == 0:
+        fresh = it % chunk == 0
+        if fresh:
             count = min(chunk, iterations - it)
             block = directions(seed, index, it, directions_per_batch, d, spaces, count)
             slices = Slice.of(block.reshape(-1, d))
         b = it % chunk
-        theta = np.ascontiguousarray(block[idx, b])
-        rows = ((idx[:, None] * count + b) * K + np.arange(K)).ravel()
-        y, per_point = batch(np.ascontiguousarray(x[idx]), theta, slices.take(rows), step / K)
-        x[idx] = y
-        cost[idx] = [math.fsum(row) / (n * K) for row in per_point]
+        if resident:
+            if held is None or not np.array_equal(held, idx):
+                if held is not None:
+                    x[held] = runner.result()
+                runner = sot_device.ResidentBatches(x[idx], K, step / K, SETTLE)
+                held, fresh = idx, True
+            if fresh:                   # the block's rows of the held sets, batch-major
+                rows = (idx[None, :, None] * count + np.arange(count)[:, None, None]) * K
+                runner.block(block[idx].transpose(1, 0, 2, 3),
+                             slices.take((rows + np.arange(K)).ravel()))
+            runner.batch(b)
+            pending.append((idx, None))
+        else:
+            theta = np.ascontiguousarray(block[idx, b])
+            rows = ((idx[:, None] * count + b) * K + np.arange(K)).ravel()
+            y, per_point = batch(np.ascontiguousarray(x[idx]), theta, slices.take(rows), step / K)
+            x[idx] = y
+            pending.append((idx, per_point))
         ran[idx] += 1
-        history.append(cost.copy())
+        if tol > 0.0 or len(pending) == SETTLE or it + 1 == iterations:
+            sums = runner.costs() if resident else [cost_sums(p) for _, p in pending]
+            for (sets, _), total in zip(pending, sums, strict=True):
+                cost[sets] = total / (n * K)
+                history.append(cost.copy())
+            pending = []
         if tol > 0.0 and it + 1 >= 2 * WINDOW:
             h = np.stack(history[-2 * WINDOW:], axis=1)[idx]
             done = h[:, WINDOW:].mean(axis=1) >= (1.0 - tol) * h[:, :WINDOW].mean(axis=1)
             converged[idx[done]] = True
             active[idx[done]] = False
+    if held is not None:
+        x[held] = runner.result()
     history = np.stack(history, axis=1) if history else np.empty((r, 0))
     info = SOTInfo(realizations=index.astype(np.int64), cost_history=history, iterations=ran,
                    converged=converged)
@@ -707,10 +589,12 @@ class SOTSampler(Sampler):
     measure (Paulin et al. 2020, Algorithm 1); ``cost_history`` is that distance as the
     batches see it, which falls on average. The projected measure is the distribution of a
     sum of scaled uniforms, whose CDF is a piecewise polynomial of degree d (the
-    alternating sum over the cube's vertices); its quantiles are found by safeguarded
-    Newton steps to 1e-14 of their range. The projective variant ("projective blue noise")
-    also draws directions within chosen coordinate subspaces, so that those projections of
-    the set are optimized too, as the authors' multi-projection code does.
+    alternating sum over the cube's vertices); its quantiles are found in closed form
+    where at most two components count (every 2-D direction: a trapezoid) and by
+    safeguarded Newton steps to 1e-14 of their range otherwise. The projective variant
+    ("projective blue noise") also draws directions within chosen coordinate subspaces, so
+    that those projections of the set are optimized too, as the authors' multi-projection
+    code does.
 
     The step: a random unit direction has E[theta theta^T] = I / d, so the batch's mean
     moves a point by about 1/d of its transport displacement. The default step d is the
@@ -720,11 +604,11 @@ class SOTSampler(Sampler):
     the points pile up on the cube's faces.
 
     Points stay in the cube [0, 1)^d (a move outside is clamped; the target measure is the
-    cube's, not the torus's). Directions and each direction's vertex sums are host code; the
-    quantiles (in vector lanes on CPUs) and the moves run on the device
-    (``kernels/sot.cl``), as do the projections and the sort (a bitonic network) on GPUs;
-    CPU devices project and sort on the host (NumPy's sort). The NumPy twin gives the same
-    bits.
+    cube's, not the torus's). Directions and each direction's vertex sums are host code;
+    the quantiles (in vector lanes on CPUs), the projections, the sort, the moves and the
+    costs run on the device (``kernels/sot.cl``): the sort by a bitonic network on GPUs,
+    by buckets one direction a work-item on CPUs, where the points stay on the device for
+    the whole run. The NumPy twin gives the same bits.
 
     References
     ----------
