@@ -33,6 +33,7 @@
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #pragma OPENCL FP_CONTRACT OFF
 #include "cells.h"
+#include "in_order.h"
 
 #ifndef GBN_C13
 #error "gbn.cl needs the exponential's constants (clsamp.samplers.gbn.EXP_DEFINES)"
@@ -88,6 +89,7 @@ __kernel void gbn_pairs(__global const double *pts,
 #endif
     int c[D];
     cell_of(x, G, c);
+    IN_ORDER
     for (uint o = 0; o < noff; ++o) {
 #if D >= 3
         /* a neighbouring cell wholly beyond the reach holds no partner */
@@ -96,11 +98,13 @@ __kernel void gbn_pairs(__global const double *pts,
 #endif
         const size_t slot = (size_t)r * total_cells + neighbour(c, o, G);
         const uint s1 = start[slot + 1];
+        IN_ORDER
         for (uint j = start[slot]; j < s1; ++j) {
             if (j == gi)
                 continue;
             __global const double *y = pts + (size_t)j * D;
             double r2 = 0.0;
+            IN_ORDER
             for (int k = 0; k < D; ++k) {
                 double v = x[k] - y[k];
 #if PERIODIC

@@ -112,7 +112,8 @@ def test_bnot_exact_cells_give_the_same_bits(device):
 
 @pytest.mark.parametrize("device", OTHERS, ids=_label)
 @pytest.mark.parametrize("name, params, n", [
-    ("sot", {"d": 3, "iterations": 6, "projections": "pairs"}, 513)])
+    ("sot", {"d": 3, "iterations": 6, "projections": "pairs"}, 513),
+    ("gbn", {"d": 4, "iterations": 3}, 300)])
 def test_float_optimizers_give_the_same_bits_past_a_groups_tail(device, name, params, n):
     """Sizes where a work-group's tail holds a lone work-item: Intel's compiler summed such
     an item's terms in partial sums until kernels/in_order.h forbade it; the histories
