@@ -16,9 +16,13 @@
  * CDF is a trapezoid's (a1 = c_1 >= a2 = c_2, a2 = 0 where m = 1): t = sqrt(2 a1 a2 p) where
  * 2 a1 p <= a2, else a1 p + a2 / 2. Otherwise the solver is Newton's step kept inside a
  * bisection bracket (Numerical Recipes' rtsafe), stopped when Newton's step (taken) or the
- * step made is at most QTOL total, or after QMAX steps. A work-item solves LANES
- * consecutive quantiles of one direction in vector lanes.
- * Launch: directions * ceil(((n + 1) / 2) / LANES) work-items.
+ * step made is at most QTOL total, or after QMAX steps. The half's quantiles come in
+ * chunks of CHUNK consecutive ones, solved in turn: a chunk's first from the bracket's
+ * middle total / 4, the second from the first's root t1, the third from 2 t1 - t2, the
+ * others from 3 t1 - 3 t2 + t3 (the last roots extrapolated), each start kept in
+ * [t1, total / 2]. A work-item solves LANES consecutive chunks of one direction, one a
+ * vector lane.
+ * Launch: directions * ceil(ceil(((n + 1) / 2) / CHUNK) / LANES) work-items.
  *
  * sot_project: proj[set, k, i] = sum_j theta[set, k, j] x[set, i, j], j in order.
  * Launch: one work-item per (set, k, i).
@@ -43,7 +47,7 @@
  * sum_k disp^2, the point's transport cost over the batch before the move.
  * Launch: one work-item per (set, i).
  *
- * Build options: D (dimensions), QTOL, QMAX, LANES (sot_quantiles; 1, 4, 8 or 16).
+ * Build options: D (dimensions), QTOL, QMAX, CHUNK, LANES (sot_quantiles; 1, 4, 8 or 16).
  */
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #pragma OPENCL FP_CONTRACT OFF
@@ -91,68 +95,83 @@ __kernel void sot_quantiles(__global const double *c, __global const double *sig
                             __global const double *total_of, __global const double *base_of,
                             const uint first, const uint n, const uint dirs, __global double *q)
 {
-    const uint nh = (n + 1) / 2, groups = (nh + LANES - 1) / LANES;
+    const uint nh = (n + 1) / 2, chunks = (nh + CHUNK - 1) / CHUNK;
+    const uint groups = (chunks + LANES - 1) / LANES;
     const uint gid = get_global_id(0);
     if (gid >= dirs * groups)
         return;
-    const uint r = gid / groups, i0 = (gid % groups) * LANES, k = first + r;
+    const uint r = gid / groups, g0 = (gid % groups) * LANES, k = first + r;
     const double total = total_of[k], base = base_of[k], norm = norm_of[k];
     __global double *row = q + (size_t)r * n;
     const int m = m_of[k];
     const uint nv = 1u << m;
     __global const double *ck = c + (size_t)k * VERTS;
     __global const double *sk = sign + (size_t)k * VERTS;
-    const real_v i = (double)i0 + LANE_INDEX;
-    const real_v p = (i + 0.5) / (double)n;
-    const double tol = QTOL * total;
-    real_v lo = 0.0, hi = total * 0.5;
-    real_v t = hi * 0.5, dx_old = hi;
-    /* the lanes past the half and an odd n's middle solve nothing, nor m <= 2 (closed form) */
-    mask_v live = MASK(i < (double)nh) & MASK(2.0 * i + 1.0 != (double)n) & (m > 2 ? (mask_v)(-1L) : (mask_v)(0L));
-    for (int it = 0; it < QMAX && ANY(live); ++it) {
-        real_v F = 0.0, dF = 0.0;
-        IN_ORDER
-        for (uint v = 0; v < nv; ++v) {
-            const real_v u = t - ck[v];
-            real_v w = 1.0;
-            IN_ORDER
-            for (int j = 1; j < m; ++j)
-                w = w * u;
-            const mask_v on = MASK(u > 0.0);
-            F = SEL(F, F + sk[v] * (w * u), on);
-            dF = SEL(dF, dF + sk[v] * w, on);
-        }
-        const real_v f = F * norm - p;
-        const real_v df = dF * norm * (double)m;
-        const mask_v below = MASK(f < 0.0);
-        const real_v lo_t = SEL(lo, t, below), hi_t = SEL(t, hi, below);
-        const real_v tn = t - f / df, step = tn - t;
-        const mask_v done = MASK(df > 0.0) & MASK(ABS(step) <= tol);
-        const mask_v newton = MASK(df > 0.0) & MASK(tn > lo_t) & MASK(tn < hi_t)
-                              & MASK(ABS(step) < 0.5 * ABS(dx_old));
-        const real_v next = SEL(lo_t + (hi_t - lo_t) * 0.5, tn, newton);
-        const real_v dx = next - t;
-        t = SEL(t, SEL(next, tn, done), live);
-        lo = SEL(lo, lo_t, live);
-        hi = SEL(hi, hi_t, live);
-        dx_old = SEL(dx_old, dx, live);
-        live = live & ~done & ~MASK(ABS(dx) <= tol);
-    }
-    const double *tl = (const double *)&t;
+    const double tol = QTOL * total, mid = total * 0.5;
     const double a1 = ck[1], a2 = m == 2 ? ck[2] : 0.0;
-    for (uint l = 0; l < LANES && i0 + l < nh; ++l) {
-        const uint j = i0 + l;
-        double tj = tl[l];
-        if (m <= 2) {
-            const double pj = ((double)j + 0.5) / (double)n;
-            tj = 2.0 * a1 * pj <= a2 ? sqrt(2.0 * a1 * a2 * pj) : a1 * pj + 0.5 * a2;
+    const mask_v solved = m > 2 ? (mask_v)(-1L) : (mask_v)(0L);      /* else closed form */
+    real_v t1 = 0.0, t2 = 0.0, t3 = 0.0;           /* the lane's last three roots */
+    for (uint cc = 0; cc < CHUNK; ++cc) {
+        const real_v i = ((double)g0 + LANE_INDEX) * (double)CHUNK + (double)cc;
+        const real_v p = (i + 0.5) / (double)n;
+        real_v lo = 0.0, hi = mid, dx_old = hi;
+        /* a chunk's first quantile from the bracket's middle, the next ones from the
+         * last roots extrapolated (linearly, then quadratically), kept in [t1, total / 2] */
+        real_v t = cc == 0 ? (real_v)(mid * 0.5) : cc == 1 ? t1
+                 : cc == 2 ? 2.0 * t1 - t2 : 3.0 * t1 - 3.0 * t2 + t3;
+        t = SEL(t, t1, MASK(t < t1));
+        t = SEL(t, hi, MASK(t > hi));
+        /* the lanes past the half and an odd n's middle solve nothing */
+        mask_v live = MASK(i < (double)nh) & MASK(2.0 * i + 1.0 != (double)n) & solved;
+        for (int it = 0; it < QMAX && ANY(live); ++it) {
+            real_v F = 0.0, dF = 0.0;
+            IN_ORDER
+            for (uint v = 0; v < nv; ++v) {
+                const real_v u = t - ck[v];
+                real_v w = 1.0;
+                IN_ORDER
+                for (int j = 1; j < m; ++j)
+                    w = w * u;
+                const mask_v on = MASK(u > 0.0);
+                F = SEL(F, F + sk[v] * (w * u), on);
+                dF = SEL(dF, dF + sk[v] * w, on);
+            }
+            const real_v f = F * norm - p;
+            const real_v df = dF * norm * (double)m;
+            const mask_v below = MASK(f < 0.0);
+            const real_v lo_t = SEL(lo, t, below), hi_t = SEL(t, hi, below);
+            const real_v tn = t - f / df, step = tn - t;
+            const mask_v done = MASK(df > 0.0) & MASK(ABS(step) <= tol);
+            const mask_v newton = MASK(df > 0.0) & MASK(tn > lo_t) & MASK(tn < hi_t)
+                                  & MASK(ABS(step) < 0.5 * ABS(dx_old));
+            const real_v next = SEL(lo_t + (hi_t - lo_t) * 0.5, tn, newton);
+            const real_v dx = next - t;
+            t = SEL(t, SEL(next, tn, done), live);
+            lo = SEL(lo, lo_t, live);
+            hi = SEL(hi, hi_t, live);
+            dx_old = SEL(dx_old, dx, live);
+            live = live & ~done & ~MASK(ABS(dx) <= tol);
         }
-        if (2 * j + 1 == n) {
-            row[j] = base + total * 0.5;
-        } else {
-            row[j] = base + tj;
-            row[n - 1 - j] = base + (total - tj);
+        const double *tl = (const double *)&t;
+        for (uint l = 0; l < LANES; ++l) {
+            const uint j = (g0 + l) * CHUNK + cc;
+            if (j >= nh)
+                break;
+            double tj = tl[l];
+            if (m <= 2) {
+                const double pj = ((double)j + 0.5) / (double)n;
+                tj = 2.0 * a1 * pj <= a2 ? sqrt(2.0 * a1 * a2 * pj) : a1 * pj + 0.5 * a2;
+            }
+            if (2 * j + 1 == n) {
+                row[j] = base + mid;
+            } else {
+                row[j] = base + tj;
+                row[n - 1 - j] = base + (total - tj);
+            }
         }
+        t3 = t2;
+        t2 = t1;
+        t1 = t;
     }
 }
 

@@ -23,7 +23,7 @@ from ..errors import InvalidArgumentError
 from ..validation import check_positive_int, check_real
 from . import sot_device
 from .base import SampleInfo, Sampler, info_field, make_sampler, register
-from .sot_device import QMAX, QTOL
+from .sot_device import CHUNK, QMAX, QTOL
 
 DIRECTIONS = 32      # directions a batch (full space), as the authors' code
 ITERATIONS = 256
@@ -168,17 +168,55 @@ def quantiles_reference(sl, n):
     -------
     ndarray (K, n)
         Row k: F_k^-1((i + 1/2) / n), i = 0..n-1, increasing.
+
+    Notes
+    -----
+    The lower half is solved in chunks of ``CHUNK`` consecutive quantiles, position c of
+    every chunk at once (:func:`_solve`), each from the last roots of its chunk
+    extrapolated (the kernel's rule); the upper half mirrors it.
     """
     K = sl.m.shape[0]
     half = (n + 1) // 2
-    row = np.repeat(np.arange(K), half)
-    p = (np.tile(np.arange(half, dtype=np.float64), K) + 0.5) / float(n)
+    t = np.zeros((K, half))
+    solved = np.flatnonzero(sl.m > 2)
+    for c in range(min(CHUNK, half)):
+        j = np.arange(c, half, CHUNK)
+        j = j[2 * j + 1 != n]                       # an odd n's middle: total / 2
+        rows, cols = np.repeat(solved, j.size), np.tile(j, solved.size)
+        p = (cols + 0.5) / float(n)
+        if c == 0:
+            start = sl.total[rows] * 0.5 * 0.5
+        else:
+            t1 = t[rows, cols - 1]
+            start = t1 if c == 1 else (
+                2.0 * t1 - t[rows, cols - 2] if c == 2
+                else 3.0 * t1 - 3.0 * t[rows, cols - 2] + t[rows, cols - 3])
+            start = np.where(start < t1, t1, start)
+        start = np.where(start > sl.total[rows] * 0.5, sl.total[rows] * 0.5, start)
+        t[rows, cols] = _solve(sl, rows, p, start)
+    closed = np.flatnonzero(sl.m <= 2)
+    a1 = sl.c[closed, 1][:, None]
+    a2 = np.where(sl.m[closed] == 2, sl.c[closed, 2], 0.0)[:, None]
+    p = (np.arange(half) + 0.5) / float(n)
+    t[closed] = np.where(2.0 * a1 * p <= a2, np.sqrt(2.0 * a1 * a2 * p), a1 * p + 0.5 * a2)
+    total = sl.total[:, None]
+    q = np.empty((K, n))
+    q[:, :half] = sl.base[:, None] + t
+    q[:, n - half:] = (sl.base[:, None] + (total - t))[:, ::-1]
+    if n % 2:
+        q[:, half - 1] = sl.base + sl.total * 0.5
+    return q
+
+
+def _solve(sl, row, p, t):
+    """Safeguarded Newton (rtsafe) on F_row(t) = p from the starts ``t``, bracket
+    [0, total / 2], every quantile in vector form: the kernel's steps and stopping rule."""
     total, norm, m = sl.total[row], sl.norm[row], sl.m[row]
-    lo = np.zeros(K * half)
+    t = t.copy()
+    lo = np.zeros(row.size)
     hi = total * 0.5
-    t = hi * 0.5
     dx_old = hi.copy()
-    live = np.flatnonzero(m > 2)        # the quantiles still being solved (m <= 2: closed form)
+    live = np.arange(row.size)          # the quantiles still being solved
     for _ in range(QMAX):
         if live.size == 0:
             break
@@ -207,19 +245,7 @@ def quantiles_reference(sl, n):
         t[live] = np.where(done, tn, nxt)
         lo[live], hi[live], dx_old[live] = lo_l, hi_l, dx
         live = live[~(done | (np.abs(dx) <= tol))]
-    closed = np.flatnonzero(m <= 2)
-    a1 = sl.c[row[closed], 1]
-    a2 = np.where(m[closed] == 2, sl.c[row[closed], 2], 0.0)
-    pc = p[closed]
-    t[closed] = np.where(2.0 * a1 * pc <= a2, np.sqrt(2.0 * a1 * a2 * pc), a1 * pc + 0.5 * a2)
-    t = t.reshape(K, half)
-    total = sl.total[:, None]
-    q = np.empty((K, n))
-    q[:, :half] = sl.base[:, None] + t
-    q[:, n - half:] = (sl.base[:, None] + (total - t))[:, ::-1]
-    if n % 2:
-        q[:, half - 1] = sl.base + sl.total * 0.5
-    return q
+    return t
 
 
 def project_reference(x, theta):

@@ -20,7 +20,8 @@ from .. import runtime
 
 QTOL = 1e-14         # quantile solver: stop when the step is at most QTOL times the range
 QMAX = 200
-DEFINES = {"QTOL": repr(QTOL), "QMAX": QMAX}
+CHUNK = 16           # consecutive quantiles solved in turn, each from the last roots
+DEFINES = {"QTOL": repr(QTOL), "QMAX": QMAX, "CHUNK": CHUNK}
 
 
 def _defines(d, lanes=None):
@@ -30,7 +31,8 @@ def _defines(d, lanes=None):
 
 
 def _quantile_items(K, n, lanes):
-    return K * -(-((n + 1) // 2) // lanes)
+    chunks = -(-((n + 1) // 2) // CHUNK)
+    return K * -(-chunks // lanes)
 
 
 def _launch(name, d, items, *args, lanes=None):
