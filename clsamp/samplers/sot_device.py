@@ -26,7 +26,8 @@ DEFINES = {"QTOL": repr(QTOL), "QMAX": QMAX, "CHUNK": CHUNK}
 
 def _defines(d, lanes=None):
     """The build options of ``kernels/sot.cl`` in ``d`` dimensions: ``sot_quantiles`` solves
-    ``lanes`` quantiles a work-item (default: the device's vector width, one on GPUs)."""
+    ``lanes`` chunks of ``CHUNK`` quantiles a work-item (default: the device's vector width,
+    one on GPUs)."""
     return {"D": d, "LANES": lanes or runtime.shape().vector_width, **DEFINES}
 
 
@@ -60,7 +61,7 @@ def quantiles_device(sl, n, host=True, lanes=None):
     host : bool
         Return a host array (else a device array).
     lanes : int, optional
-        Quantiles a work-item (default: the device's vector width).
+        Chunks of quantiles a work-item (default: the device's vector width).
 
     Returns
     -------
