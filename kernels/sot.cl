@@ -175,6 +175,16 @@ __kernel void sot_quantiles(__global const double *c, __global const double *sig
     }
 }
 
+/* <theta, x> summed over the coordinates in order: the projection both ways of sorting use */
+static inline double sot_dot(__global const double *th, __global const double *xi)
+{
+    double p = th[0] * xi[0];
+    IN_ORDER
+    for (int j = 1; j < D; ++j)
+        p = p + th[j] * xi[j];
+    return p;
+}
+
 __kernel void sot_project(__global const double *x, __global const double *theta, const uint n,
                           const uint K, const uint sets, __global double *proj)
 {
@@ -184,11 +194,7 @@ __kernel void sot_project(__global const double *x, __global const double *theta
     const uint i = gid % n, sk = gid / n, s = sk / K;
     __global const double *xi = x + ((size_t)s * n + i) * D;
     __global const double *th = theta + (size_t)sk * D;
-    double p = th[0] * xi[0];
-    IN_ORDER
-    for (int j = 1; j < D; ++j)
-        p = p + th[j] * xi[j];
-    proj[gid] = p;
+    proj[gid] = sot_dot(th, xi);
 }
 
 __kernel void sot_move(__global const double *x, __global const double *theta, const uint first,
@@ -375,10 +381,7 @@ __kernel void sot_project_displace(__global const double *x, __global const doub
     __global uint *restrict pm = perm + (size_t)row * n;
     double lo = INFINITY, hi = -INFINITY;
     for (uint i = 0; i < n; ++i) {
-        double v = th[0] * xs[(size_t)i * D];
-        IN_ORDER
-        for (int j = 1; j < D; ++j)
-            v = v + th[j] * xs[(size_t)i * D + j];
+        const double v = sot_dot(th, xs + (size_t)i * D);
         p[i] = v;
         lo = v < lo ? v : lo;
         hi = v > hi ? v : hi;
