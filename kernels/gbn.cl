@@ -23,6 +23,8 @@
  *
  * Build options: D (dimensions), PERIODIC (1: the unit torus, differences wrapped into
  * [-1/2, 1/2]; 0: the unit cube), ADAPTIVE (1: per-point widths t, as above; 0: none),
+ * RESIDENT (1: a flags argument before out, and the sets whose flags[3 set] is 0 skipped;
+ * gbn_control below),
  * GBN_INV_LN2, GBN_LN2_HI, GBN_LN2_LO and GBN_C0 .. GBN_C13 (the exponential's constants,
  * from clsamp.samplers.gbn.EXP_DEFINES).
  * From 3-D on, a neighbouring cell whose box lies beyond skip2 (the squared reach the grid
@@ -70,12 +72,19 @@ __kernel void gbn_pairs(__global const double *pts,
                         __global const uint *start, const uint n,
                         const uint total, const int G, const uint noff, const double R2,
                         const double inv2s2, const double gR, const double skip2,
+#if RESIDENT
+                        __global const int *flags,
+#endif
                         __global double *out)
 {
     const uint gi = get_global_id(0);
     if (gi >= total)
         return;
     const uint r = gi / n;
+#if RESIDENT
+    if (!flags[3 * r])                              /* a set that has stopped (gbn_control) */
+        return;
+#endif
     const uint total_cells = cells_count(G);
     double x[D], f[D], w[D];
     for (int k = 0; k < D; ++k) {
@@ -140,4 +149,130 @@ __kernel void gbn_pairs(__global const double *pts,
 #if ADAPTIVE
     row[D + 1] = width;
 #endif
+}
+
+/* gbn_control: a resident run's step control (clsamp/samplers/gbn_device.py), one work-item
+ * a set, on the torus without a density: what gbn_optimize does on the host between pair
+ * passes, so that a run's iterations are launches with no wait. Its twin is gbn_optimize
+ * itself (the same bits).
+ *
+ * A set's state: its points x and their force f (sets, n, D), and its proposal y (the
+ * points the last pair pass saw, in index order); energy, tau and initial in real
+ * (sets, 3), live, converged and ran in flags (sets, 3); history (sets, iterations). The
+ * pair pass reads sorted (sets n, D) and start (sets G^D + 1), which gbn_control writes
+ * by a counting sort of y (stable: the order sorted_by_cell gives), with order (sets n,
+ * sorted index -> set n + index), and writes out (sets n, D + 1) in sorted order.
+ * mode 0: sort y (the start, which the host put in x and y);
+ * mode 1: the start's pass: its energy (exact_sum of the pass's energies / n, math.fsum's
+ *         value) into energy and initial, its force into f;
+ * mode 2: iteration it of a live set: ran + 1; the proposal accepted where its energy is
+ *         no higher (x = y, f, energy; converged once the drop is at most tol |energy|),
+ *         else tau halved (converged below tau_min); history[it] = energy.
+ * Then, where the set is live and propose is 1, the next proposal y = x + tau f wrapped
+ * into [0, 1) and sorted. gbn_pairs built with RESIDENT 1 skips the sets whose live flag
+ * is 0, so the passes that follow a set's end, until the host sees it, cost it nothing. */
+#include "exact_sum.h"
+
+inline uint gbn_flat_cell(__global const double *p, const int G)
+{
+    double x[D];
+    int c[D];
+    for (int k = 0; k < D; ++k)
+        x[k] = p[k];
+    cell_of(x, G, c);
+    uint flat = 0;
+    for (int k = 0; k < D; ++k)
+        flat = flat * (uint)G + (uint)c[k];
+    return flat;
+}
+
+__kernel void gbn_control(__global double *x, __global double *f, __global double *y,
+                          __global const double *out, __global double *sorted,
+                          __global uint *start, __global uint *order, __global double *real,
+                          __global int *flags, __global double *history, const uint n,
+                          const uint sets, const int G, const int mode, const uint it,
+                          const uint iterations, const double tol, const double tau_min,
+                          const int propose)
+{
+    const uint s = get_global_id(0);
+    if (s >= sets)
+        return;
+    const uint cells = cells_count(G);
+    const size_t base = (size_t)s * n;
+    __global double *xs = x + base * D, *fs = f + base * D, *ys = y + base * D;
+    __global const double *os = out + base * (D + 1);
+    __global double *rs = real + (size_t)s * 3;
+    __global int *fl = flags + (size_t)s * 3;
+    if (mode > 0) {
+        if (mode == 2 && !fl[0])
+            return;
+        long acc[EXACT_DIGITS];
+        exact_clear(acc);
+        for (uint g = 0; g < n; ++g)
+            exact_add(acc, os[(size_t)g * (D + 1)]);
+        const double e = exact_round(acc) / (double)n;
+        bool take = mode == 1, done = false;
+        if (mode == 2) {
+            fl[2] += 1;
+            take = e <= rs[0];
+            if (take) {
+                const double drop = rs[0] - e;
+                done = drop <= tol * fabs(e);
+                for (uint i = 0; i < n * D; ++i)
+                    xs[i] = ys[i];
+            } else {
+                rs[1] = rs[1] * 0.5;
+                done = rs[1] < tau_min;
+            }
+        }
+        if (take) {
+            rs[0] = e;
+            if (mode == 1)
+                rs[2] = e;
+            for (uint g = 0; g < n; ++g) {
+                const size_t i = order[base + g] - base;
+                for (int k = 0; k < D; ++k)
+                    fs[i * D + k] = os[(size_t)g * (D + 1) + 1 + k];
+            }
+        }
+        if (mode == 2) {
+            history[(size_t)s * iterations + it] = rs[0];
+            if (done) {
+                fl[0] = 0;
+                fl[1] = 1;
+                return;
+            }
+        }
+        if (!propose)
+            return;
+        const double tau = rs[1];
+        for (uint i = 0; i < n * D; ++i) {
+            double v = xs[i] + tau * fs[i];
+            v = v - floor(v);
+            ys[i] = v >= 1.0 ? 0.0 : v;
+        }
+    }
+    /* the counting sort of y by cell, ties in index order */
+    __global uint *st = start + (size_t)s * cells;
+    for (uint c = 0; c < cells; ++c)
+        st[c] = 0;
+    for (uint i = 0; i < n; ++i)
+        st[gbn_flat_cell(ys + (size_t)i * D, G)] += 1;
+    uint run = (uint)base;
+    for (uint c = 0; c < cells; ++c) {
+        const uint count = st[c];
+        st[c] = run;
+        run += count;
+    }
+    for (uint i = 0; i < n; ++i) {
+        const uint at = st[gbn_flat_cell(ys + (size_t)i * D, G)]++;
+        for (int k = 0; k < D; ++k)
+            sorted[(size_t)at * D + k] = ys[(size_t)i * D + k];
+        order[at] = (uint)base + i;
+    }
+    for (uint c = cells - 1; c > 0; --c)            /* st[c] ended as cell c's end */
+        st[c] = st[c - 1];
+    st[0] = (uint)base;
+    if (s == sets - 1)
+        start[(size_t)sets * cells] = (uint)(base + n);
 }

@@ -137,6 +137,35 @@ def _gbn_adaptive():
         64, realizations=range(1, 3)))
 
 
+@check("gbn-resident")
+def _gbn_resident():
+    # a run kept on the device, as CPU devices run it (the simulator's own shape takes the
+    # host's path): the step control's exact sums and counting sort, and two sets that
+    # stop at different iterations, the pair passes after a set's end skipping it
+    import math
+
+    import pyopencl.array as cla
+
+    from clsamp import runtime
+    from clsamp.samplers import gbn, gbn_device
+    kernel = gbn.Kernel(n=40, d=2, sigma=0.5, periodic=True)
+    x = clsamp.make_sampler("random", d=2, seed=6, backend="numpy").sample(40, realizations=2)
+    tau0 = gbn.STEP / kernel.mass
+    got = gbn_device.optimize_resident(x, kernel, gbn.EXP_DEFINES, tau0, 12, 0.05,
+                                       tau0 * 2.0 ** -gbn.HALVINGS)
+    want, info = gbn.gbn_optimize(x, kernel, iterations=12, tol=0.05, backend="numpy")
+    assert not np.array_equal(info.iterations, [12, 12])
+    _same_bits(got[0], want)
+    _same_bits(got[6], info.energy_history)
+    _same_bits(got[5], info.iterations)
+    q = runtime.queue()
+    values = np.array([[1.0, 2.0**-53, 2.0**-200, -0.5], [5e-324, -1.5, 2.0**-60, 3.0]])
+    out = cla.empty(q, 2, np.float64)
+    runtime.kernel("exact_sum_probe.cl", "exact_sum_rows")(
+        q, (2,), None, cla.to_device(q, values).data, np.uint32(4), np.uint32(2), out.data)
+    _same_bits(out.get(), np.array([math.fsum(r) for r in values]))
+
+
 @check("sample-elimination-3d")
 def _sample_elimination_3d():
     # from 3-D on the neighbour passes skip the cells beyond d_max (cells.h's cell_beyond),

@@ -7,7 +7,9 @@ found through a grid of cells (:mod:`clsamp.geometry.cells`), so a step costs O(
 ``gbn_pairs`` in ``kernels/gbn.cl`` on the device, :func:`pair_pass_reference` here in
 NumPy, the same bits (an exponential of our own, :func:`exp_neg`, in both). Everything
 else -- the binning, the domain's attraction in the cube, the step and its control -- is
-host code both backends share (:func:`gbn_optimize`).
+host code both backends share (:func:`gbn_optimize`), except where a run stays on a CPU
+device (on the torus, without a density: :mod:`clsamp.samplers.gbn_device`), whose
+kernel does that code's work with the same bits.
 """
 
 import dataclasses
@@ -20,6 +22,7 @@ from ..density import Density, as_density
 from ..errors import InvalidArgumentError
 from ..geometry.cells import cells_for, neighbour_cells, sorted_by_cell
 from ..validation import check_bool, check_positive_int, check_real
+from . import gbn_device
 from .base import SampleInfo, Sampler, info_field, make_sampler, register, sampler_class
 
 SIGMA = 0.5          # the kernel's standard deviation, in mean spacings n^(-1/d)
@@ -472,9 +475,15 @@ def gbn_optimize(start_points, kernel, step=STEP, iterations=ITERATIONS, tol=TOL
         runtime.require_fp64()
     x = np.array(start_points, dtype=np.float64)
     r = x.shape[0]
+    tau0 = step / kernel.mass
+    index = np.arange(r) if realizations is None else np.asarray(realizations)
+    if backend != "numpy" and gbn_device.resident(kernel, density):
+        x, energy, initial, tau, converged, ran, history = gbn_device.optimize_resident(
+            x, kernel, EXP_DEFINES, tau0, iterations, tol, tau0 * 2.0 ** -HALVINGS)
+        return x, GBNInfo(realizations=index.astype(np.int64), energy_history=history,
+                          initial_energy=initial, iterations=ran, converged=converged, step=tau)
     energy, force = _evaluate(x, kernel, pair_pass, density)
     initial = energy.copy()
-    tau0 = step / kernel.mass
     tau = np.full(r, tau0)
     active = np.ones(r, dtype=bool)
     converged = np.zeros(r, dtype=bool)
@@ -500,7 +509,6 @@ def gbn_optimize(start_points, kernel, step=STEP, iterations=ITERATIONS, tol=TOL
         active &= ~done
         history.append(energy.copy())
     history = np.stack(history, axis=1) if history else np.empty((r, 0))
-    index = np.arange(r) if realizations is None else np.asarray(realizations)
     info = GBNInfo(realizations=index.astype(np.int64), energy_history=history,
                    initial_energy=initial, iterations=ran, converged=converged, step=tau)
     return x, info
@@ -573,7 +581,9 @@ class GBNSampler(Sampler):
     A step that would raise the energy is rejected and the step halved, so the energy
     never rises (``energy_history``); a run stops when an accepted step lowers it by at
     most ``tol`` of it. The pair pass runs on the device (``kernels/gbn.cl``); its NumPy
-    twin gives the same bits, and so does every device.
+    twin gives the same bits, and so does every device. On a CPU device a run on the
+    torus without a density keeps its iterations on the device (the exact sum of the
+    energies, the step's control and the sort by cell there too), the same bits again.
 
     *Adaptive sampling* ([1], section on adaptive sampling): each point's kernel width
     follows the density rho (normalized to mean 1) where the point is,
