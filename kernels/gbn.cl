@@ -218,7 +218,7 @@ __kernel void gbn_control(__global double *x, __global double *f, __global doubl
             if (take) {
                 const double drop = rs[0] - e;
                 done = drop <= tol * fabs(e);
-                for (uint i = 0; i < n * D; ++i)
+                for (size_t i = 0; i < (size_t)n * D; ++i)
                     xs[i] = ys[i];
             } else {
                 rs[1] = rs[1] * 0.5;
@@ -246,7 +246,7 @@ __kernel void gbn_control(__global double *x, __global double *f, __global doubl
         if (!propose)
             return;
         const double tau = rs[1];
-        for (uint i = 0; i < n * D; ++i) {
+        for (size_t i = 0; i < (size_t)n * D; ++i) {
             double v = xs[i] + tau * fs[i];
             v = v - floor(v);
             ys[i] = v >= 1.0 ? 0.0 : v;
