@@ -11,6 +11,40 @@ Users: the pair statistics of :mod:`clsamp.metrics.neighbors` and the minimum di
 import numpy as np
 
 
+def stable_order(key, bound):
+    """``np.argsort(key, kind="stable")`` for integer keys in [0, bound), by NumPy's radix
+    sort: keys below 2^16 as uint16 in one pass, keys below 2^32 in two (the low 16 bits,
+    then the high ones, each pass stable), an order 10-13x faster to find than the
+    comparison sort that other integer types get (docs/performance.md).
+
+    Parameters
+    ----------
+    key : ndarray of int
+        Non-negative, below ``bound``.
+    bound : int
+
+    Returns
+    -------
+    ndarray of int64
+        The permutation that sorts ``key``, ties in index order.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clsamp.geometry.cells import stable_order
+    >>> stable_order(np.array([70000, 3, 70000, 2]), 2**20).tolist()
+    [3, 1, 0, 2]
+    """
+    key = np.asarray(key)
+    if bound <= 1 << 16:
+        return np.argsort(key.astype(np.uint16), kind="stable").astype(np.int64, copy=False)
+    if bound <= 1 << 32:
+        order = np.argsort((key & 0xFFFF).astype(np.uint16), kind="stable")
+        return order[np.argsort((key[order] >> 16).astype(np.uint16), kind="stable")].astype(
+            np.int64, copy=False)
+    return np.argsort(key, kind="stable")
+
+
 def sorted_by_cell(batch, cells):
     """The points of all realizations sorted by (realization, cell) of a grid of cells, the
     order the neighbour kernels walk them in.
@@ -48,7 +82,7 @@ def sorted_by_cell(batch, cells):
         flat = flat * cells + index[..., k]
     total = cells ** d
     key = (np.arange(r, dtype=np.int64)[:, None] * total + flat).ravel()
-    order = np.argsort(key, kind="stable")
+    order = stable_order(key, r * total)
     counts = np.bincount(key, minlength=r * total)
     start = np.concatenate(([0], np.cumsum(counts))).astype(np.uint32)
     pts = np.ascontiguousarray(batch.reshape(r * n, d)[order])

@@ -15,6 +15,8 @@ is its one source.
 
 import numpy as np
 
+from .cells import stable_order
+
 BITS = 22
 SIZE = 1 << BITS
 MASK = SIZE - 1
@@ -176,7 +178,7 @@ def build_grid(sites, G):
         Site indices, grouped by cell, in index order within a cell.
     """
     cell = cell_of(sites[:, 1], G) * G + cell_of(sites[:, 0], G)
-    order = np.argsort(cell, kind="stable")
+    order = stable_order(cell, G * G)
     start = np.zeros(G * G + 1, dtype=np.int64)
     np.cumsum(np.bincount(cell, minlength=G * G), out=start[1:])
     return start, order

@@ -5,6 +5,7 @@ backends."""
 import numpy as np
 
 from ...geometry import integer_torus as it
+from ...geometry.cells import stable_order
 from .pairs import ccvt_near2
 from .power import start_grid_size, start_table
 
@@ -33,9 +34,9 @@ def members_matrix(owner, S, p):
         The ids no site could keep, ascending.
     """
     key = np.where(owner < 0, S, owner)
-    # a radix sort where the site ids fit in 16 bits; each site's ids are then one run of
-    # `order`, ascending, and a row is the first p of its run, gathered in one go
-    order = np.argsort(key.astype(np.uint16) if S < 1 << 16 else key, kind="stable")
+    # each site's ids are one run of `order`, ascending, and a row is the first p of its
+    # run, gathered in one go
+    order = stable_order(key, S + 1)
     count = np.bincount(key, minlength=S + 1)[:S]
     start = np.cumsum(count) - count
     take = np.minimum(count, p)

@@ -15,7 +15,7 @@ maximal one is in :func:`.sampler._draw`. Maximal sets are made for d <= 4 only.
 
 import numpy as np
 
-from ...geometry.cells import cells_for, sorted_by_cell
+from ...geometry.cells import cells_for, sorted_by_cell, stable_order
 from .grid import IN
 
 COARSE_MIN_D = 5        # the first dimension thrown this way
@@ -98,7 +98,7 @@ def ragged_by_cell(points, sets, count, G):
     flat = np.empty(len(points), dtype=np.int64)
     flat[by_cell] = cell
     key = np.asarray(sets, dtype=np.int64) * cells + flat
-    order = np.argsort(key, kind="stable")
+    order = stable_order(key, count * cells)
     start = np.concatenate(([0], np.cumsum(np.bincount(key, minlength=count * cells))))
     return np.ascontiguousarray(points[order]), start.astype(np.uint32), order
 
