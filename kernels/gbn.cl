@@ -161,7 +161,7 @@ __kernel void gbn_pairs(__global const double *pts,
  * (sets, 3), live, converged and ran in flags (sets, 3); history (sets, iterations). The
  * pair pass reads sorted (sets n, D) and start (sets G^D + 1), which gbn_control writes
  * by a counting sort of y (stable: the order sorted_by_cell gives), with order (sets n,
- * sorted index -> set n + index), and writes out (sets n, D + 1) in sorted order.
+ * sorted index -> index in the set), and writes out (sets n, D + 1) in sorted order.
  * mode 0: sort y (the start, which the host put in x and y);
  * mode 1: the start's pass: its energy (exact_sum of the pass's energies / n, math.fsum's
  *         value) into energy and initial, its force into f;
@@ -171,20 +171,24 @@ __kernel void gbn_pairs(__global const double *pts,
  * Then, where the set is live and propose is 1, the next proposal y = x + tau f wrapped
  * into [0, 1) and sorted. gbn_pairs built with RESIDENT 1 skips the sets whose live flag
  * is 0, so the passes that follow a set's end, until the host sees it, cost it nothing. */
+#include "counting_sort.h"
 #include "exact_sum.h"
 
-inline uint gbn_flat_cell(__global const double *p, const int G)
+/* the flat cell of point i of p (sorted_by_cell's) */
+inline uint gbn_item_cell(__global const double *p, const uint i, const uint G)
 {
     double x[D];
     int c[D];
     for (int k = 0; k < D; ++k)
-        x[k] = p[k];
-    cell_of(x, G, c);
+        x[k] = p[(size_t)i * D + k];
+    cell_of(x, (int)G, c);
     uint flat = 0;
     for (int k = 0; k < D; ++k)
-        flat = flat * (uint)G + (uint)c[k];
+        flat = flat * G + (uint)c[k];
     return flat;
 }
+
+COUNTING_SORT(gbn_sort_by_cell, double, gbn_item_cell)
 
 __kernel void gbn_control(__global double *x, __global double *f, __global double *y,
                           __global const double *out, __global double *sorted,
@@ -230,7 +234,7 @@ __kernel void gbn_control(__global double *x, __global double *f, __global doubl
             if (mode == 1)
                 rs[2] = e;
             for (uint g = 0; g < n; ++g) {
-                const size_t i = order[base + g] - base;
+                const size_t i = order[base + g];
                 for (int k = 0; k < D; ++k)
                     fs[i * D + k] = os[(size_t)g * (D + 1) + 1 + k];
             }
@@ -252,27 +256,12 @@ __kernel void gbn_control(__global double *x, __global double *f, __global doubl
             ys[i] = v >= 1.0 ? 0.0 : v;
         }
     }
-    /* the counting sort of y by cell, ties in index order */
-    __global uint *st = start + (size_t)s * cells;
-    for (uint c = 0; c < cells; ++c)
-        st[c] = 0;
-    for (uint i = 0; i < n; ++i)
-        st[gbn_flat_cell(ys + (size_t)i * D, G)] += 1;
-    uint run = (uint)base;
-    for (uint c = 0; c < cells; ++c) {
-        const uint count = st[c];
-        st[c] = run;
-        run += count;
-    }
-    for (uint i = 0; i < n; ++i) {
-        const uint at = st[gbn_flat_cell(ys + (size_t)i * D, G)]++;
+    /* the counting sort of y by cell, ties in index order, and the points in that order */
+    __global uint *ord = order + base;
+    gbn_sort_by_cell(ys, n, cells, (uint)G, (uint)base, start + (size_t)s * cells, ord);
+    for (uint g = 0; g < n; ++g)
         for (int k = 0; k < D; ++k)
-            sorted[(size_t)at * D + k] = ys[(size_t)i * D + k];
-        order[at] = (uint)base + i;
-    }
-    for (uint c = cells - 1; c > 0; --c)            /* st[c] ended as cell c's end */
-        st[c] = st[c - 1];
-    st[0] = (uint)base;
+            sorted[(base + g) * D + k] = ys[(size_t)ord[g] * D + k];
     if (s == sets - 1)
         start[(size_t)sets * cells] = (uint)(base + n);
 }

@@ -14,6 +14,8 @@
 #ifndef CLSAMP_VORONOI_H
 #define CLSAMP_VORONOI_H
 
+#include "counting_sort.h"
+
 /* VOR_BITS comes from the host (clsamp.geometry.integer_torus.BITS, its one source). */
 #ifndef VOR_BITS
 #error "VOR_BITS must be given by the host: clsamp.geometry.integer_torus.DEFINES"
@@ -77,6 +79,8 @@ inline uint vor_site_cell(__global const uint *s, const uint i, const uint G)
     return c;
 }
 
+COUNTING_SORT(vor_sort_sites, uint, vor_site_cell)
+
 /* Background grid of the sites of one realization: a counting sort into G^VOR_DIM cells,
  * sites in index order inside each cell (deterministic). Sequential: n is small next to
  * the density points, and a sequential sort needs no atomics. */
@@ -84,18 +88,8 @@ inline void vor_build_grid_one(__global const uint *s, const uint n, const uint 
                                __global uint *start, __global uint *list)
 {
     const uint cells = vor_cells(G);
-    for (uint c = 0; c <= cells; ++c)
-        start[c] = 0;
-    for (uint i = 0; i < n; ++i)
-        start[vor_site_cell(s, i, G) + 1] += 1;
-    for (uint c = 0; c < cells; ++c)
-        start[c + 1] += start[c];
-    /* start[c] is used as the cursor of cell c, which leaves it at start[c + 1] */
-    for (uint i = 0; i < n; ++i)
-        list[start[vor_site_cell(s, i, G)]++] = i;
-    for (uint c = cells; c > 0; --c)
-        start[c] = start[c - 1];
-    start[0] = 0;
+    vor_sort_sites(s, n, cells, G, 0, start, list);
+    start[cells] = n;
 }
 
 /* One work-item per realization. */

@@ -14,8 +14,7 @@ import numpy as np
 def stable_order(key, bound):
     """``np.argsort(key, kind="stable")`` for integer keys in [0, bound), by NumPy's radix
     sort: keys below 2^16 as uint16 in one pass, keys below 2^32 in two (the low 16 bits,
-    then the high ones, each pass stable), an order 10-13x faster to find than the
-    comparison sort that other integer types get (docs/performance.md).
+    then the high ones, each pass stable); NumPy sorts other integer types by comparison.
 
     Parameters
     ----------
