@@ -30,5 +30,5 @@ setup(
         "bench": ["scipy>=1.10", "finufft>=2.2", "bridson>=0.1", "qmcpy>=2.0"],
         "docs": ["sphinx>=7", "numpydoc>=1.6", "myst-parser>=2"],
     },
-    entry_points={"console_scripts": ["clsamp=clsamp.cli:main"]},
+    entry_points={"console_scripts": ["clsamp=clsamp.__main__:entry"]},
 )

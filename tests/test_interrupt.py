@@ -178,3 +178,24 @@ def test_a_sweep_on_a_local_cluster_stops_within_two_seconds_of_ctrl_c(tmp_path)
     stopped = time.perf_counter() - sent
     assert proc.returncode == 130, err[-2000:]
     assert stopped < 2.0, stopped
+
+
+@pytest.mark.parametrize("status", [130, 143])
+def test_a_stopped_command_ends_the_process_without_the_teardown(monkeypatch, status):
+    # the console script and python -m clsamp: 130 / 143 flush and end at once (os._exit)
+    import clsamp.__main__ as script
+    ended = []
+    monkeypatch.setattr(script, "main", lambda argv=None: status)
+    monkeypatch.setattr(os, "_exit", lambda code: ended.append(code))
+    script.entry([])
+    assert ended == [status]
+
+
+@pytest.mark.parametrize("status", [0, 2])
+def test_a_finished_command_ends_through_sys_exit(monkeypatch, status):
+    import clsamp.__main__ as script
+    monkeypatch.setattr(script, "main", lambda argv=None: status)
+    monkeypatch.setattr(os, "_exit", lambda code: pytest.fail("os._exit for a finished command"))
+    with pytest.raises(SystemExit) as ended:
+        script.entry([])
+    assert ended.value.code == status
