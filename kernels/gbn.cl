@@ -24,7 +24,9 @@
  * Build options: D (dimensions), PERIODIC (1: the unit torus, differences wrapped into
  * [-1/2, 1/2]; 0: the unit cube), ADAPTIVE (1: per-point widths t, as above; 0: none),
  * RESIDENT (1: a flags argument before out, and the sets whose flags[3 set] is 0 skipped;
- * gbn_control below),
+ * gbn_control below), LANES (16: the pass without widths takes 16 points at a time in
+ * vector lanes, gbn_range16 below, with the same sums in the same order, for CPUs' vector
+ * units; else 1, one at a time),
  * GBN_INV_LN2, GBN_LN2_HI, GBN_LN2_LO and GBN_C0 .. GBN_C13 (the exponential's constants,
  * from clsamp.samplers.gbn.EXP_DEFINES).
  * From 3-D on, a neighbouring cell whose box lies beyond skip2 (the squared reach the grid
@@ -41,6 +43,13 @@
 #error "gbn.cl needs the exponential's constants (clsamp.samplers.gbn.EXP_DEFINES)"
 #endif
 
+/* the Horner steps of e^r's polynomial below, for p and r of one type (double or double4) */
+#define GBN_HORNER(p, r) \
+    p = p * r + GBN_C12; p = p * r + GBN_C11; p = p * r + GBN_C10; p = p * r + GBN_C9; \
+    p = p * r + GBN_C8; p = p * r + GBN_C7; p = p * r + GBN_C6; p = p * r + GBN_C5; \
+    p = p * r + GBN_C4; p = p * r + GBN_C3; p = p * r + GBN_C2; p = p * r + GBN_C1; \
+    p = p * r + GBN_C0;
+
 /* e^-t for 0 <= t < 700: t = k ln 2 - r with |r| <= ln 2 / 2, e^r by its Taylor
  * polynomial of degree 13 (truncation below 5e-18 relative), times 2^-k exactly */
 inline double gbn_exp_neg(const double t)
@@ -49,21 +58,117 @@ inline double gbn_exp_neg(const double t)
     const double kd = (double)k;
     const double r = (kd * GBN_LN2_HI - t) + kd * GBN_LN2_LO;
     double p = GBN_C13;
-    p = p * r + GBN_C12;
-    p = p * r + GBN_C11;
-    p = p * r + GBN_C10;
-    p = p * r + GBN_C9;
-    p = p * r + GBN_C8;
-    p = p * r + GBN_C7;
-    p = p * r + GBN_C6;
-    p = p * r + GBN_C5;
-    p = p * r + GBN_C4;
-    p = p * r + GBN_C3;
-    p = p * r + GBN_C2;
-    p = p * r + GBN_C1;
-    p = p * r + GBN_C0;
+    GBN_HORNER(p, r)
     return p * as_double((ulong)(1023 - k) << 52);
 }
+
+#if LANES == 16
+#if ADAPTIVE
+#error "gbn.cl: LANES 16 is for the pass without widths"
+#endif
+/* gbn_exp_neg in 4 lanes, each the same operations (a float to int conversion rounds
+ * toward zero, as the cast does) */
+inline double4 gbn_exp_neg4(const double4 t)
+{
+    const int4 k = convert_int4(t * GBN_INV_LN2 + 0.5);
+    const double4 kd = convert_double4(k);
+    const double4 r = (kd * GBN_LN2_HI - t) + kd * GBN_LN2_LO;
+    double4 p = (double4)(GBN_C13);
+    GBN_HORNER(p, r)
+    return p * as_double4(convert_ulong4(1023 - k) << 52);
+}
+
+/* coordinate k of the 4 sorted points from j into y[k]: in 2-D the even and odd lanes of
+ * two loads, in 4-D the four loads transposed; else, and for the last points of pts
+ * (total of them), gathered one by one, the points past the end clamped to the last, so
+ * that no lane reads past the buffer */
+inline void gbn_load4(__global const double *pts, const uint total, const uint j, double4 *y)
+{
+#if D == 2
+    if (j + 4 <= total) {
+        const double4 a = vload4(0, pts + 2 * (size_t)j), b = vload4(1, pts + 2 * (size_t)j);
+        y[0] = (double4)(a.even, b.even);
+        y[1] = (double4)(a.odd, b.odd);
+        return;
+    }
+#elif D == 4
+    if (j + 4 <= total) {
+        __global const double *p = pts + 4 * (size_t)j;
+        const double4 a = vload4(0, p), b = vload4(1, p), c = vload4(2, p), d = vload4(3, p);
+        y[0] = (double4)(a.x, b.x, c.x, d.x);
+        y[1] = (double4)(a.y, b.y, c.y, d.y);
+        y[2] = (double4)(a.z, b.z, c.z, d.z);
+        y[3] = (double4)(a.w, b.w, c.w, d.w);
+        return;
+    }
+#endif
+    for (int k = 0; k < D; ++k) {
+        double c[4];
+        for (uint l = 0; l < 4; ++l) {
+            const size_t at = j + l < total ? j + l : total - 1;
+            c[l] = pts[at * D + k];
+        }
+        y[k] = vload4(0, c);
+    }
+}
+
+/* the partners of sorted point i (at x) among sorted points lo .. hi - 1, in order, added
+ * to sums (the energy, then the force's D coordinates): 16 points at a time, as four
+ * vectors of 4 lanes (no wider: PoCL's built-ins and kernels disagree on how a 512-bit
+ * vector is passed on some AVX-512 hosts, tests/test_runtime.py), their distances and
+ * exponentials in lanes, then added one by one in order. A lane that is not a partner
+ * adds +0.0, which leaves a sum unchanged: a sum starts at +0.0 and x + y is -0.0 only
+ * where both are, so no sum is ever -0.0; 16 points without a partner add nothing. */
+inline void gbn_range16(__global const double *pts, const uint total, const uint lo,
+                        const uint hi, const uint i, const double *x, const double R2,
+                        const double inv2s2, const double gR, double *sums)
+{
+    const double4 zero = (double4)(0.0);
+    for (uint j0 = lo; j0 < hi; j0 += 16) {
+        double4 v[4][D], r2[4];
+        long4 on[4];
+        for (int q = 0; q < 4; ++q) {
+            const uint jq = j0 + 4 * (uint)q;
+            gbn_load4(pts, total, jq, v[q]);
+            r2[q] = zero;
+            for (int k = 0; k < D; ++k) {
+                double4 w = x[k] - v[q][k];
+#if PERIODIC
+                w = select(w, w - 1.0, w > 0.5);
+                w = select(w, w + 1.0, w < -0.5);
+#endif
+                v[q][k] = w;
+                r2[q] = k == 0 ? w * w : r2[q] + w * w;
+            }
+            const long4 j = (long4)(long)jq + (long4)(0, 1, 2, 3);
+            on[q] = (j < (long)hi) & (j != (long)i) & (r2[q] < R2);
+        }
+        if (!any(on[0] | on[1] | on[2] | on[3]))
+            continue;
+        double4 de[4];
+        for (int q = 0; q < 4; ++q) {
+            const double4 e = gbn_exp_neg4(select(zero, r2[q] * inv2s2, on[q]));
+            de[q] = select(zero, e - gR, on[q]);
+            for (int k = 0; k < D; ++k)
+                v[q][k] = select(zero, v[q][k] * e, on[q]);
+        }
+        double s = sums[0], f[D];
+        for (int k = 0; k < D; ++k)
+            f[k] = sums[1 + k];
+#define GBN_ADD(q, l) \
+        s = s + de[q].l; \
+        for (int k = 0; k < D; ++k) \
+            f[k] = f[k] + v[q][k].l;
+        for (int q = 0; q < 4; ++q) {
+            GBN_ADD(q, x) GBN_ADD(q, y) GBN_ADD(q, z) GBN_ADD(q, w)
+        }
+#undef GBN_ADD
+        sums[0] = s;
+        for (int k = 0; k < D; ++k)
+            sums[1 + k] = f[k];
+    }
+}
+#endif
 
 __kernel void gbn_pairs(__global const double *pts,
 #if ADAPTIVE
@@ -86,7 +191,7 @@ __kernel void gbn_pairs(__global const double *pts,
         return;
 #endif
     const uint total_cells = cells_count(G);
-    double x[D], f[D], w[D];
+    double x[D], f[D];
     for (int k = 0; k < D; ++k) {
         x[k] = pts[(size_t)gi * D + k];
         f[k] = 0.0;
@@ -98,6 +203,48 @@ __kernel void gbn_pairs(__global const double *pts,
 #endif
     int c[D];
     cell_of(x, G, c);
+#if LANES == 16
+    /* the stencil by rows along the last axis: the cells c[D - 1] - 1 .. c[D - 1] + 1 of a
+     * row lie together in sorted order unless the row wraps, and are taken as one range,
+     * or as the ranges that the wrap and the cells skipped (from 3-D on) leave; the same
+     * cells in the same order as one at a time */
+    double sums[D + 1];
+    for (int k = 0; k <= D; ++k)
+        sums[k] = 0.0;
+    __global const uint *st = start + (size_t)r * total_cells;
+    if (G == 1)
+        gbn_range16(pts, total, st[0], st[1], gi, x, R2, inv2s2, gR, sums);
+    const uint rows = G > 1 ? noff / 3 : 0;
+    for (uint o = 0; o < rows; ++o) {
+        const uint base = neighbour(c, 3 * o + 1, G) - (uint)c[D - 1];
+        uint lo = 0, hi = 0;
+        int last = -2;
+        for (int dl = -1; dl <= 1; ++dl) {
+#if D >= 3
+            /* a neighbouring cell wholly beyond the reach holds no partner */
+            if (cell_beyond(x, c, 3 * o + (uint)(dl + 1), G, skip2))
+                continue;
+#endif
+            int b = c[D - 1] + dl;
+            b = b < 0 ? b + G : b >= G ? b - G : b;
+            if (b == last + 1) {
+                hi = st[base + (uint)b + 1];
+            } else {
+                if (hi > lo)
+                    gbn_range16(pts, total, lo, hi, gi, x, R2, inv2s2, gR, sums);
+                lo = st[base + (uint)b];
+                hi = st[base + (uint)b + 1];
+            }
+            last = b;
+        }
+        if (hi > lo)
+            gbn_range16(pts, total, lo, hi, gi, x, R2, inv2s2, gR, sums);
+    }
+    e_sum = sums[0];
+    for (int k = 0; k < D; ++k)
+        f[k] = sums[1 + k];
+#else
+    double w[D];
     IN_ORDER
     for (uint o = 0; o < noff; ++o) {
 #if D >= 3
@@ -142,6 +289,7 @@ __kernel void gbn_pairs(__global const double *pts,
                 f[k] = f[k] + w[k] * ce;
         }
     }
+#endif
     __global double *row = out + (size_t)gi * (D + 1 + ADAPTIVE);
     row[0] = e_sum;
     for (int k = 0; k < D; ++k)

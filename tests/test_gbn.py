@@ -5,13 +5,14 @@ Poisson disk measured in the same test; 4-D sets spread far better than random o
 cube variant stays inside the cube without piling points on its faces. The contract
 matrix (test_sampler_contract.py) covers shapes, seeds, realizations and chunks."""
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
 import clsamp
-from clsamp import spectral_stats
+from clsamp import runtime, spectral_stats
 from clsamp.errors import InvalidArgumentError
 from clsamp.geometry.cells import sorted_by_cell
 from clsamp.metrics import max_min_distance, nearest_neighbor_distances, relative_radius
@@ -44,6 +45,35 @@ def test_the_kernel_gives_the_twins_bits(d, periodic):
     assert np.array_equal(e_dev, e_ref) and np.array_equal(f_dev, f_ref)
     device, info_d = gbn_optimize(pts, kernel, iterations=15)
     host, info_h = gbn_optimize(pts, kernel, iterations=15, backend="numpy")
+    assert np.array_equal(device, host)
+    assert np.array_equal(info_d.energy_history, info_h.energy_history)
+
+
+@pytest.mark.parametrize("lanes", [1, 16])
+@pytest.mark.parametrize("n, d, periodic", [(20, 2, True), (60, 2, True), (61, 2, False),
+                                            (1000, 2, True), (1000, 2, False), (300, 1, True),
+                                            (500, 3, True), (200, 4, True), (1500, 4, False),
+                                            (300, 8, True)])
+def test_the_pass_gives_the_twins_bits_one_point_or_16_at_a_time(lanes, n, d, periodic):
+    # LANES 16 (CPUs) takes the stencil's rows 16 points at a time in vector lanes, 1 (GPUs)
+    # one at a time: on one cell (2-D n = 20, 4-D n = 200), on 3^d cells whose rows all
+    # wrap, with cells skipped from 3-D on, and with points on a cell's edges, at 0 and by
+    # 1, and on top of each other
+    pts = clsamp.make_sampler("random", d=d, seed=n).sample(n, realizations=3)
+    kernel = Kernel(n=n, d=d, sigma=0.5, periodic=periodic)
+    G = kernel.cells
+    pts[0, 0] = 0.0
+    pts[0, 1, 0], pts[0, 1, -1] = 1.0 - 2.0**-53, 0.5
+    pts[0, 2, 0], pts[0, 2, -1] = 1.0 / G, 2.0 / G if G > 2 else 0.25
+    pts[0, 3, 0], pts[0, 3, -1] = 0.5, 1.0 - 2.0**-53
+    pts[1, 5] = pts[1, 6]
+    shape = dataclasses.replace(runtime.shape(), pair_lanes=lanes)
+    with runtime.forced_shape(shape):
+        e_dev, f_dev = gbn_energy(pts, kernel)
+        device, info_d = gbn_optimize(pts, kernel, iterations=6)
+    e_ref, f_ref = gbn_energy(pts, kernel, backend="numpy")
+    host, info_h = gbn_optimize(pts, kernel, iterations=6, backend="numpy")
+    assert np.array_equal(e_dev, e_ref) and np.array_equal(f_dev, f_ref)
     assert np.array_equal(device, host)
     assert np.array_equal(info_d.energy_history, info_h.energy_history)
 

@@ -92,7 +92,7 @@ def test_sets_that_stop_apart_keep_their_bits():
     # a step so long that it is halved until it falls below its floor
     tau0 = 1e6 / kernel.mass
     x, energy, initial, tau, converged, ran, _ = gbn_device.optimize_resident(
-        pts[:1], kernel, gbn.EXP_DEFINES, tau0, 80, 0.0, tau0 * 2.0 ** -HALVINGS)
+        pts[:1], kernel, gbn.pass_defines(2, True, False), tau0, 80, 0.0, tau0 * 2.0 ** -HALVINGS)
     _, info = gbn_optimize(pts[:1], kernel, step=1e6, iterations=80, tol=0.0, backend="numpy")
     assert np.array_equal(tau, info.step) and np.array_equal(ran, info.iterations)
     assert converged[0] == info.converged[0]

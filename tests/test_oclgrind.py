@@ -151,7 +151,7 @@ def _gbn_resident():
     kernel = gbn.Kernel(n=40, d=2, sigma=0.5, periodic=True)
     x = clsamp.make_sampler("random", d=2, seed=6, backend="numpy").sample(40, realizations=2)
     tau0 = gbn.STEP / kernel.mass
-    got = gbn_device.optimize_resident(x, kernel, gbn.EXP_DEFINES, tau0, 12, 0.01,
+    got = gbn_device.optimize_resident(x, kernel, gbn.pass_defines(2, True, False), tau0, 12, 0.01,
                                        tau0 * 2.0 ** -gbn.HALVINGS)
     want, info = gbn.gbn_optimize(x, kernel, iterations=12, tol=0.01, backend="numpy")
     assert info.iterations[0] != info.iterations[1] and info.iterations.max() < 12
@@ -164,6 +164,40 @@ def _gbn_resident():
     runtime.kernel("exact_sum_probe.cl", "exact_sum_rows")(
         q, (2,), None, cla.to_device(q, values).data, np.uint32(4), np.uint32(2), out.data)
     _same_bits(out.get(), np.array([math.fsum(r) for r in values]))
+
+
+@check("gbn-lanes16")
+def _gbn_lanes16():
+    # the pair pass 16 points at a time, as CPU devices build it (the simulator's own shape
+    # takes one at a time): rows of the stencil that wrap, the last points of the buffer
+    # read one by one, on the torus and in the cube, and kept on the device; in 3-D on a
+    # grid of 3 cells a side (cells skipped, gathered loads), in 4-D on one cell
+    import dataclasses
+
+    from clsamp import runtime
+    from clsamp.samplers import gbn, gbn_device
+    x = clsamp.make_sampler("random", d=2, seed=7, backend="numpy").sample(40, realizations=2)
+    with runtime.forced_shape(dataclasses.replace(runtime.shape(), pair_lanes=16)):
+        for periodic in (True, False):
+            kernel = gbn.Kernel(n=40, d=2, sigma=0.5, periodic=periodic)
+            got = gbn.gbn_energy(x, kernel)
+            want = gbn.gbn_energy(x, kernel, backend="numpy")
+            _same_bits(got[0], want[0])
+            _same_bits(got[1], want[1])
+        for d, n in ((3, 220), (4, 40)):
+            y = clsamp.make_sampler("random", d=d, seed=7, backend="numpy").sample(n)[None]
+            wide = gbn.Kernel(n=n, d=d, sigma=0.5, periodic=True)
+            got = gbn.gbn_energy(y, wide)
+            want = gbn.gbn_energy(y, wide, backend="numpy")
+            _same_bits(got[0], want[0])
+            _same_bits(got[1], want[1])
+        tau0 = gbn.STEP / kernel.mass
+        got = gbn_device.optimize_resident(x, gbn.Kernel(n=40, d=2, sigma=0.5, periodic=True),
+                                           gbn.pass_defines(2, True, False), tau0, 3, 0.0,
+                                           tau0 * 2.0 ** -gbn.HALVINGS)
+    want, _ = gbn.gbn_optimize(x, gbn.Kernel(n=40, d=2, sigma=0.5, periodic=True), iterations=3,
+                               tol=0.0, backend="numpy")
+    _same_bits(got[0], want)
 
 
 @check("sample-elimination-3d")

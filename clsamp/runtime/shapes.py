@@ -68,6 +68,9 @@ class Shape:
     tile_group : int
         Work-items a group of the direct spectrum's tile product (1 where the compiler
         would vectorize across work-items what the kernel already writes in vectors).
+    pair_lanes : int
+        Points a work-item of Gaussian blue noise's pair pass takes at once, in vector
+        lanes: 16 on a CPU's vector units, 1 (one at a time) on a GPU.
     chunk : int
         Points one launch of the convergence error sums holds.
     source : str
@@ -83,6 +86,7 @@ class Shape:
     host_gemm: bool
     prefetch: bool
     tile_group: int
+    pair_lanes: int
     chunk: int
     source: str = "host"
 
@@ -109,7 +113,7 @@ def gpu_shape(device):
     """
     return Shape(points_per_item=1, block=1, local=_group(device, 128), vector_width=1,
                  host_output=device.host_memory, host_sort=False, host_gemm=False,
-                 prefetch=False, tile_group=16, chunk=2**25, source="gpu")
+                 prefetch=False, tile_group=16, pair_lanes=1, chunk=2**25, source="gpu")
 
 
 def host_shape(device):
@@ -129,7 +133,7 @@ def host_shape(device):
     return Shape(points_per_item=16, block=256, local=_group(device, 64), vector_width=width,
                  host_output=device.host_memory, host_sort=device.host_memory,
                  host_gemm=device.host_memory, prefetch=_pocl(device), tile_group=1,
-                 chunk=2**21, source="host")
+                 pair_lanes=16, chunk=2**21, source="host")
 
 
 _lock = threading.RLock()

@@ -236,6 +236,26 @@ def _loop_bound(kernel, start):
     return kernel.stencil * (2 * kernel.d + 1) * (most + 1)
 
 
+def pass_defines(d, periodic, adaptive):
+    """The build options of ``gbn_pairs`` for the current device.
+
+    Parameters
+    ----------
+    d : int
+    periodic, adaptive : bool
+        On the torus; with per-point widths.
+
+    Returns
+    -------
+    dict
+        D, PERIODIC, ADAPTIVE, LANES (the launch shape's ``pair_lanes`` for the pass
+        without widths, else 1) and the exponential's constants.
+    """
+    lanes = 1 if adaptive else runtime.shape().pair_lanes
+    return {"D": d, "PERIODIC": int(periodic), "ADAPTIVE": int(adaptive), "LANES": lanes,
+            **EXP_DEFINES}
+
+
 def pair_pass_device(pts, cell, start, n, kernel, t=None):
     """``gbn_pairs`` on the current device: :func:`pair_pass_reference`'s result, the same
     bits.
@@ -261,8 +281,7 @@ def pair_pass_device(pts, cell, start, n, kernel, t=None):
         runtime.require_short_loops("gbn's pair pass")
     total, d = pts.shape
     adaptive = t is not None
-    defines = {"D": d, "PERIODIC": int(kernel.periodic), "ADAPTIVE": int(adaptive), **EXP_DEFINES}
-    pairs = runtime.kernel("gbn.cl", "gbn_pairs", defines)
+    pairs = runtime.kernel("gbn.cl", "gbn_pairs", pass_defines(d, kernel.periodic, adaptive))
     cols = d + 1 + adaptive
     out = runtime.Output((total, cols), np.float64, host=np.empty((total, cols)))
     local = runtime.local_size(64)
@@ -479,7 +498,8 @@ def gbn_optimize(start_points, kernel, step=STEP, iterations=ITERATIONS, tol=TOL
     index = np.arange(r) if realizations is None else np.asarray(realizations)
     if backend != "numpy" and gbn_device.resident(kernel, density):
         x, energy, initial, tau, converged, ran, history = gbn_device.optimize_resident(
-            x, kernel, EXP_DEFINES, tau0, iterations, tol, tau0 * 2.0 ** -HALVINGS)
+            x, kernel, pass_defines(kernel.d, True, False), tau0, iterations, tol,
+            tau0 * 2.0 ** -HALVINGS)
         return x, GBNInfo(realizations=index.astype(np.int64), energy_history=history,
                           initial_energy=initial, iterations=ran, converged=converged, step=tau)
     energy, force = _evaluate(x, kernel, pair_pass, density)

@@ -32,7 +32,7 @@ def resident(kernel, density):
             and runtime.loop_limit() is None)
 
 
-def optimize_resident(x, kernel, exp_defines, tau0, iterations, tol, tau_min):
+def optimize_resident(x, kernel, defines, tau0, iterations, tol, tau_min):
     """Gradient descent on the Gaussian energy, every iteration on the device.
 
     Parameters
@@ -41,8 +41,9 @@ def optimize_resident(x, kernel, exp_defines, tau0, iterations, tol, tau_min):
         The starting sets, in [0, 1)^d.
     kernel : Kernel
         On the torus.
-    exp_defines : dict
-        The exponential's constants (:data:`clsamp.samplers.gbn.EXP_DEFINES`).
+    defines : dict
+        The pair pass's build options on the torus without widths
+        (:func:`clsamp.samplers.gbn.pass_defines`).
     tau0 : float
         The first step.
     iterations : int
@@ -67,7 +68,7 @@ def optimize_resident(x, kernel, exp_defines, tau0, iterations, tol, tau_min):
 
     sets, n, d = x.shape
     G, total = kernel.cells, sets * n
-    defines = {"D": d, "PERIODIC": 1, "ADAPTIVE": 0, "RESIDENT": 1, **exp_defines}
+    defines = {**defines, "RESIDENT": 1}
     pairs = runtime.kernel("gbn.cl", "gbn_pairs", defines, instance="resident")
     control = runtime.kernel("gbn.cl", "gbn_control", defines, instance="resident")
     queue = runtime.queue()
