@@ -38,6 +38,7 @@
 #pragma OPENCL FP_CONTRACT OFF
 #include "cells.h"
 #include "in_order.h"
+#include "torus.h"
 
 #ifndef GBN_C13
 #error "gbn.cl needs the exponential's constants (clsamp.samplers.gbn.EXP_DEFINES)"
@@ -132,10 +133,10 @@ inline void gbn_range16(__global const double *pts, const uint total, const uint
             gbn_load4(pts, total, jq, v[q]);
             r2[q] = zero;
             for (int k = 0; k < D; ++k) {
-                double4 w = x[k] - v[q][k];
 #if PERIODIC
-                w = select(w, w - 1.0, w > 0.5);
-                w = select(w, w + 1.0, w < -0.5);
+                const double4 w = torus_wrapped4((double4)(x[k]), v[q][k]);
+#else
+                const double4 w = x[k] - v[q][k];
 #endif
                 v[q][k] = w;
                 r2[q] = k == 0 ? w * w : r2[q] + w * w;

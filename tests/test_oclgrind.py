@@ -191,12 +191,11 @@ def _gbn_lanes16():
             want = gbn.gbn_energy(y, wide, backend="numpy")
             _same_bits(got[0], want[0])
             _same_bits(got[1], want[1])
-        tau0 = gbn.STEP / kernel.mass
-        got = gbn_device.optimize_resident(x, gbn.Kernel(n=40, d=2, sigma=0.5, periodic=True),
-                                           gbn.pass_defines(2, True, False), tau0, 3, 0.0,
-                                           tau0 * 2.0 ** -gbn.HALVINGS)
-    want, _ = gbn.gbn_optimize(x, gbn.Kernel(n=40, d=2, sigma=0.5, periodic=True), iterations=3,
-                               tol=0.0, backend="numpy")
+        torus = gbn.Kernel(n=40, d=2, sigma=0.5, periodic=True)
+        tau0 = gbn.STEP / torus.mass
+        got = gbn_device.optimize_resident(x, torus, gbn.pass_defines(2, True, False), tau0, 3,
+                                           0.0, tau0 * 2.0 ** -gbn.HALVINGS)
+    want, _ = gbn.gbn_optimize(x, torus, iterations=3, tol=0.0, backend="numpy")
     _same_bits(got[0], want)
 
 
