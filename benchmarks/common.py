@@ -140,12 +140,21 @@ def profile(fn):
             "transfer": transfer, "host": max(0.0, wall - launch - kernel - transfer)}
 
 
+#: seconds :func:`timed` waits before its first call: after a NumPy call that goes to
+#: OpenBLAS (a quality check's spectrum, the last peer), OpenBLAS's worker threads spin
+#: for a while before they sleep, and a CPU OpenCL device's work items, timed then, would
+#: share a core with them (docs/performance.md, "Timings after a BLAS call")
+SETTLE = 0.25
+
+
 def timed(fn, repeats=5, warmup=1, min_time=0.0):
     """Median seconds of ``fn()`` over ``repeats`` calls after ``warmup`` calls; and its last result.
 
+    Both sides of a row start on a quiet machine: :data:`SETTLE` seconds of sleep come first.
     With ``--profile`` one more call is profiled (:func:`profile`) and the next :class:`Row`
     made carries the breakdown (calls that use no OpenCL, a peer's, leave none)."""
     result = None
+    time.sleep(SETTLE)
     for _ in range(warmup):
         result = fn()
     times = []
