@@ -14,6 +14,9 @@
  *     e = exp(-r2 inv2s2),  energy += e - gR,  force[k] += (x_i - x_j)[k] e,
  * gR = exp(-R2 inv2s2), so that the kernel cut at the cutoff stays continuous; row i of
  * out (total, D + 1) is (energy, force).
+ * Each sum is four partial sums, partner j's term going to partial sum j mod 4 (in the
+ * order above), and its value is (s0 + s1) + (s2 + s3): so 4 consecutive partners go to
+ * 4 vector lanes that add independently (gbn_range16).
  * ADAPTIVE (adaptive sampling): t (total) holds each sorted point's variance relative to
  * s^2; a pair's is tau = (t_i + t_j) / 2, it interacts while r2 < R2 tau, and adds
  *     q = r2 inv2s2 / tau,  e = exp(-q),  energy += e - gR,  force[k] += (x_i - x_j)[k] (e / tau),
@@ -25,8 +28,8 @@
  * [-1/2, 1/2]; 0: the unit cube), ADAPTIVE (1: per-point widths t, as above; 0: none),
  * RESIDENT (1: a flags argument before out, and the sets whose flags[3 set] is 0 skipped;
  * gbn_control below), LANES (16: the pass without widths takes 16 points at a time in
- * vector lanes, gbn_range16 below, with the same sums in the same order, for CPUs' vector
- * units; else 1, one at a time),
+ * vector lanes, gbn_range16 below, with the same partial sums in the same order, for CPUs'
+ * vector units; else 1, one at a time),
  * GBN_INV_LN2, GBN_LN2_HI, GBN_LN2_LO and GBN_C0 .. GBN_C13 (the exponential's constants,
  * from clsamp.samplers.gbn.EXP_DEFINES).
  * From 3-D on, a neighbouring cell whose box lies beyond skip2 (the squared reach the grid
@@ -50,6 +53,9 @@
     p = p * r + GBN_C8; p = p * r + GBN_C7; p = p * r + GBN_C6; p = p * r + GBN_C5; \
     p = p * r + GBN_C4; p = p * r + GBN_C3; p = p * r + GBN_C2; p = p * r + GBN_C1; \
     p = p * r + GBN_C0;
+
+/* a sum's value from its four partial sums (by partner index mod 4) */
+#define GBN_FOLD(a, b, c, d) (((a) + (b)) + ((c) + (d)))
 
 /* e^-t for 0 <= t < 700: t = k ln 2 - r with |r| <= ln 2 / 2, e^r by its Taylor
  * polynomial of degree 13 (truncation below 5e-18 relative), times 2^-k exactly */
@@ -103,6 +109,7 @@ inline void gbn_load4(__global const double *pts, const uint total, const uint j
         return;
     }
 #endif
+    _Pragma("unroll")
     for (int k = 0; k < D; ++k) {
         double c[4];
         for (uint l = 0; l < 4; ++l) {
@@ -114,24 +121,28 @@ inline void gbn_load4(__global const double *pts, const uint total, const uint j
 }
 
 /* the partners of sorted point i (at x) among sorted points lo .. hi - 1, in order, added
- * to sums (the energy, then the force's D coordinates): 16 points at a time, as four
- * vectors of 4 lanes (no wider: PoCL's built-ins and kernels disagree on how a 512-bit
- * vector is passed on some AVX-512 hosts, tests/test_runtime.py), their distances and
- * exponentials in lanes, then added one by one in order. A lane that is not a partner
- * adds +0.0, which leaves a sum unchanged: a sum starts at +0.0 and x + y is -0.0 only
- * where both are, so no sum is ever -0.0; 16 points without a partner add nothing. */
+ * to acc (the energy's, then the force's D coordinates' partial sums, lane l holding
+ * partial sum l): 16 points at a time from a multiple of 4, as four vectors of 4 lanes
+ * (no wider: PoCL's built-ins and kernels disagree on how a 512-bit vector is passed on
+ * some AVX-512 hosts, tests/test_runtime.py), so that lane l is always a point of index
+ * l mod 4 and the vectors add in order. The loops are unrolled (PoCL keeps them rolled,
+ * the vectors in memory). A lane that is not a partner adds +0.0, which leaves a partial
+ * sum unchanged: it starts at +0.0 and x + y is -0.0 only where both are, so none is
+ * ever -0.0; 16 points without a partner add nothing. */
 inline void gbn_range16(__global const double *pts, const uint total, const uint lo,
                         const uint hi, const uint i, const double *x, const double R2,
-                        const double inv2s2, const double gR, double *sums)
+                        const double inv2s2, const double gR, double4 *acc)
 {
     const double4 zero = (double4)(0.0);
-    for (uint j0 = lo; j0 < hi; j0 += 16) {
+    for (uint j0 = lo & ~3u; j0 < hi; j0 += 16) {
         double4 v[4][D], r2[4];
         long4 on[4];
+        _Pragma("unroll")
         for (int q = 0; q < 4; ++q) {
             const uint jq = j0 + 4 * (uint)q;
             gbn_load4(pts, total, jq, v[q]);
             r2[q] = zero;
+            _Pragma("unroll")
             for (int k = 0; k < D; ++k) {
 #if PERIODIC
                 const double4 w = torus_wrapped4((double4)(x[k]), v[q][k]);
@@ -142,31 +153,18 @@ inline void gbn_range16(__global const double *pts, const uint total, const uint
                 r2[q] = k == 0 ? w * w : r2[q] + w * w;
             }
             const long4 j = (long4)(long)jq + (long4)(0, 1, 2, 3);
-            on[q] = (j < (long)hi) & (j != (long)i) & (r2[q] < R2);
+            on[q] = (j >= (long)lo) & (j < (long)hi) & (j != (long)i) & (r2[q] < R2);
         }
         if (!any(on[0] | on[1] | on[2] | on[3]))
             continue;
-        double4 de[4];
+        _Pragma("unroll")
         for (int q = 0; q < 4; ++q) {
             const double4 e = gbn_exp_neg4(select(zero, r2[q] * inv2s2, on[q]));
-            de[q] = select(zero, e - gR, on[q]);
+            acc[0] = acc[0] + select(zero, e - gR, on[q]);
+            _Pragma("unroll")
             for (int k = 0; k < D; ++k)
-                v[q][k] = select(zero, v[q][k] * e, on[q]);
+                acc[1 + k] = acc[1 + k] + select(zero, v[q][k] * e, on[q]);
         }
-        double s = sums[0], f[D];
-        for (int k = 0; k < D; ++k)
-            f[k] = sums[1 + k];
-#define GBN_ADD(q, l) \
-        s = s + de[q].l; \
-        for (int k = 0; k < D; ++k) \
-            f[k] = f[k] + v[q][k].l;
-        for (int q = 0; q < 4; ++q) {
-            GBN_ADD(q, x) GBN_ADD(q, y) GBN_ADD(q, z) GBN_ADD(q, w)
-        }
-#undef GBN_ADD
-        sums[0] = s;
-        for (int k = 0; k < D; ++k)
-            sums[1 + k] = f[k];
     }
 }
 #endif
@@ -192,15 +190,12 @@ __kernel void gbn_pairs(__global const double *pts,
         return;
 #endif
     const uint total_cells = cells_count(G);
-    double x[D], f[D];
-    for (int k = 0; k < D; ++k) {
+    double x[D], f[D], e_sum;
+    for (int k = 0; k < D; ++k)
         x[k] = pts[(size_t)gi * D + k];
-        f[k] = 0.0;
-    }
-    double e_sum = 0.0;
 #if ADAPTIVE
     const double ti = t[gi];
-    double width = 0.0;
+    double width;
 #endif
     int c[D];
     cell_of(x, G, c);
@@ -208,10 +203,10 @@ __kernel void gbn_pairs(__global const double *pts,
     /* the stencil by rows along the last axis: the cells c[D - 1] - 1 .. c[D - 1] + 1 of a
      * row lie together in sorted order unless the row wraps, and are taken as one range,
      * or as the ranges that the wrap and the cells skipped (from 3-D on) leave; the same
-     * cells in the same order as one at a time */
-    double sums[D + 1];
+     * cells in the same order as one at a time; sums[k] lane l is partial sum l */
+    double4 sums[D + 1];
     for (int k = 0; k <= D; ++k)
-        sums[k] = 0.0;
+        sums[k] = (double4)(0.0);
     __global const uint *st = start + (size_t)r * total_cells;
     if (G == 1)
         gbn_range16(pts, total, st[0], st[1], gi, x, R2, inv2s2, gR, sums);
@@ -241,11 +236,23 @@ __kernel void gbn_pairs(__global const double *pts,
         if (hi > lo)
             gbn_range16(pts, total, lo, hi, gi, x, R2, inv2s2, gR, sums);
     }
-    e_sum = sums[0];
+    e_sum = GBN_FOLD(sums[0].x, sums[0].y, sums[0].z, sums[0].w);
     for (int k = 0; k < D; ++k)
-        f[k] = sums[1 + k];
+        f[k] = GBN_FOLD(sums[1 + k].x, sums[1 + k].y, sums[1 + k].z, sums[1 + k].w);
 #else
-    double w[D];
+    /* the partial sums, [j mod 4]: the energy's, the force's (D a partner) and the width's */
+    double w[D], pe[4], pf[4][D];
+#if ADAPTIVE
+    double pw[4];
+#endif
+    for (int m = 0; m < 4; ++m) {
+        pe[m] = 0.0;
+        for (int k = 0; k < D; ++k)
+            pf[m][k] = 0.0;
+#if ADAPTIVE
+        pw[m] = 0.0;
+#endif
+    }
     IN_ORDER
     for (uint o = 0; o < noff; ++o) {
 #if D >= 3
@@ -278,18 +285,25 @@ __kernel void gbn_pairs(__global const double *pts,
             const double q = r2 * inv2s2 / tau;
             const double e = gbn_exp_neg(q);
             const double ce = e / tau;
-            width = width + q * ce;
+            pw[j & 3u] = pw[j & 3u] + q * ce;
 #else
             if (r2 >= R2)
                 continue;
             const double e = gbn_exp_neg(r2 * inv2s2);
             const double ce = e;
 #endif
-            e_sum = e_sum + (e - gR);
+            const uint m = j & 3u;
+            pe[m] = pe[m] + (e - gR);
             for (int k = 0; k < D; ++k)
-                f[k] = f[k] + w[k] * ce;
+                pf[m][k] = pf[m][k] + w[k] * ce;
         }
     }
+    e_sum = GBN_FOLD(pe[0], pe[1], pe[2], pe[3]);
+    for (int k = 0; k < D; ++k)
+        f[k] = GBN_FOLD(pf[0][k], pf[1][k], pf[2][k], pf[3][k]);
+#if ADAPTIVE
+    width = GBN_FOLD(pw[0], pw[1], pw[2], pw[3]);
+#endif
 #endif
     __global double *row = out + (size_t)gi * (D + 1 + ADAPTIVE);
     row[0] = e_sum;

@@ -158,6 +158,11 @@ def pair_pass_reference(pts, cell, start, n, kernel, t=None):
     """NumPy twin of ``gbn_pairs``: per sorted point, its energy and force from the
     neighbours within the cutoff, summed in the kernel's order.
 
+    Each sum is kept as four partial sums: partner j (a sorted index) adds to partial sum
+    j mod 4, the partners taken in stencil order, then sorted order; the sum is
+    (s0 + s1) + (s2 + s3). The kernel so adds four consecutive partners in four vector
+    lanes.
+
     Parameters
     ----------
     pts : ndarray (total, d)
@@ -187,10 +192,9 @@ def pair_pass_reference(pts, cell, start, n, kernel, t=None):
     own = np.arange(total, dtype=np.int64)
     slot_base = (own // n) * G ** d
     start = start.astype(np.int64)
-    energy = np.zeros(total)
-    width = np.zeros(total)
-    force = [np.zeros(total) for _ in range(d)]
     adaptive = t is not None
+    sums = d + 1 + adaptive                  # energy, force, width
+    part = [np.zeros(4 * total) for _ in range(sums)]   # partial sum j mod 4 of i: (j mod 4) total + i
     R2, inv2s2, gR = (kernel.Rc2, kernel.inv2s2, kernel.gc) if adaptive else \
         (kernel.R2, kernel.inv2s2, kernel.gR)
     for o in range(kernel.stencil):
@@ -204,30 +208,31 @@ def pair_pass_reference(pts, cell, start, n, kernel, t=None):
             i, jj = live, j[live]
             w = [pts[i, a] - pts[jj, a] for a in range(d)]
             if kernel.periodic:
-                w = [np.where(v > 0.5, v - 1.0, v) for v in w]
-                w = [np.where(v < -0.5, v + 1.0, v) for v in w]
+                # the kernel's wrap, v - 1 above 1/2 and v + 1 below -1/2, to the bit
+                w = [v - np.rint(v) for v in w]
             r2 = w[0] * w[0]
             for a in range(1, d):
                 r2 = r2 + w[a] * w[a]
             if adaptive:
                 tau = (t[i] + t[jj]) * 0.5
                 near = r2 < R2 * tau
-                i, r2, tau = i[near], r2[near], tau[near]
+                r2, tau = r2[near], tau[near]
                 q = r2 * inv2s2 / tau
                 e = exp_neg(q)
                 c = e / tau
-                width[i] = width[i] + q * c
+                terms = [e - gR] + [w[a][near] * c for a in range(d)] + [q * c]
             else:
                 near = r2 < R2
-                i, r2 = i[near], r2[near]
-                e = exp_neg(r2 * inv2s2)
-                c = e
-            energy[i] = energy[i] + (e - gR)
-            for a in range(d):
-                force[a][i] = force[a][i] + w[a][near] * c
+                e = exp_neg(r2[near] * inv2s2)
+                terms = [e - gR] + [w[a][near] * e for a in range(d)]
+            at = (jj[near] & 3) * total + i[near]
+            for p, term in zip(part, terms, strict=True):
+                p[at] = p[at] + term
+    part = np.stack(part).reshape(sums, 4, total)
+    summed = (part[:, 0] + part[:, 1]) + (part[:, 2] + part[:, 3])
     if adaptive:
-        return energy, np.stack(force, axis=1), width
-    return energy, np.stack(force, axis=1)
+        return summed[0], summed[1:d + 1].T.copy(), summed[d + 1]
+    return summed[0], summed[1:d + 1].T.copy()
 
 
 def _loop_bound(kernel, start):
