@@ -22,6 +22,7 @@ _programs = {}          # (device index, file, options) -> pyopencl.Program
 
 
 _kernels = {}           # (program key, kernel name, instance) -> pyopencl.Kernel
+_kernel_types = {}      # the same keys -> the scalar types declared on that object
 
 
 _build_count = 0
@@ -307,7 +308,8 @@ def program(file, defines=None, options=(), appendix=None):
         return built
 
 
-def kernel(file, name, defines=None, options=(), instance=None, appendix=None):
+def kernel(file, name, defines=None, options=(), instance=None, appendix=None,
+           scalar_types=None):
     """A kernel object from :func:`program`, fetched once per program and thread.
 
     Callers in one thread share the object, so each launch sets all its arguments. Each
@@ -323,6 +325,11 @@ def kernel(file, name, defines=None, options=(), instance=None, appendix=None):
     instance : hashable, optional
         A key for an object of its own, kept with the program: for a loop that sets
         arguments once and launches many times.
+    scalar_types : sequence, optional
+        The kernel's arguments for pyopencl's fast argument setting
+        (``Kernel.set_scalar_arg_dtypes``): a NumPy type for each scalar, None for each
+        buffer; declared once on the object. pyopencl otherwise sets each scalar through
+        a slow generic path, which a launch loop pays on every launch.
 
     Returns
     -------
@@ -340,6 +347,10 @@ def kernel(file, name, defines=None, options=(), instance=None, appendix=None):
         if k is None:
             k = discovery._cl().Kernel(prog, name)
             _kernels[key] = k
+            _kernel_types.pop(key, None)
+        if scalar_types is not None and _kernel_types.get(key) != tuple(scalar_types):
+            k.set_scalar_arg_dtypes(list(scalar_types))
+            _kernel_types[key] = tuple(scalar_types)
         return k
 
 

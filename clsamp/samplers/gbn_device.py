@@ -13,6 +13,10 @@ import numpy as np
 from .. import runtime
 
 SETTLE = 8           # iterations between two looks at the sets' flags
+# gbn_control's arguments: ten buffers, then n, sets, G, mode, it, iterations, tol, tau_min,
+# propose (declared once, so that an iteration sets them in one fast call)
+CONTROL_TYPES = [None] * 10 + [np.uint32, np.uint32, np.int32, np.int32, np.uint32, np.uint32,
+                               np.float64, np.float64, np.int32]
 
 
 def resident(kernel, density):
@@ -70,7 +74,8 @@ def optimize_resident(x, kernel, defines, tau0, iterations, tol, tau_min):
     G, total = kernel.cells, sets * n
     defines = {**defines, "RESIDENT": 1}
     pairs = runtime.kernel("gbn.cl", "gbn_pairs", defines, instance="resident")
-    control = runtime.kernel("gbn.cl", "gbn_control", defines, instance="resident")
+    control = runtime.kernel("gbn.cl", "gbn_control", defines, instance="resident",
+                             scalar_types=CONTROL_TYPES)
     queue = runtime.queue()
     x = np.ascontiguousarray(x, dtype=np.float64)
     points, proposal = runtime.work_buffer(array=x), runtime.work_buffer(array=x)
@@ -87,11 +92,10 @@ def optimize_resident(x, kernel, defines, tau0, iterations, tol, tau_min):
                    np.uint32(kernel.stencil), np.float64(kernel.R2), np.float64(kernel.inv2s2),
                    np.float64(kernel.gR), np.float64(kernel.reach ** 2), flags, out)
     fixed = (points, force, proposal, out, ordered, start, order, real, flags, history,
-             np.uint32(n), np.uint32(sets), np.int32(G))
+             n, sets, G)
 
     def step(mode, it, propose):
-        control.set_args(*fixed, np.int32(mode), np.uint32(it), np.uint32(iterations),
-                         np.float64(tol), np.float64(tau_min), np.int32(propose))
+        control.set_args(*fixed, mode, it, iterations, tol, tau_min, propose)
         cl.enqueue_nd_range_kernel(queue, control, (sets,), (1,))
         if mode == 0 or propose:
             cl.enqueue_nd_range_kernel(queue, pairs, (-(-total // local) * local,), (local,))

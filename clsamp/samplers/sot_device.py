@@ -239,15 +239,11 @@ RESIDENT_TYPES = {"sot_quantiles": [None] * 6 + [_U, _U, _U, None],
                   "sot_project_displace": [None, None, _U, None, _U, _U, _U] + [None] * 4,
                   "sot_move": [None, None, _U, None, _U, _U, _U, _F, None, None],
                   "sot_cost": [None, _U, _U, _U, None]}
-_typed = {}             # id(kernel) -> kernel, for the kernels whose types are declared
 
 
 def _resident_kernel(name, d, lanes):
-    kernel = runtime.kernel("sot.cl", name, _defines(d, lanes), instance="resident")
-    if _typed.get(id(kernel)) is not kernel:
-        kernel.set_scalar_arg_dtypes(RESIDENT_TYPES[name])
-        _typed[id(kernel)] = kernel
-    return kernel
+    return runtime.kernel("sot.cl", name, _defines(d, lanes), instance="resident",
+                          scalar_types=RESIDENT_TYPES[name])
 
 
 class ResidentBatches:
