@@ -78,6 +78,86 @@ inline bool cell_beyond(const double *x, const int *c, uint o, const int G, cons
 }
 #endif
 
+#if CLSAMP_FP64
+/* The sorted ranges of the cells of stencil row o (neighbours 3 o .. 3 o + 2 as
+ * neighbour() numbers them: the cells c[D - 1] - 1 .. c[D - 1] + 1 along the last axis, the
+ * other axes fixed) of the set whose cell starts are st (G >= 3): consecutive cells lie
+ * together in sorted order, so the row is one range, or two where it wraps around the
+ * torus; from 3-D on a cell wholly beyond the reach from x (cell_beyond, reach2) is left
+ * out. Writes the non-empty ranges lo[k] .. hi[k] - 1 in stencil order and returns how
+ * many (0, 1 or 2): walking them finds the points that the cells one at a time hold, in
+ * the same order. */
+inline uint cells_row_ranges(__global const uint *st, const int *c, const double *x,
+                             const int G, const uint o, const double reach2, uint *lo,
+                             uint *hi)
+{
+    const uint base = neighbour(c, 3 * o + 1, G) - (uint)c[D - 1];
+    uint ranges = 0, a = 0, b = 0;
+    int last = -2;
+    for (int dl = -1; dl <= 1; ++dl) {
+#if D >= 3
+        if (cell_beyond(x, c, 3 * o + (uint)(dl + 1), G, reach2))
+            continue;
+#endif
+        int cell = c[D - 1] + dl;
+        cell = cell < 0 ? cell + G : cell >= G ? cell - G : cell;
+        if (cell == last + 1) {
+            b = st[base + (uint)cell + 1];
+        } else {
+            if (b > a) {
+                lo[ranges] = a;
+                hi[ranges] = b;
+                ranges += 1;
+            }
+            a = st[base + (uint)cell];
+            b = st[base + (uint)cell + 1];
+        }
+        last = cell;
+    }
+    if (b > a) {
+        lo[ranges] = a;
+        hi[ranges] = b;
+        ranges += 1;
+    }
+    return ranges;
+}
+
+/* coordinate k of the 4 sorted points from j into y[k] (double4 lanes): in 2-D the even
+ * and odd lanes of two loads, in 4-D the four loads transposed; else, and for the last
+ * points of pts (total of them), gathered one by one, the points past the end clamped to
+ * the last, so that no lane reads past the buffer */
+inline void cells_load4(__global const double *pts, const uint total, const uint j, double4 *y)
+{
+#if D == 2
+    if (j + 4 <= total) {
+        const double4 a = vload4(0, pts + 2 * (size_t)j), b = vload4(1, pts + 2 * (size_t)j);
+        y[0] = (double4)(a.even, b.even);
+        y[1] = (double4)(a.odd, b.odd);
+        return;
+    }
+#elif D == 4
+    if (j + 4 <= total) {
+        __global const double *p = pts + 4 * (size_t)j;
+        const double4 a = vload4(0, p), b = vload4(1, p), c = vload4(2, p), d = vload4(3, p);
+        y[0] = (double4)(a.x, b.x, c.x, d.x);
+        y[1] = (double4)(a.y, b.y, c.y, d.y);
+        y[2] = (double4)(a.z, b.z, c.z, d.z);
+        y[3] = (double4)(a.w, b.w, c.w, d.w);
+        return;
+    }
+#endif
+    _Pragma("unroll")
+    for (int k = 0; k < D; ++k) {
+        double c[4];
+        for (uint l = 0; l < 4; ++l) {
+            const size_t at = j + l < total ? j + l : total - 1;
+            c[l] = pts[at * D + k];
+        }
+        y[k] = vload4(0, c);
+    }
+}
+#endif
+
 inline void cell_coordinates(uint flat, const int G, int *c)
 {
     for (int k = D - 1; k >= 0; --k) {

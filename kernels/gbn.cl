@@ -85,41 +85,6 @@ inline double4 gbn_exp_neg4(const double4 t)
     return p * as_double4(convert_ulong4(1023 - k) << 52);
 }
 
-/* coordinate k of the 4 sorted points from j into y[k]: in 2-D the even and odd lanes of
- * two loads, in 4-D the four loads transposed; else, and for the last points of pts
- * (total of them), gathered one by one, the points past the end clamped to the last, so
- * that no lane reads past the buffer */
-inline void gbn_load4(__global const double *pts, const uint total, const uint j, double4 *y)
-{
-#if D == 2
-    if (j + 4 <= total) {
-        const double4 a = vload4(0, pts + 2 * (size_t)j), b = vload4(1, pts + 2 * (size_t)j);
-        y[0] = (double4)(a.even, b.even);
-        y[1] = (double4)(a.odd, b.odd);
-        return;
-    }
-#elif D == 4
-    if (j + 4 <= total) {
-        __global const double *p = pts + 4 * (size_t)j;
-        const double4 a = vload4(0, p), b = vload4(1, p), c = vload4(2, p), d = vload4(3, p);
-        y[0] = (double4)(a.x, b.x, c.x, d.x);
-        y[1] = (double4)(a.y, b.y, c.y, d.y);
-        y[2] = (double4)(a.z, b.z, c.z, d.z);
-        y[3] = (double4)(a.w, b.w, c.w, d.w);
-        return;
-    }
-#endif
-    _Pragma("unroll")
-    for (int k = 0; k < D; ++k) {
-        double c[4];
-        for (uint l = 0; l < 4; ++l) {
-            const size_t at = j + l < total ? j + l : total - 1;
-            c[l] = pts[at * D + k];
-        }
-        y[k] = vload4(0, c);
-    }
-}
-
 /* the partners of sorted point i (at x) among sorted points lo .. hi - 1, in order, added
  * to acc (the energy's, then the force's D coordinates' partial sums, lane l holding
  * partial sum l): 16 points at a time from a multiple of 4, as four vectors of 4 lanes
@@ -140,7 +105,7 @@ inline void gbn_range16(__global const double *pts, const uint total, const uint
         _Pragma("unroll")
         for (int q = 0; q < 4; ++q) {
             const uint jq = j0 + 4 * (uint)q;
-            gbn_load4(pts, total, jq, v[q]);
+            cells_load4(pts, total, jq, v[q]);
             r2[q] = zero;
             _Pragma("unroll")
             for (int k = 0; k < D; ++k) {
@@ -200,10 +165,8 @@ __kernel void gbn_pairs(__global const double *pts,
     int c[D];
     cell_of(x, G, c);
 #if LANES == 16
-    /* the stencil by rows along the last axis: the cells c[D - 1] - 1 .. c[D - 1] + 1 of a
-     * row lie together in sorted order unless the row wraps, and are taken as one range,
-     * or as the ranges that the wrap and the cells skipped (from 3-D on) leave; the same
-     * cells in the same order as one at a time; sums[k] lane l is partial sum l */
+    /* the stencil by rows along the last axis (cells_row_ranges): the same cells in the
+     * same order as one at a time; sums[k] lane l is partial sum l */
     double4 sums[D + 1];
     for (int k = 0; k <= D; ++k)
         sums[k] = (double4)(0.0);
@@ -212,29 +175,10 @@ __kernel void gbn_pairs(__global const double *pts,
         gbn_range16(pts, total, st[0], st[1], gi, x, R2, inv2s2, gR, sums);
     const uint rows = G > 1 ? noff / 3 : 0;
     for (uint o = 0; o < rows; ++o) {
-        const uint base = neighbour(c, 3 * o + 1, G) - (uint)c[D - 1];
-        uint lo = 0, hi = 0;
-        int last = -2;
-        for (int dl = -1; dl <= 1; ++dl) {
-#if D >= 3
-            /* a neighbouring cell wholly beyond the reach holds no partner */
-            if (cell_beyond(x, c, 3 * o + (uint)(dl + 1), G, skip2))
-                continue;
-#endif
-            int b = c[D - 1] + dl;
-            b = b < 0 ? b + G : b >= G ? b - G : b;
-            if (b == last + 1) {
-                hi = st[base + (uint)b + 1];
-            } else {
-                if (hi > lo)
-                    gbn_range16(pts, total, lo, hi, gi, x, R2, inv2s2, gR, sums);
-                lo = st[base + (uint)b];
-                hi = st[base + (uint)b + 1];
-            }
-            last = b;
-        }
-        if (hi > lo)
-            gbn_range16(pts, total, lo, hi, gi, x, R2, inv2s2, gR, sums);
+        uint lo[2], hi[2];
+        const uint ranges = cells_row_ranges(st, c, x, G, o, skip2, lo, hi);
+        for (uint k = 0; k < ranges; ++k)
+            gbn_range16(pts, total, lo[k], hi[k], gi, x, R2, inv2s2, gR, sums);
     }
     e_sum = GBN_FOLD(sums[0].x, sums[0].y, sums[0].z, sums[0].w);
     for (int k = 0; k < D; ++k)

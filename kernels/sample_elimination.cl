@@ -17,7 +17,7 @@
  * which is symmetric to the bit (the wrapped differences of i - j and j - i have one
  * magnitude).
  *
- * se_count: count[i] = the neighbours of i.
+ * se_count: count[i] = the neighbours of i (with LANES 16 by se_range16 without lists).
  * se_pairs: writes the neighbours (their sorted indices) and their weights to
  *     nbr[offset[i] ..] and w[offset[i] ..], offset the exclusive prefix sum of the counts
  *     (host), and the sum of the weights in that order to weight[i]. With cap > 0 it
@@ -30,7 +30,9 @@
  *     weights in weight.
  *
  * Build options: D (dimensions), PERIODIC (1: the unit torus; 0: the unit cube), ALPHA
- * (the weight's exponent, a positive integer).
+ * (the weight's exponent, a positive integer), LANES (16: se_pairs takes the stencil's
+ * rows 16 points at a time in vector lanes, se_range16 below, the same lists and sums,
+ * for CPUs' vector units; else 1, one at a time).
  * Launch: se_count and se_pairs one work-item per sorted point, grid (total,);
  * se_eliminate one work-item per set, grid (sets,).
  */
@@ -38,6 +40,7 @@
 #pragma OPENCL FP_CONTRACT OFF
 #include "cells.h"
 #include "heap.h"
+#include "torus.h"
 
 inline double se_r2(const double *x, __global const double *y)
 {
@@ -53,17 +56,112 @@ inline double se_r2(const double *x, __global const double *y)
     return r2;
 }
 
-/* t^ALPHA by squaring, low bits of ALPHA first */
-inline double se_power(double t)
-{
-    double p = 1.0;
-    for (uint e = ALPHA; e != 0; e >>= 1) {
-        if (e & 1)
-            p = p * t;
-        t = t * t;
+/* t^ALPHA by squaring, low bits of ALPHA first, for T double or double4 */
+#define SE_POWER(name, T)                               \
+    inline T name(T t)                                  \
+    {                                                   \
+        T p = (T)(1.0);                                 \
+        for (uint e = ALPHA; e != 0; e >>= 1) {         \
+            if (e & 1)                                  \
+                p = p * t;                              \
+            t = t * t;                                  \
+        }                                               \
+        return p;                                       \
     }
-    return p;
+SE_POWER(se_power, double)
+
+#if LANES == 16
+SE_POWER(se_power4, double4)
+
+/* The neighbours of sorted point i (at x) among sorted points lo .. hi - 1, in order,
+ * counted in *found; with lists, each also written to slot *at while *at < end (then *at
+ * advances) and its weight added to *sum: 16 points at a time from a multiple of 4, the
+ * distances and weights as four vectors of 4 lanes (no wider: tests/test_runtime.py), the
+ * same operations as the scalar search, then the neighbours' lanes in order. */
+inline void se_range16(__global const double *pts, const uint total, const uint lo,
+                       const uint hi, const uint i, const double *x, const double R2,
+                       const int lists, const double d_min, const double d_max,
+                       __global uint *nbr, __global double *w, ulong *at, const ulong end,
+                       uint *found, double *sum)
+{
+    for (uint j0 = lo & ~3u; j0 < hi; j0 += 16) {
+        double4 r2[4];
+        long4 on[4];
+        _Pragma("unroll")
+        for (int q = 0; q < 4; ++q) {
+            const uint jq = j0 + 4 * (uint)q;
+            double4 v[D];
+            cells_load4(pts, total, jq, v);
+            _Pragma("unroll")
+            for (int k = 0; k < D; ++k) {
+#if PERIODIC
+                const double4 t = torus_wrapped4((double4)(x[k]), v[k]);
+#else
+                const double4 t = x[k] - v[k];
+#endif
+                r2[q] = k == 0 ? t * t : r2[q] + t * t;
+            }
+            const long4 j = (long4)(long)jq + (long4)(0, 1, 2, 3);
+            on[q] = (j >= (long)lo) & (j < (long)hi) & (j != (long)i) & (r2[q] < R2);
+        }
+        /* bit l set where lane l holds a neighbour (select reads a mask's sign bit, as a
+         * mask is defined) */
+        uint bits = 0;
+        _Pragma("unroll")
+        for (int q = 0; q < 4; ++q) {
+            const long4 lane = (long4)(0, 1, 2, 3) + (long4)(4 * q);
+            const long4 b = select((long4)(0), (long4)(1), on[q]) << lane;
+            bits |= (uint)((b.x | b.y) | (b.z | b.w));
+        }
+        if (!lists) {
+            *found += popcount(bits);
+            continue;
+        }
+        if (bits == 0)
+            continue;
+        double e[16];
+        _Pragma("unroll")
+        for (int q = 0; q < 4; ++q) {
+            const double4 dist = sqrt(r2[q]);
+            const double4 t = select((double4)(d_min), dist, dist > d_min);
+            vstore4(se_power4(1.0 - t / d_max), q, e);
+        }
+        /* the neighbours' lanes in order, the lowest set bit first */
+        while (bits != 0) {
+            const uint l = 31u - clz(bits & (0u - bits));
+            bits &= bits - 1u;
+            if (*at < end) {
+                nbr[*at] = j0 + l;
+                w[*at] = e[l];
+            }
+            *at += 1;
+            *found += 1;
+            *sum = *sum + e[l];
+        }
+    }
 }
+
+/* se_range16 over the stencil of sorted point gi (at x, in cell c) by rows along the last
+ * axis (cells_row_ranges): the same cells in the same order as one at a time */
+inline void se_search16(__global const double *pts, __global const uint *st, const uint total,
+                        const uint gi, const double *x, const int *c, const int G,
+                        const uint noff, const double R2, const int lists, const double d_min,
+                        const double d_max, __global uint *nbr, __global double *w,
+                        ulong *at, const ulong end, uint *found, double *sum)
+{
+    if (G == 1)
+        se_range16(pts, total, st[0], st[1], gi, x, R2, lists, d_min, d_max, nbr, w, at, end,
+                   found, sum);
+    const uint rows = G > 1 ? noff / 3 : 0;
+    for (uint o = 0; o < rows; ++o) {
+        uint lo[2], hi[2];
+        const uint ranges = cells_row_ranges(st, c, x, G, o, R2, lo, hi);
+        for (uint k = 0; k < ranges; ++k)
+            se_range16(pts, total, lo[k], hi[k], gi, x, R2, lists, d_min, d_max, nbr, w, at,
+                       end, found, sum);
+    }
+}
+#endif
 
 __kernel void se_count(__global const double *pts, __global const uint *start, const uint n,
                        const uint total, const int G, const uint noff, const double R2,
@@ -79,6 +177,12 @@ __kernel void se_count(__global const double *pts, __global const uint *start, c
     int c[D];
     cell_of(x, G, c);
     uint found = 0;
+#if LANES == 16
+    ulong at = 0;
+    double sum = 0.0;
+    se_search16(pts, start + (size_t)(gi / n) * total_cells, total, gi, x, c, G, noff, R2, 0,
+                0.0, 1.0, 0, 0, &at, 0, &found, &sum);
+#else
     for (uint o = 0; o < noff; ++o) {
 #if D >= 3
         if (G > 1 && cell_beyond(x, c, o, G, R2))
@@ -89,6 +193,7 @@ __kernel void se_count(__global const double *pts, __global const uint *start, c
         for (uint j = start[slot]; j < s1; ++j)
             found += (j != gi && se_r2(x, pts + (size_t)j * D) < R2) ? 1u : 0u;
     }
+#endif
     count[gi] = found;
 }
 
@@ -113,6 +218,10 @@ __kernel void se_pairs(__global const double *pts, __global const uint *start, c
     const ulong end = cap > 0 ? at + cap : offset[gi + 1];
     uint found = 0;
     double sum = 0.0;
+#if LANES == 16
+    se_search16(pts, start + (size_t)(gi / n) * total_cells, total, gi, x, c, G, noff, R2, 1,
+                d_min, d_max, nbr, w, &at, end, &found, &sum);
+#else
     for (uint o = 0; o < noff; ++o) {
 #if D >= 3
         if (G > 1 && cell_beyond(x, c, o, G, R2))
@@ -137,6 +246,7 @@ __kernel void se_pairs(__global const double *pts, __global const uint *start, c
             sum = sum + e;
         }
     }
+#endif
     weight[gi] = sum;
     if (cap > 0)
         count[gi] = found;

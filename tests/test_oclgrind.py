@@ -245,6 +245,41 @@ def _sample_elimination_heap():
         assert gone[s].tolist() == order.tolist()
 
 
+@check("sample-elimination-lanes16")
+def _sample_elimination_lanes16():
+    # the neighbour passes 16 points at a time, as CPU devices build them (the simulator's
+    # own shape takes one at a time): the counts and the lists at their offsets; the lists
+    # in 4 slots a candidate, which many overflow (the writes past a list's slots held
+    # back), then by offsets; the lists in slots and the heap; 2-D on the torus (rows that
+    # wrap) and in the cube, 3-D (cells skipped), 4-D on one cell
+    import dataclasses
+
+    from clsamp import runtime
+    from clsamp.geometry.cells import sorted_by_cell
+    from clsamp.samplers import sample_elimination as se
+    with runtime.forced_shape(dataclasses.replace(runtime.shape(), pair_lanes=16)):
+        for d, periodic, m in ((2, True, 150), (2, False, 150), (3, True, 120), (4, True, 60)):
+            weighting = se.Weighting.for_counts(m, m // 5, d, periodic=periodic)
+            cells = weighting.cells(m, d)
+            pts, _, start, _ = sorted_by_cell(np.random.default_rng(d).random((2, m, d)), cells)
+            want = se.neighbour_weights_reference(pts, start, m, cells, weighting)
+            for got in (se.neighbour_weights_device(pts, start, m, cells, weighting),
+                        se._pairs_on_device(pts, start, m, cells, weighting, True, cap=4)):
+                if len(got) > 4:        # (first, found, nbr, w, weight, defines)
+                    assert (got[1] > 4).any()
+                    got = (np.append(got[0], got[0][-1] + got[1][-1]).astype(np.int64),
+                           *(out.finish() for out in got[2:5]))
+                for a, b in zip(got, want, strict=True):
+                    _same_bits(a, b)
+            gone, _ = se.eliminate_device(pts, start, m, cells, weighting, m // 5)
+            offset, nbr, w, weight = want
+            for s in range(2):
+                a, b = offset[s * m], offset[(s + 1) * m]
+                order = se.eliminate(weight[s * m:(s + 1) * m], offset[s * m:(s + 1) * m + 1] - a,
+                                     nbr[a:b].astype(np.int64) - s * m, w[a:b], m // 5)[1]
+                assert gone[s].tolist() == order.tolist()
+
+
 @check("bnot-exact-cells")
 def _bnot_exact_cells():
     # bnot's cells="exact": the clipping kernel on a grid of 8 x 8 cells (one stencil ring,

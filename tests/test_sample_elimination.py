@@ -6,11 +6,14 @@ test; progressive prefixes are eliminated sets with a good radius; 3-D, 4-D and 
 run and spread. The contract matrix (test_sampler_contract.py) covers shapes, seeds,
 realizations, chunks and both backends' bits."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from test_gbn import low_frequency_power
 
 import clsamp
+from clsamp import runtime
 from clsamp.errors import InvalidArgumentError
 from clsamp.geometry.cells import sorted_by_cell
 from clsamp.geometry.torus import distance2
@@ -29,15 +32,31 @@ def _candidates(sets, m, d, seed=3):
     return clsamp.make_sampler("random", d=d, seed=seed).sample(m, realizations=sets)
 
 
+def _lanes(lanes):
+    """The device's launch shape with its neighbour passes taking ``lanes`` points at once
+    (16 on CPUs, in vector lanes; 1 on GPUs)."""
+    return runtime.forced_shape(dataclasses.replace(runtime.shape(), pair_lanes=lanes))
+
+
+@pytest.mark.parametrize("lanes", [1, 16])
 @pytest.mark.parametrize("d, periodic", [(1, True), (2, True), (2, False), (3, True), (4, False),
                                          (8, True)])
-def test_the_kernel_gives_the_twins_bits(d, periodic):
+def test_the_kernel_gives_the_twins_bits(d, periodic, lanes):
+    # both passes (the counts, then the lists at their offsets), one point at a time or 16
+    # in vector lanes: on 3^d cells whose rows wrap, cells skipped from 3-D on, and on one
+    # cell (4-D, 8-D); with points on a cell's edges and on top of each other
     m, n = 600, 120
     weighting = Weighting.for_counts(m, n, d, periodic=periodic)
     cells = weighting.cells(m, d)
-    pts, _, start, _ = sorted_by_cell(_candidates(3, m, d), cells)
+    cand = _candidates(3, m, d)
+    cand[0, 0] = 0.0
+    cand[0, 1, 0], cand[0, 1, -1] = 1.0 - 2.0**-53, 0.5
+    cand[0, 2, 0] = 1.0 / cells if cells > 1 else 0.25
+    cand[1, 5] = cand[1, 6]
+    pts, _, start, _ = sorted_by_cell(cand, cells)
     ref = neighbour_weights_reference(pts, start, m, cells, weighting)
-    dev = neighbour_weights_device(pts, start, m, cells, weighting)
+    with _lanes(lanes):
+        dev = neighbour_weights_device(pts, start, m, cells, weighting)
     for a, b in zip(ref, dev, strict=True):
         assert a.dtype == b.dtype and np.array_equal(a, b)
     assert ref[0][-1] > m        # pairs were found
@@ -107,7 +126,8 @@ def _grid_candidates(sets, side, d):
     (3, True, True, None),
     (2, True, False, 3),        # every list overflows its slots: the two-pass lists
     (3, False, False, 10**6)])  # slots for every candidate
-def test_the_elimination_kernel_removes_what_the_heap_removes(d, periodic, grid, slab,
+@pytest.mark.parametrize("lanes", [1, 16])
+def test_the_elimination_kernel_removes_what_the_heap_removes(d, periodic, grid, slab, lanes,
                                                               monkeypatch):
     from clsamp.samplers import sample_elimination
     if slab is not None:
@@ -119,7 +139,8 @@ def test_the_elimination_kernel_removes_what_the_heap_removes(d, periodic, grid,
     weighting = Weighting.for_counts(m, keep, d, periodic=periodic)
     cells = weighting.cells(m, d)
     pts, _, start, _ = sorted_by_cell(cand, cells)
-    gone, weight = eliminate_device(pts, start, m, cells, weighting, keep)
+    with _lanes(lanes):
+        gone, weight = eliminate_device(pts, start, m, cells, weighting, keep)
     offset, nbr, w, first = neighbour_weights_reference(pts, start, m, cells, weighting)
     assert gone.shape == (sets, m - keep) and weight.shape == (sets, m)
     for s in range(sets):

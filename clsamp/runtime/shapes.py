@@ -69,8 +69,9 @@ class Shape:
         Work-items a group of the direct spectrum's tile product (1 where the compiler
         would vectorize across work-items what the kernel already writes in vectors).
     pair_lanes : int
-        Points a work-item of Gaussian blue noise's pair pass takes at once, in vector
-        lanes: 16 on a CPU's vector units, 1 (one at a time) on a GPU.
+        Points a work-item of a neighbour pass (Gaussian blue noise's pair pass, sample
+        elimination's lists) takes at once, in vector lanes: 16 on a CPU's vector units,
+        1 (one at a time) on a GPU.
     chunk : int
         Points one launch of the convergence error sums holds.
     source : str

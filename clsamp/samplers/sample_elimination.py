@@ -213,7 +213,8 @@ def _pairs_on_device(pts, start, m, cells, weighting, host, cap=0):
     limit = runtime.loop_limit()
     if limit is not None and _loop_bound(d, cells, start) > limit:
         runtime.require_short_loops("sample elimination's neighbour search")
-    defines = {"D": d, "PERIODIC": int(weighting.periodic), "ALPHA": int(weighting.alpha)}
+    defines = {"D": d, "PERIODIC": int(weighting.periodic), "ALPHA": int(weighting.alpha),
+               "LANES": runtime.shape().pair_lanes}
     queue = runtime.queue()
     local = runtime.local_size(64)
     grid = (-(-total // local) * local,)
