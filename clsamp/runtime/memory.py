@@ -175,15 +175,23 @@ def work_buffer(nbytes=0, array=None):
                      hostbuf=np.ascontiguousarray(array))
 
 
+#: the factor by which :func:`wait`'s sleeps grow: past the first milliseconds each sleep
+#: is about this less one of the time slept before it, which bounds how late the wait
+#: notices the event
+WAIT_GROWTH = 1.25
+
+
 def wait(event=None):
     """Wait for ``event``, or for all the work enqueued on the current queue, so that Ctrl-C
     is taken while a long kernel runs.
 
     A blocking read waits inside OpenCL, where Python cannot take a signal until the kernel
     ends (seconds for a large CCVT launch); this polls the event's status with sleeps
-    growing from 0.1 ms to 10 ms, so a KeyboardInterrupt arrives within about 10 ms. The
-    polling costs about 0.1-0.5 ms a call: it is for launches that run long (CCVT's power
-    passes and solve chunks), not for every read.
+    growing by :data:`WAIT_GROWTH` from 0.1 ms to 10 ms, so a KeyboardInterrupt arrives
+    within about 10 ms, and past the first milliseconds the wait ends within about a quarter
+    of the time already waited after the event completes (sleeps that doubled could wait
+    as long again). It is for launches that run long (CCVT's and bnot's power passes,
+    CCVT's solve chunks, a gbn run kept on the device), not for every read.
 
     Parameters
     ----------
@@ -203,7 +211,7 @@ def wait(event=None):
     delay = 1e-4
     while event.command_execution_status > cl.command_execution_status.COMPLETE:
         time.sleep(delay)
-        delay = min(2 * delay, 0.01)
+        delay = min(WAIT_GROWTH * delay, 0.01)
     event.wait()                    # raises where the command failed (a negative status)
     return event
 
