@@ -52,6 +52,7 @@
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #pragma OPENCL FP_CONTRACT OFF
 
+#include "cells.h"
 #include "heap.h"
 #include "in_order.h"
 
@@ -379,14 +380,39 @@ __kernel void sot_project_displace(__global const double *x, __global const doub
     __global double *restrict ks = key + (size_t)row * n;
     __global uint *restrict cnt = count + (size_t)row * n;
     __global uint *restrict pm = perm + (size_t)row * n;
+    /* the projections 4 points at a time (sot_dot's operations in each lane), their
+     * smallest and largest kept per lane: a minimum does not depend on the order in which
+     * it is taken (but for the sign of a zero, which moves no key to another bucket) */
+    double t[D];
+    for (int k = 0; k < D; ++k)
+        t[k] = th[k];
+    double4 lo4 = (double4)(INFINITY), hi4 = (double4)(-INFINITY);
+    const uint n4 = n & ~3u;
+    for (uint i = 0; i < n4; i += 4) {
+        double4 y[D];
+        cells_load4(xs, n, i, y);
+        double4 v = t[0] * y[0];
+        _Pragma("unroll")
+        for (int k = 1; k < D; ++k)
+            v = v + t[k] * y[k];
+        vstore4(v, 0, p + i);
+        lo4 = select(lo4, v, v < lo4);
+        hi4 = select(hi4, v, v > hi4);
+    }
     double lo = INFINITY, hi = -INFINITY;
-    for (uint i = 0; i < n; ++i) {
+    for (uint i = n4; i < n; ++i) {
         const double v = sot_dot(th, xs + (size_t)i * D);
         p[i] = v;
         lo = v < lo ? v : lo;
         hi = v > hi ? v : hi;
-        cnt[i] = 0;
     }
+    const double *lo_l = (const double *)&lo4, *hi_l = (const double *)&hi4;
+    for (int l = 0; l < 4; ++l) {
+        lo = lo_l[l] < lo ? lo_l[l] : lo;
+        hi = hi_l[l] > hi ? hi_l[l] : hi;
+    }
+    for (uint i = 0; i < n; ++i)
+        cnt[i] = 0;
     double scale = (double)n / (hi - lo);
     scale = scale < INFINITY ? scale : 0.0;            /* a zero range (or its overflow) */
     const double last = (double)(n - 1);
