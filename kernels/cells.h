@@ -91,6 +91,17 @@ inline uint cells_row_ranges(__global const uint *st, const int *c, const double
                              const int G, const uint o, const double reach2, uint *lo,
                              uint *hi)
 {
+#if D == 2
+    /* in 2-D, a row that does not wrap is one range, found without neighbour() */
+    if (c[1] >= 1 && c[1] <= G - 2) {
+        int ry = c[0] + (int)o - 1;
+        ry = ry < 0 ? ry + G : ry >= G ? ry - G : ry;
+        const uint at = (uint)ry * (uint)G + (uint)c[1];
+        lo[0] = st[at - 1];
+        hi[0] = st[at + 2];
+        return hi[0] > lo[0] ? 1u : 0u;
+    }
+#endif
     const uint base = neighbour(c, 3 * o + 1, G) - (uint)c[D - 1];
     uint ranges = 0, a = 0, b = 0;
     int last = -2;
