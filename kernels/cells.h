@@ -79,18 +79,30 @@ inline bool cell_beyond(const double *x, const int *c, uint o, const int G, cons
 #endif
 
 #if CLSAMP_FP64
+/* The stencil of a cell as rows along the last axis: cells_rows(G, noff) of them for a
+ * stencil of noff cells (3^D, or 1 with G == 1). */
+inline uint cells_rows(const int G, const uint noff)
+{
+    return G > 1 ? noff / 3 : 1;
+}
+
 /* The sorted ranges of the cells of stencil row o (neighbours 3 o .. 3 o + 2 as
  * neighbour() numbers them: the cells c[D - 1] - 1 .. c[D - 1] + 1 along the last axis, the
  * other axes fixed) of the set whose cell starts are st (G >= 3): consecutive cells lie
  * together in sorted order, so the row is one range, or two where it wraps around the
  * torus; from 3-D on a cell wholly beyond the reach from x (cell_beyond, reach2) is left
- * out. Writes the non-empty ranges lo[k] .. hi[k] - 1 in stencil order and returns how
- * many (0, 1 or 2): walking them finds the points that the cells one at a time hold, in
- * the same order. */
+ * out. With G == 1 the one row is the one cell. Writes the non-empty ranges lo[k] ..
+ * hi[k] - 1 in stencil order and returns how many (0, 1 or 2): walking them finds the
+ * points that the cells one at a time hold, in the same order. */
 inline uint cells_row_ranges(__global const uint *st, const int *c, const double *x,
                              const int G, const uint o, const double reach2, uint *lo,
                              uint *hi)
 {
+    if (G == 1) {
+        lo[0] = st[0];
+        hi[0] = st[1];
+        return hi[0] > lo[0] ? 1u : 0u;
+    }
 #if D == 2
     /* in 2-D, a row that does not wrap is one range, found without neighbour() */
     if (c[1] >= 1 && c[1] <= G - 2) {

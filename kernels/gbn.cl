@@ -171,10 +171,7 @@ __kernel void gbn_pairs(__global const double *pts,
     for (int k = 0; k <= D; ++k)
         sums[k] = (double4)(0.0);
     __global const uint *st = start + (size_t)r * total_cells;
-    if (G == 1)
-        gbn_range16(pts, total, st[0], st[1], gi, x, R2, inv2s2, gR, sums);
-    const uint rows = G > 1 ? noff / 3 : 0;
-    for (uint o = 0; o < rows; ++o) {
+    for (uint o = 0; o < cells_rows(G, noff); ++o) {
         uint lo[2], hi[2];
         const uint ranges = cells_row_ranges(st, c, x, G, o, skip2, lo, hi);
         for (uint k = 0; k < ranges; ++k)

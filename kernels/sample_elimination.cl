@@ -149,11 +149,7 @@ inline void se_search16(__global const double *pts, __global const uint *st, con
                         const double d_max, __global uint *nbr, __global double *w,
                         ulong *at, const ulong end, uint *found, double *sum)
 {
-    if (G == 1)
-        se_range16(pts, total, st[0], st[1], gi, x, R2, lists, d_min, d_max, nbr, w, at, end,
-                   found, sum);
-    const uint rows = G > 1 ? noff / 3 : 0;
-    for (uint o = 0; o < rows; ++o) {
+    for (uint o = 0; o < cells_rows(G, noff); ++o) {
         uint lo[2], hi[2];
         const uint ranges = cells_row_ranges(st, c, x, G, o, R2, lo, hi);
         for (uint k = 0; k < ranges; ++k)
