@@ -28,8 +28,9 @@
  * [-1/2, 1/2]; 0: the unit cube), ADAPTIVE (1: per-point widths t, as above; 0: none),
  * RESIDENT (1: a flags argument before out, and the sets whose flags[3 set] is 0 skipped;
  * gbn_control below), LANES (16: the pass without widths takes 16 points at a time in
- * vector lanes, gbn_range16 below, with the same partial sums in the same order, for CPUs'
- * vector units; else 1, one at a time),
+ * vector lanes, gbn_range16 below, from 4-D on the exponential on 4 queued partners at a
+ * time, with the same partial sums in the same order, for CPUs' vector units; else 1, one
+ * at a time),
  * GBN_INV_LN2, GBN_LN2_HI, GBN_LN2_LO and GBN_C0 .. GBN_C13 (the exponential's constants,
  * from clsamp.samplers.gbn.EXP_DEFINES).
  * From 3-D on, a neighbouring cell whose box lies beyond skip2 (the squared reach the grid
@@ -85,18 +86,82 @@ inline double4 gbn_exp_neg4(const double4 t)
     return p * as_double4(convert_ulong4(1023 - k) << 52);
 }
 
+/* The partners of a point are summed into gbn_acc: part[0] holds the energy's four partial
+ * sums, part[1 + k] the force's along axis k, [m] partial sum m. Up to 3-D the terms are
+ * added in vector lanes as they come (gbn_range16 below, a lane that is not a partner
+ * adding +0.0). From 4-D on most candidates are not partners (a one-cell grid takes every
+ * pair), so the partners are queued first and the exponential runs on 4 partners at a
+ * time (GBN_QUEUED); their terms are then added in queue order, each to its partial sum. */
+#define GBN_QUEUED (D >= 4)
+
+typedef struct {
+#if GBN_QUEUED
+    double part[D + 1][4];
+    double r2[4];               /* the queue: up to 4 partners' squared distances, */
+    double w[D][4];             /* wrapped differences */
+    uint m[4];                  /* and partial sums (partner index mod 4), in order */
+    uint count;
+#else
+    double4 part[D + 1];
+#endif
+} gbn_acc;
+
+inline void gbn_acc_init(gbn_acc *acc)
+{
+    for (int k = 0; k <= D; ++k) {
+#if GBN_QUEUED
+        for (int m = 0; m < 4; ++m) {
+            acc->part[k][m] = 0.0;
+            acc->r2[m] = 0.0;
+        }
+#else
+        acc->part[k] = (double4)(0.0);
+#endif
+    }
+#if GBN_QUEUED
+    acc->count = 0;
+#endif
+}
+
+#if GBN_QUEUED
+/* the queued partners' terms added to their partial sums in queue order; the exponential
+ * runs in 4 lanes, those past count on earlier (finite) values, unused */
+inline void gbn_flush(gbn_acc *acc, const double inv2s2, const double gR)
+{
+    double e[4];
+    vstore4(gbn_exp_neg4(vload4(0, acc->r2) * inv2s2), 0, e);
+    for (uint s = 0; s < acc->count; ++s) {
+        const uint m = acc->m[s];
+        acc->part[0][m] = acc->part[0][m] + (e[s] - gR);
+        _Pragma("unroll")
+        for (int k = 0; k < D; ++k)
+            acc->part[1 + k][m] = acc->part[1 + k][m] + acc->w[k][s] * e[s];
+    }
+    acc->count = 0;
+}
+#endif
+
+/* the sum of quantity k (0 the energy, 1 + k the force along axis k) */
+inline double gbn_acc_sum(gbn_acc *acc, const int k)
+{
+#if GBN_QUEUED
+    return GBN_FOLD(acc->part[k][0], acc->part[k][1], acc->part[k][2], acc->part[k][3]);
+#else
+    return GBN_FOLD(acc->part[k].x, acc->part[k].y, acc->part[k].z, acc->part[k].w);
+#endif
+}
+
 /* the partners of sorted point i (at x) among sorted points lo .. hi - 1, in order, added
- * to acc (the energy's, then the force's D coordinates' partial sums, lane l holding
- * partial sum l): 16 points at a time from a multiple of 4, as four vectors of 4 lanes
- * (no wider: PoCL's built-ins and kernels disagree on how a 512-bit vector is passed on
- * some AVX-512 hosts, tests/test_runtime.py), so that lane l is always a point of index
- * l mod 4 and the vectors add in order. The loops are unrolled (PoCL keeps them rolled,
- * the vectors in memory). A lane that is not a partner adds +0.0, which leaves a partial
- * sum unchanged: it starts at +0.0 and x + y is -0.0 only where both are, so none is
- * ever -0.0; 16 points without a partner add nothing. */
+ * to acc: 16 points at a time from a multiple of 4, as four vectors of 4 lanes (no wider:
+ * PoCL's built-ins and kernels disagree on how a 512-bit vector is passed on some AVX-512
+ * hosts, tests/test_runtime.py), so that lane l is always a point of index l mod 4. The
+ * loops are unrolled (PoCL keeps them rolled, the vectors in memory). Without the queue a
+ * lane that is not a partner adds +0.0, which leaves a partial sum unchanged: it starts at
+ * +0.0 and x + y is -0.0 only where both are, so none is ever -0.0; 16 points without a
+ * partner add nothing. With it the partners' lanes are queued lowest first. */
 inline void gbn_range16(__global const double *pts, const uint total, const uint lo,
                         const uint hi, const uint i, const double *x, const double R2,
-                        const double inv2s2, const double gR, double4 *acc)
+                        const double inv2s2, const double gR, gbn_acc *acc)
 {
     const double4 zero = (double4)(0.0);
     for (uint j0 = lo & ~3u; j0 < hi; j0 += 16) {
@@ -120,16 +185,46 @@ inline void gbn_range16(__global const double *pts, const uint total, const uint
             const long4 j = (long4)(long)jq + (long4)(0, 1, 2, 3);
             on[q] = (j >= (long)lo) & (j < (long)hi) & (j != (long)i) & (r2[q] < R2);
         }
+#if GBN_QUEUED
+        /* bit l set where lane l holds a partner (select reads a mask's sign bit, as a
+         * mask is defined), the lanes kept in arrays to be queued by index */
+        uint bits = 0;
+        double r2l[16], wl[D][16];
+        _Pragma("unroll")
+        for (int q = 0; q < 4; ++q) {
+            const long4 lane = (long4)(0, 1, 2, 3) + (long4)(4 * q);
+            const long4 b = select((long4)(0), (long4)(1), on[q]) << lane;
+            bits |= (uint)((b.x | b.y) | (b.z | b.w));
+            vstore4(r2[q], q, r2l);
+            _Pragma("unroll")
+            for (int k = 0; k < D; ++k)
+                vstore4(v[q][k], q, wl[k]);
+        }
+        while (bits != 0) {
+            const uint l = 31u - clz(bits & (0u - bits));
+            bits &= bits - 1u;
+            const uint s = acc->count;
+            acc->r2[s] = r2l[l];
+            _Pragma("unroll")
+            for (int k = 0; k < D; ++k)
+                acc->w[k][s] = wl[k][l];
+            acc->m[s] = l & 3u;
+            acc->count = s + 1;
+            if (s == 3)
+                gbn_flush(acc, inv2s2, gR);
+        }
+#else
         if (!any(on[0] | on[1] | on[2] | on[3]))
             continue;
         _Pragma("unroll")
         for (int q = 0; q < 4; ++q) {
             const double4 e = gbn_exp_neg4(select(zero, r2[q] * inv2s2, on[q]));
-            acc[0] = acc[0] + select(zero, e - gR, on[q]);
+            acc->part[0] = acc->part[0] + select(zero, e - gR, on[q]);
             _Pragma("unroll")
             for (int k = 0; k < D; ++k)
-                acc[1 + k] = acc[1 + k] + select(zero, v[q][k] * e, on[q]);
+                acc->part[1 + k] = acc->part[1 + k] + select(zero, v[q][k] * e, on[q]);
         }
+#endif
     }
 }
 #endif
@@ -166,20 +261,23 @@ __kernel void gbn_pairs(__global const double *pts,
     cell_of(x, G, c);
 #if LANES == 16
     /* the stencil by rows along the last axis (cells_row_ranges): the same cells in the
-     * same order as one at a time; sums[k] lane l is partial sum l */
-    double4 sums[D + 1];
-    for (int k = 0; k <= D; ++k)
-        sums[k] = (double4)(0.0);
+     * same order as one at a time, into gbn_acc's partial sums */
+    gbn_acc acc;
+    gbn_acc_init(&acc);
     __global const uint *st = start + (size_t)r * total_cells;
     for (uint o = 0; o < cells_rows(G, noff); ++o) {
         uint lo[2], hi[2];
         const uint ranges = cells_row_ranges(st, c, x, G, o, skip2, lo, hi);
         for (uint k = 0; k < ranges; ++k)
-            gbn_range16(pts, total, lo[k], hi[k], gi, x, R2, inv2s2, gR, sums);
+            gbn_range16(pts, total, lo[k], hi[k], gi, x, R2, inv2s2, gR, &acc);
     }
-    e_sum = GBN_FOLD(sums[0].x, sums[0].y, sums[0].z, sums[0].w);
+#if GBN_QUEUED
+    if (acc.count)
+        gbn_flush(&acc, inv2s2, gR);
+#endif
+    e_sum = gbn_acc_sum(&acc, 0);
     for (int k = 0; k < D; ++k)
-        f[k] = GBN_FOLD(sums[1 + k].x, sums[1 + k].y, sums[1 + k].z, sums[1 + k].w);
+        f[k] = gbn_acc_sum(&acc, 1 + k);
 #else
     /* the partial sums, [j mod 4]: the energy's, the force's (D a partner) and the width's */
     double w[D], pe[4], pf[4][D];
