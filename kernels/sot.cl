@@ -14,14 +14,14 @@
  * (t in [0, total / 2], where no cancellation beyond the one Slice bounds occurs) and mirrored:
  * q_(n-1-i) = base + (total - t_i); an odd n's middle is base + total / 2. Where m <= 2 the
  * CDF is a trapezoid's (a1 = c_1 >= a2 = c_2, a2 = 0 where m = 1): t = sqrt(2 a1 a2 p) where
- * 2 a1 p <= a2, else a1 p + a2 / 2. Otherwise the solver is Newton's step kept inside a
- * bisection bracket (Numerical Recipes' rtsafe), stopped when Newton's step (taken) or the
- * step made is at most QTOL total, or after QMAX steps. The half's quantiles come in
- * chunks of CHUNK consecutive ones, solved in turn: a chunk's first from the bracket's
- * middle total / 4, the second from the first's root t1, the third from 2 t1 - t2, the
- * others from 3 t1 - 3 t2 + t3 (the last roots extrapolated), each start kept in
- * [t1, total / 2]. A work-item solves LANES consecutive chunks of one direction, one a
- * vector lane.
+ * 2 a1 p <= a2, else a1 p + a2 / 2, 4 quantiles at a time in vector lanes. Otherwise the
+ * solver is Newton's step kept inside a bisection bracket (Numerical Recipes' rtsafe),
+ * stopped when Newton's step (taken) or the step made is at most QTOL total, or after QMAX
+ * steps. The half's quantiles come in chunks of CHUNK consecutive ones, solved in turn: a
+ * chunk's first from the bracket's middle total / 4, the second from the first's root t1,
+ * the third from 2 t1 - t2, the others from 3 t1 - 3 t2 + t3 (the last roots extrapolated),
+ * each start kept in [t1, total / 2]. A work-item solves LANES consecutive chunks of one
+ * direction, one a vector lane.
  * Launch: directions * ceil(ceil(((n + 1) / 2) / CHUNK) / LANES) work-items.
  *
  * sot_project: proj[set, k, i] = sum_j theta[set, k, j] x[set, i, j], j in order.
@@ -45,7 +45,8 @@
  * sot_move: point i of a set moves by scale sum_k disp[set, k, i] theta_k (theta_k the row
  * first + set K + k, scale = step / K), clamped into [0, 1 - 2^-53]; cost[set, i] =
  * sum_k disp^2, the point's transport cost over the batch before the move.
- * Launch: one work-item per (set, i).
+ * Launch: one work-item per (set, i). sot_move4 (below) moves 4 points a work-item in
+ * vector lanes, for CPUs.
  *
  * Build options: D (dimensions), QTOL, QMAX, CHUNK, LANES (sot_quantiles; 1, 4, 8 or 16).
  */
@@ -91,26 +92,54 @@ typedef CAT(long, LANES) mask_v;
 #endif
 #endif
 
-__kernel void sot_quantiles(__global const double *c, __global const double *sign,
-                            __global const int *m_of, __global const double *norm_of,
-                            __global const double *total_of, __global const double *base_of,
-                            const uint first, const uint n, const uint dirs, __global double *q)
+/* quantile j < (n + 1) / 2 of a row from its root t, and its mirror image: q_j = base + t,
+ * q_(n-1-j) = base + (total - t); an odd n's middle base + total / 2 */
+static inline void sot_store_quantile(__global double *row, const uint n, const uint j,
+                                      const double base, const double total, const double t)
 {
-    const uint nh = (n + 1) / 2, chunks = (nh + CHUNK - 1) / CHUNK;
-    const uint groups = (chunks + LANES - 1) / LANES;
-    const uint gid = get_global_id(0);
-    if (gid >= dirs * groups)
-        return;
-    const uint r = gid / groups, g0 = (gid % groups) * LANES, k = first + r;
+    if (2 * j + 1 == n) {
+        row[j] = base + total * 0.5;
+    } else {
+        row[j] = base + t;
+        row[n - 1 - j] = base + (total - t);
+    }
+}
+
+/* the quantile groups of a direction's row: ceil(ceil(((n + 1) / 2) / CHUNK) / LANES) */
+static inline uint sot_quantile_groups(const uint n)
+{
+    const uint chunks = ((n + 1) / 2 + CHUNK - 1) / CHUNK;
+    return (chunks + LANES - 1) / LANES;
+}
+
+/* the quantiles of chunks g0 .. g0 + LANES - 1 of slice k, into its row */
+static inline void sot_quantile_lanes(__global const double *c, __global const double *sign,
+                                      __global const int *m_of, __global const double *norm_of,
+                                      __global const double *total_of,
+                                      __global const double *base_of, const uint k,
+                                      const uint n, const uint g0, __global double *row)
+{
+    const uint nh = (n + 1) / 2;
     const double total = total_of[k], base = base_of[k], norm = norm_of[k];
-    __global double *row = q + (size_t)r * n;
     const int m = m_of[k];
     const uint nv = 1u << m;
     __global const double *ck = c + (size_t)k * VERTS;
     __global const double *sk = sign + (size_t)k * VERTS;
     const double tol = QTOL * total, mid = total * 0.5;
-    const double a1 = ck[1], a2 = m == 2 ? ck[2] : 0.0;
-    const mask_v solved = m > 2 ? (mask_v)(-1L) : (mask_v)(0L);      /* else closed form */
+    if (m <= 2) {
+        /* the trapezoid's closed form, 4 quantiles at a time */
+        const double a1 = ck[1], a2 = m == 2 ? ck[2] : 0.0;
+        const uint j1 = min((g0 + LANES) * CHUNK, nh);
+        for (uint j = g0 * CHUNK; j < j1; j += 4) {
+            const double4 i = convert_double4((uint4)(j) + (uint4)(0, 1, 2, 3));
+            const double4 p = (i + 0.5) / (double)n;
+            double t[4];
+            vstore4(select(a1 * p + 0.5 * a2, sqrt(2.0 * a1 * a2 * p), 2.0 * a1 * p <= a2), 0, t);
+            for (uint l = 0; l < 4 && j + l < j1; ++l)
+                sot_store_quantile(row, n, j + l, base, total, t[l]);
+        }
+        return;
+    }
     real_v t1 = 0.0, t2 = 0.0, t3 = 0.0;           /* the lane's last three roots */
     for (uint cc = 0; cc < CHUNK; ++cc) {
         const real_v i = ((double)g0 + LANE_INDEX) * (double)CHUNK + (double)cc;
@@ -123,7 +152,7 @@ __kernel void sot_quantiles(__global const double *c, __global const double *sig
         t = SEL(t, t1, MASK(t < t1));
         t = SEL(t, hi, MASK(t > hi));
         /* the lanes past the half and an odd n's middle solve nothing */
-        mask_v live = MASK(i < (double)nh) & MASK(2.0 * i + 1.0 != (double)n) & solved;
+        mask_v live = MASK(i < (double)nh) & MASK(2.0 * i + 1.0 != (double)n);
         for (int it = 0; it < QMAX && ANY(live); ++it) {
             real_v F = 0.0, dF = 0.0;
             IN_ORDER
@@ -158,22 +187,26 @@ __kernel void sot_quantiles(__global const double *c, __global const double *sig
             const uint j = (g0 + l) * CHUNK + cc;
             if (j >= nh)
                 break;
-            double tj = tl[l];
-            if (m <= 2) {
-                const double pj = ((double)j + 0.5) / (double)n;
-                tj = 2.0 * a1 * pj <= a2 ? sqrt(2.0 * a1 * a2 * pj) : a1 * pj + 0.5 * a2;
-            }
-            if (2 * j + 1 == n) {
-                row[j] = base + mid;
-            } else {
-                row[j] = base + tj;
-                row[n - 1 - j] = base + (total - tj);
-            }
+            sot_store_quantile(row, n, j, base, total, tl[l]);
         }
         t3 = t2;
         t2 = t1;
         t1 = t;
     }
+}
+
+__kernel void sot_quantiles(__global const double *c, __global const double *sign,
+                            __global const int *m_of, __global const double *norm_of,
+                            __global const double *total_of, __global const double *base_of,
+                            const uint first, const uint n, const uint dirs, __global double *q)
+{
+    const uint groups = sot_quantile_groups(n);
+    const uint gid = get_global_id(0);
+    if (gid >= dirs * groups)
+        return;
+    const uint r = gid / groups;
+    sot_quantile_lanes(c, sign, m_of, norm_of, total_of, base_of, first + r, n,
+                       (gid % groups) * LANES, q + (size_t)r * n);
 }
 
 /* <theta, x> summed over the coordinates in order: the projection both ways of sorting use */
@@ -198,14 +231,12 @@ __kernel void sot_project(__global const double *x, __global const double *theta
     proj[gid] = sot_dot(th, xi);
 }
 
-__kernel void sot_move(__global const double *x, __global const double *theta, const uint first,
-                       __global const double *disp, const uint n, const uint K, const uint sets,
-                       const double scale, __global double *out, __global double *cost)
+/* point i of set s moved (sot_move's operations) */
+static inline void sot_move_point(__global const double *x, __global const double *theta,
+                                  const uint first, __global const double *disp, const uint n,
+                                  const uint K, const uint s, const uint i, const double scale,
+                                  __global double *out, __global double *cost)
 {
-    const uint gid = get_global_id(0);
-    if (gid >= sets * n)
-        return;
-    const uint s = gid / n, i = gid % n;
     double shift[D];
     for (int j = 0; j < D; ++j)
         shift[j] = 0.0;
@@ -219,28 +250,90 @@ __kernel void sot_move(__global const double *x, __global const double *theta, c
             shift[j] = shift[j] + dk * theta[(first + sk) * D + j];
     }
     const double top = 1.0 - 0x1.0p-53;
+    const size_t at = (size_t)s * n + i;
     for (int j = 0; j < D; ++j) {
-        double v = x[(size_t)gid * D + j] + shift[j] * scale;
+        double v = x[at * D + j] + shift[j] * scale;
         v = v < 0.0 ? 0.0 : v;
-        out[(size_t)gid * D + j] = v > top ? top : v;
+        out[at * D + j] = v > top ? top : v;
     }
-    cost[gid] = c;
+    cost[at] = c;
 }
 
-/* sot_cost: sums[slot, set] = the set's point costs summed in index order (from 0.0).
- * Launch: one work-item a set. */
-__kernel void sot_cost(__global const double *cost, const uint n, const uint sets,
-                       const uint slot, __global double *sums)
+__kernel void sot_move(__global const double *x, __global const double *theta, const uint first,
+                       __global const double *disp, const uint n, const uint K, const uint sets,
+                       const double scale, __global double *out, __global double *cost)
 {
-    const uint s = get_global_id(0);
-    if (s >= sets)
+    const uint gid = get_global_id(0);
+    if (gid >= sets * n)
         return;
-    __global const double *c = cost + (size_t)s * n;
+    sot_move_point(x, theta, first, disp, n, K, gid / n, gid % n, scale, out, cost);
+}
+
+/* sot_move4: sot_move for points 4 g .. 4 g + 3 of a set a work-item, the same operations
+ * in the lanes of double4 vectors; a set's last n mod 4 points one at a time. The costs go
+ * to slot `slot` of costs (slot, set, i), so that a resident run sums a few batches' at
+ * once (sot_cost).
+ * Launch: sets * ceil(n / 4) work-items. */
+__kernel void sot_move4(__global const double *x, __global const double *theta,
+                        const uint first, __global const double *disp, const uint n,
+                        const uint K, const uint sets, const double scale,
+                        __global double *out, __global double *costs, const uint slot)
+{
+    const uint groups = (n + 3) / 4, gid = get_global_id(0);
+    if (gid >= sets * groups)
+        return;
+    __global double *cost = costs + (size_t)slot * sets * n;
+    const uint s = gid / groups, i = (gid % groups) * 4;
+    if (i + 4 > n) {
+        for (uint p = i; p < n; ++p)
+            sot_move_point(x, theta, first, disp, n, K, s, p, scale, out, cost);
+        return;
+    }
+    double4 shift[D];
+    for (int j = 0; j < D; ++j)
+        shift[j] = (double4)(0.0);
+    double4 c = (double4)(0.0);
+    IN_ORDER
+    for (uint k = 0; k < K; ++k) {
+        const size_t sk = (size_t)s * K + k;
+        const double4 dk = vload4(0, disp + sk * n + i);
+        c = c + dk * dk;
+        _Pragma("unroll")
+        for (int j = 0; j < D; ++j)
+            shift[j] = shift[j] + dk * theta[(first + sk) * D + j];
+    }
+    const size_t at = (size_t)s * n + i;
+    double4 y[D];
+    cells_load4(x + (size_t)s * n * D, n, i, y);
+    const double4 zero = (double4)(0.0), top = (double4)(1.0 - 0x1.0p-53);
+    double v[D][4];
+    _Pragma("unroll")
+    for (int j = 0; j < D; ++j) {
+        double4 w = y[j] + shift[j] * scale;
+        w = select(w, zero, w < zero);
+        vstore4(select(w, top, w > top), 0, v[j]);
+    }
+    for (uint l = 0; l < 4; ++l)
+        for (int j = 0; j < D; ++j)
+            out[(at + l) * D + j] = v[j][l];
+    vstore4(c, 0, cost + at);
+}
+
+/* sot_cost: sums[g] = the point costs of row g (n of them from g n) summed in index order
+ * (from 0.0): a row is a set's costs after one batch.
+ * Launch: one work-item a row. */
+__kernel void sot_cost(__global const double *cost, const uint n, const uint rows,
+                       __global double *sums)
+{
+    const uint g = get_global_id(0);
+    if (g >= rows)
+        return;
+    __global const double *c = cost + (size_t)g * n;
     double t = 0.0;
     IN_ORDER
     for (uint i = 0; i < n; ++i)
         t = t + c[i];
-    sums[(size_t)slot * sets + s] = t;
+    sums[g] = t;
 }
 
 __kernel void sot_sort_init(__global const double *proj, const uint n, const uint P,
@@ -364,15 +457,12 @@ static void sot_heapsort(__global double *key, __global uint *idx, const uint le
  * in index order. The projected cube's density is at most a few times its mean, so a
  * bucket holds a few keys. Scratch: key (doubles), count and perm (uints), n a row.
  * Launch: sets * K work-items, the rows of directions theta[first..first + sets K). */
-__kernel void sot_project_displace(__global const double *x, __global const double *theta,
-                                   const uint first, __global const double *q, const uint n,
-                                   const uint K, const uint sets, __global double *disp,
-                                   __global double *key, __global uint *count,
-                                   __global uint *perm)
+static inline void sot_row_displace(__global const double *x, __global const double *theta,
+                                    const uint first, __global const double *q, const uint n,
+                                    const uint K, const uint row, __global double *disp,
+                                    __global double *key, __global uint *count,
+                                    __global uint *perm)
 {
-    const uint row = get_global_id(0);
-    if (row >= sets * K)
-        return;
     __global const double *restrict xs = x + (size_t)(row / K) * n * D;
     __global const double *restrict th = theta + ((size_t)first + row) * D;
     __global const double *restrict qr = q + (size_t)row * n;
@@ -420,11 +510,12 @@ __kernel void sot_project_displace(__global const double *x, __global const doub
         const double f = (p[i] - lo) * scale;
         cnt[(uint)(f < last ? f : last)] += 1;
     }
-    uint start = 0;
+    uint start = 0, longest = 0;
     for (uint b = 0; b < n; ++b) {
         const uint c = cnt[b];
         cnt[b] = start;
         start += c;
+        longest = c > longest ? c : longest;
     }
     for (uint i = 0; i < n; ++i) {                     /* cnt[b] ends as bucket b's end */
         const double f = (p[i] - lo) * scale;
@@ -436,7 +527,7 @@ __kernel void sot_project_displace(__global const double *x, __global const doub
      * past its bucket's start (every key of an earlier bucket is smaller), so the pass
      * costs the short buckets' inversions and leaves the sorted ones alone */
     start = 0;
-    for (uint b = 0; b < n; ++b) {
+    for (uint b = 0; longest > LONG_RUN && b < n; ++b) {
         const uint end = cnt[b];
         if (end - start > LONG_RUN)
             sot_heapsort(ks + start, pm + start, end - start);
@@ -458,4 +549,37 @@ __kernel void sot_project_displace(__global const double *x, __global const doub
     }
     for (uint j = 0; j < n; ++j)
         p[pm[j]] = qr[j] - ks[j];
+}
+
+__kernel void sot_project_displace(__global const double *x, __global const double *theta,
+                                   const uint first, __global const double *q, const uint n,
+                                   const uint K, const uint sets, __global double *disp,
+                                   __global double *key, __global uint *count,
+                                   __global uint *perm)
+{
+    const uint row = get_global_id(0);
+    if (row < sets * K)
+        sot_row_displace(x, theta, first, q, n, K, row, disp, key, count, perm);
+}
+
+/* sot_row: a resident run's row (set s, direction k) in one work-item: its quantiles
+ * (sot_quantiles' groups in turn, slice first + row) into q's row, then
+ * sot_project_displace's work.
+ * Launch: sets * K work-items. */
+__kernel void sot_row(__global const double *c, __global const double *sign,
+                      __global const int *m_of, __global const double *norm_of,
+                      __global const double *total_of, __global const double *base_of,
+                      __global const double *x, __global const double *theta,
+                      const uint first, __global double *q, const uint n, const uint K,
+                      const uint sets, __global double *disp, __global double *key,
+                      __global uint *count, __global uint *perm)
+{
+    const uint row = get_global_id(0);
+    if (row >= sets * K)
+        return;
+    const uint groups = sot_quantile_groups(n);
+    for (uint g = 0; g < groups; ++g)
+        sot_quantile_lanes(c, sign, m_of, norm_of, total_of, base_of, first + row, n,
+                           g * LANES, q + (size_t)row * n);
+    sot_row_displace(x, theta, first, q, n, K, row, disp, key, count, perm);
 }

@@ -592,23 +592,26 @@ def _sot_bitonic():
 def _sot_lanes_resident():
     # the quantiles in 8 lanes (a CPU's width; the simulator's own shape solves one a
     # work-item), and two batches as CPU devices run them: the points kept on the device,
-    # ranks by buckets (a cluster of ties in one of them: the heapsort)
+    # each row's quantiles and ranks by buckets in one work-item (a cluster of ties in one
+    # set: the heapsort), the moves 4 points a work-item (21 points: one alone); in 3-D
+    # and in 2-D (every quantile the closed form's)
     from clsamp.samplers import sot, sot_device
-    theta = sot.directions(4, np.arange(2), 0, 3, 3, count=2)
-    sl = sot.Slice.of(theta.transpose(1, 0, 2, 3).reshape(-1, 3))
-    _same_bits(sot_device.quantiles_device(sl, 21, lanes=8), sot.quantiles_reference(sl, 21))
-    x = clsamp.make_sampler("random", d=3, seed=4, backend="numpy").sample(21, realizations=2)
-    x[1, 3:] = 0.5
-    run = sot_device.ResidentBatches(x, 3, 1.0 / 3, 2)
-    run.block(theta.transpose(1, 0, 2, 3), sl)
-    want = []
-    for b in range(2):
-        run.batch(b)
-        x, cost = sot.batch_reference(x, theta[:, b], sl.take(np.arange(6 * b, 6 * b + 6)),
-                                      1.0 / 3)
-        want.append(sot.cost_sums(cost))
-    _same_bits(run.costs(), np.stack(want))
-    _same_bits(run.result(), x)
+    for d in (3, 2):
+        theta = sot.directions(4, np.arange(2), 0, 3, d, count=2)
+        sl = sot.Slice.of(theta.transpose(1, 0, 2, 3).reshape(-1, d))
+        _same_bits(sot_device.quantiles_device(sl, 21, lanes=8), sot.quantiles_reference(sl, 21))
+        x = clsamp.make_sampler("random", d=d, seed=4, backend="numpy").sample(21, realizations=2)
+        x[1, 3:] = 0.5
+        run = sot_device.ResidentBatches(x, 3, 1.0 / 3, 2)
+        run.block(theta.transpose(1, 0, 2, 3), sl)
+        want = []
+        for b in range(2):
+            run.batch(b)
+            x, cost = sot.batch_reference(x, theta[:, b], sl.take(np.arange(6 * b, 6 * b + 6)),
+                                          1.0 / 3)
+            want.append(sot.cost_sums(cost))
+        _same_bits(run.costs(), np.stack(want))
+        _same_bits(run.result(), x)
 
 
 @check("spectrum-direct-1d-3d")

@@ -32,30 +32,37 @@ def test_every_pass_gives_the_twins_bits(d, n):
     assert np.array_equal(sot_device.displacements_device(proj, q, d), disp)
     assert np.array_equal(sot_device.project_displacements_device(x, theta, q), disp)
     moved, cost = sot.move_reference(x, theta, disp, 1.0 / 6)
-    moved_d, cost_d = sot_device.move_device(x, theta, disp, 1.0 / 6)
-    assert np.array_equal(moved, moved_d) and np.array_equal(cost, cost_d)
+    for lanes in (1, 4):        # a point a work-item, or four in vector lanes (n % 4 points alone)
+        moved_d, cost_d = sot_device.move_device(x, theta, disp, 1.0 / 6, lanes=lanes)
+        assert np.array_equal(moved, moved_d) and np.array_equal(cost, cost_d)
     assert np.all(moved >= 0.0) and np.all(moved < 1.0)
 
 
 @pytest.mark.parametrize("d, projections", [(2, None), (4, "pairs"), (3, [(0, 2)])])
 def test_a_run_gives_the_same_bits_on_the_device_and_in_numpy(d, projections):
+    # 41 points: the moves 4 a work-item on CPUs and the last one alone; 12 batches: the
+    # costs read after 8 batches, then after 4
     kw = dict(d=d, seed=4, iterations=12, projections=projections)
-    pts, info = clsamp.make_sampler("sot", **kw).sample(40, realizations=2, return_info=True)
+    pts, info = clsamp.make_sampler("sot", **kw).sample(41, realizations=2, return_info=True)
     ref, info_r = clsamp.make_sampler("sot", backend="numpy", **kw).sample(
-        40, realizations=2, return_info=True)
+        41, realizations=2, return_info=True)
     assert np.array_equal(pts, ref)
     assert np.array_equal(info.cost_history, info_r.cost_history)
 
 
 @pytest.mark.parametrize("lanes", [1, 4, 8, 16])
 def test_each_lane_width_solves_the_twins_quantiles(lanes):
-    # odd and even n, fewer quantiles than lanes, directions with dropped components
+    # odd and even n, fewer quantiles than lanes, directions with dropped components; in
+    # 2-D every direction's quantiles are the closed form's (one component: an axis)
     theta = sot.directions(5, np.arange(2), 1, 5, 4).reshape(-1, 4)
     theta[0] = [1.0, 1e-9, 0.0, -1e-12]
-    for n in (1, 2, 7, 100, 257):
-        sl = sot.Slice.of(theta)
-        assert np.array_equal(sot_device.quantiles_device(sl, n, lanes=lanes),
-                              sot.quantiles_reference(sl, n))
+    plane = sot.directions(5, np.arange(2), 1, 5, 2).reshape(-1, 2)
+    plane[0], plane[1] = [0.0, -1.0], [math.sqrt(0.5), math.sqrt(0.5)]
+    for directions in (theta, plane):
+        sl = sot.Slice.of(directions)
+        for n in (1, 2, 7, 100, 257):
+            assert np.array_equal(sot_device.quantiles_device(sl, n, lanes=lanes),
+                                  sot.quantiles_reference(sl, n))
 
 
 @pytest.mark.parametrize("d", [2, 3, 5])

@@ -8,8 +8,9 @@ the points, each pass a launch over many work-items. On devices that share the h
 cores (``Shape.host_sort``) a run keeps its points on the device
 (:class:`ResidentBatches`): a batch is four launches -- the quantiles, the projections
 sorted and matched one row a work-item by a bucket sort (``sot_project_displace``), the
-move, the cost's sum -- and no wait; each block of batches' directions and slices goes up
-once, and the costs come back a few batches at a time.
+move (four points a work-item in vector lanes, ``sot_move4``), the cost's sum -- and no
+wait; each block of batches' directions and slices goes up once, and the costs come back
+a few batches at a time.
 """
 
 import math
@@ -185,7 +186,7 @@ def _local_sort(d, items, L2, key, index, P):
     return run
 
 
-def move_device(x, theta, disp, scale):
+def move_device(x, theta, disp, scale, lanes=1):
     """``sot_move``: :func:`~clsamp.samplers.sot.move_reference`'s (points, cost).
 
     Parameters
@@ -194,6 +195,9 @@ def move_device(x, theta, disp, scale):
     theta : ndarray (sets, K, d)
     disp : ndarray or pyopencl.array.Array (sets, K, n)
     scale : float
+    lanes : int
+        1: a point a work-item (``sot_move``); 4: four in vector lanes (``sot_move4``,
+        as a resident run on a CPU device moves them).
 
     Returns
     -------
@@ -203,9 +207,11 @@ def move_device(x, theta, disp, scale):
     sets, n, d = x.shape
     K = theta.shape[1]
     out, cost = _output((sets, n, d), np.float64, True), _output((sets, n), np.float64, True)
-    _launch("sot_move", d, sets * n, runtime.to_device(x).data, runtime.to_device(theta).data,
+    name, items = ("sot_move", sets * n) if lanes == 1 else ("sot_move4", sets * -(-n // 4))
+    slot = () if lanes == 1 else (np.uint32(0),)
+    _launch(name, d, items, runtime.to_device(x).data, runtime.to_device(theta).data,
             np.uint32(0), runtime.to_device(disp).data, np.uint32(n), np.uint32(K),
-            np.uint32(sets), np.float64(scale), out.buffer, cost.buffer)
+            np.uint32(sets), np.float64(scale), out.buffer, cost.buffer, *slot)
     return out.finish(), cost.finish()
 
 
@@ -235,10 +241,9 @@ def batch_device(x, theta, sl, scale):
 # the scalar types of the kernels ResidentBatches runs (declared once a kernel object, so
 # that a batch sets all of a kernel's arguments in one fast call)
 _U, _F = np.uint32, np.float64
-RESIDENT_TYPES = {"sot_quantiles": [None] * 6 + [_U, _U, _U, None],
-                  "sot_project_displace": [None, None, _U, None, _U, _U, _U] + [None] * 4,
-                  "sot_move": [None, None, _U, None, _U, _U, _U, _F, None, None],
-                  "sot_cost": [None, _U, _U, _U, None]}
+RESIDENT_TYPES = {"sot_row": [None] * 8 + [_U, None, _U, _U, _U] + [None] * 4,
+                  "sot_move4": [None, None, _U, None, _U, _U, _U, _F, None, None, _U],
+                  "sot_cost": [None, _U, _U, None]}
 
 
 def _resident_kernel(name, d, lanes):
@@ -264,11 +269,11 @@ class ResidentBatches:
     Notes
     -----
     :meth:`block` uploads a block of batches' directions and slices, batch-major, once.
-    :meth:`batch` launches ``sot_quantiles``, ``sot_project_displace`` and ``sot_move`` (into
-    the other of two point buffers) at its batch's rows, without waiting, and ``sot_cost``,
-    which sums each set's point costs into consecutive slots that :meth:`costs` reads at
-    once. (Solving a block's quantiles in one launch was slower: their rows fall out of
-    the cache before the moves read them.)
+    :meth:`batch` launches ``sot_quantiles``, ``sot_project_displace`` and ``sot_move4`` (into
+    the other of two point buffers) at its batch's rows, without waiting; the move writes
+    its point costs to the batch's slot. :meth:`costs` sums every slot's costs per set
+    (``sot_cost``, one launch) and reads them at once. (Solving a block's quantiles in one
+    launch was slower: their rows fall out of the cache before the moves read them.)
     """
 
     def __init__(self, x, K, scale, settle):
@@ -277,7 +282,7 @@ class ResidentBatches:
         self.points = [runtime.work_buffer(array=x), runtime.work_buffer(x.nbytes)]
         # targets, displacements and keys (doubles), counts and order (uints), a row each
         self.scratch = [runtime.work_buffer(self.rows * n * size) for size in (8, 8, 8, 4, 4)]
-        self.cost = runtime.work_buffer(8 * sets * n)
+        self.cost = runtime.work_buffer(8 * settle * sets * n)    # a slot a batch
         self.sums = runtime.work_buffer(8 * settle * sets)
         self.slot = 0
         self.lanes, self.local = runtime.shape().vector_width, runtime.local_size(64)
@@ -316,14 +321,11 @@ class ResidentBatches:
         n, rows, sets = self.n, self.rows, self.sets
         theta, *slices = self.block_buffers
         q, disp, key, count, perm = self.scratch
-        self._launch("sot_quantiles", _quantile_items(rows, n, self.lanes), self.local,
-                     *slices, b * rows, n, rows, q)
         x, out = self.points[self.parity], self.points[1 - self.parity]
-        self._launch("sot_project_displace", rows, 1, x, theta, b * rows, q, n, rows // sets,
-                     sets, disp, key, count, perm)
-        self._launch("sot_move", sets * n, self.local, x, theta, b * rows, disp, n, rows // sets,
-                     sets, self.scale, out, self.cost)
-        self._launch("sot_cost", sets, 1, self.cost, n, sets, self.slot, self.sums)
+        self._launch("sot_row", rows, 1, *slices, x, theta, b * rows, q, n, rows // sets, sets,
+                     disp, key, count, perm)
+        self._launch("sot_move4", sets * -(-n // 4), self.local, x, theta, b * rows, disp, n,
+                     rows // sets, sets, self.scale, out, self.cost, self.slot)
         self.parity, self.slot = 1 - self.parity, self.slot + 1
         runtime.queue().flush()
 
@@ -333,6 +335,8 @@ class ResidentBatches:
         import pyopencl as cl
         out = np.empty((self.slot, self.sets))
         if self.slot:
+            rows = self.slot * self.sets
+            self._launch("sot_cost", rows, 1, self.cost, self.n, rows, self.sums)
             cl.enqueue_copy(runtime.queue(), out, self.sums, is_blocking=True)
         self.slot = 0
         return out
