@@ -40,7 +40,8 @@
  *   from kmin to kmax, j from jtop (k == kmin) or k / 2 down to 1; sot_displace matches
  *   the sorted row to q. Launch: rows * n work-items.
  * - where the device's cores are the host's, sot_project_displace (below): one row a
- *   work-item, the projections with it, by buckets.
+ *   work-item, the projections with it, by buckets; sot_row (below) solves the row's
+ *   quantiles first, in the same work-item.
  *
  * sot_move: point i of a set moves by scale sum_k disp[set, k, i] theta_k (theta_k the row
  * first + set K + k, scale = step / K), clamped into [0, 1 - 2^-53]; cost[set, i] =

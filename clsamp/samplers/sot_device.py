@@ -6,11 +6,11 @@ On GPUs a batch (:func:`batch_device`) projects the points, sorts the projection
 bitonic network, matches them to their targets (:func:`displacements_device`) and moves
 the points, each pass a launch over many work-items. On devices that share the host's
 cores (``Shape.host_sort``) a run keeps its points on the device
-(:class:`ResidentBatches`): a batch is four launches -- the quantiles, the projections
-sorted and matched one row a work-item by a bucket sort (``sot_project_displace``), the
-move (four points a work-item in vector lanes, ``sot_move4``), the cost's sum -- and no
-wait; each block of batches' directions and slices goes up once, and the costs come back
-a few batches at a time.
+(:class:`ResidentBatches`): a batch is two launches and no wait -- one row a work-item,
+its quantiles, then its projections sorted by a bucket sort and matched (``sot_row``,
+the work of ``sot_quantiles`` and ``sot_project_displace``); the move, four points a
+work-item in vector lanes (``sot_move4``). Each block of batches' directions and slices
+goes up once, and the costs are summed and come back a few batches at a time.
 """
 
 import math
@@ -269,11 +269,11 @@ class ResidentBatches:
     Notes
     -----
     :meth:`block` uploads a block of batches' directions and slices, batch-major, once.
-    :meth:`batch` launches ``sot_quantiles``, ``sot_project_displace`` and ``sot_move4`` (into
-    the other of two point buffers) at its batch's rows, without waiting; the move writes
-    its point costs to the batch's slot. :meth:`costs` sums every slot's costs per set
-    (``sot_cost``, one launch) and reads them at once. (Solving a block's quantiles in one
-    launch was slower: their rows fall out of the cache before the moves read them.)
+    :meth:`batch` launches ``sot_row`` and ``sot_move4`` (into the other of two point
+    buffers) at its batch's rows, without waiting; the move writes its point costs to the
+    batch's slot. :meth:`costs` sums every slot's costs per set (``sot_cost``, one launch)
+    and reads them at once. (Solving a block's quantiles in one launch was slower: their
+    rows fall out of the cache before the moves read them.)
     """
 
     def __init__(self, x, K, scale, settle):
