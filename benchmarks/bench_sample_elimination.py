@@ -20,7 +20,7 @@ periodogram over the integer frequencies 0 < |w| < sqrt(n) / 2) beside Poisson d
 
 import numpy as np
 from bench_gbn import low_frequency_power
-from common import Row, main, on_device, short_name, timed
+from common import WARM, Row, main, on_device, short_name, timed
 
 import clsamp
 from clsamp.geometry.cells import sorted_by_cell
@@ -56,16 +56,17 @@ def run(devices, quick):
                 cand = clsamp.make_sampler("random", d=d, seed=1).sample(m, realizations=1)
                 pts, _, start, _ = sorted_by_cell(cand, cells)
                 t_cl, dev_w = timed(lambda: neighbour_weights_device(pts, start, m, cells, weighting),  # noqa: B023
-                                    repeats=3)
+                                    repeats=3, warm_time=WARM)
                 t_np, ref_w = timed(lambda: neighbour_weights_reference(pts, start, m, cells, weighting),  # noqa: B023
-                                    repeats=3, warmup=0)
+                                    repeats=3, warmup=0, warm_time=WARM)
                 same = all(np.array_equal(a, b) for a, b in zip(dev_w, ref_w, strict=True))
                 rows.append(Row("neighbours + weights", f"{m} candidates, {d}D", dev, t_cl,
                                 "numpy twin", t_np,
                                 f"{int(dev_w[0][-1])} pairs, {'bit-identical' if same else 'DIFFERS'}"))
-                t_cl, out = timed(lambda: sampler.sample(n), repeats=3)   # noqa: B023
+                t_cl, out = timed(lambda: sampler.sample(n), repeats=3, warm_time=WARM)   # noqa: B023
                 twin = clsamp.make_sampler("sample_elimination", d=d, seed=1, backend="numpy")
-                t_np, ref = timed(lambda: twin.sample(n), repeats=3, warmup=0)   # noqa: B023
+                t_np, ref = timed(lambda: twin.sample(n), repeats=3, warmup=0,   # noqa: B023
+                                  warm_time=WARM)
                 same = "bit-identical" if np.array_equal(ref, out) else "DIFFERS"
                 rows.append(Row("sample_elimination", f"{n}x{d}D", dev, t_cl, "numpy twin", t_np,
                                 f"{_quality(out, n, d, disk[n])}, {same}"))

@@ -146,16 +146,26 @@ def profile(fn):
 #: share a core with them (docs/performance.md, "Timings after a BLAS call")
 SETTLE = 0.25
 
+#: seconds of untimed calls (``warm_time``) before the timed ones of the rows that ask for
+#: them, both sides alike: after a pause, a 2-core VM runs the first tenth of a second or
+#: so of a CPU device's calls slower than the rest (docs/performance.md, "Warm calls
+#: before the timed ones")
+WARM = 0.2
 
-def timed(fn, repeats=5, warmup=1, min_time=0.0):
-    """Median seconds of ``fn()`` over ``repeats`` calls after ``warmup`` calls; and its last result.
+
+def timed(fn, repeats=5, warmup=1, min_time=0.0, warm_time=0.0):
+    """Median seconds of ``fn()`` over ``repeats`` calls after ``warmup`` calls, and more
+    untimed calls until ``warm_time`` seconds of them have passed; and its last result.
 
     Both sides of a row start on a quiet machine: :data:`SETTLE` seconds of sleep come first.
     With ``--profile`` one more call is profiled (:func:`profile`) and the next :class:`Row`
     made carries the breakdown (calls that use no OpenCL, a peer's, leave none)."""
     result = None
     time.sleep(SETTLE)
+    warm_start = time.perf_counter()
     for _ in range(warmup):
+        result = fn()
+    while time.perf_counter() - warm_start < warm_time:
         result = fn()
     times = []
     start_all = time.perf_counter()
@@ -175,7 +185,8 @@ def timed(fn, repeats=5, warmup=1, min_time=0.0):
 def to_quality(name, d, n, ladder, quality, device, unit="iterations", title=None, **params):
     """An iterating sampler timed where it first reaches a quality: climb ``ladder`` (its
     ``iterations``) until ``quality(points)`` gives (True, text), then time that setting
-    against its NumPy twin (which must give the same bits).
+    against its NumPy twin (which must give the same bits), each side after :data:`WARM`
+    seconds of untimed calls.
 
     Returns
     -------
@@ -189,9 +200,9 @@ def to_quality(name, d, n, ladder, quality, device, unit="iterations", title=Non
         met, text = quality(sampler.sample(n))
         if met:
             break
-    t_cl, pts = timed(lambda: sampler.sample(n), repeats=3)
+    t_cl, pts = timed(lambda: sampler.sample(n), repeats=3, warm_time=WARM)
     twin = clsamp.make_sampler(name, d=d, seed=1, iterations=iterations, backend="numpy", **params)
-    t_np, ref = timed(lambda: twin.sample(n), repeats=1, warmup=0)
+    t_np, ref = timed(lambda: twin.sample(n), repeats=1, warmup=0, warm_time=WARM)
     same = "bit-identical" if np.array_equal(ref, pts) else "DIFFERS"
     reached = "" if met else f"quality not reached in {iterations} {unit}: "
     return Row(title or f"{name} to quality", f"{n}x{d}D, {iterations} it", device, t_cl,
