@@ -148,8 +148,8 @@ SETTLE = 0.25
 
 #: seconds of untimed calls (``warm_time``) before the timed ones of the rows that ask for
 #: them, both sides alike: after a pause, a 2-core VM runs the first tenth of a second or
-#: so of a CPU device's calls slower than the rest (docs/performance.md, "Warm calls
-#: before the timed ones")
+#: so of a CPU device's calls slower than the rest
+#: (docs/performance.md, "Warm calls before the timed ones")
 WARM = 0.2
 
 
