@@ -108,18 +108,16 @@ typedef struct {
 
 inline void gbn_acc_init(gbn_acc *acc)
 {
-    for (int k = 0; k <= D; ++k) {
 #if GBN_QUEUED
-        for (int m = 0; m < 4; ++m) {
+    for (int k = 0; k <= D; ++k)
+        for (int m = 0; m < 4; ++m)
             acc->part[k][m] = 0.0;
-            acc->r2[m] = 0.0;
-        }
-#else
-        acc->part[k] = (double4)(0.0);
-#endif
-    }
-#if GBN_QUEUED
+    for (int m = 0; m < 4; ++m)
+        acc->r2[m] = 0.0;
     acc->count = 0;
+#else
+    for (int k = 0; k <= D; ++k)
+        acc->part[k] = (double4)(0.0);
 #endif
 }
 
@@ -140,6 +138,16 @@ inline void gbn_flush(gbn_acc *acc, const double inv2s2, const double gR)
     acc->count = 0;
 }
 #endif
+
+/* the partners still queued added (nothing to do without the queue): after the last
+ * range, before gbn_acc_sum */
+inline void gbn_acc_finish(gbn_acc *acc, const double inv2s2, const double gR)
+{
+#if GBN_QUEUED
+    if (acc->count)
+        gbn_flush(acc, inv2s2, gR);
+#endif
+}
 
 /* the sum of quantity k (0 the energy, 1 + k the force along axis k) */
 inline double gbn_acc_sum(gbn_acc *acc, const int k)
@@ -271,10 +279,7 @@ __kernel void gbn_pairs(__global const double *pts,
         for (uint k = 0; k < ranges; ++k)
             gbn_range16(pts, total, lo[k], hi[k], gi, x, R2, inv2s2, gR, &acc);
     }
-#if GBN_QUEUED
-    if (acc.count)
-        gbn_flush(&acc, inv2s2, gR);
-#endif
+    gbn_acc_finish(&acc, inv2s2, gR);
     e_sum = gbn_acc_sum(&acc, 0);
     for (int k = 0; k < D; ++k)
         f[k] = gbn_acc_sum(&acc, 1 + k);
