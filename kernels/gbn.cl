@@ -2,7 +2,7 @@
  * n-body sum over the neighbours within the kernel's cutoff found through a grid of cells
  * (kernels/cells.h). NumPy twin: pair_pass_reference in clsamp/samplers/gbn.py, the same
  * bits: exactly rounded double operations in the same order, no contraction, and the
- * exponential gbn_exp_neg below (range reduction and a Horner polynomial) instead of the
+ * exponential gbn_exp_neg below (range reduction, a table and a Horner polynomial) instead of the
  * device's exp, whose last bits differ between devices.
  *
  * The points of the sets being optimized come sorted by (set, cell) of a G^D grid in pts
@@ -31,8 +31,8 @@
  * vector lanes, gbn_range16 below, from 4-D on the exponential on 4 queued partners at a
  * time, with the same partial sums in the same order, for CPUs' vector units; else 1, one
  * at a time),
- * GBN_INV_LN2, GBN_LN2_HI, GBN_LN2_LO and GBN_C0 .. GBN_C13 (the exponential's constants,
- * from clsamp.samplers.gbn.EXP_DEFINES).
+ * GBN_EXP_BITS, GBN_EXP_INV, GBN_EXP_HI, GBN_EXP_LO, GBN_EXP_TABLE and GBN_C0 .. GBN_C6 (the
+ * exponential's constants, from clsamp.samplers.gbn.EXP_DEFINES).
  * From 3-D on, a neighbouring cell whose box lies beyond skip2 (the squared reach the grid
  * was made for) is skipped whole: it holds no partner within the cutoff, so the sums,
  * their order and the bits are those of the full stencil.
@@ -44,30 +44,36 @@
 #include "in_order.h"
 #include "torus.h"
 
-#ifndef GBN_C13
+#ifndef GBN_EXP_TABLE
 #error "gbn.cl needs the exponential's constants (clsamp.samplers.gbn.EXP_DEFINES)"
 #endif
 
-/* the Horner steps of e^r's polynomial below, for p and r of one type (double or double4) */
+/* 2^(-j / 2^GBN_EXP_BITS), j = 0 .. 2^GBN_EXP_BITS - 1, correctly rounded */
+__constant double gbn_exp2_table[1 << GBN_EXP_BITS] = {GBN_EXP_TABLE};
+#define GBN_EXP_MASK ((1 << GBN_EXP_BITS) - 1)
+
+/* the Horner steps of (e^r - 1) / r's polynomial below, for p and r of one type (double or
+ * double4) */
 #define GBN_HORNER(p, r) \
-    p = p * r + GBN_C12; p = p * r + GBN_C11; p = p * r + GBN_C10; p = p * r + GBN_C9; \
-    p = p * r + GBN_C8; p = p * r + GBN_C7; p = p * r + GBN_C6; p = p * r + GBN_C5; \
-    p = p * r + GBN_C4; p = p * r + GBN_C3; p = p * r + GBN_C2; p = p * r + GBN_C1; \
-    p = p * r + GBN_C0;
+    p = p * r + GBN_C5; p = p * r + GBN_C4; p = p * r + GBN_C3; p = p * r + GBN_C2; \
+    p = p * r + GBN_C1;
 
 /* a sum's value from its four partial sums (by partner index mod 4) */
 #define GBN_FOLD(a, b, c, d) (((a) + (b)) + ((c) + (d)))
 
-/* e^-t for 0 <= t < 700: t = k ln 2 - r with |r| <= ln 2 / 2, e^r by its Taylor
- * polynomial of degree 13 (truncation below 5e-18 relative), times 2^-k exactly */
+/* e^-t for 0 <= t < 700: t = k ln 2 / 32 - r with |r| <= ln 2 / 64 (GBN_EXP_BITS 5),
+ * e^-t = 2^-(k >> 5) T (1 + r P(r)), T = 2^(-(k mod 32) / 32) from the table and 1 + r P(r)
+ * e^r's Taylor polynomial of degree 6 (truncation below 4e-18 relative), summed as
+ * T + T (r P(r)) so that the small part's rounding barely shows; the power of two exactly */
 inline double gbn_exp_neg(const double t)
 {
-    const int k = (int)(t * GBN_INV_LN2 + 0.5);
+    const int k = (int)(t * GBN_EXP_INV + 0.5);
     const double kd = (double)k;
-    const double r = (kd * GBN_LN2_HI - t) + kd * GBN_LN2_LO;
-    double p = GBN_C13;
+    const double r = (kd * GBN_EXP_HI - t) + kd * GBN_EXP_LO;
+    double p = GBN_C6;
     GBN_HORNER(p, r)
-    return p * as_double((ulong)(1023 - k) << 52);
+    const double table = gbn_exp2_table[k & GBN_EXP_MASK];
+    return (table + table * (r * p)) * as_double((ulong)(1023 - (k >> GBN_EXP_BITS)) << 52);
 }
 
 #if LANES == 16
@@ -78,12 +84,15 @@ inline double gbn_exp_neg(const double t)
  * toward zero, as the cast does) */
 inline double4 gbn_exp_neg4(const double4 t)
 {
-    const int4 k = convert_int4(t * GBN_INV_LN2 + 0.5);
+    const int4 k = convert_int4(t * GBN_EXP_INV + 0.5);
     const double4 kd = convert_double4(k);
-    const double4 r = (kd * GBN_LN2_HI - t) + kd * GBN_LN2_LO;
-    double4 p = (double4)(GBN_C13);
+    const double4 r = (kd * GBN_EXP_HI - t) + kd * GBN_EXP_LO;
+    double4 p = (double4)(GBN_C6);
     GBN_HORNER(p, r)
-    return p * as_double4(convert_ulong4(1023 - k) << 52);
+    const int4 j = k & GBN_EXP_MASK;
+    const double4 table = (double4)(gbn_exp2_table[j.x], gbn_exp2_table[j.y],
+                                    gbn_exp2_table[j.z], gbn_exp2_table[j.w]);
+    return (table + table * (r * p)) * as_double4(convert_ulong4(1023 - (k >> GBN_EXP_BITS)) << 52);
 }
 
 /* The partners of a point are summed into gbn_acc: part[0] holds the energy's four partial
@@ -226,6 +235,10 @@ inline void gbn_range16(__global const double *pts, const uint total, const uint
             continue;
         _Pragma("unroll")
         for (int q = 0; q < 4; ++q) {
+            /* in 1-D and 2-D a vector without a partner is skipped (from 3-D on the
+             * branch cost what it saved) */
+            if (D <= 2 && !any(on[q]))
+                continue;
             const double4 e = gbn_exp_neg4(select(zero, r2[q] * inv2s2, on[q]));
             acc->part[0] = acc->part[0] + select(zero, e - gR, on[q]);
             _Pragma("unroll")

@@ -13,6 +13,7 @@ kernel does that code's work with the same bits.
 """
 
 import dataclasses
+import decimal
 import math
 
 import numpy as np
@@ -34,20 +35,38 @@ HALVINGS = 40        # a set whose step has been halved this often has converged
 MAX_D = 64
 RHO_FLOOR = 1e-3     # adaptive widths stop growing where the density is below this (mean 1)
 
-# e^-t by range reduction and the Taylor polynomial of degree 13 (kernels/gbn.cl): the
-# constants of fdlibm's exp (ln 2 split so that k ln2_hi is exact) and 1/k!.
-INV_LN2 = 1.44269504088896338700e+00
-LN2_HI = 6.93147180369123816490e-01
-LN2_LO = 1.90821492927058770002e-10
-EXP_COEFFICIENTS = tuple(1.0 / math.factorial(k) for k in range(14))
-EXP_DEFINES = {"GBN_INV_LN2": repr(INV_LN2), "GBN_LN2_HI": repr(LN2_HI), "GBN_LN2_LO": repr(LN2_LO),
+# e^-t by range reduction to |r| <= ln 2 / 64 and a table of 2^(-j/32) (kernels/gbn.cl):
+# t = k ln2/32 - r, e^-t = 2^-(k >> 5) T (1 + r P(r)), T = 2^(-(k & 31)/32), 1 + r P(r) the
+# Taylor polynomial of e^r of degree 6 (truncation below 4e-18 relative), summed as
+# T + T (r P(r)); ln 2 / 32 split as fdlibm's ln 2 (scaled by 2^-5, exactly), so that
+# k ln2_hi / 32 is exact for every k of t < 700.
+EXP_TABLE_BITS = 5
+EXP_INV = 1.44269504088896338700e+00 * (1 << EXP_TABLE_BITS)
+EXP_HI = 6.93147180369123816490e-01 / (1 << EXP_TABLE_BITS)
+EXP_LO = 1.90821492927058770002e-10 / (1 << EXP_TABLE_BITS)
+EXP_COEFFICIENTS = tuple(1.0 / math.factorial(k) for k in range(7))
+
+
+def _exp2_table(bits):
+    """2^(-j / 2^bits), j = 0 .. 2^bits - 1, each correctly rounded to a double."""
+    with decimal.localcontext() as ctx:
+        ctx.prec = 60
+        ln2 = decimal.Decimal(2).ln()
+        return tuple(float((-ln2 * j / (1 << bits)).exp()) for j in range(1 << bits))
+
+
+EXP_TABLE = _exp2_table(EXP_TABLE_BITS)
+EXP_DEFINES = {"GBN_EXP_BITS": EXP_TABLE_BITS, "GBN_EXP_INV": repr(EXP_INV),
+               "GBN_EXP_HI": repr(EXP_HI), "GBN_EXP_LO": repr(EXP_LO),
+               "GBN_EXP_TABLE": ",".join(float.hex(v) for v in EXP_TABLE),
                **{f"GBN_C{k}": repr(c) for k, c in enumerate(EXP_COEFFICIENTS)}}
 
 
 def exp_neg(t):
     """e^-t for 0 <= t < 700, with the operations of ``gbn_exp_neg`` in ``kernels/gbn.cl``
-    (so the kernel and the NumPy reference agree bit for bit; within 3e-16 relative of
-    ``np.exp(-t)``).
+    (so the kernel and the NumPy reference agree bit for bit; within one unit in the last
+    place of the exactly rounded value): t = k ln 2 / 32 - r with |r| <= ln 2 / 64, a table
+    of 2^(-j/32) and the Taylor polynomial of e^r of degree 6.
 
     Parameters
     ----------
@@ -66,13 +85,14 @@ def exp_neg(t):
     True
     """
     t = np.asarray(t, dtype=np.float64)
-    k = (t * INV_LN2 + 0.5).astype(np.int64)
+    k = (t * EXP_INV + 0.5).astype(np.int64)
     kd = k.astype(np.float64)
-    r = (kd * LN2_HI - t) + kd * LN2_LO
-    p = np.full_like(r, EXP_COEFFICIENTS[13])
-    for c in EXP_COEFFICIENTS[12::-1]:
+    r = (kd * EXP_HI - t) + kd * EXP_LO
+    p = np.full_like(r, EXP_COEFFICIENTS[-1])
+    for c in EXP_COEFFICIENTS[-2:0:-1]:
         p = p * r + c
-    return np.ldexp(p, -k)
+    table = np.array(EXP_TABLE)[k & ((1 << EXP_TABLE_BITS) - 1)]
+    return np.ldexp(table + table * (r * p), -(k >> EXP_TABLE_BITS))
 
 
 @dataclasses.dataclass(frozen=True)
