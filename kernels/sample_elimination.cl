@@ -2,8 +2,9 @@
  * O(M k) part of eliminating M candidates down to n. NumPy twin: neighbour_weights_reference
  * in clsamp/samplers/sample_elimination.py, the same bits: exactly rounded double
  * operations (the square root and the division included) in the same order, no
- * contraction, the power by squaring. The elimination itself, a heap walked one removal
- * at a time, is se_eliminate, one work-item a set; its twin is eliminate() there.
+ * contraction, the power by squaring. The elimination itself, a tournament tree walked
+ * one removal at a time, is se_eliminate, one work-item a set; its twin is eliminate()
+ * there (a heap, the same order of removals).
  *
  * The candidates of every set come sorted by (set, cell) of a G^D grid in pts (total, D)
  * (each point's cell found again here from its coordinates), and start (sets G^D + 1)
@@ -27,7 +28,8 @@
  *     among equal ones), subtracts its pair weights (count[i] of them from first[i] in nbr
  *     and w) from its neighbours' weights, and again, `removals` times; writes the
  *     removed candidates (indices within the set) in order to gone and leaves the final
- *     weights in weight.
+ *     weights in weight; key and idx are its scratch, L doubles and L uints a set, L the
+ *     least power of two >= max(m, 2) (sample_elimination._tree_leaves).
  *
  * Build options: D (dimensions), PERIODIC (1: the unit torus; 0: the unit cube), ALPHA
  * (the weight's exponent, a positive integer), LANES (16: se_pairs takes the stencil's
@@ -39,7 +41,6 @@
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #pragma OPENCL FP_CONTRACT OFF
 #include "cells.h"
-#include "heap.h"
 #include "torus.h"
 
 inline double se_r2(const double *x, __global const double *y)
@@ -248,21 +249,41 @@ __kernel void se_pairs(__global const double *pts, __global const uint *start, c
         count[gi] = found;
 }
 
-/* whether heap entry (ka, ia) comes before (kb, ib): the larger weight, then the lower index */
-inline bool se_before(double ka, uint ia, double kb, uint ib)
+/* The elimination keeps each set's candidates in a tournament tree: L (a power of two, at
+ * least m and 2) leaves, leaf i's key lk[i] the weight of candidate i while it remains and
+ * -inf once removed (the padding past m too); internal node v (1 .. L - 1, children 2v and
+ * 2v + 1, node L + i being leaf i) holds in win[v] the winner of its subtree, the leaf of
+ * the largest key and the lowest index among equal keys. Leaves are in index order, so of
+ * two subtrees' winners a < b (a from the left) a wins where lk[a] >= lk[b]; keys are never
+ * NaN. The root's winner is the next to go, as an eagerly updated heap gives it. */
+inline uint se_winner(__global const double *lk, const uint a, const uint b)
 {
-    return ka > kb || (ka == kb && ia < ib);
+    return lk[a] >= lk[b] ? a : b;
 }
 
-/* restores the heap below entry `at`, whose key may have fallen */
-HEAP_SIFT(se_sift, se_before)
+/* leaf j's key has fallen: the nodes above it that it won, from the bottom up, decided
+ * again (a node that j did not win keeps its winner, and so does every node above it) */
+inline void se_replay(__global const double *lk, __global uint *win, const uint L, const uint j)
+{
+    uint v = (j + L) >> 1;
+    if (win[v] != j)
+        return;
+    const uint a = v * 2 - L;
+    win[v] = se_winner(lk, a, a + 1);
+    for (v >>= 1; v != 0 && win[v] == j; v >>= 1)
+        win[v] = se_winner(lk, win[2 * v], win[2 * v + 1]);
+}
+
+/* Up to 3-D a removal's neighbours are replayed at once (SE_EAGER); from 4-D on they are
+ * many, so only their weights fall and a leaf's key is refreshed when it wins the root with
+ * a key above its weight (weights only fall, so every key stays at least its weight, and a
+ * root whose key is its weight is the heaviest candidate). */
+#define SE_EAGER (D <= 3)
 
 /* The elimination of set s (its m sorted candidates from s m on; nbr holds sorted indices
- * over all sets). The heap (key, idx: m entries a set, scratch) keeps one entry per
- * remaining candidate whose key is at least its weight, refreshed when it surfaces
- * (weights only fall): an entry that surfaces with its exact weight is the next to go, as
- * an eagerly updated heap gives it. Each entry is unique, so the order of removals does
- * not depend on how the heap is laid out: eliminate() in Python's heapq gives the same. */
+ * over all sets; lk (L doubles) and win (L uints) a set, scratch, from s L on). The removed
+ * candidate's pair weights leave all its neighbours' weights (the removed ones' too). The
+ * order of removals is that of eliminate() in Python's heapq, whose entries are unique. */
 __kernel void se_eliminate(__global const ulong *first, __global const uint *count,
                            __global const uint *nbr,
                            __global const double *w, __global double *weight, const uint m,
@@ -272,35 +293,45 @@ __kernel void se_eliminate(__global const ulong *first, __global const uint *cou
     const uint s = get_global_id(0);
     if (s >= sets)
         return;
+    const uint L = m < 2 ? 2u : 1u << (32 - clz(m - 1));
     const size_t base = (size_t)s * m;
     __global double *current = weight + base;
-    __global double *hk = key + base;
-    __global uint *hi = idx + base;
-    for (uint i = 0; i < m; ++i) {
-        hk[i] = current[i];
-        hi[i] = i;
-    }
-    for (uint at = m / 2; at-- > 0;)
-        se_sift(hk, hi, m, at);
-    uint size = m;
+    __global double *lk = key + (size_t)s * L;
+    __global uint *win = idx + (size_t)s * L;
+    for (uint i = 0; i < m; ++i)
+        lk[i] = current[i];
+    for (uint i = m; i < L; ++i)
+        lk[i] = -INFINITY;
+    for (uint v = L - 1; v >= L / 2; --v)
+        win[v] = se_winner(lk, 2 * v - L, 2 * v + 1 - L);
+    for (uint v = L / 2; v-- > 1;)
+        win[v] = se_winner(lk, win[2 * v], win[2 * v + 1]);
     uint removed = 0;
     while (removed < removals) {
-        const uint i = hi[0];
+        const uint i = win[1];
         const double now = current[i];
-        if (hk[0] != now) {
-            hk[0] = now;
-            se_sift(hk, hi, size, 0);
+        if (lk[i] != now) {                         /* a stale key (never with SE_EAGER) */
+            lk[i] = now;
+            se_replay(lk, win, L, i);
             continue;
         }
-        size -= 1;
-        hk[0] = hk[size];
-        hi[0] = hi[size];
-        se_sift(hk, hi, size, 0);
         gone[(size_t)s * removals + removed] = i;
         removed += 1;
+        lk[i] = -INFINITY;
+        se_replay(lk, win, L, i);
         const ulong a0 = first[base + i];
         const ulong stop = a0 + count[base + i];
-        for (ulong a = a0; a < stop; ++a)
-            weight[nbr[a]] = weight[nbr[a]] - w[a];
+        for (ulong a = a0; a < stop; ++a) {
+            const uint j = nbr[a];
+            const double fallen = weight[j] - w[a];
+            weight[j] = fallen;
+#if SE_EAGER
+            const uint jl = j - (uint)base;
+            if (lk[jl] != -INFINITY) {
+                lk[jl] = fallen;
+                se_replay(lk, win, L, jl);
+            }
+#endif
+        }
     }
 }

@@ -203,7 +203,7 @@ def _gbn_lanes16():
 def _sample_elimination_3d():
     # from 3-D on the neighbour passes skip the cells beyond d_max (cells.h's cell_beyond),
     # which the registry's 2-D run does not build; 64 points in 3-D make a grid of 3 cells
-    # a side; progressive: the heap kernel again on each halving
+    # a side; progressive: the elimination kernel again on each halving
     made = clsamp.make_sampler("sample_elimination", d=3, seed=3, progressive=True).sample(
         64, realizations=range(1, 3))
     _same_bits(made, clsamp.make_sampler("sample_elimination", d=3, seed=3, progressive=True,
@@ -222,9 +222,10 @@ def _lloyd_rings():
             64, realizations=range(1, 3)))
 
 
-@check("sample-elimination-heap")
-def _sample_elimination_heap():
-    # se_eliminate, which a sampler runs only on devices that share the host's memory
+@check("sample-elimination-tree")
+def _sample_elimination_tree():
+    # se_eliminate's tournament tree, which a sampler runs only on devices that share the
+    # host's memory (150 candidates: 256 leaves, the padding past m included)
     from clsamp.geometry.cells import sorted_by_cell
     from clsamp.samplers.sample_elimination import (
         Weighting,
@@ -250,8 +251,9 @@ def _sample_elimination_lanes16():
     # the neighbour passes 16 points at a time, as CPU devices build them (the simulator's
     # own shape takes one at a time): the counts and the lists at their offsets; the lists
     # in 4 slots a candidate, which many overflow (the writes past a list's slots held
-    # back), then by offsets; the lists in slots and the heap; 2-D on the torus (rows that
-    # wrap) and in the cube, 3-D (cells skipped), 4-D on one cell
+    # back), then by offsets; the lists in slots and the elimination (from 4-D on its
+    # stale keys refreshed); 2-D on the torus (rows that wrap) and in the cube, 3-D (cells
+    # skipped), 4-D on one cell
     import dataclasses
 
     from clsamp import runtime

@@ -125,7 +125,8 @@ def _grid_candidates(sets, side, d):
     (3, True, False, None), (2, True, True, None), (2, False, True, None),
     (3, True, True, None),
     (2, True, False, 3),        # every list overflows its slots: the two-pass lists
-    (3, False, False, 10**6)])  # slots for every candidate
+    (3, False, False, 10**6),   # slots for every candidate
+    (4, True, False, None), (4, True, True, None), (6, False, False, None)])  # stale keys
 @pytest.mark.parametrize("lanes", [1, 16])
 def test_the_elimination_kernel_removes_what_the_heap_removes(d, periodic, grid, slab, lanes,
                                                               monkeypatch):
@@ -133,7 +134,8 @@ def test_the_elimination_kernel_removes_what_the_heap_removes(d, periodic, grid,
     if slab is not None:
         monkeypatch.setattr(sample_elimination, "slab_width", lambda m, d, w: min(slab, m - 1))
     sets = 3
-    cand = _grid_candidates(sets, 16 if d < 3 else 7, d) if grid else _candidates(sets, 500, d)
+    side = 16 if d < 3 else 7 if d == 3 else 5
+    cand = _grid_candidates(sets, side, d) if grid else _candidates(sets, 500, d)
     m = cand.shape[1]
     keep = m // 4
     weighting = Weighting.for_counts(m, keep, d, periodic=periodic)

@@ -5,11 +5,11 @@ cube, optionally in progressive order.
 The neighbour search and the weights are the O(M k) part: ``se_count`` and ``se_pairs``
 in ``kernels/sample_elimination.cl`` on the device, :func:`neighbour_weights_reference`
 here in NumPy, the same bits, over the grid of cells of :mod:`clsamp.geometry.cells`. The
-elimination -- take the heaviest candidate, lower its neighbours' weights, again -- is a
-heap walked one candidate at a time: ``se_eliminate`` on a device that shares the host's
-cores, one work-item a set, where the pair lists already are (:func:`eliminate_device`),
-and :func:`eliminate` in Python's heapq (the twin's, and on discrete GPUs), the same
-removals in the same order.
+elimination -- take the heaviest candidate, lower its neighbours' weights, again -- walks
+one candidate at a time: ``se_eliminate`` on a device that shares the host's cores, one
+work-item a set, where the pair lists already are (:func:`eliminate_device`, a tournament
+tree), and :func:`eliminate` in Python's heapq (the twin's, and on discrete GPUs), the
+same removals in the same order.
 """
 
 import dataclasses
@@ -275,6 +275,12 @@ def neighbour_weights_device(pts, start, m, cells, weighting):
     return offset, nbr.finish()[:size], w.finish()[:size], weight.finish()
 
 
+def _tree_leaves(m):
+    """The leaves of ``se_eliminate``'s tournament tree for m candidates: the least power of
+    two at least max(m, 2)."""
+    return 1 << max(int(m) - 1, 1).bit_length()
+
+
 def eliminate_device(pts, start, m, cells, weighting, keep):
     """The neighbours, their weights and the elimination of every set on the current
     device (``se_pairs`` into :func:`slab_width` slots a candidate, then ``se_eliminate``,
@@ -309,11 +315,11 @@ def eliminate_device(pts, start, m, cells, weighting, keep):
         pts, start, m, cells, weighting, host=False, cap=slab_width(m, d, weighting))
     limit = runtime.loop_limit()
     if limit is not None and (removals + int(found.sum())) * (int(m).bit_length() + 1) > limit:
-        runtime.require_short_loops("sample elimination's heap")
+        runtime.require_short_loops("sample elimination's tournament tree")
     gone = runtime.Output((sets * max(removals, 1),), np.uint32,
                           host=np.empty(sets * max(removals, 1), dtype=np.uint32))
-    key = runtime.Output((total,), np.float64)
-    idx = runtime.Output((total,), np.uint32)
+    key = runtime.Output((sets * _tree_leaves(m),), np.float64)
+    idx = runtime.Output((sets * _tree_leaves(m),), np.uint32)
     local = min(runtime.local_size(64), sets)
     runtime.kernel("sample_elimination.cl", "se_eliminate", defines)(
         runtime.queue(), (-(-sets // local) * local,), (local,), runtime.input_buffer(first),
@@ -399,7 +405,7 @@ def _eliminate_sets(points, keep, weighting, backend):
         # are about M V_d d_max^d (here with a margin of 4)
         pairs = max(min(m, math.ceil(4 * m * ball_volume(d, weighting.d_max))),
                     slab_width(m, d, weighting))
-        ranges = runtime.chunk_ranges(sets, m * (8 * d + 64) + 12 * m * pairs)
+        ranges = runtime.chunk_ranges(sets, m * (8 * d + 64) + 12 * _tree_leaves(m) + 12 * m * pairs)
         if len(ranges) > 1:
             return [result for lo, hi in ranges
                     for result in _eliminate_sets(points[lo:hi], keep, weighting, backend)]
