@@ -1,8 +1,7 @@
 /* HEAP_SIFT(name, first) defines name(key, idx, size, at): restores the binary heap of
  * (key, idx) pairs below entry at (the heap's first `size` entries), where the root is
- * the pair that first(ka, ia, kb, ib) puts before every other. Sample elimination's heap
- * (the largest weight first) and sliced optimal transport's heapsort (the largest pair
- * first) are both this. */
+ * the pair that first(ka, ia, kb, ib) puts before every other. Sliced optimal transport's
+ * heapsort (the largest pair first) is this. */
 #ifndef CLSAMP_HEAP_H
 #define CLSAMP_HEAP_H
 

@@ -405,7 +405,8 @@ def _eliminate_sets(points, keep, weighting, backend):
         # are about M V_d d_max^d (here with a margin of 4)
         pairs = max(min(m, math.ceil(4 * m * ball_volume(d, weighting.d_max))),
                     slab_width(m, d, weighting))
-        ranges = runtime.chunk_ranges(sets, m * (8 * d + 64) + 12 * _tree_leaves(m) + 12 * m * pairs)
+        ranges = runtime.chunk_ranges(
+            sets, m * (8 * d + 64) + 12 * _tree_leaves(m) + 12 * m * pairs)
         if len(ranges) > 1:
             return [result for lo, hi in ranges
                     for result in _eliminate_sets(points[lo:hi], keep, weighting, backend)]
