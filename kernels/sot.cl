@@ -451,13 +451,18 @@ static void sot_heapsort(__global double *key, __global uint *idx, const uint le
 /* sot_project_displace: one work-item a row (set s, direction k), on devices that share the
  * host's cores: the row's projections (sot_project's sums), sorted with ties by index by a
  * bucket sort, matched to the row's targets q: disp[i] = q[rank of i] - p_i, as
- * sot_project, a stable sort and sot_displace give. A key's bucket,
- * floor((p - lo) n / (hi - lo)) clamped to n - 1 (all keys in bucket 0 where the row's
- * range is 0 or n over it overflows), never falls as the key rises, so the buckets in
- * turn, each sorted (sot_sort_run), are the row in sorted order; keys fill the buckets
- * in index order. The projected cube's density is at most a few times its mean, so a
- * bucket holds a few keys. Scratch: key (doubles), count and perm (uints), n a row.
+ * sot_project, a stable sort and sot_displace give. With B buckets (n, or 2n from
+ * SOT_WIDE_FROM points on), a key's bucket, floor((p - lo) B / (hi - lo)) clamped to
+ * B - 1 (all keys in bucket 0 where the row's range is 0 or B over it overflows), never
+ * falls as the key rises, so the buckets in turn, each sorted, are the row in sorted
+ * order; keys fill the buckets in index order. The projected cube's density is at most a
+ * few times its mean, so a bucket holds a few keys. Scratch: key (doubles) and perm
+ * (uints), n a row; count (uints), 2n a row.
  * Launch: sets * K work-items, the rows of directions theta[first..first + sets K). */
+
+/* from this many points on a row takes 2n buckets: fewer keys share one, and the
+ * insertion pass meets fewer inversions; below it the longer prefix sums cost as much */
+#define SOT_WIDE_FROM 2048
 static inline void sot_row_displace(__global const double *x, __global const double *theta,
                                     const uint first, __global const double *q, const uint n,
                                     const uint K, const uint row, __global double *disp,
@@ -469,7 +474,8 @@ static inline void sot_row_displace(__global const double *x, __global const dou
     __global const double *restrict qr = q + (size_t)row * n;
     __global double *restrict p = disp + (size_t)row * n;
     __global double *restrict ks = key + (size_t)row * n;
-    __global uint *restrict cnt = count + (size_t)row * n;
+    const uint nb = n >= SOT_WIDE_FROM ? 2 * n : n;
+    __global uint *restrict cnt = count + (size_t)row * 2 * n;
     __global uint *restrict pm = perm + (size_t)row * n;
     /* the projections 4 points at a time (sot_dot's operations in each lane), their
      * smallest and largest kept per lane: a minimum does not depend on the order in which
@@ -502,17 +508,17 @@ static inline void sot_row_displace(__global const double *x, __global const dou
         lo = lo_l[l] < lo ? lo_l[l] : lo;
         hi = hi_l[l] > hi ? hi_l[l] : hi;
     }
-    for (uint i = 0; i < n; ++i)
-        cnt[i] = 0;
-    double scale = (double)n / (hi - lo);
+    for (uint b = 0; b < nb; ++b)
+        cnt[b] = 0;
+    double scale = (double)nb / (hi - lo);
     scale = scale < INFINITY ? scale : 0.0;            /* a zero range (or its overflow) */
-    const double last = (double)(n - 1);
+    const double last = (double)(nb - 1);
     for (uint i = 0; i < n; ++i) {
         const double f = (p[i] - lo) * scale;
         cnt[(uint)(f < last ? f : last)] += 1;
     }
     uint start = 0, longest = 0;
-    for (uint b = 0; b < n; ++b) {
+    for (uint b = 0; b < nb; ++b) {
         const uint c = cnt[b];
         cnt[b] = start;
         start += c;
@@ -528,7 +534,7 @@ static inline void sot_row_displace(__global const double *x, __global const dou
      * past its bucket's start (every key of an earlier bucket is smaller), so the pass
      * costs the short buckets' inversions and leaves the sorted ones alone */
     start = 0;
-    for (uint b = 0; longest > LONG_RUN && b < n; ++b) {
+    for (uint b = 0; longest > LONG_RUN && b < nb; ++b) {
         const uint end = cnt[b];
         if (end - start > LONG_RUN)
             sot_heapsort(ks + start, pm + start, end - start);

@@ -593,15 +593,18 @@ def _sot_bitonic():
 @check("sot-buckets")
 def _sot_buckets():
     # the rows' projections ranked by buckets alone (sot_project_displace, which sot_row
-    # runs after a row's quantiles): a set with a cluster of ties (the heapsort)
+    # runs after a row's quantiles): a set with a cluster of ties (the heapsort); then a
+    # row of 2048 points, which takes 2n buckets
     from clsamp.samplers import sot, sot_device
-    theta = sot.directions(5, np.arange(2), 0, 3, 2)
-    x = clsamp.make_sampler("random", d=2, seed=5, backend="numpy").sample(40, realizations=2)
-    x[1, 5:30] = 0.25
-    proj = sot.project_reference(x, theta)
-    q = np.zeros(proj.shape) + np.arange(40.0)
-    _same_bits(sot_device.project_displacements_device(x, theta, q),
-               sot.displacements_reference(q, sot._ranks(proj), proj))
+    for n, sets, K in ((40, 2, 3), (2048, 1, 1)):
+        theta = sot.directions(5, np.arange(sets), 0, K, 2)
+        x = clsamp.make_sampler("random", d=2, seed=5, backend="numpy").sample(
+            n, realizations=sets)
+        x[-1, 5:30] = 0.25
+        proj = sot.project_reference(x, theta)
+        q = np.zeros(proj.shape) + np.arange(float(n))
+        _same_bits(sot_device.project_displacements_device(x, theta, q),
+                   sot.displacements_reference(q, sot._ranks(proj), proj))
 
 
 @check("sot-lanes-resident")

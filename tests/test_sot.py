@@ -50,6 +50,13 @@ def test_a_run_gives_the_same_bits_on_the_device_and_in_numpy(d, projections):
     assert np.array_equal(info.cost_history, info_r.cost_history)
 
 
+def test_a_run_of_2048_points_and_more_gives_the_twins_bits():
+    # from 2048 points on a row's bucket sort takes 2n buckets
+    kw = dict(d=2, seed=5, iterations=3)
+    pts = clsamp.make_sampler("sot", **kw).sample(2051)
+    assert np.array_equal(pts, clsamp.make_sampler("sot", backend="numpy", **kw).sample(2051))
+
+
 @pytest.mark.parametrize("lanes", [1, 4, 8, 16])
 def test_each_lane_width_solves_the_twins_quantiles(lanes):
     # odd and even n, fewer quantiles than lanes, directions with dropped components; in
@@ -97,13 +104,14 @@ def test_the_bitonic_sort_ranks_ties_by_index(n):
                           sot.displacements_reference(q, sot._ranks(proj), proj))
 
 
-@pytest.mark.parametrize("case", ["ties", "equal", "cluster", "one"])
+@pytest.mark.parametrize("case", ["ties", "equal", "cluster", "one", "wide", "wide ties"])
 def test_the_bucket_sort_ranks_as_the_stable_sort(case):
     # repeated points (ties, -0.0 beside 0.0), a row of one value (a zero range), a
-    # cluster that fills one bucket (heapsort) beside two far points, a single point
+    # cluster that fills one bucket (heapsort) beside two far points, a single point; from
+    # 2048 points on the rows take 2n buckets (wide), with ties too
     rng = np.random.default_rng(3)
-    x = rng.random((2, 300, 2))
-    if case == "ties":
+    x = rng.random((2, 2100 if case.startswith("wide") else 300, 2))
+    if case.endswith("ties"):
         x = np.round(x, 1)
         x[0, :40] = [0.0, -0.0]
     elif case == "equal":

@@ -118,7 +118,9 @@ def project_displacements_device(x, theta, q):
     sets, n, d = x.shape
     K = theta.shape[1]
     disp = runtime.Output((sets, K, n), np.float64, host=np.empty((sets, K, n)), read_write=True)
-    scratch = [_output((sets * K, n), dtype, False) for dtype in (np.float64, np.uint32, np.uint32)]
+    # keys (doubles), counts (uints, 2n a row) and order (uints)
+    scratch = [_output((sets * K, w * n), dtype, False)
+               for dtype, w in ((np.float64, 1), (np.uint32, 2), (np.uint32, 1))]
     kernel = runtime.kernel("sot.cl", "sot_project_displace", _defines(d))
     kernel(runtime.queue(), (sets * K,), (1,), runtime.to_device(x).data,
            runtime.to_device(theta).data, np.uint32(0), runtime.to_device(q).data, np.uint32(n),
@@ -280,8 +282,9 @@ class ResidentBatches:
         sets, n, d = x.shape
         self.sets, self.n, self.d, self.rows = sets, n, d, sets * K
         self.points = [runtime.work_buffer(array=x), runtime.work_buffer(x.nbytes)]
-        # targets, displacements and keys (doubles), counts and order (uints), a row each
-        self.scratch = [runtime.work_buffer(self.rows * n * size) for size in (8, 8, 8, 4, 4)]
+        # targets, displacements and keys (doubles), counts (uints, 2n a row) and order
+        # (uints), a row each
+        self.scratch = [runtime.work_buffer(self.rows * n * size) for size in (8, 8, 8, 8, 4)]
         self.cost = runtime.work_buffer(8 * settle * sets * n)    # a slot a batch
         self.sums = runtime.work_buffer(8 * settle * sets)
         self.slot = 0
