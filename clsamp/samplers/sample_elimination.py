@@ -318,8 +318,8 @@ def eliminate_device(pts, start, m, cells, weighting, keep):
         runtime.require_short_loops("sample elimination's tournament tree")
     gone = runtime.Output((sets * max(removals, 1),), np.uint32,
                           host=np.empty(sets * max(removals, 1), dtype=np.uint32))
-    key = runtime.Output((sets * _tree_leaves(m),), np.float64)
-    idx = runtime.Output((sets * _tree_leaves(m),), np.uint32)
+    leaves = sets * _tree_leaves(m)
+    key, idx = runtime.Output((leaves,), np.float64), runtime.Output((leaves,), np.uint32)
     local = min(runtime.local_size(64), sets)
     runtime.kernel("sample_elimination.cl", "se_eliminate", defines)(
         runtime.queue(), (-(-sets // local) * local,), (local,), runtime.input_buffer(first),
