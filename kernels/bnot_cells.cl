@@ -12,21 +12,28 @@
  * The candidates are the sites of the (2 R + 1)^2 cells of a G x G grid around i's cell
  * (the points sorted by cell as clsamp.geometry.cells.sorted_by_cell sorts them: start
  * holds each cell's first sorted index), ring by ring (the cells at Chebyshev distance
- * 0, 1, .., R, so that the near sites cut first), within a ring the first axis outer,
- * then in sorted order; with G == 1 every other site, in the (2 R + 1)^2 images of the
- * torus, by the same rings. A site no candidate lies at least reach from x_i; the cell is
- * certified (status 0) when its farthest vertex, at r, leaves no such site a cut:
- * r < reach and reach^2 - 2 r reach + w_i - wmax >= 0; otherwise status 1 (the host takes
- * a wider stencil). Status 2: more than VMAX vertices or LMAX cutting lines.
+ * 0, 1, .., R), within a ring the first axis outer, then in sorted order; with G == 1
+ * every other site, in the (2 R + 1)^2 images of the torus, by the same rings. They come
+ * in two passes of that order: first those with |d|^2 < near (about the natural
+ * neighbours, which leave the cell nearly final), then the others, most of which the
+ * farthest vertex then shows to miss the cell. A site no candidate lies at least reach from x_i, and one
+ * beyond the ring R + 1 of grid cells at least far; a cut by a site j at distance d needs
+ * d^2 - 2 r d + w_i - w_j < 0, r the distance of the cell's farthest vertex. So the cell is
+ * certified (status 0) when r < reach, reach^2 - 2 r reach + w_i - wring >= 0 (wring the
+ * largest weight in the cells of ring R + 1, from cellmax, each grid cell's largest
+ * weight) and far^2 - 2 r far + w_i - wmax >= 0 (wmax the largest weight); with G == 1
+ * (far = reach) the last alone. Otherwise status 1 (the host takes a wider stencil).
+ * Status 2: more than VMAX vertices or LMAX cutting lines.
  *
- * Row i of out (n, 4 + VMAX): the area A, the centroid's offset from x_i (cx, cy), the
- * second moment about x_i (the integral of |z|^2 over the cell), then coef; row i of
- * iout (n, 1 + VMAX): the status, then nbr. Each edge of the cell on the boundary with a
- * site j gives, at slot e of nbr and coef, j (sorted index) and |edge| / (2 |d|), the
- * boundary's move per unit of w_j (-dA_i/dw_j); the other slots hold -1 and 0. An empty
- * cell has A = 0.
+ * The rows are the sites' own order (order: sorted index -> site). Row order[i] of out
+ * (n, 4 + VMAX): the area A, the centroid's offset from x_i (cx, cy), the second moment
+ * about x_i (the integral of |z|^2 over the cell), then coef; row order[i] of iout
+ * (n, 1 + VMAX): the status, then nbr. Each edge of the cell on the boundary with a site
+ * j gives, at slot e of nbr and coef, order[j] and |edge| / (2 |d|), the boundary's move
+ * per unit of w_j (-dA_i/dw_j); the other slots hold -1 and 0. An empty cell has A = 0.
  *
- * Build options: VMAX, LMAX. Launch: one work-item a sorted site, grid (n,).
+ * Build options: VMAX, LMAX. Launch: one work-item a sorted site of todo (the sites to
+ * clip, m of them: every one, or those a narrower stencil left uncertified), grid (m,).
  */
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #pragma OPENCL FP_CONTRACT OFF
@@ -35,14 +42,21 @@
 #error "bnot_cells.cl needs VMAX and LMAX (clsamp.samplers.bnot_cells)"
 #endif
 
+#include "in_order.h"
+
 __kernel void bnot_cells(__global const double *sites, __global const double *w,
-                         __global const uint *start, const uint n, const int G, const int R,
-                         const double reach, const double wmax, __global double *out,
+                         __global const uint *start, __global const uint *order,
+                         __global const uint *todo, const uint m, const int G, const int R,
+                         const double near, const double reach, const double far,
+                         const double wmax,
+                         __global const double *cellmax, __global double *out,
                          __global int *iout)
 {
-    const uint i = get_global_id(0);
-    if (i >= n)
+    const uint g = get_global_id(0);
+    if (g >= m)
         return;
+    const uint i = todo[g];
+    const size_t row = order[i];
     const double xi = sites[2 * i], yi = sites[2 * i + 1], wi = w[i];
     double px[VMAX], py[VMAX], qx[VMAX], qy[VMAX], s[VMAX];
     int lab[VMAX], qlab[VMAX];
@@ -60,6 +74,7 @@ __kernel void bnot_cells(__global const double *sites, __global const double *w,
         cx = cx < G - 1 ? cx : G - 1;
         cy = cy < G - 1 ? cy : G - 1;
     }
+    for (int pass = 0; pass < 2 && cnt > 0 && st == 0; ++pass)
     for (int ring = 0; ring <= R && cnt > 0 && st == 0; ++ring)
     for (int ox = -ring; ox <= ring && cnt > 0 && st == 0; ++ox) {
         for (int oy = -ring; oy <= ring && cnt > 0 && st == 0; ++oy) {
@@ -81,6 +96,8 @@ __kernel void bnot_cells(__global const double *sites, __global const double *w,
                 const double dx = (sites[2 * j] + (double)shx) - xi;
                 const double dy = (sites[2 * j + 1] + (double)shy) - yi;
                 const double dd = dx * dx + dy * dy;
+                if ((dd < near) != (pass == 0))
+                    continue;       /* the near sites in the first pass, the rest after */
                 const double h = 0.5 * ((dd + wi) - w[j]);
                 if (h > 0.0 && h * h >= r2 * dd)
                     continue;       /* the cell lies within |z| <= sqrt(r2): no cut */
@@ -131,6 +148,7 @@ __kernel void bnot_cells(__global const double *sites, __global const double *w,
         }
     }
     double A2 = 0.0, mx = 0.0, my = 0.0, I = 0.0;
+    IN_ORDER
     for (int a = 0; a < cnt; ++a) {
         const int b = a + 1 < cnt ? a + 1 : 0;
         const double cr = px[a] * py[b] - py[a] * px[b];
@@ -140,15 +158,15 @@ __kernel void bnot_cells(__global const double *sites, __global const double *w,
         I += cr * (((px[a] * px[a] + py[a] * py[a]) + (px[b] * px[b] + py[b] * py[b]))
                    + (px[a] * px[b] + py[a] * py[b]));
     }
-    __global double *coef = out + (size_t)i * (4 + VMAX) + 4;
-    __global int *nbr = iout + (size_t)i * (1 + VMAX) + 1;
+    __global double *coef = out + row * (4 + VMAX) + 4;
+    __global int *nbr = iout + row * (1 + VMAX) + 1;
     int e = 0;
     for (int a = 0; a < cnt; ++a) {
         if (lab[a] < 0)
             continue;
         const int b = a + 1 < cnt ? a + 1 : 0;
         const double ex = px[b] - px[a], ey = py[b] - py[a];
-        nbr[e] = tj[lab[a]];
+        nbr[e] = (int)order[tj[lab[a]]];
         coef[e] = sqrt(ex * ex + ey * ey) / (2.0 * tn[lab[a]]);
         ++e;
     }
@@ -157,14 +175,28 @@ __kernel void bnot_cells(__global const double *sites, __global const double *w,
         coef[e] = 0.0;
     }
     if (st == 0) {
+        double wring = wmax;
+        if (G > 1) {
+            const int k = R + 1;
+            wring = -INFINITY;
+            for (int ox = -k; ox <= k; ++ox)
+            for (int oy = -k; oy <= k; ++oy) {
+                if (ox != -k && ox != k && oy != -k && oy != k)
+                    continue;
+                const int gx = ((cx + ox) % G + G) % G, gy = ((cy + oy) % G + G) % G;
+                const double c = cellmax[gx * G + gy];
+                wring = c > wring ? c : wring;
+            }
+        }
         const double r = sqrt(r2);
-        st = (r < reach && (reach * reach - 2.0 * r * reach) + (wi - wmax) >= 0.0) ? 0 : 1;
+        st = (r < reach && (reach * reach - 2.0 * r * reach) + (wi - wring) >= 0.0
+              && (far * far - 2.0 * r * far) + (wi - wmax) >= 0.0) ? 0 : 1;
     }
     const double area = 0.5 * A2;
-    __global double *row = out + (size_t)i * (4 + VMAX);
-    row[0] = area;
-    row[1] = A2 > 0.0 ? mx / (3.0 * A2) : 0.0;
-    row[2] = A2 > 0.0 ? my / (3.0 * A2) : 0.0;
-    row[3] = I / 12.0;
-    iout[(size_t)i * (1 + VMAX)] = st;
+    __global double *moments = out + row * (4 + VMAX);
+    moments[0] = area;
+    moments[1] = A2 > 0.0 ? mx / (3.0 * A2) : 0.0;
+    moments[2] = A2 > 0.0 ? my / (3.0 * A2) : 0.0;
+    moments[3] = I / 12.0;
+    iout[row * (1 + VMAX)] = st;
 }

@@ -97,6 +97,32 @@ def test_a_wider_stencil_where_a_cell_is_not_certified():
     assert np.allclose(area, everything[0][:, 0], rtol=0, atol=1e-15)
 
 
+@pytest.mark.parametrize("pattern", ["heavy far away", "light far away", "one heavy", "spread"])
+def test_certified_cells_are_the_cells_of_every_site(pattern):
+    # a cell is certified by the largest weight in the next ring of grid cells and the
+    # largest of all beyond it: weights that differ by region test both bounds, and the
+    # cells clipped again (a wider stencil for the uncertified ones only) the retries
+    n = 400
+    sites, w = _random(n, 0.05, seed=8)
+    far = np.hypot(*(((sites - 0.25 + 0.5) % 1.0) - 0.5).T) < 0.15     # a disc around (1/4, 1/4)
+    if pattern == "heavy far away":
+        w[far] += 3.0 / n
+    elif pattern == "light far away":
+        w[~far] += 3.0 / n
+    elif pattern == "one heavy":
+        w[11] = 2.0 / n
+    else:
+        w = np.random.default_rng(9).normal(0.0, 1.5 / n, n)
+    device, twin = bc.PowerCells(sites, "opencl"), bc.PowerCells(sites, "numpy")
+    a = device(w)
+    assert _same(a, twin(w))
+    everything = bc.power_cells_reference(sites, w, np.array([0, n], dtype=np.uint32), 1, 3,
+                                          3.0, float(w.max()))
+    assert np.all(everything[3] == 0)
+    assert np.allclose(a[0], everything[0][:, 0], rtol=0, atol=1e-15)
+    assert np.allclose(a[2], everything[0][:, 3], rtol=0, atol=1e-15)
+
+
 @pytest.mark.parametrize("n", [50, 700])
 def test_newton_meets_the_capacities(n):
     sites, _ = _random(n, 0.0, seed=6)

@@ -487,8 +487,9 @@ class BNOTSampler(OptimizerSampler):
     (:mod:`clsamp.samplers.bnot_cells`, one work-item a site on the device), which gives
     its area, centroid and second moment and the exact Hessian (|edge| / (2 |x_i - x_j|))
     without sampling. Each iteration solves the weights by the damped Newton method of
-    Kitagawa, Merigot and Thibert [3] until every area is within 1e-5 of 1/n
-    (:func:`clsamp.samplers.bnot_cells.solve_exact_weights`), then moves every site to its
+    Kitagawa, Merigot and Thibert [3] until every area is within 1e-5 of 1/n (looser, up to
+    1e-2, in the iterations before the last while the sites still move far;
+    :func:`clsamp.samplers.bnot_cells.solve_exact_weights`), then moves every site to its
     cell's centroid. The kernel and its NumPy twin give the same bits, and the rest is
     host arithmetic on identical inputs, so every fp64 device gives the same sets.
 

@@ -23,6 +23,7 @@ HALVINGS = 12           # step halvings before a Newton step gives up
 CAPACITY_TOL = 1e-5     # a solve stops once every area is within this fraction of 1/n
 COARSE = 1e-2           # the loosest capacities of an iteration before the last
 MAX_IMAGES = 4          # the widest stencil of images of the torus (G == 1)
+NEAR = 2.0              # sites within sqrt(NEAR / n) cut a cell first: its natural neighbours
 
 
 def grid(n, R):
@@ -55,7 +56,31 @@ def _stencil(R):
             for oy in range(-ring, ring + 1) if max(abs(ox), abs(oy)) == ring]
 
 
-def power_cells_reference(sites, w, start, G, R, reach, wmax):
+def cell_max(w, start):
+    """The largest weight in each cell of the grid.
+
+    Parameters
+    ----------
+    w : ndarray (n,)
+        Weights of the sites sorted by cell.
+    start : ndarray (G * G + 1,)
+        Each cell's first sorted index.
+
+    Returns
+    -------
+    ndarray (G * G,)
+        -inf for an empty cell.
+    """
+    start = np.asarray(start, dtype=np.int64)
+    out = np.full(start.size - 1, -np.inf)
+    full = np.flatnonzero(start[1:] > start[:-1])
+    if full.size:
+        out[full] = np.maximum.reduceat(w, start[full])
+    return out
+
+
+def power_cells_reference(sites, w, start, G, R, reach, wmax, order=None, todo=None, far=None,
+                          cellmax=None, near=None):
     """NumPy twin of the ``bnot_cells`` kernel (``kernels/bnot_cells.cl``): the same
     candidates in the same order, the same operations, the same bits.
 
@@ -71,20 +96,34 @@ def power_cells_reference(sites, w, start, G, R, reach, wmax):
         Cells per axis, stencil radius in cells.
     reach, wmax : float
         The least distance of a site outside the stencil; the largest weight.
+    order : ndarray (n,), optional
+        Sorted index -> the site's own index, which ``nbr`` gives (default: the sorted
+        index).
+    todo : ndarray (m,), optional
+        The sorted indices of the cells to clip (default: every one).
+    far : float, optional
+        The least distance of a site beyond the stencil's next ring of cells: (R + 1) / G
+        (default; ``reach`` when G == 1).
+    cellmax : ndarray (G * G,), optional
+        The largest weight in each grid cell (:func:`cell_max`, by default from ``w``).
+    near : float, optional
+        The squared distance below which a candidate cuts in the first pass (default
+        ``NEAR`` / n).
 
     Returns
     -------
-    out : ndarray (n, 4)
-        Area, centroid offset (x, y), second moment about the site.
-    nbr : ndarray (n, VMAX) of int32
-        The neighbours across each edge (-1: none).
-    coef : ndarray (n, VMAX)
+    out : ndarray (m, 4)
+        Area, centroid offset (x, y), second moment about the site, a row for each of
+        ``todo`` in its order.
+    nbr : ndarray (m, VMAX) of int32
+        The neighbours across each edge (``order`` of their sorted index; -1: none).
+    coef : ndarray (m, VMAX)
         |edge| / (2 |d|) of each.
-    status : ndarray (n,) of int32
+    status : ndarray (m,) of int32
         0 certified, 1 needs a wider stencil, 2 too many vertices or lines.
     """
-    n = sites.shape[0]
-    rows = np.arange(n)
+    rows = np.arange(sites.shape[0]) if todo is None else np.asarray(todo, dtype=np.int64)
+    n = rows.size
     px = np.zeros((n, VMAX))
     py = np.zeros((n, VMAX))
     lab = np.full((n, VMAX), -1, dtype=np.int64)
@@ -96,7 +135,7 @@ def power_cells_reference(sites, w, start, G, R, reach, wmax):
     tn = np.zeros((n, LMAX))
     st = np.zeros(n, dtype=np.int64)
     r2 = np.full(n, 0.5)
-    xi, yi = sites[:, 0], sites[:, 1]
+    xi, yi, wi = sites[rows, 0], sites[rows, 1], w[rows]
     if G > 1:
         cx = np.minimum((xi * float(G)).astype(np.int64), G - 1)
         cy = np.minimum((yi * float(G)).astype(np.int64), G - 1)
@@ -104,42 +143,59 @@ def power_cells_reference(sites, w, start, G, R, reach, wmax):
         cx = cy = np.zeros(n, dtype=np.int64)
     starts = start.astype(np.int64)
     a = np.arange(VMAX)
-    for ox, oy in _stencil(R):
-        if G == 1:
-            shx = np.full(n, ox)
-            shy = np.full(n, oy)
-            cell = np.zeros(n, dtype=np.int64)
-        else:
-            gx, gy = cx + ox, cy + oy
-            shx = np.where(gx < 0, -1, np.where(gx >= G, 1, 0))
-            shy = np.where(gy < 0, -1, np.where(gy >= G, 1, 0))
-            cell = (gx - shx * G) * G + (gy - shy * G)
-        first, count = starts[cell], starts[cell + 1] - starts[cell]
-        for slot in range(int(count.max(initial=0))):
-            j = first + slot
-            live = (slot < count) & (cnt > 0) & (st == 0) & (j != rows)
-            r = np.flatnonzero(live)
-            if r.size == 0:
-                continue
-            jr = j[r]
-            dx = (sites[jr, 0] + shx[r].astype(np.float64)) - xi[r]
-            dy = (sites[jr, 1] + shy[r].astype(np.float64)) - yi[r]
-            dd = dx * dx + dy * dy
-            h = 0.5 * ((dd + w[r]) - w[jr])
-            near = ~((h > 0.0) & (h * h >= r2[r] * dd))
-            r, jr, dx, dy, h = (a[near] for a in (r, jr, dx, dy, h))
-            inside = a[None, :] < cnt[r, None]
-            s = (px[r] * dx[:, None] + py[r] * dy[:, None]) - h[:, None]
-            cut = ((s > 0.0) & inside).any(axis=1)
-            r, jr, dx, dy, s, inside = (a[cut] for a in (r, jr, dx, dy, s, inside))
-            full = lines[r] == LMAX
-            st[r[full]] = 2
-            keep = ~full
-            r, jr, dx, dy, s, inside = (a[keep] for a in (r, jr, dx, dy, s, inside))
-            if r.size == 0:
-                continue
-            _clip(r, jr, dx, dy, s, inside, px, py, lab, cnt, lines, tj, tn, st, r2)
-    return _moments(px, py, lab, cnt, tj, tn, st, w, reach, wmax, r2)
+    near = NEAR / sites.shape[0] if near is None else near
+    for first_pass in (True, False):      # the near sites first (the kernel's passes)
+        for ox, oy in _stencil(R):
+            if G == 1:
+                shx = np.full(n, ox)
+                shy = np.full(n, oy)
+                cell = np.zeros(n, dtype=np.int64)
+            else:
+                gx, gy = cx + ox, cy + oy
+                shx = np.where(gx < 0, -1, np.where(gx >= G, 1, 0))
+                shy = np.where(gy < 0, -1, np.where(gy >= G, 1, 0))
+                cell = (gx - shx * G) * G + (gy - shy * G)
+            first, count = starts[cell], starts[cell + 1] - starts[cell]
+            for slot in range(int(count.max(initial=0))):
+                j = first + slot
+                live = (slot < count) & (cnt > 0) & (st == 0) & (j != rows)
+                r = np.flatnonzero(live)
+                if r.size == 0:
+                    continue
+                jr = j[r]
+                dx = (sites[jr, 0] + shx[r].astype(np.float64)) - xi[r]
+                dy = (sites[jr, 1] + shy[r].astype(np.float64)) - yi[r]
+                dd = dx * dx + dy * dy
+                now = (dd < near) == first_pass
+                r, jr, dx, dy, dd = (a[now] for a in (r, jr, dx, dy, dd))
+                h = 0.5 * ((dd + wi[r]) - w[jr])
+                reaches = ~((h > 0.0) & (h * h >= r2[r] * dd))
+                r, jr, dx, dy, h = (a[reaches] for a in (r, jr, dx, dy, h))
+                inside = a[None, :] < cnt[r, None]
+                s = (px[r] * dx[:, None] + py[r] * dy[:, None]) - h[:, None]
+                cut = ((s > 0.0) & inside).any(axis=1)
+                r, jr, dx, dy, s, inside = (a[cut] for a in (r, jr, dx, dy, s, inside))
+                full = lines[r] == LMAX
+                st[r[full]] = 2
+                keep = ~full
+                r, jr, dx, dy, s, inside = (a[keep] for a in (r, jr, dx, dy, s, inside))
+                if r.size == 0:
+                    continue
+                _clip(r, jr, dx, dy, s, inside, px, py, lab, cnt, lines, tj, tn, st, r2)
+    if far is None:
+        far = (R + 1) / G if G > 1 else reach
+    wring = np.full(n, float(wmax))
+    if G > 1:
+        cellmax = cell_max(w, start) if cellmax is None else cellmax
+        k = R + 1
+        ring = [(ox, oy) for ox in range(-k, k + 1) for oy in range(-k, k + 1)
+                if max(abs(ox), abs(oy)) == k]
+        wring = np.max([cellmax[((cx + ox) % G) * G + (cy + oy) % G] for ox, oy in ring], axis=0)
+    out, nbr, coef, status = _moments(px, py, lab, cnt, tj, tn, st, wi, reach, far, wmax,
+                                      wring, r2)
+    if order is not None:
+        nbr = np.where(nbr >= 0, np.asarray(order)[np.maximum(nbr, 0)], -1).astype(np.int32)
+    return out, nbr, coef, status
 
 
 def _clip(r, jr, dx, dy, s, inside, px, py, lab, cnt, lines, tj, tn, st, r2):
@@ -185,7 +241,7 @@ def _clip(r, jr, dx, dy, s, inside, px, py, lab, cnt, lines, tj, tn, st, r2):
     r2[r] = np.where(a[None, :] < total[:, None], ra, 0.0).max(axis=1, initial=0.0)
 
 
-def _moments(px, py, lab, cnt, tj, tn, st, w, reach, wmax, r2):
+def _moments(px, py, lab, cnt, tj, tn, st, w, reach, far, wmax, wring, r2):
     """Area, centroid, second moment, edges and status of clipped cells (the kernel's
     last loops, in its order)."""
     n = px.shape[0]
@@ -215,7 +271,8 @@ def _moments(px, py, lab, cnt, tj, tn, st, w, reach, wmax, r2):
     nbr[k, slot] = tj[k, lab[k, v]]
     coef[k, slot] = np.sqrt(ex * ex + ey * ey) / (2.0 * tn[k, lab[k, v]])
     rr = np.sqrt(r2)
-    certified = (rr < reach) & ((reach * reach - 2.0 * rr * reach) + (w - wmax) >= 0.0)
+    certified = ((rr < reach) & ((reach * reach - 2.0 * rr * reach) + (w - wring) >= 0.0)
+                 & ((far * far - 2.0 * rr * far) + (w - wmax) >= 0.0))
     status = np.where(st != 0, st, np.where(certified, 0, 1)).astype(np.int32)
     out = np.empty((n, 4))
     out[:, 0] = 0.5 * A2
@@ -226,8 +283,10 @@ def _moments(px, py, lab, cnt, tj, tn, st, w, reach, wmax, r2):
     return out, nbr, coef, status
 
 
-def power_cells_device(sites, w, start, G, R, reach, wmax, outputs=None):
-    """:func:`power_cells_reference` by the ``bnot_cells`` kernel (the same bits).
+def power_cells_device(sites, w, start, order, G, R, reach, wmax, todo=None, outputs=None,
+                       far=None, cellmax=None, near=None):
+    """:func:`power_cells_reference` by the ``bnot_cells`` kernel (the same bits), its rows
+    written in the sites' own order.
 
     Parameters
     ----------
@@ -235,14 +294,24 @@ def power_cells_device(sites, w, start, G, R, reach, wmax, outputs=None):
         As :func:`power_cells_reference` takes them; ``sites`` and ``start`` may be
         buffers already on the device (:class:`PowerCells` keeps them for the passes
         over the same sites).
+    order : ndarray (n,) or buffer of uint32
+        Sorted index -> the site's own index: the row each cell is written to, and the
+        index ``nbr`` gives.
+    todo : ndarray (m,), optional
+        The sorted indices of the cells to clip (default: every one); the other rows of
+        ``outputs`` are left as they are.
     outputs : tuple, optional
         The two :class:`clsamp.runtime.Output` the kernel writes (n, 4 + VMAX) float64 and
         (n, 1 + VMAX) int32, kept by the caller for its passes; new ones by default.
+    far, cellmax, near : optional
+        As :func:`power_cells_reference` takes them (``cellmax`` needed where G > 1 and
+        ``start`` is a buffer).
 
     Returns
     -------
     out, nbr, coef, status
-        As :func:`power_cells_reference` returns them (views of the outputs).
+        As :func:`power_cells_reference` returns them, for every site in its own order
+        (views of the outputs).
 
     Raises
     ------
@@ -253,12 +322,26 @@ def power_cells_device(sites, w, start, G, R, reach, wmax, outputs=None):
     n = int(w.shape[0])
     kernel = runtime.kernel("bnot_cells.cl", "bnot_cells", {"VMAX": VMAX, "LMAX": LMAX})
     floats, ints = outputs or _outputs(n)
+    if todo is None:
+        m = n
+        todo = runtime.table(("bnot_cells.every", n), lambda: np.arange(n)).data
+    else:
+        m = int(len(todo))
+        todo = runtime.input_buffer(np.asarray(todo, dtype=np.uint32))
+    if far is None:
+        far = (R + 1) / G if G > 1 else reach
+    near = NEAR / n if near is None else near
+    if cellmax is None:
+        cellmax = cell_max(w, start) if G > 1 else np.array([float(wmax)])
     local = runtime.local_size(64)
     sites, start = (a if not isinstance(a, np.ndarray) else runtime.input_buffer(a)
                     for a in (sites, start))
-    kernel(runtime.queue(), (-(-n // local) * local,), (local,), sites, runtime.input_buffer(w),
-           start, np.uint32(n), np.int32(G), np.int32(R), np.float64(reach), np.float64(wmax),
-           floats.buffer, ints.buffer)
+    if isinstance(order, np.ndarray):
+        order = runtime.input_buffer(order.astype(np.uint32))
+    kernel(runtime.queue(), (-(-m // local) * local,), (local,), sites, runtime.input_buffer(w),
+           start, order, todo, np.uint32(m), np.int32(G), np.int32(R), np.float64(near),
+           np.float64(reach), np.float64(far), np.float64(wmax), runtime.input_buffer(cellmax), floats.buffer,
+           ints.buffer)
     f, i = floats.finish(), ints.finish()
     return f[:, :4], i[:, 1:], f[:, 4:], i[:, 0]
 
@@ -276,9 +359,10 @@ class PowerCells:
     in the weights (:func:`laplacian`).
 
     The sites are sorted by a grid of cells; a call clips every cell with the stencil of
-    R cells around it (R = 1 first, or every site's 5 x 5 images for small n), widening
-    the stencil while some cell is not certified (``bnot_cells.cl``), so that every cell
-    is exact.
+    R cells around it (R = 1, or every site's 5 x 5 images for small n), then clips
+    again, with a stencil one ring wider each time, only the cells that are not certified
+    (``bnot_cells.cl``), until every cell is exact. Where a stencil leaves most cells
+    uncertified, later calls start one ring wider.
 
     Parameters
     ----------
@@ -292,37 +376,74 @@ class PowerCells:
         self.n = self.sites.shape[0]
         self.device = backend == "opencl"
         self.outputs = _outputs(self.n) if self.device else None
-        self._sort(1 if grid(self.n, 1)[0] > 1 else 2)
+        self.first = 1 if grid(self.n, 1)[0] > 1 else 2
+        self.R = self.first     # the widest stencil a call has taken
+        self._sorts = {}
 
-    def _sort(self, R):
-        self.R = R
-        self.G, self.reach = grid(self.n, R)
-        self.pts, _, self.start, self.order = sorted_by_cell(self.sites[None], self.G)
-        self.back = np.empty(self.n, dtype=np.int64)
-        self.back[self.order] = np.arange(self.n)
-        if self.device:         # the same sites for every pass: upload once
-            self.pts, self.start = runtime.input_buffer(self.pts), runtime.input_buffer(self.start)
+    def _sorted(self, G):
+        """The sites sorted by a grid of G x G cells, made once: (sites, start, order,
+        back, rows, starts), the first two and rows (order as uint32) on the device for
+        the device backend, starts ``start`` on the host."""
+        if G not in self._sorts:
+            pts, _, starts, order = sorted_by_cell(self.sites[None], G)
+            back = np.empty(self.n, dtype=np.int64)
+            back[order] = np.arange(self.n)
+            start, rows = starts, order
+            if self.device:     # the same sites for every pass: upload once
+                pts, start, rows = (runtime.input_buffer(a) for a in (
+                    pts, starts, order.astype(np.uint32)))
+            self._sorts[G] = pts, start, order, back, rows, starts
+        return self._sorts[G]
 
-    def __call__(self, w):
+    def __call__(self, w, hessian=True):
+        """The cells under weights ``w``: (area, centroid offset, second moment, L), L
+        None with ``hessian=False`` (:meth:`laplacian` builds it until the next call)."""
+        w = np.asarray(w, dtype=np.float64)
+        wmax = float(w.max(initial=0.0))
+        if self.device:
+            floats, ints = (o.array for o in self.outputs)
+        else:
+            floats, ints = np.empty((self.n, 4 + VMAX)), np.empty((self.n, 1 + VMAX), np.int32)
+        R, uncertified = self.first, None
         while True:
-            ws = np.ascontiguousarray(np.asarray(w, dtype=np.float64)[self.order])
-            args = (self.pts, ws, self.start, self.G, self.R, self.reach, float(ws.max(initial=0.0)))
-            out, nbr, coef, status = (power_cells_device(*args, outputs=self.outputs)
-                                      if self.device else power_cells_reference(*args))
+            G, reach = grid(self.n, R)
+            pts, start, order, back, rows, starts = self._sorted(G)
+            todo = None if uncertified is None else back[uncertified]
+            ws = np.ascontiguousarray(w[order])
+            far = (R + 1) / G if G > 1 else reach
+            cellmax = cell_max(ws, starts) if G > 1 else np.array([wmax])
+            if self.device:
+                power_cells_device(pts, ws, start, rows, G, R, reach, wmax, todo, self.outputs,
+                                   far, cellmax)
+            else:
+                out, nbr, coef, status = power_cells_reference(pts, ws, start, G, R, reach, wmax,
+                                                               order, todo, far, cellmax)
+                at = order if todo is None else order[todo]
+                floats[at, :4], floats[at, 4:] = out, coef
+                ints[at, 0], ints[at, 1:] = status, nbr
+            status = ints[:, 0]
             if (status == 2).any():
                 raise SamplingError("bnot: a power cell with more than "
                                     f"{VMAX} vertices or {LMAX} cutting lines")
-            if not status.any():
+            uncertified = np.flatnonzero(status)
+            if uncertified.size == 0:
                 break
-            if self.G == 1 and self.R >= MAX_IMAGES:
+            if G == 1 and R >= MAX_IMAGES:
                 raise SamplingError("bnot: weights too far apart for exact power cells")
-            self._sort(self.R + 1)
-        back = self.back
-        res = out[back]
-        return res[:, 0], res[:, 1:3], res[:, 3], laplacian(nbr[back], coef[back], self.order)
+            if todo is None and 2 * uncertified.size > self.n:
+                self.first = R + 1      # most cells need more: the next call starts wider
+            R += 1
+            self.R = max(self.R, R)
+        self._rows = ints[:, 1:], floats[:, 4:]
+        return (floats[:, 0].copy(), floats[:, 1:3].copy(), floats[:, 3].copy(),
+                self.laplacian() if hessian else None)
+
+    def laplacian(self):
+        """The Laplacian (:func:`laplacian`) of the cells of the last call."""
+        return laplacian(*self._rows)
 
 
-def laplacian(nbr, coef, order):
+def laplacian(nbr, coef):
     """The Jacobian of the cells' areas in the weights, L_ij = dA_i / dw_j: minus the
     edges' coefficients off the diagonal, their sum on it, plus 1e-9 of the mean degree
     there (the Laplacian is singular along the constants, to which the gradient is
@@ -332,30 +453,27 @@ def laplacian(nbr, coef, order):
     Parameters
     ----------
     nbr, coef : ndarray (n, VMAX)
-        The kernel's rows in the sites' order, neighbours as sorted indices (-1: none,
-        after the live slots).
-    order : ndarray (n,)
-        Sorted index -> site.
+        The kernel's rows in the sites' order, neighbours as the sites' indices (-1:
+        none, after the live slots).
 
     Returns
     -------
     scipy.sparse.csr_matrix (n, n)
     """
     import scipy.sparse as sp
-    n = nbr.shape[0]
-    live = nbr >= 0
+    n, slots = nbr.shape
+    index = np.int32 if n * (1 + slots) < 2**31 else np.int64
+    cols = np.empty((n, 1 + slots), dtype=index)
+    cols[:, 0] = np.arange(n, dtype=index)
+    cols[:, 1:] = nbr
     degree = coef.sum(axis=1)
-    indptr = np.zeros(n + 1, dtype=np.int64)
-    np.cumsum(live.sum(axis=1) + 1, out=indptr[1:])
-    cols = np.empty(indptr[-1], dtype=np.int64)
-    vals = np.empty(indptr[-1])
-    diagonal = np.zeros(indptr[-1], dtype=bool)
-    diagonal[indptr[:-1]] = True
-    cols[diagonal] = np.arange(n)
-    vals[diagonal] = degree + 1e-9 * max(float(degree.mean()), 1e-300)
-    cols[~diagonal] = order[nbr[live]]
-    vals[~diagonal] = -coef[live]
-    return sp.csr_matrix((vals, cols, indptr), shape=(n, n))
+    vals = np.empty((n, 1 + slots))
+    vals[:, 0] = degree + 1e-9 * max(float(degree.mean()), 1e-300)
+    np.negative(coef, out=vals[:, 1:])
+    live = cols >= 0            # the diagonal first, then the live slots of the row
+    indptr = np.zeros(n + 1, dtype=index)
+    np.cumsum(np.count_nonzero(live, axis=1), out=indptr[1:])
+    return sp.csr_matrix((vals[live], cols[live], indptr), shape=(n, n))
 
 
 class LaplacianSolver:
@@ -363,9 +481,14 @@ class LaplacianSolver:
     one Newton step or iteration to the next: conjugate gradients preconditioned by the
     LU factors of an earlier L (SuperLU, symmetric mode), factored anew when they take
     more than ``steps`` iterations to reach ``rtol``. The same arithmetic on every
-    backend, so the same bits."""
+    backend, so the same bits.
 
-    def __init__(self, rtol=1e-6, steps=12):
+    A Newton direction need not be exact: ``rtol`` (1e-3 of the residual) is the
+    inexact Newton method's forcing term (Dembo, Eisenstat and Steihaug 1982), and the
+    step's line search in :func:`solve_exact_weights` checks every step it takes.
+    """
+
+    def __init__(self, rtol=1e-3, steps=12):
         self.rtol, self.steps, self.lu = rtol, steps, None
 
     def _factor(self, L):
@@ -373,12 +496,37 @@ class LaplacianSolver:
         self.lu = splu(L.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                        options={"SymmetricMode": True})
 
+    def _cg(self, L, b):
+        """Preconditioned conjugate gradients from x = 0 (Hestenes and Stiefel), or None
+        when ``steps`` iterations do not bring |r| to ``rtol`` |b|."""
+        solve = self.lu.solve
+        x = np.zeros_like(b)
+        r = b.copy()
+        z = solve(r)
+        p = z.copy()
+        rz = float(r @ z)
+        bound = self.rtol * float(np.sqrt(b @ b))
+        for _ in range(self.steps):
+            q = L @ p
+            curvature = float(p @ q)
+            if not curvature > 0.0:         # an earlier L's factors that no longer fit
+                return None
+            alpha = rz / curvature
+            x += alpha * p
+            r -= alpha * q
+            if float(np.sqrt(r @ r)) <= bound:
+                return x
+            z = solve(r)
+            rz, previous = float(r @ z), rz
+            p = z + (rz / previous) * p
+        return None
+
     def __call__(self, L, b):
-        from scipy.sparse.linalg import LinearOperator, cg
+        if not b.any():
+            return np.zeros_like(b)
         if self.lu is not None:
-            M = LinearOperator(L.shape, matvec=self.lu.solve, dtype=np.float64)
-            x, info = cg(L, b, rtol=self.rtol, atol=0.0, maxiter=self.steps, M=M)
-            if info == 0:
+            x = self._cg(L, b)
+            if x is not None:
                 return x
         self._factor(L)
         return self.lu.solve(b)
@@ -414,28 +562,29 @@ def solve_exact_weights(cells, w, solver, newton=NEWTON, tol=CAPACITY_TOL):
     -------
     w : ndarray (n,)
     cells : tuple
-        ``cells(w)``: area, centroid offset, second moment, L.
+        ``cells(w)``: area, centroid offset, second moment (and None for L, which
+        ``cells.laplacian()`` builds).
     steps : int
         Newton steps taken.
     """
     n = cells.n
     m = 1.0 / n
-    state = cells(w)
+    state = cells(w, hessian=False)
     if w.any() and not state[0].min() > 0.0:
         w = np.zeros(n)
-        state = cells(w)
+        state = cells(w, hessian=False)
     least = 0.5 * min(float(state[0].min()), m)
     steps = 0
     for _ in range(newton):
         grad = m - state[0]
         if n == 1 or np.abs(grad).max() <= tol * m:
             break
-        delta = solver(state[3], grad)
+        delta = solver(cells.laplacian(), grad)     # state is the last call's
         delta -= delta.mean()
         norm, alpha, taken = np.linalg.norm(grad), 1.0, None
         for _ in range(HALVINGS):
             trial = w + alpha * delta
-            out = cells(trial)
+            out = cells(trial, hessian=False)
             if out[0].min() >= least and np.linalg.norm(m - out[0]) <= (1.0 - alpha / 2) * norm:
                 taken = trial, out
                 break
@@ -477,7 +626,7 @@ def exact_optimize(sites, iterations, tol, backend, newton=NEWTON, progress=Fals
     for k in range(r):
         x, w, solver = out[k], np.zeros(n), LaplacianSolver()
         history, dual_history, taken, done, area = [], [], 0, False, np.full(n, 1.0 / n)
-        loose = 0.0
+        loose = COARSE          # the first sites are far from their centroids
         for t in range(iterations):
             w, (area, centroid, moment, _), used = solve_exact_weights(
                 PowerCells(x, backend), w, solver, newton,
