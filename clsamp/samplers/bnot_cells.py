@@ -24,6 +24,7 @@ CAPACITY_TOL = 1e-5     # a solve stops once every area is within this fraction 
 COARSE = 1e-2           # the loosest capacities of an iteration before the last
 MAX_IMAGES = 4          # the widest stencil of images of the torus (G == 1)
 NEAR = 2.0              # sites within sqrt(NEAR / n) cut a cell first: its natural neighbours
+EMPTY = 5e-324          # the least positive double: a cell of a smaller area is empty
 
 
 def grid(n, R):
@@ -395,9 +396,11 @@ class PowerCells:
             self._sorts[G] = pts, start, order, back, rows, starts
         return self._sorts[G]
 
-    def __call__(self, w, hessian=True):
+    def __call__(self, w, hessian=True, least=None):
         """The cells under weights ``w``: (area, centroid offset, second moment, L), L
-        None with ``hessian=False`` (:meth:`laplacian` builds it until the next call)."""
+        None with ``hessian=False`` (:meth:`laplacian` builds it until the next call);
+        None at once where a cell's area falls below ``least`` (a wider stencil only
+        clips a cell further)."""
         w = np.asarray(w, dtype=np.float64)
         wmax = float(w.max(initial=0.0))
         if self.device:
@@ -425,6 +428,8 @@ class PowerCells:
             if (status == 2).any():
                 raise SamplingError("bnot: a power cell with more than "
                                     f"{VMAX} vertices or {LMAX} cutting lines")
+            if least is not None and floats[:, 0].min() < least:
+                return None
             uncertified = np.flatnonzero(status)
             if uncertified.size == 0:
                 break
@@ -569,8 +574,8 @@ def solve_exact_weights(cells, w, solver, newton=NEWTON, tol=CAPACITY_TOL):
     """
     n = cells.n
     m = 1.0 / n
-    state = cells(w, hessian=False)
-    if w.any() and not state[0].min() > 0.0:
+    state = cells(w, hessian=False, least=EMPTY if w.any() else None)
+    if state is None:
         w = np.zeros(n)
         state = cells(w, hessian=False)
     least = 0.5 * min(float(state[0].min()), m)
@@ -584,8 +589,8 @@ def solve_exact_weights(cells, w, solver, newton=NEWTON, tol=CAPACITY_TOL):
         norm, alpha, taken = np.linalg.norm(grad), 1.0, None
         for _ in range(HALVINGS):
             trial = w + alpha * delta
-            out = cells(trial, hessian=False)
-            if out[0].min() >= least and np.linalg.norm(m - out[0]) <= (1.0 - alpha / 2) * norm:
+            out = cells(trial, hessian=False, least=least)
+            if out is not None and np.linalg.norm(m - out[0]) <= (1.0 - alpha / 2) * norm:
                 taken = trial, out
                 break
             alpha *= 0.5
