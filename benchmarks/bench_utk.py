@@ -11,7 +11,8 @@ missing gives none; ``benchmarks/run.py`` runs it all the same. Each UTK binary
 own clock, so process start and file I/O are not counted; its points come back for the
 quality figures. The machine may be shared, so the two sides are timed close together:
 for ``sot`` and the nets clsamp's and UTK's calls alternate (each column the median of
-its calls), for PeriodicBNOT clsamp's calls follow UTK's. Even so a loaded machine bends
+its calls; each clsamp call timed after ``common.WARM`` seconds of untimed ones), for
+PeriodicBNOT clsamp's calls follow UTK's. Even so a loaded machine bends
 the ratios: UTK's SOT runs OpenMP threads, which slowed 22x at a load of 10 on two cores
 where clsamp's sot slowed 2.2x (docs/performance.md); compare runs at low load.
 
@@ -60,7 +61,7 @@ from bench_gbn import LADDER as GBN_LADDER
 from bench_gbn import low_frequency_power
 from bench_sot import LADDER as SOT_LADDER
 from bench_sot import _mean_nn
-from common import Row, main, on_device, short_name, timed
+from common import WARM, Row, main, on_device, short_name, timed
 
 import clsamp
 from clsamp.metrics import relative_radius
@@ -119,11 +120,17 @@ def into_cube(points):
 
 
 def interleaved(clsamp_fn, utk_fn, repeats):
-    """Median seconds of clsamp's calls and UTK's, called alternately ``repeats`` times each
-    (clsamp after one warm-up call); the last points of each."""
-    pts = clsamp_fn()
+    """Median seconds of clsamp's calls and UTK's, called alternately ``repeats`` times each;
+    the last points of each. Each timed clsamp call comes after ``WARM`` seconds of
+    untimed ones (at least one), as ``common.timed``'s rows over the twins: UTK's run
+    leaves clsamp's process idle, and a CPU device's first work after a pause runs slower
+    (docs/performance.md, "Warm calls before the timed ones")."""
     t_cl, t_utk = [], []
     for _ in range(repeats):
+        warm = time.perf_counter()
+        pts = clsamp_fn()
+        while time.perf_counter() - warm < WARM:
+            pts = clsamp_fn()
         t0 = time.perf_counter()
         pts = clsamp_fn()
         t_cl.append(time.perf_counter() - t0)
