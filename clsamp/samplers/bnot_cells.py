@@ -341,8 +341,8 @@ def power_cells_device(sites, w, start, order, G, R, reach, wmax, todo=None, out
         order = runtime.input_buffer(order.astype(np.uint32))
     kernel(runtime.queue(), (-(-m // local) * local,), (local,), sites, runtime.input_buffer(w),
            start, order, todo, np.uint32(m), np.int32(G), np.int32(R), np.float64(near),
-           np.float64(reach), np.float64(far), np.float64(wmax), runtime.input_buffer(cellmax), floats.buffer,
-           ints.buffer)
+           np.float64(reach), np.float64(far), np.float64(wmax), runtime.input_buffer(cellmax),
+           floats.buffer, ints.buffer)
     f, i = floats.finish(), ints.finish()
     return f[:, :4], i[:, 1:], f[:, 4:], i[:, 0]
 
@@ -514,7 +514,7 @@ class LaplacianSolver:
         for _ in range(self.steps):
             q = L @ p
             curvature = float(p @ q)
-            if not curvature > 0.0:         # an earlier L's factors that no longer fit
+            if not (curvature > 0.0 and rz > 0.0):     # factors that no longer fit L
                 return None
             alpha = rz / curvature
             x += alpha * p
