@@ -16,13 +16,15 @@
  * every other site, in the (2 R + 1)^2 images of the torus, by the same rings. They come
  * in two passes of that order: first those with |d|^2 < near (about the natural
  * neighbours, which leave the cell nearly final), then the others, most of which the
- * farthest vertex then shows to miss the cell. A site no candidate lies at least reach from x_i, and one
- * beyond the ring R + 1 of grid cells at least far; a cut by a site j at distance d needs
- * d^2 - 2 r d + w_i - w_j < 0, r the distance of the cell's farthest vertex. So the cell is
- * certified (status 0) when r < reach, reach^2 - 2 r reach + w_i - wring >= 0 (wring the
- * largest weight in the cells of ring R + 1, from cellmax, each grid cell's largest
- * weight) and far^2 - 2 r far + w_i - wmax >= 0 (wmax the largest weight); with G == 1
- * (far = reach) the last alone. Otherwise status 1 (the host takes a wider stencil).
+ * farthest vertex then shows to miss the cell.
+ *
+ * A site j at distance d cuts the cell only if d^2 - 2 r d + w_i - w_j < 0, r the distance
+ * of the cell's farthest vertex. A site no candidate lies at least reach from x_i, and one
+ * beyond the ring R + 1 of grid cells at least far. So the cell is certified (status 0)
+ * when r < reach, reach^2 - 2 r reach + w_i - wring >= 0 (wring the largest weight in the
+ * cells of ring R + 1, from cellmax, each grid cell's largest weight) and
+ * far^2 - 2 r far + w_i - wmax >= 0 (wmax the largest weight); with G == 1 (far = reach)
+ * the last alone. Otherwise status 1 (the host takes a wider stencil).
  * Status 2: more than VMAX vertices or LMAX cutting lines.
  *
  * The rows are the sites' own order (order: sorted index -> site). Row order[i] of out
