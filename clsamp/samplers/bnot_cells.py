@@ -51,10 +51,26 @@ def grid(n, R):
     return G, R / G
 
 
+def _ring(k):
+    """The cells at Chebyshev distance k, in the kernel's order: the first axis outer."""
+    return [(ox, oy) for ox in range(-k, k + 1) for oy in range(-k, k + 1)
+            if max(abs(ox), abs(oy)) == k]
+
+
 def _stencil(R):
     """The kernel's order of the (2 R + 1)^2 neighbouring cells: by ring, then first axis."""
-    return [(ox, oy) for ring in range(R + 1) for ox in range(-ring, ring + 1)
-            for oy in range(-ring, ring + 1) if max(abs(ox), abs(oy)) == ring]
+    return [cell for ring in range(R + 1) for cell in _ring(ring)]
+
+
+def _bounds(w, start, G, R, reach, wmax, far=None, cellmax=None):
+    """The certificate's ``far`` and ``cellmax`` (:func:`power_cells_reference`), each
+    where not given: (R + 1) / G (``reach`` when G == 1), and each grid cell's largest
+    weight (the largest of all when G == 1)."""
+    if far is None:
+        far = (R + 1) / G if G > 1 else reach
+    if cellmax is None:
+        cellmax = cell_max(w, start) if G > 1 else np.array([float(wmax)])
+    return far, cellmax
 
 
 def cell_max(w, start):
@@ -183,15 +199,11 @@ def power_cells_reference(sites, w, start, G, R, reach, wmax, order=None, todo=N
                 if r.size == 0:
                     continue
                 _clip(r, jr, dx, dy, s, inside, px, py, lab, cnt, lines, tj, tn, st, r2)
-    if far is None:
-        far = (R + 1) / G if G > 1 else reach
+    far, cellmax = _bounds(w, start, G, R, reach, wmax, far, cellmax)
     wring = np.full(n, float(wmax))
     if G > 1:
-        cellmax = cell_max(w, start) if cellmax is None else cellmax
-        k = R + 1
-        ring = [(ox, oy) for ox in range(-k, k + 1) for oy in range(-k, k + 1)
-                if max(abs(ox), abs(oy)) == k]
-        wring = np.max([cellmax[((cx + ox) % G) * G + (cy + oy) % G] for ox, oy in ring], axis=0)
+        wring = np.max([cellmax[((cx + ox) % G) * G + (cy + oy) % G]
+                        for ox, oy in _ring(R + 1)], axis=0)
     out, nbr, coef, status = _moments(px, py, lab, cnt, tj, tn, st, wi, reach, far, wmax,
                                       wring, r2)
     if order is not None:
@@ -329,11 +341,8 @@ def power_cells_device(sites, w, start, order, G, R, reach, wmax, todo=None, out
     else:
         m = int(len(todo))
         todo = runtime.input_buffer(np.asarray(todo, dtype=np.uint32))
-    if far is None:
-        far = (R + 1) / G if G > 1 else reach
+    far, cellmax = _bounds(w, start, G, R, reach, wmax, far, cellmax)
     near = NEAR / n if near is None else near
-    if cellmax is None:
-        cellmax = cell_max(w, start) if G > 1 else np.array([float(wmax)])
     local = runtime.local_size(64)
     sites, start = (a if not isinstance(a, np.ndarray) else runtime.input_buffer(a)
                     for a in (sites, start))
@@ -413,8 +422,7 @@ class PowerCells:
             pts, start, order, back, rows, starts = self._sorted(G)
             todo = None if uncertified is None else back[uncertified]
             ws = np.ascontiguousarray(w[order])
-            far = (R + 1) / G if G > 1 else reach
-            cellmax = cell_max(ws, starts) if G > 1 else np.array([wmax])
+            far, cellmax = _bounds(ws, starts, G, R, reach, wmax)
             if self.device:
                 power_cells_device(pts, ws, start, rows, G, R, reach, wmax, todo, self.outputs,
                                    far, cellmax)
