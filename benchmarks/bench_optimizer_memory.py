@@ -1,0 +1,114 @@
+"""The blue-noise optimizers' peak memory against n: the issue's "memory linear in n".
+
+    python benchmarks/bench_optimizer_memory.py [--device all] [--quick] [--out FILE]
+
+Each optimizer makes one 2-D set (seed 1) at n = 8192, 16384, 32768 and 65536 (``--quick``:
+8192 and 16384), each n in a fresh Python process on the device: a warm-up call of 64
+points (the kernels built, the runtime's pools made), then the measured call, with the
+process's peak resident memory (``getrusage``'s ``ru_maxrss``) read before and after it.
+
+The optimizers, with few iterations (an iteration's arrays are made in the first and
+reused, so the peak does not grow with the iterations; docs/performance.md gives the
+measurements over more):
+
+* ``gbn``, 5 iterations, ``tol=0``;
+* ``sot``, 16 batches of 32 directions;
+* ``bnot`` with exact cells, 4 iterations;
+* ``bnot`` with density points (256 a site), 1 iteration;
+* ``sample_elimination``, 5 candidates a point.
+
+A row gives the call's seconds and, in its quality column, the peak, the part above the
+warm-up's peak, and the growth of both over the previous n (one doubling): the issue's bound
+is 2.2x on the peak; the part above the warm-up, what the call itself holds, grows about
+2x a doubling where memory is linear in n. There is no peer: the rows stay in the full
+table (docs/benchmarks.md). The memory is the host's: on a GPU the device's buffers are not
+in it.
+"""
+
+import json
+import os
+import subprocess
+import sys
+
+from common import Row, main, short_name
+
+#: (case, sampler, keyword arguments) of each optimizer measured
+OPTIMIZERS = (
+    ("gbn", "gbn", {"iterations": 5, "tol": 0.0}),
+    ("sot", "sot", {"iterations": 16}),
+    ("bnot exact", "bnot", {"cells": "exact", "iterations": 4, "progress": False}),
+    ("bnot with density points", "bnot", {"iterations": 1, "progress": False}),
+    ("sample_elimination", "sample_elimination", {}),
+)
+SIZES = (8192, 16384, 32768, 65536)
+QUICK_SIZES = (8192, 16384)
+BOUND = 2.2           # the issue's largest growth of the peak a doubling of n
+WARM_UP = 64          # points of the call before the measured one
+TIMEOUT = 1800        # seconds one child process may take
+
+
+def measure(device_index, name, n, params):
+    """One child process: ``name`` with ``params`` makes a warm-up set, then n points.
+
+    Returns
+    -------
+    dict
+        ``seconds`` of the measured call, ``base`` and ``peak``: the process's peak resident
+        memory before and after it, in MiB.
+    """
+    env = dict(os.environ, CLSAMP_DEVICE=str(device_index))
+    done = subprocess.run([sys.executable, os.path.abspath(__file__), "--child", name, str(n),
+                           json.dumps(params)], env=env, capture_output=True, text=True,
+                          timeout=TIMEOUT, check=False)
+    if done.returncode != 0:
+        raise RuntimeError(f"{name} at n = {n}: the child process failed:\n{done.stderr}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def _child(name, n, params):
+    """The measurement inside the child process; prints its dict as JSON."""
+    import resource
+    import time
+
+    import clsamp
+    sampler = clsamp.make_sampler(name, seed=1, **params)
+    sampler.sample(WARM_UP)
+    base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    start = time.perf_counter()
+    sampler.sample(n)
+    seconds = time.perf_counter() - start
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    # ru_maxrss is in KiB on Linux
+    print(json.dumps({"seconds": seconds, "base": base / 1024, "peak": peak / 1024}))
+
+
+def run(devices, quick):
+    rows = []
+    sizes = QUICK_SIZES if quick else SIZES
+    for device in devices:
+        dev = short_name(device)
+        for case, name, params in OPTIMIZERS:
+            last = None
+            for n in sizes:
+                got = measure(device.index, name, n, params)
+                peak, above = got["peak"], got["peak"] - got["base"]
+                text = f"peak RSS {peak:.0f} MiB, {above:.1f} MiB above the warm-up"
+                extra = {"peak_mib": peak, "above_mib": above}
+                if last is not None:
+                    growth = peak / last[0]
+                    text += f"; {growth:.2f}x the peak at n/2 (bound {BOUND}x)"
+                    extra.update(growth=growth, within_bound=growth <= BOUND)
+                    if last[1] > 0:
+                        extra["above_growth"] = above / last[1]
+                        text += f", {above / last[1]:.2f}x the part above the warm-up"
+                rows.append(Row(f"{case} memory", f"{n}x2D", dev, got["seconds"],
+                                quality=text, extra=extra))
+                last = (peak, above)
+    return rows
+
+
+if __name__ == "__main__":
+    if len(sys.argv) > 1 and sys.argv[1] == "--child":
+        _child(sys.argv[2], int(sys.argv[3]), json.loads(sys.argv[4]))
+    else:
+        main(run, __doc__)
