@@ -53,28 +53,40 @@ inline void cell_of(const double *x, const int G, int *c)
 #endif
 
 #if CLSAMP_FP64
+/* the gap along one axis from coordinate xk to the box of the cell digit (-1, 0, +1) steps
+ * from cell ck (cells 1 / G wide), less a margin far above the rounding of x G and of a
+ * squared distance, and at least 0 */
+inline double cells_gap(const double xk, const int ck, const int digit, const double inv_G)
+{
+    const double gap = (digit > 0 ? (double)(ck + 1) * inv_G - xk
+                        : digit < 0 ? xk - (double)ck * inv_G : 0.0) - 1e-12;
+    return gap > 0.0 ? gap : 0.0;
+}
+
+/* whether a lower bound lb of a squared distance passes the squared reach reach2, with a
+ * margin far above the rounding */
+inline bool cells_past(const double lb, const double reach2)
+{
+    return lb > reach2 * 1.000001;
+}
+
 /* whether neighbour o of cell c (as neighbour() numbers them) lies wholly beyond the reach
  * from x, its squared reach reach2 no more than the cells' width squared (G >= 3): a lower
- * bound of the squared distance from x to the cell's box, each axis's gap less a margin
- * far above the rounding of x G and of a squared distance, passes reach2. Such a cell
- * holds no point within the reach (on the torus too: with G >= 3 the cell's nearest image
- * is the one next to c), so a search that skips it finds what the full stencil finds, in
- * the same order. Worth its cost from 3-D on, where most of the 3^D cells' corners lie
- * beyond the reach. */
+ * bound of the squared distance from x to the cell's box, the sum of each axis's
+ * cells_gap squared, passes reach2 (cells_past). Such a cell holds no point within the
+ * reach (on the torus too: with G >= 3 the cell's nearest image is the one next to c), so
+ * a search that skips it finds what the full stencil finds, in the same order. Worth its
+ * cost from 3-D on, where most of the 3^D cells' corners lie beyond the reach. */
 inline bool cell_beyond(const double *x, const int *c, uint o, const int G, const double reach2)
 {
     const double inv_G = 1.0 / (double)G;
     double lb = 0.0;
     for (int k = D - 1; k >= 0; --k) {
-        const int digit = (int)(o % 3) - 1;
+        const double gap = cells_gap(x[k], c[k], (int)(o % 3) - 1, inv_G);
         o /= 3;
-        double gap = digit > 0 ? (double)(c[k] + 1) * inv_G - x[k]
-                   : digit < 0 ? x[k] - (double)c[k] * inv_G : 0.0;
-        gap = gap - 1e-12;
-        gap = gap > 0.0 ? gap : 0.0;
         lb = lb + gap * gap;
     }
-    return lb > reach2 * 1.000001;
+    return cells_past(lb, reach2);
 }
 #endif
 
@@ -90,10 +102,11 @@ inline uint cells_rows(const int G, const uint noff)
  * neighbour() numbers them: the cells c[D - 1] - 1 .. c[D - 1] + 1 along the last axis, the
  * other axes fixed) of the set whose cell starts are st (G >= 3): consecutive cells lie
  * together in sorted order, so the row is one range, or two where it wraps around the
- * torus; from 3-D on a cell wholly beyond the reach from x (cell_beyond, reach2) is left
- * out. With G == 1 the one row is the one cell. Writes the non-empty ranges lo[k] ..
- * hi[k] - 1 in stencil order and returns how many (0, 1 or 2): walking them finds the
- * points that the cells one at a time hold, in the same order. */
+ * torus; from 3-D on a cell wholly beyond the reach from x (cell_beyond's bound, reach2)
+ * is left out, and a row whose cells all are, at once. With G == 1 the one row is the one
+ * cell. Writes the non-empty ranges lo[k] .. hi[k] - 1 in stencil order and returns how
+ * many (0, 1 or 2): walking them finds the points that the cells one at a time hold, in
+ * the same order. */
 inline uint cells_row_ranges(__global const uint *st, const int *c, const double *x,
                              const int G, const uint o, const double reach2, uint *lo,
                              uint *hi)
@@ -114,12 +127,27 @@ inline uint cells_row_ranges(__global const uint *st, const int *c, const double
         return hi[0] > lo[0] ? 1u : 0u;
     }
 #endif
+#if D >= 3
+    /* cell_beyond's bound in two parts: the row's first D - 1 axes once (a row wholly
+     * beyond the reach has no cell to walk), then each cell's last axis */
+    const double inv_G = 1.0 / (double)G;
+    double row = 0.0;
+    uint digits = o;
+    for (int k = D - 2; k >= 0; --k) {
+        const double gap = cells_gap(x[k], c[k], (int)(digits % 3) - 1, inv_G);
+        digits /= 3;
+        row = row + gap * gap;
+    }
+    if (cells_past(row, reach2))
+        return 0;
+#endif
     const uint base = neighbour(c, 3 * o + 1, G) - (uint)c[D - 1];
     uint ranges = 0, a = 0, b = 0;
     int last = -2;
     for (int dl = -1; dl <= 1; ++dl) {
 #if D >= 3
-        if (cell_beyond(x, c, 3 * o + (uint)(dl + 1), G, reach2))
+        const double gap = cells_gap(x[D - 1], c[D - 1], dl, inv_G);
+        if (cells_past(row + gap * gap, reach2))
             continue;
 #endif
         int cell = c[D - 1] + dl;
