@@ -28,8 +28,8 @@
  *     among equal ones), subtracts its pair weights (count[i] of them from first[i] in nbr
  *     and w) from its neighbours' weights, and again, `removals` times; writes the
  *     removed candidates (indices within the set) in order to gone and leaves the final
- *     weights in weight; key and idx are its scratch, L doubles and L uints a set, L the
- *     least power of two >= max(m, 2) (sample_elimination._tree_leaves).
+ *     weights in weight; key and idx are its scratch, sample_elimination._tree_slots(m)
+ *     doubles and uints a set (its tree, below).
  *
  * Build options: D (dimensions), PERIODIC (1: the unit torus; 0: the unit cube), ALPHA
  * (the weight's exponent, a positive integer), LANES (16: se_pairs takes the stencil's
@@ -249,29 +249,67 @@ __kernel void se_pairs(__global const double *pts, __global const uint *start, c
         count[gi] = found;
 }
 
-/* The elimination keeps each set's candidates in a tournament tree: L (a power of two, at
- * least m and 2) leaves, leaf i's key lk[i] the weight of candidate i while it remains and
- * -inf once removed (the padding past m too); internal node v (1 .. L - 1, children 2v and
- * 2v + 1, node L + i being leaf i) holds in win[v] the winner of its subtree, the leaf of
- * the largest key and the lowest index among equal keys. Leaves are in index order, so of
- * two subtrees' winners a < b (a from the left) a wins where lk[a] >= lk[b]; keys are never
- * NaN. The root's winner is the next to go, as an eagerly updated heap gives it. */
-inline uint se_winner(__global const double *lk, const uint a, const uint b)
+/* The elimination keeps each set's candidates in an 8-ary tournament tree. Level 0 holds
+ * the leaves, candidate i's key the weight of i while it remains and -inf once removed
+ * (padded with -inf to a multiple of 8); node p of level l + 1 decides among nodes 8 p ..
+ * 8 p + 7 of level l, holding their winner (the leaf of the largest key, the lowest index
+ * among equal keys) and its key; each level above the leaves is padded to a multiple of 8
+ * (-inf) until one node, the root, is left. The levels lie one after another in key and
+ * idx (SE_LEVELS at most; sample_elimination._tree_slots gives their length, a set's
+ * scratch). Leaves are in index order, so of two equal keys the left one wins. The root's
+ * winner is the next to go, as an eagerly updated heap gives it. A fallen leaf's key
+ * reaches a node above it only where it won the node below; with 8 children a node, it
+ * mostly did not, and a removal decides log_8 m nodes, not log_2 m. */
+#define SE_LEVELS 12
+
+/* the levels' first slots of a set of m candidates into off; returns the root's level */
+inline uint se_levels(const uint m, uint *off)
 {
-    return lk[a] >= lk[b] ? a : b;
+    uint size = (m + 7u) & ~7u, top = 0;
+    off[0] = 0;
+    while (size > 1) {
+        off[top + 1] = off[top] + size;
+        size = (size + 7u) >> 3;
+        size = size > 1 ? (size + 7u) & ~7u : 1u;
+        top += 1;
+    }
+    return top;
 }
 
-/* leaf j's key has fallen: the nodes above it that it won, from the bottom up, decided
- * again (a node that j did not win keeps its winner, and so does every node above it) */
-inline void se_replay(__global const double *lk, __global uint *win, const uint L, const uint j)
+/* the child (0 .. 7) of the largest of the 8 keys at k, the first among equal ones */
+inline uint se_best8(__global const double *k)
 {
-    uint v = (j + L) >> 1;
-    if (win[v] != j)
-        return;
-    const uint a = v * 2 - L;
-    win[v] = se_winner(lk, a, a + 1);
-    for (v >>= 1; v != 0 && win[v] == j; v >>= 1)
-        win[v] = se_winner(lk, win[2 * v], win[2 * v + 1]);
+    const uint c01 = k[1] > k[0], c23 = 2u + (k[3] > k[2]);
+    const uint c45 = 4u + (k[5] > k[4]), c67 = 6u + (k[7] > k[6]);
+    const uint c03 = k[c23] > k[c01] ? c23 : c01;
+    const uint c47 = k[c67] > k[c45] ? c67 : c45;
+    return k[c47] > k[c03] ? c47 : c03;
+}
+
+/* node p of level l (1 ..) decided again from its 8 children */
+inline void se_decide(__global double *key, __global uint *idx, const uint *off, const uint l,
+                      const uint p)
+{
+    __global const double *k = key + off[l - 1] + 8 * (size_t)p;
+    const uint c = se_best8(k);
+    key[off[l] + p] = k[c];
+    idx[off[l] + p] = l == 1 ? 8 * p + c : idx[off[l - 1] + 8 * p + c];
+}
+
+/* leaf j's key set to v (never above the last): the nodes above it that it won, from the
+ * bottom up, decided again (a node that j did not win keeps its winner, and so does every
+ * node above it) */
+inline void se_replay(__global double *key, __global uint *idx, const uint *off,
+                      const uint top, const uint j, const double v)
+{
+    key[j] = v;
+    uint p = j;
+    for (uint l = 1; l <= top; ++l) {
+        p >>= 3;
+        if (idx[off[l] + p] != j)
+            return;
+        se_decide(key, idx, off, l, p);
+    }
 }
 
 /* Up to 3-D a removal's neighbours are replayed at once (SE_EAGER); from 4-D on they are
@@ -281,9 +319,10 @@ inline void se_replay(__global const double *lk, __global uint *win, const uint 
 #define SE_EAGER (D <= 3)
 
 /* The elimination of set s (its m sorted candidates from s m on; nbr holds sorted indices
- * over all sets; lk (L doubles) and win (L uints) a set, scratch, from s L on). The removed
- * candidate's pair weights leave all its neighbours' weights (the removed ones' too). The
- * order of removals is that of eliminate() in Python's heapq, whose entries are unique. */
+ * over all sets; key (doubles) and idx (uints) the set's tree, scratch, from s slots on).
+ * The removed candidate's pair weights leave all its neighbours' weights (the removed ones'
+ * too). The order of removals is that of eliminate() in Python's heapq, whose entries are
+ * unique. */
 __kernel void se_eliminate(__global const ulong *first, __global const uint *count,
                            __global const uint *nbr,
                            __global const double *w, __global double *weight, const uint m,
@@ -293,32 +332,37 @@ __kernel void se_eliminate(__global const ulong *first, __global const uint *cou
     const uint s = get_global_id(0);
     if (s >= sets)
         return;
-    const uint L = m < 2 ? 2u : 1u << (32 - clz(m - 1));
-    const size_t base = (size_t)s * m;
+    uint off[SE_LEVELS];
+    const uint top = se_levels(m, off);
+    const size_t base = (size_t)s * m, slots = off[top] + 1;
     __global double *current = weight + base;
-    __global double *lk = key + (size_t)s * L;
-    __global uint *win = idx + (size_t)s * L;
-    for (uint i = 0; i < m; ++i)
-        lk[i] = current[i];
-    for (uint i = m; i < L; ++i)
-        lk[i] = -INFINITY;
-    for (uint v = L - 1; v >= L / 2; --v)
-        win[v] = se_winner(lk, 2 * v - L, 2 * v + 1 - L);
-    for (uint v = L / 2; v-- > 1;)
-        win[v] = se_winner(lk, win[2 * v], win[2 * v + 1]);
+    __global double *tk = key + (size_t)s * slots;
+    __global uint *ti = idx + (size_t)s * slots;
+    for (uint i = 0; i < off[1]; ++i)
+        tk[i] = i < m ? current[i] : -INFINITY;
+    for (uint l = 1; l <= top; ++l) {
+        const uint nodes = (l < top ? off[l + 1] : off[l] + 1) - off[l];
+        const uint decided = (off[l] - off[l - 1]) >> 3;
+        for (uint p = 0; p < nodes; ++p) {
+            if (p < decided) {
+                se_decide(tk, ti, off, l, p);
+            } else {
+                tk[off[l] + p] = -INFINITY;         /* padding: never a winner */
+                ti[off[l] + p] = 0;
+            }
+        }
+    }
     uint removed = 0;
     while (removed < removals) {
-        const uint i = win[1];
+        const uint i = ti[off[top]];
         const double now = current[i];
-        if (lk[i] != now) {                         /* a stale key (never with SE_EAGER) */
-            lk[i] = now;
-            se_replay(lk, win, L, i);
+        if (tk[i] != now) {                         /* a stale key (never with SE_EAGER) */
+            se_replay(tk, ti, off, top, i, now);
             continue;
         }
         gone[(size_t)s * removals + removed] = i;
         removed += 1;
-        lk[i] = -INFINITY;
-        se_replay(lk, win, L, i);
+        se_replay(tk, ti, off, top, i, -INFINITY);
         const ulong a0 = first[base + i];
         const ulong stop = a0 + count[base + i];
         for (ulong a = a0; a < stop; ++a) {
@@ -327,10 +371,8 @@ __kernel void se_eliminate(__global const ulong *first, __global const uint *cou
             weight[j] = fallen;
 #if SE_EAGER
             const uint jl = j - (uint)base;
-            if (lk[jl] != -INFINITY) {
-                lk[jl] = fallen;
-                se_replay(lk, win, L, jl);
-            }
+            if (tk[jl] != -INFINITY)
+                se_replay(tk, ti, off, top, jl, fallen);
 #endif
         }
     }

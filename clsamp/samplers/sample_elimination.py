@@ -275,10 +275,16 @@ def neighbour_weights_device(pts, start, m, cells, weighting):
     return offset, nbr.finish()[:size], w.finish()[:size], weight.finish()
 
 
-def _tree_leaves(m):
-    """The leaves of ``se_eliminate``'s tournament tree for m candidates: the least power of
-    two at least max(m, 2)."""
-    return 1 << max(int(m) - 1, 1).bit_length()
+def _tree_slots(m):
+    """The slots of ``se_eliminate``'s 8-ary tournament tree for m candidates (its key and
+    winner arrays, a set each): the leaves, m rounded up to a multiple of 8, then each level
+    above, an eighth of the one below rounded up to a multiple of 8, up to the one root."""
+    size, slots = -(-int(m) // 8) * 8, 0
+    while size > 1:
+        slots += size
+        size = -(-size // 8)
+        size = -(-size // 8) * 8 if size > 1 else 1
+    return slots + 1
 
 
 def eliminate_device(pts, start, m, cells, weighting, keep):
@@ -318,8 +324,8 @@ def eliminate_device(pts, start, m, cells, weighting, keep):
         runtime.require_short_loops("sample elimination's tournament tree")
     gone = runtime.Output((sets * max(removals, 1),), np.uint32,
                           host=np.empty(sets * max(removals, 1), dtype=np.uint32))
-    leaves = sets * _tree_leaves(m)
-    key, idx = runtime.Output((leaves,), np.float64), runtime.Output((leaves,), np.uint32)
+    slots = sets * _tree_slots(m)
+    key, idx = runtime.Output((slots,), np.float64), runtime.Output((slots,), np.uint32)
     local = min(runtime.local_size(64), sets)
     runtime.kernel("sample_elimination.cl", "se_eliminate", defines)(
         runtime.queue(), (-(-sets // local) * local,), (local,), runtime.input_buffer(first),
@@ -406,7 +412,7 @@ def _eliminate_sets(points, keep, weighting, backend):
         pairs = max(min(m, math.ceil(4 * m * ball_volume(d, weighting.d_max))),
                     slab_width(m, d, weighting))
         ranges = runtime.chunk_ranges(
-            sets, m * (8 * d + 64) + 12 * _tree_leaves(m) + 12 * m * pairs)
+            sets, m * (8 * d + 64) + 12 * _tree_slots(m) + 12 * m * pairs)
         if len(ranges) > 1:
             return [result for lo, hi in ranges
                     for result in _eliminate_sets(points[lo:hi], keep, weighting, backend)]
