@@ -26,10 +26,12 @@
  *     gets the neighbours found (more than cap: the host runs the passes with offsets).
  * se_eliminate: per set, removes the candidate of the largest weight (the lowest index
  *     among equal ones), subtracts its pair weights (count[i] of them from first[i] in nbr
- *     and w) from its neighbours' weights, and again, `removals` times; writes the
- *     removed candidates (indices within the set) in order to gone and leaves the final
- *     weights in weight; key and idx are its scratch, sample_elimination._tree_slots(m)
- *     doubles and uints a set (its tree, below).
+ *     and w, or with cap > 0 from i cap, as se_pairs wrote them: a set with a list longer
+ *     than cap gets overflow[s] = 1 and nothing else) from its neighbours' weights, and
+ *     again, `removals` times; writes the removed candidates (indices within the set) in
+ *     order to gone, overflow[s] = 0, and leaves the final weights in weight; key and idx
+ *     are its scratch, sample_elimination._tree_slots(m) doubles and uints a set (its
+ *     tree, below).
  *
  * Build options: D (dimensions), PERIODIC (1: the unit torus; 0: the unit cube), ALPHA
  * (the weight's exponent, a positive integer), LANES (16: se_pairs takes the stencil's
@@ -324,10 +326,10 @@ inline void se_replay(__global double *key, __global uint *idx, const uint *off,
  * too). The order of removals is that of eliminate() in Python's heapq, whose entries are
  * unique. */
 __kernel void se_eliminate(__global const ulong *first, __global const uint *count,
-                           __global const uint *nbr,
+                           const uint cap, __global const uint *nbr,
                            __global const double *w, __global double *weight, const uint m,
                            const uint sets, const uint removals, __global double *key,
-                           __global uint *idx, __global uint *gone)
+                           __global uint *idx, __global uint *gone, __global uint *overflow)
 {
     const uint s = get_global_id(0);
     if (s >= sets)
@@ -335,6 +337,15 @@ __kernel void se_eliminate(__global const ulong *first, __global const uint *cou
     uint off[SE_LEVELS];
     const uint top = se_levels(m, off);
     const size_t base = (size_t)s * m, slots = off[top] + 1;
+    /* with cap > 0 list i is in the cap slots from i cap on, unless se_pairs found more
+     * neighbours than that (count[i] > cap) in some list of the set: then overflow[s] = 1
+     * and the set is left alone */
+    uint over = 0;
+    for (uint i = 0; cap > 0 && i < m; ++i)
+        over |= count[base + i] > cap;
+    overflow[s] = over;
+    if (over)
+        return;
     __global double *current = weight + base;
     __global double *tk = key + (size_t)s * slots;
     __global uint *ti = idx + (size_t)s * slots;
@@ -363,7 +374,7 @@ __kernel void se_eliminate(__global const ulong *first, __global const uint *cou
         gone[(size_t)s * removals + removed] = i;
         removed += 1;
         se_replay(tk, ti, off, top, i, -INFINITY);
-        const ulong a0 = first[base + i];
+        const ulong a0 = cap > 0 ? (ulong)(base + i) * cap : first[base + i];
         const ulong stop = a0 + count[base + i];
         for (ulong a = a0; a < stop; ++a) {
             const uint j = nbr[a];

@@ -201,13 +201,16 @@ def slab_width(m, d, weighting):
     return max(1, min(m - 1, math.ceil(lam + 6.0 * math.sqrt(lam) + 8.0)))
 
 
-def _pairs_on_device(pts, start, m, cells, weighting, host, cap=0):
+def _pairs_on_device(pts, start, m, cells, weighting, host, cap=0, wait=True):
     """Launch the neighbour passes: ``se_pairs`` into ``cap`` slots a candidate where
     ``cap`` > 0 and no list overflows, else ``se_count``, the offsets on the host and
     ``se_pairs`` into them. Returns each list's first slot (uint64, total) and length
     (uint32), the outputs ``nbr``, ``w``, ``weight`` (:class:`clsamp.runtime.Output`: over
     host arrays where ``host``, else on the device, ``weight`` read-write for
-    ``se_eliminate``) and the kernels' defines."""
+    ``se_eliminate``) and the kernels' defines. With ``cap`` > 0 and not ``wait``, the one
+    pass only, not waited for: its lengths are then the :class:`~clsamp.runtime.Output`
+    ``count`` (read-write where not ``host``, for ``se_eliminate``) and its first slots
+    None."""
     runtime.require_fp64()
     total, d = pts.shape
     limit = runtime.loop_limit()
@@ -222,7 +225,8 @@ def _pairs_on_device(pts, start, m, cells, weighting, host, cap=0):
                 np.uint32(total), np.int32(cells), np.uint32(3 ** d if cells > 1 else 1),
                 np.float64(weighting.d_max * weighting.d_max))
     weight = runtime.Output((total,), np.float64, host=np.empty(total), read_write=not host)
-    count = runtime.Output((total,), np.uint32, host=np.empty(total, dtype=np.uint32))
+    count = runtime.Output((total,), np.uint32, host=np.empty(total, dtype=np.uint32),
+                           read_write=not host)
 
     def pairs(offset, cap, slots):
         nbr = runtime.Output((slots,), np.uint32,
@@ -236,6 +240,8 @@ def _pairs_on_device(pts, start, m, cells, weighting, host, cap=0):
 
     if cap > 0:
         nbr, w = pairs(np.zeros(1, dtype=np.uint64), cap, total * cap)
+        if not wait:
+            return None, count, nbr, w, weight, defines
         found = count.finish()
         if int(found.max(initial=0)) <= cap:
             return np.arange(total, dtype=np.uint64) * np.uint64(cap), found, nbr, w, weight, defines
@@ -317,20 +323,46 @@ def eliminate_device(pts, start, m, cells, weighting, keep):
     total, d = pts.shape
     sets = total // m
     removals = m - keep
+    cap = slab_width(m, d, weighting)
+    if runtime.loop_limit() is None:
+        # the elimination right after the one pass, with no wait between: it reads the
+        # lists' lengths from the pass's counts and leaves every set alone where a list
+        # overflowed its slots, which the passes with offsets below then redo
+        _, count, nbr, w, weight, defines = _pairs_on_device(
+            pts, start, m, cells, weighting, host=False, cap=cap, wait=False)
+        done = _eliminate_lists(None, count.buffer, cap, nbr, w, weight, m, sets, removals,
+                                defines)
+        if done is not None:
+            return done
+        cap = 0
     first, found, nbr, w, weight, defines = _pairs_on_device(
-        pts, start, m, cells, weighting, host=False, cap=slab_width(m, d, weighting))
+        pts, start, m, cells, weighting, host=False, cap=cap)
     limit = runtime.loop_limit()
     if limit is not None and (removals + int(found.sum())) * (int(m).bit_length() + 1) > limit:
         runtime.require_short_loops("sample elimination's tournament tree")
+    return _eliminate_lists(runtime.input_buffer(first), runtime.input_buffer(found), 0, nbr, w,
+                            weight, m, sets, removals, defines)
+
+
+def _eliminate_lists(first, count, cap, nbr, w, weight, m, sets, removals, defines):
+    """``se_eliminate`` over the lists: list i from slot ``first[i]`` (a buffer), or with
+    ``cap`` > 0 from slot i cap, its length in ``count`` (a buffer). Returns
+    :func:`eliminate_device`'s (gone, weight), or None where ``cap`` > 0 and a list
+    overflowed its slots (then nothing was eliminated)."""
     gone = runtime.Output((sets * max(removals, 1),), np.uint32,
                           host=np.empty(sets * max(removals, 1), dtype=np.uint32))
+    overflow = runtime.Output((sets,), np.uint32, host=np.empty(sets, dtype=np.uint32))
     slots = sets * _tree_slots(m)
     key, idx = runtime.Output((slots,), np.float64), runtime.Output((slots,), np.uint32)
     local = min(runtime.local_size(64), sets)
     runtime.kernel("sample_elimination.cl", "se_eliminate", defines)(
-        runtime.queue(), (-(-sets // local) * local,), (local,), runtime.input_buffer(first),
-        runtime.input_buffer(found), nbr.buffer, w.buffer, weight.buffer, np.uint32(m),
-        np.uint32(sets), np.uint32(removals), key.buffer, idx.buffer, gone.buffer)
+        runtime.queue(), (-(-sets // local) * local,), (local,),
+        first if first is not None else runtime.input_buffer(np.zeros(1, dtype=np.uint64)),
+        count, np.uint32(cap), nbr.buffer, w.buffer, weight.buffer, np.uint32(m),
+        np.uint32(sets), np.uint32(removals), key.buffer, idx.buffer, gone.buffer,
+        overflow.buffer)
+    if cap > 0 and overflow.finish().any():
+        return None
     gone = gone.finish()[:sets * removals].reshape(sets, removals)
     return gone, weight.finish().reshape(sets, m)
 
