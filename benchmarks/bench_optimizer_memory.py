@@ -4,8 +4,12 @@
 
 Each optimizer makes one 2-D set (seed 1) at n = 8192, 16384, 32768 and 65536 (``--quick``:
 8192 and 16384), each n in a fresh Python process on the device: a warm-up call of 64
-points (the kernels built, the runtime's pools made), then the measured call, with the
-process's peak resident memory (``getrusage``'s ``ru_maxrss``) read before and after it.
+points (the kernels built, the runtime's pools made), then the measured call. Its peak is
+the process's resident high-water mark (``VmHWM`` in ``/proc/self/status``), set back to
+the resident memory of the moment (``VmRSS``) just before the call (``5`` written to
+``/proc/self/clear_refs``, Linux 4.0 on). Not ``getrusage``'s ``ru_maxrss``: on Linux a
+child started by ``subprocess`` inherits its parent's peak there, gigabytes in a full run
+of ``benchmarks/run.py``.
 
 The optimizers, with few iterations (an iteration's arrays are made in the first and
 reused, so the peak does not grow with the iterations; docs/performance.md gives the
@@ -18,11 +22,11 @@ measurements over more):
 * ``sample_elimination``, 5 candidates a point.
 
 A row gives the call's seconds and, in its quality column, the peak, the part above the
-warm-up's peak, and the growth of both over the previous n (one doubling): the issue's bound
-is 2.2x on the peak; the part above the warm-up, what the call itself holds, grows about
-2x a doubling where memory is linear in n. There is no peer: the rows stay in the full
-table (docs/benchmarks.md). The memory is the host's: on a GPU the device's buffers are not
-in it.
+resident memory before the call, and the growth of both over the previous n (one
+doubling): the issue's bound is 2.2x on the peak; the part above, what the call itself
+holds at its peak, grows about 2x a doubling where memory is linear in n. There is no
+peer: the rows stay in the full table (docs/benchmarks.md). The memory is the host's: on a
+GPU the device's buffers are not in it.
 """
 
 import json
@@ -45,6 +49,8 @@ QUICK_SIZES = (8192, 16384)
 BOUND = 2.2           # the issue's largest growth of the peak a doubling of n
 WARM_UP = 64          # points of the call before the measured one
 TIMEOUT = 1800        # seconds one child process may take
+MIN_ABOVE = 4.0       # MiB above the call's start from which its growth is given (below
+                      # it the allocator's reuse of freed memory decides the figure)
 
 
 def measure(device_index, name, n, params):
@@ -53,8 +59,8 @@ def measure(device_index, name, n, params):
     Returns
     -------
     dict
-        ``seconds`` of the measured call, ``base`` and ``peak``: the process's peak resident
-        memory before and after it, in MiB.
+        ``seconds`` of the measured call; ``base``, the resident memory before it, and
+        ``peak``, the resident high-water mark of the call, in MiB.
     """
     env = dict(os.environ, CLSAMP_DEVICE=str(device_index))
     done = subprocess.run([sys.executable, os.path.abspath(__file__), "--child", name, str(n),
@@ -65,21 +71,29 @@ def measure(device_index, name, n, params):
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
+def _status_mib(field):
+    """A memory field of ``/proc/self/status`` (``VmRSS``, ``VmHWM``) in MiB."""
+    with open("/proc/self/status") as status:
+        for line in status:
+            if line.startswith(field + ":"):
+                return int(line.split()[1]) / 1024      # kB
+    raise RuntimeError(f"/proc/self/status has no {field}")
+
+
 def _child(name, n, params):
     """The measurement inside the child process; prints its dict as JSON."""
-    import resource
     import time
 
     import clsamp
     sampler = clsamp.make_sampler(name, seed=1, **params)
     sampler.sample(WARM_UP)
-    base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    base = _status_mib("VmRSS")
+    with open("/proc/self/clear_refs", "w") as refs:      # the high-water mark := VmRSS
+        refs.write("5")
     start = time.perf_counter()
     sampler.sample(n)
     seconds = time.perf_counter() - start
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    # ru_maxrss is in KiB on Linux
-    print(json.dumps({"seconds": seconds, "base": base / 1024, "peak": peak / 1024}))
+    print(json.dumps({"seconds": seconds, "base": base, "peak": _status_mib("VmHWM")}))
 
 
 def run(devices, quick):
@@ -92,15 +106,15 @@ def run(devices, quick):
             for n in sizes:
                 got = measure(device.index, name, n, params)
                 peak, above = got["peak"], got["peak"] - got["base"]
-                text = f"peak RSS {peak:.0f} MiB, {above:.1f} MiB above the warm-up"
+                text = f"peak RSS {peak:.0f} MiB, {above:.1f} MiB above the RSS before the call"
                 extra = {"peak_mib": peak, "above_mib": above}
                 if last is not None:
                     growth = peak / last[0]
                     text += f"; {growth:.2f}x the peak at n/2 (bound {BOUND}x)"
                     extra.update(growth=growth, within_bound=growth <= BOUND)
-                    if last[1] > 0:
+                    if last[1] >= MIN_ABOVE:
                         extra["above_growth"] = above / last[1]
-                        text += f", {above / last[1]:.2f}x the part above the warm-up"
+                        text += f", {above / last[1]:.2f}x the part above"
                 rows.append(Row(f"{case} memory", f"{n}x2D", dev, got["seconds"],
                                 quality=text, extra=extra))
                 last = (peak, above)
