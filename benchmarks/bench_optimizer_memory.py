@@ -7,9 +7,10 @@ Each optimizer makes one 2-D set (seed 1) at n = 8192, 16384, 32768 and 65536 (`
 points (the kernels built, the runtime's pools made), then the measured call. Its peak is
 the process's resident high-water mark (``VmHWM`` in ``/proc/self/status``), set back to
 the resident memory of the moment (``VmRSS``) just before the call (``5`` written to
-``/proc/self/clear_refs``, Linux 4.0 on). Not ``getrusage``'s ``ru_maxrss``: on Linux a
-child started by ``subprocess`` inherits its parent's peak there, gigabytes in a full run
-of ``benchmarks/run.py``.
+``/proc/self/clear_refs``, Linux 4.0 on; where that is refused, the mark includes the
+warm-up's peak). Not ``getrusage``'s ``ru_maxrss``: on Linux a child started by
+``subprocess`` inherits its parent's peak there, gigabytes in a full run of
+``benchmarks/run.py``. Without ``/proc`` (not Linux) the module gives no rows.
 
 The optimizers, with few iterations (an iteration's arrays are made in the first and
 reused, so the peak does not grow with the iterations; docs/performance.md gives the
@@ -88,8 +89,11 @@ def _child(name, n, params):
     sampler = clsamp.make_sampler(name, seed=1, **params)
     sampler.sample(WARM_UP)
     base = _status_mib("VmRSS")
-    with open("/proc/self/clear_refs", "w") as refs:      # the high-water mark := VmRSS
-        refs.write("5")
+    try:
+        with open("/proc/self/clear_refs", "w") as refs:  # the high-water mark := VmRSS
+            refs.write("5")
+    except OSError:          # not allowed here: the mark then includes the warm-up's peak
+        pass
     start = time.perf_counter()
     sampler.sample(n)
     seconds = time.perf_counter() - start
@@ -98,6 +102,10 @@ def _child(name, n, params):
 
 def run(devices, quick):
     rows = []
+    if not os.path.exists("/proc/self/status"):
+        print("bench_optimizer_memory: no /proc/self/status here (not Linux), no rows",
+              file=sys.stderr)
+        return rows
     sizes = QUICK_SIZES if quick else SIZES
     for device in devices:
         dev = short_name(device)
