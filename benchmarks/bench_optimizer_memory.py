@@ -35,7 +35,9 @@ import os
 import subprocess
 import sys
 
-from common import Row, main, short_name
+from common import Row, main, on_device, short_name
+
+from clsamp import runtime
 
 #: (case, sampler, keyword arguments) of each optimizer measured
 OPTIMIZERS = (
@@ -108,6 +110,8 @@ def run(devices, quick):
         return rows
     sizes = QUICK_SIZES if quick else SIZES
     for device in devices:
+        on_device(device)
+        runtime.require_fp64()      # the optimizers need it; run.py lists a refusal as such
         dev = short_name(device)
         for case, name, params in OPTIMIZERS:
             last = None
