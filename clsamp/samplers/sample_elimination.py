@@ -324,7 +324,8 @@ def eliminate_device(pts, start, m, cells, weighting, keep):
     sets = total // m
     removals = m - keep
     cap = slab_width(m, d, weighting)
-    if runtime.loop_limit() is None:
+    limit = runtime.loop_limit()
+    if limit is None:
         # the elimination right after the one pass, with no wait between: it reads the
         # lists' lengths from the pass's counts and leaves every set alone where a list
         # overflowed its slots, which the passes with offsets below then redo
@@ -337,7 +338,6 @@ def eliminate_device(pts, start, m, cells, weighting, keep):
         cap = 0
     first, found, nbr, w, weight, defines = _pairs_on_device(
         pts, start, m, cells, weighting, host=False, cap=cap)
-    limit = runtime.loop_limit()
     if limit is not None and (removals + int(found.sum())) * (int(m).bit_length() + 1) > limit:
         runtime.require_short_loops("sample elimination's tournament tree")
     return _eliminate_lists(runtime.input_buffer(first), runtime.input_buffer(found), 0, nbr, w,
