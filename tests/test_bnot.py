@@ -151,8 +151,8 @@ def test_bad_arguments_are_refused_by_name(kw, name):
 def test_an_image_density_places_the_sites_by_its_mass():
     # a bump four times the background in a disk of radius 0.15: the share of sites in
     # it equals the share of the density's mass (the cells hold equal masses)
-    def bump(x, y):
-        return 1.0 + 4.0 * (np.hypot(x - 0.5, y - 0.5) < 0.15)
+    def bump(p):
+        return 1.0 + 4.0 * (np.hypot(p[:, 0] - 0.5, p[:, 1] - 0.5) < 0.15)
 
     n = 400
     kw = dict(seed=1, density=bump, points_per_site=64, iterations=12)
@@ -176,7 +176,37 @@ def test_the_warp_follows_the_image():
 
 
 @pytest.mark.parametrize("density", [np.zeros((4, 4)), np.full((2, 2), np.nan), -np.ones((3, 3)),
-                                     np.ones(5), "blue", lambda x, y: -x])
+                                     np.ones(5), np.ones((2, 2, 2)), "blue", lambda p: -p[:, 0],
+                                     lambda x, y: x, lambda p: np.ones(3), {"a": 1}])
 def test_bad_densities_are_refused(density):
     with pytest.raises(InvalidArgumentError, match="density"):
         clsamp.make_sampler("bnot", density=density)
+
+
+def test_a_density_means_what_it_means_to_gbn():
+    # the library's one convention (clsamp.density.as_density): an array's first axis is x,
+    # a callable takes points (m, 2); so the same array or callable crowds bnot's sites
+    # and gbn's points on the same side
+    left = np.array([[4.0], [1.0]])                     # x = 1/4: 4, x = 3/4: 1, along x
+    # the multilinear density's mass left of x = 1/2: (1/4 4 + 1/4 3.25) / 2.5
+    share = (0.25 * 4.0 + 0.25 * 3.25) / 2.5
+    image = bnot.check_density(left)
+    assert image.shape == (bnot.IMAGE_SIDE, bnot.IMAGE_SIDE)
+    x = (np.arange(image.shape[1]) + 0.5) / image.shape[1]
+    assert abs(image[:, x < 0.5].sum() / image.sum() - share) < 1e-3
+    assert np.ptp(image, axis=0).max() == 0           # nothing changes along y
+    ramp = bnot.check_density(lambda p: 1.0 + 3.0 * (p[:, 0] < 0.5))
+    assert np.array_equal(ramp, bnot.check_density(np.where(x < 0.5, 4.0, 1.0)[:, None]
+                                                    * np.ones((1, 256))))
+    for density in (left, lambda p: 1.0 + 3.0 * (p[:, 0] < 0.5)):
+        pts = clsamp.make_sampler("bnot", seed=2, density=density, points_per_site=32,
+                                  iterations=4).sample(256)
+        gbn = clsamp.make_sampler("gbn", seed=2, density=density, iterations=20).sample(256)
+        assert (pts[:, 0] < 0.5).mean() > 0.65 and (gbn[:, 0] < 0.5).mean() > 0.65
+
+
+def test_a_large_array_is_warped_by_its_own_pixels():
+    a = np.random.default_rng(3).random((300, 260)) + 0.1
+    image = bnot.check_density(a)
+    assert image.shape == (260, 300)
+    assert np.allclose(image, a.T / a.mean(), rtol=1e-12)

@@ -16,6 +16,7 @@ import dataclasses
 import numpy as np
 
 from .. import runtime
+from ..density import as_density
 from ..errors import InvalidArgumentError
 from ..geometry import integer_torus as it
 from ..validation import check_bool, check_choice, check_int, check_positive_int, check_real
@@ -330,47 +331,62 @@ def _info(realizations, histories, duals, steps, counts, capacities, converged):
                     converged=np.asarray(converged, dtype=bool))
 
 
-IMAGE_SIDE = 256        # a callable density is sampled on this many pixels a side
+IMAGE_SIDE = 256        # the least pixels a side of the image a density is warped by
 
 
 def check_density(density, name="density"):
-    """A density as ``bnot`` takes it: one of CCVT's names, or an image or a callable.
+    """A density as ``bnot`` takes it: one of CCVT's names, or a target density as every
+    sampler takes one (:func:`clsamp.density.as_density`), as the image
+    :func:`warp_to_image` warps the density points by.
 
     Parameters
     ----------
-    density : str, array_like (h, w) or callable
+    density : str, callable or array_like (a, b)
         ``"jittered"`` or ``"random"`` (:func:`clsamp.samplers.ccvt.density.density_points`),
-        or a non-negative density on the unit torus: an image (row i covers
-        y in [i / h, (i + 1) / h), column j x in [j / w, (j + 1) / w)), or a callable
-        ``f(x, y)`` on arrays, sampled at the centres of ``IMAGE_SIDE`` x ``IMAGE_SIDE``
-        pixels.
+        or a non-negative density on the unit torus as ``gbn`` takes one: a callable on
+        points (m, 2) returning m values, or an array with 2 axes whose entry [i, j] is
+        the density at ((i + 1/2) / a, (j + 1/2) / b), multilinear between those centres
+        (the first axis is x: an image shown with rows going down the screen is
+        ``image[::-1].T``).
     name : str
         The argument's name, for messages.
 
     Returns
     -------
     str or ndarray (h, w) of float64
+        The name, or the density at the centres of h x w pixels, row i covering y in
+        [i / h, (i + 1) / h) and column j x in [j / w, (j + 1) / w): w = max(a,
+        ``IMAGE_SIDE``) and h = max(b, ``IMAGE_SIDE``) for an array (one at least
+        ``IMAGE_SIDE`` a side gives its transpose, normalized), ``IMAGE_SIDE`` a side for a
+        callable.
 
     Raises
     ------
     InvalidArgumentError
-        Another name, an image that is not 2-D, finite, non-negative with a positive sum.
+        Another name; a callable or an array that :func:`~clsamp.density.as_density`
+        refuses; a density that is zero at every pixel centre.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> a = np.arange(1.0, 65537.0).reshape(256, 256)     # a[i, j]: x = (i + 1/2) / 256
+    >>> bool(np.allclose(check_density(a), a.T / a.mean()))   # rows are y
+    True
+    >>> ramp = check_density(lambda p: 1.0 + p[:, 0])     # rising along x, the columns
+    >>> ramp.shape, bool(ramp[0, -1] > ramp[0, 0])
+    ((256, 256), True)
     """
     if isinstance(density, str):
         return check_choice(density, name, DENSITIES)
-    if callable(density):
-        c = (np.arange(IMAGE_SIDE) + 0.5) / IMAGE_SIDE
-        x, y = np.meshgrid(c, c)
-        density = np.broadcast_to(np.asarray(density(x, y), dtype=np.float64), x.shape)
-    image = np.asarray(density, dtype=np.float64) if not isinstance(density, np.ndarray) \
-        or density.dtype != object else None
-    if image is None or image.ndim != 2 or not image.size:
+    target = as_density(density, 2, name)
+    wide, high = (IMAGE_SIDE, IMAGE_SIDE) if target.image is None else \
+        (max(IMAGE_SIDE, target.image.shape[0]), max(IMAGE_SIDE, target.image.shape[1]))
+    x, y = np.meshgrid((np.arange(wide) + 0.5) / wide, (np.arange(high) + 0.5) / high)
+    image = target(np.stack([x.ravel(), y.ravel()], axis=1)).reshape(high, wide)
+    if not image.sum() > 0:
         raise InvalidArgumentError(
-            f"'{name}' must be 'jittered', 'random', a 2-D image or a callable f(x, y)")
-    if not np.all(np.isfinite(image)) or image.min() < 0 or not image.sum() > 0:
-        raise InvalidArgumentError(
-            f"'{name}' must be finite and non-negative with a positive sum")
-    return np.array(image)
+            f"'{name}' must be positive somewhere on the {wide} x {high} pixel centres")
+    return image
 
 
 def warp_to_image(points, image):
@@ -435,10 +451,12 @@ class BNOTSampler(OptimizerSampler):
         With ``cells="points"`` (default ``"jittered"``): the density points, as
         ``ccvt`` draws them (:func:`clsamp.samplers.ccvt.density.
         density_points`): one per cell of an equal-area partition of the torus, shifted
-        at random per realization (default), or i.i.d. uniform. An image (h, w) or a
-        callable ``f(x, y)`` (:func:`check_density`) gives adaptive sampling: the
-        jittered points warped to that density (:func:`warp_to_image`), so that every
-        cell holds an equal share of its mass and the sites crowd where it is high.
+        at random per realization (default), or i.i.d. uniform. A target density as
+        ``gbn`` takes one (:func:`clsamp.density.as_density`: a callable on points (m, 2),
+        or an array with 2 axes, the first x) gives adaptive sampling: the jittered
+        points warped to that density (:func:`check_density`, :func:`warp_to_image`),
+        so that every cell holds an equal share of its mass and the sites crowd where it
+        is high.
     newton : int
         Cap on the Newton steps of one weight solve (default 16).
     cells : {"points", "exact"}
