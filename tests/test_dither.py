@@ -79,7 +79,8 @@ def test_spatiotemporal_frames_are_blue_and_each_pixel_is_blue_in_time():
     ({"size": 8, "temporal": 1}, "'temporal'"),
     ({"size": 8, "sigma": 0}, "'sigma'"),
     ({"size": 8, "seed": -1}, "'seed'"),
-    ({"size": 4096, "d": 3}, "at most"),
+    ({"size": 4096, "d": 3}, "'size' and 'd' give a mask of 68719476736 pixels .*; at most"),
+    ({"size": 1024, "temporal": 64}, "'size', 'd' and 'temporal' give .*64 x 1024 x 1024"),
 ])
 def test_bad_arguments_are_one_line_before_any_work(kwargs, match):
     with pytest.raises(InvalidArgumentError, match=match):

@@ -166,7 +166,9 @@ def dither_mask(size, d=2, seed=0, temporal=None, sigma=SIGMA):
     shape = (size,) * d if temporal is None else (temporal,) + (size,) * d
     total = math.prod(shape)
     if total > MAX_PIXELS:
-        raise InvalidArgumentError(f"the mask would hold {total} pixels; at most {MAX_PIXELS}")
+        names = "'size' and 'd'" if temporal is None else "'size', 'd' and 'temporal'"
+        raise InvalidArgumentError(f"{names} give a mask of {total} pixels ({' x '.join(map(str, shape))}); "
+                                   f"at most {MAX_PIXELS}")
     state = _Energy(shape, _mask_stencils(shape, temporal is not None, float(sigma)))
     ranks = _void_and_cluster(state, total, seed)
     return ranks.reshape(shape)
