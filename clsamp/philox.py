@@ -185,6 +185,33 @@ def uniform(seed, stream, realization, index, dim):
     return words_to_unit(hi, lo)
 
 
+def uniform_pair(seed, stream, realization, index, block):
+    """Coordinates 2 ``block`` and 2 ``block`` + 1 of point ``index``, from one Philox call:
+    ``uniform(..., 2 block)`` and ``uniform(..., 2 block + 1)``, the same bits at half the
+    work. Arguments broadcast.
+
+    Parameters
+    ----------
+    seed : int
+    stream : int
+        The purpose (:class:`Stream`).
+    realization, index, block : int or array_like of int
+
+    Returns
+    -------
+    even, odd : ndarray of float64
+        The broadcast shape.
+
+    Examples
+    --------
+    >>> even, odd = uniform_pair(7, Stream.POINTS, 0, 3, 1)
+    >>> bool(even == uniform(7, Stream.POINTS, 0, 3, 2)), bool(odd == uniform(7, Stream.POINTS, 0, 3, 3))
+    (True, True)
+    """
+    out = philox4x32(_counter(stream, realization, index, block), np.stack(seed_key(seed)))
+    return words_to_unit(out[..., 0], out[..., 1]), words_to_unit(out[..., 2], out[..., 3])
+
+
 def uniform_block(seed, stream, realizations, n, d, start=0):
     """Uniform points: the NumPy reference of the ``random`` sampler.
 

@@ -416,8 +416,7 @@ def directions(seed, realizations, batch, K, d, spaces=(), count=None):
     index = batches[:, None] * np.uint64(total) + np.arange(total, dtype=np.uint64)
     index = index.astype(np.uint32)[None, :, :, None]
     dim = np.arange(d, dtype=np.uint32)
-    u1 = philox.uniform(seed, philox.Stream.DIRECTIONS, r, index, 2 * dim)
-    u2 = philox.uniform(seed, philox.Stream.DIRECTIONS, r, index, 2 * dim + 1)
+    u1, u2 = philox.uniform_pair(seed, philox.Stream.DIRECTIONS, r, index, dim)
     g = np.sqrt(-2.0 * np.log1p(-u1)) * np.cos(2.0 * math.pi * u2) * mask
     norm = np.sqrt((g * g).sum(axis=-1, keepdims=True))
     # a vector of zeros (every u1 of it 0) becomes the first axis of its subspace
