@@ -50,6 +50,21 @@ def test_a_run_gives_the_same_bits_on_the_device_and_in_numpy(d, projections):
     assert np.array_equal(info.cost_history, info_r.cost_history)
 
 
+def test_blocks_and_cost_groups_read_behind_keep_the_twins_bits():
+    # 83 batches: a first block of 8, then blocks of 64 and 11; the costs of groups of 8
+    # read one group behind, the last 3 at the end (and with a tolerance, every batch)
+    for tol in (0.0, 1e-3):
+        kw = dict(d=2, seed=7, iterations=83, directions=8, tol=tol)
+        pts, info = clsamp.make_sampler("sot", **kw).sample(37, realizations=3, return_info=True)
+        ref, info_r = clsamp.make_sampler("sot", backend="numpy", **kw).sample(
+            37, realizations=3, return_info=True)
+        assert np.array_equal(pts, ref)
+        assert np.array_equal(info.cost_history, info_r.cost_history)
+        assert np.array_equal(info.iterations, info_r.iterations)
+        assert info.cost_history.shape[1] == info.iterations.max()
+    assert info.iterations.min() < 83          # the tolerance stopped some sets early
+
+
 def test_a_run_of_2048_points_and_more_gives_the_twins_bits():
     # from 2048 points on a row's bucket sort takes 2n buckets
     kw = dict(d=2, seed=5, iterations=3)

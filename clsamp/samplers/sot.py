@@ -525,20 +525,32 @@ def sot_optimize(start_points, seed, directions_per_batch=DIRECTIONS, iterations
     history = []
     cost = np.zeros(r)
     K = directions_per_batch + max(directions_per_batch // 2, 1) * len(spaces)
-    # the directions and slices of a block of batches come from one call each
+    # the directions and slices of a block of batches come from one call each; the first
+    # block is short, so that the device starts while the host makes the next
     chunk = int(np.clip(BLOCK_BYTES // (r * K * (16 << d) + 1), 1, 64))
     runner, held = None, None           # resident: the batches of the sets ``held``
     pending = []                        # (sets, per-point costs or None) not yet summed
+    # resident without a tolerance: each group of SETTLE batches' costs is read while the
+    # device runs the next group (nothing waits on them), one group behind
+    behind = []
+    first, end = 0, 0                   # the block's first batch and the one after it
+
+    def settle(entries, sums):
+        for (sets, _), total in zip(entries, sums, strict=True):
+            cost[sets] = total / (n * K)
+            history.append(cost.copy())
+
     for it in range(iterations):
         idx = np.flatnonzero(active)
         if idx.size == 0:
             break
-        fresh = it % chunk == 0
+        fresh = it == end
         if fresh:
-            count = min(chunk, iterations - it)
+            count = min(chunk if it else min(chunk, SETTLE), iterations - it)
+            first, end = it, it + count
             block = directions(seed, index, it, directions_per_batch, d, spaces, count)
             slices = Slice.of(block.reshape(-1, d))
-        b = it % chunk
+        b = it - first
         if resident:
             if held is None or not np.array_equal(held, idx):
                 if held is not None:
@@ -558,11 +570,17 @@ def sot_optimize(start_points, seed, directions_per_batch=DIRECTIONS, iterations
             x[idx] = y
             pending.append((idx, per_point))
         ran[idx] += 1
-        if tol > 0.0 or len(pending) == SETTLE or it + 1 == iterations:
-            sums = runner.costs() if resident else [cost_sums(p) for _, p in pending]
-            for (sets, _), total in zip(pending, sums, strict=True):
-                cost[sets] = total / (n * K)
-                history.append(cost.copy())
+        if resident and tol == 0.0 and len(pending) == SETTLE and it + 1 < iterations:
+            behind.append((pending, runner.costs(wait=False)))
+            pending = []
+            if len(behind) > 1:
+                entries, ticket = behind.pop(0)
+                settle(entries, runner.collect(ticket))
+        elif tol > 0.0 or len(pending) == SETTLE or it + 1 == iterations:
+            for entries, ticket in behind:
+                settle(entries, runner.collect(ticket))
+            behind = []
+            settle(pending, runner.costs() if resident else [cost_sums(p) for _, p in pending])
             pending = []
         if tol > 0.0 and it + 1 >= 2 * WINDOW:
             h = np.stack(history[-2 * WINDOW:], axis=1)[idx]

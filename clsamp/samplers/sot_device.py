@@ -274,7 +274,7 @@ class ResidentBatches:
     :meth:`batch` launches ``sot_row`` and ``sot_move4`` (into the other of two point
     buffers) at its batch's rows, without waiting; the move writes its point costs to the
     batch's slot. :meth:`costs` sums every slot's costs per set (``sot_cost``, one launch)
-    and reads them at once. (Solving a block's quantiles in one launch was slower: their
+    and reads them at once, or (``wait=False``) while the device runs the next batches. (Solving a block's quantiles in one launch was slower: their
     rows fall out of the cache before the moves read them.)
     """
 
@@ -332,16 +332,35 @@ class ResidentBatches:
         self.parity, self.slot = 1 - self.parity, self.slot + 1
         runtime.queue().flush()
 
-    def costs(self):
+    def costs(self, wait=True):
         """The costs of the batches since the last call, each set's point costs summed in
-        index order: ndarray (batches, sets)."""
+        index order: ndarray (batches, sets).
+
+        Parameters
+        ----------
+        wait : bool
+            Wait for them; else return ``(array, event)`` at once, the array filled once
+            the event completes (:meth:`collect`), while the device runs the batches
+            enqueued after (the queue is in order: the next call's sums are written after
+            this read).
+        """
         import pyopencl as cl
         out = np.empty((self.slot, self.sets))
+        event = None
         if self.slot:
             rows = self.slot * self.sets
             self._launch("sot_cost", rows, 1, self.cost, self.n, rows, self.sums)
-            cl.enqueue_copy(runtime.queue(), out, self.sums, is_blocking=True)
+            event = cl.enqueue_copy(runtime.queue(), out, self.sums, is_blocking=False)
+            runtime.queue().flush()
         self.slot = 0
+        return self.collect((out, event)) if wait else (out, event)
+
+    @staticmethod
+    def collect(ticket):
+        """The costs a ``costs(wait=False)`` call returned, once read."""
+        out, event = ticket
+        if event is not None:
+            event.wait()
         return out
 
     def result(self):
