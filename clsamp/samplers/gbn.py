@@ -646,7 +646,11 @@ class GBNSampler(Sampler):
     the image convolved with each kernel; a callable in d dimensions has no closed form
     for that term, and without it normalized kernels let the dense side push harder, so
     the set would not follow rho. The pair kernels here keep amplitude 1, which makes
-    the spacing follow s_i with repulsion alone.
+    the spacing follow s_i with repulsion alone. A smooth density is followed closely (1 +
+    0.8 sin 2 pi x: E[sin 2 pi x] within 0.03 of its 0.4 in 2 to 4 dimensions, n = 1000);
+    a jump is blurred over about a spacing on each side, which in 3-D and 4-D with few
+    points a side moves visible mass (1 + 4 [x < 0.3], n = 1000: 0.49-0.59 of the points
+    below 0.3 against 0.68 of the mass; 0.63-0.65 in 2-D).
 
     References
     ----------
