@@ -274,8 +274,9 @@ class ResidentBatches:
     :meth:`batch` launches ``sot_row`` and ``sot_move4`` (into the other of two point
     buffers) at its batch's rows, without waiting; the move writes its point costs to the
     batch's slot. :meth:`costs` sums every slot's costs per set (``sot_cost``, one launch)
-    and reads them at once, or (``wait=False``) while the device runs the next batches. (Solving a block's quantiles in one launch was slower: their
-    rows fall out of the cache before the moves read them.)
+    and reads them at once, or (``wait=False``) while the device runs the next batches.
+    (Solving a block's quantiles in one launch was slower: their rows fall out of the cache
+    before the moves read them.)
     """
 
     def __init__(self, x, K, scale, settle):
