@@ -381,8 +381,11 @@ def check_density(density, name="density"):
     target = as_density(density, 2, name)
     wide, high = (IMAGE_SIDE, IMAGE_SIDE) if target.image is None else \
         (max(IMAGE_SIDE, target.image.shape[0]), max(IMAGE_SIDE, target.image.shape[1]))
-    x, y = np.meshgrid((np.arange(wide) + 0.5) / wide, (np.arange(high) + 0.5) / high)
-    image = target(np.stack([x.ravel(), y.ravel()], axis=1)).reshape(high, wide)
+    if target.image is not None and target.image.shape == (wide, high):
+        image = np.ascontiguousarray(target.image.T)    # its values at its own centres
+    else:
+        x, y = np.meshgrid((np.arange(wide) + 0.5) / wide, (np.arange(high) + 0.5) / high)
+        image = target(np.stack([x.ravel(), y.ravel()], axis=1)).reshape(high, wide)
     if not image.sum() > 0:
         raise InvalidArgumentError(
             f"'{name}' must be positive somewhere on the {wide} x {high} pixel centres")
