@@ -335,15 +335,20 @@ class ResidentBatches:
 
     def costs(self, wait=True):
         """The costs of the batches since the last call, each set's point costs summed in
-        index order: ndarray (batches, sets).
+        index order.
 
         Parameters
         ----------
         wait : bool
-            Wait for them; else return ``(array, event)`` at once, the array filled once
-            the event completes (:meth:`collect`), while the device runs the batches
-            enqueued after (the queue is in order: the next call's sums are written after
-            this read).
+            Wait for them (default); else return at once, while the device runs the
+            batches enqueued after (the queue is in order: the next call's sums are
+            written after this read).
+
+        Returns
+        -------
+        ndarray (batches, sets) or tuple
+            With ``wait``, the costs; else a ticket ``(array, event)`` whose array holds
+            them once the event completes (:meth:`collect`).
         """
         import pyopencl as cl
         out = np.empty((self.slot, self.sets))
@@ -358,7 +363,17 @@ class ResidentBatches:
 
     @staticmethod
     def collect(ticket):
-        """The costs a ``costs(wait=False)`` call returned, once read."""
+        """The costs a ``costs(wait=False)`` call returned, once read.
+
+        Parameters
+        ----------
+        ticket : tuple
+            ``(array, event)`` from :meth:`costs`.
+
+        Returns
+        -------
+        ndarray (batches, sets)
+        """
         out, event = ticket
         if event is not None:
             event.wait()
