@@ -530,8 +530,8 @@ def sot_optimize(start_points, seed, directions_per_batch=DIRECTIONS, iterations
     chunk = int(np.clip(BLOCK_BYTES // (r * K * (16 << d) + 1), 1, 64))
     runner, held = None, None           # resident: the batches of the sets ``held``
     pending = []                        # (sets, per-point costs or None) not yet summed
-    # resident without a tolerance: each group of SETTLE batches' costs is read while the
-    # device runs the next group (nothing waits on them), one group behind
+    # resident: each group's costs are read without a wait (ResidentBatches.costs), and
+    # without a tolerance collected one group later, while the device runs the next group
     behind = []
     first, end = 0, 0                   # the block's first batch and the one after it
 
@@ -570,18 +570,17 @@ def sot_optimize(start_points, seed, directions_per_batch=DIRECTIONS, iterations
             x[idx] = y
             pending.append((idx, per_point))
         ran[idx] += 1
-        if resident and tol == 0.0 and len(pending) == SETTLE and it + 1 < iterations:
-            behind.append((pending, runner.costs(wait=False)))
+        if tol > 0.0 or len(pending) == SETTLE or it + 1 == iterations:
+            if resident:
+                behind.append((pending, runner.costs(wait=False)))
+            else:
+                settle(pending, [cost_sums(p) for _, p in pending])
             pending = []
-            if len(behind) > 1:
+            # one group stays in flight, unless the stop needs its costs or the run ends
+            in_flight = int(tol == 0.0 and it + 1 < iterations)
+            while len(behind) > in_flight:
                 entries, ticket = behind.pop(0)
                 settle(entries, runner.collect(ticket))
-        elif tol > 0.0 or len(pending) == SETTLE or it + 1 == iterations:
-            for entries, ticket in behind:
-                settle(entries, runner.collect(ticket))
-            behind = []
-            settle(pending, runner.costs() if resident else [cost_sums(p) for _, p in pending])
-            pending = []
         if tol > 0.0 and it + 1 >= 2 * WINDOW:
             h = np.stack(history[-2 * WINDOW:], axis=1)[idx]
             done = h[:, WINDOW:].mean(axis=1) >= (1.0 - tol) * h[:, :WINDOW].mean(axis=1)
