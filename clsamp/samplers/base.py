@@ -25,6 +25,7 @@ import abc
 import copy
 import dataclasses
 import difflib
+import functools
 
 import numpy as np
 
@@ -223,13 +224,16 @@ def make_sampler(name, d=2, seed=0, **params):
     return cls(d=d, seed=seed, **params)
 
 
+@functools.cache
 def _parameters(cls):
-    """The keyword parameters ``cls(...)`` accepts, or None if it takes any (**kwargs)."""
+    """The keyword parameters ``cls(...)`` accepts, or None if it takes any (**kwargs);
+    once per class (``inspect.signature`` costs tens of microseconds, and the optimizers
+    make their start's sampler on every call)."""
     import inspect
     signature = inspect.signature(cls.__init__)
     if any(p.kind is p.VAR_KEYWORD for p in signature.parameters.values()):
         return None
-    return {name for name in signature.parameters if name != "self"}
+    return frozenset(name for name in signature.parameters if name != "self")
 
 
 def _merge_field(values, how):
