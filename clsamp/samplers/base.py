@@ -619,7 +619,10 @@ class Sampler(abc.ABC):
                     f"sample_device of {what} needs {runtime.gib(need)} of device memory; the device "
                     f"has {runtime.gib(room)}. Ask for fewer realizations or points at a time")
         else:
-            runtime.check_host_bytes(need, f"sample of {what} (its output alone)")
+            work = self._work_bytes(n)
+            runtime.check_host_bytes(
+                need + work, f"sample of {what} ("
+                + ("its output and one set's working memory" if work else "its output alone") + ")")
         if self.backend == "numpy":
             return
         one = n * self.d * 8
@@ -631,6 +634,13 @@ class Sampler(abc.ABC):
                 f"one set of {n} points in {self.d}-D of {self.label!r} needs {runtime.gib(one)} in "
                 f"one device buffer, above the device's largest, {runtime.gib(largest)} ({hint}); "
                 "use a smaller n, or backend='numpy'")
+
+    def _work_bytes(self, n):
+        """The host memory one set of n points takes while it is made, besides the output:
+        0 for samplers that write their output and little else; the optimizers' estimates
+        come from peak RSS measured at 2^16 to 2^20 points (docs/performance.md, "Working
+        memory refused before the work")."""
+        return 0
 
     def _warn_weaker(self, n, start):
         """Warn (UserWarning) where a legal request gives a weaker set than the sampler

@@ -732,6 +732,10 @@ class GBNSampler(Sampler):
         return gbn_optimize(start, kernel, self.step, self.iterations, self.tol, backend,
                             np.arange(realizations.start, realizations.stop), self.density)
 
+    def _work_bytes(self, n):
+        # measured: 140, 328 and 759 bytes a point in 2-D, 4-D and 8-D
+        return 95 * self.d * n
+
     def _reference(self, n, realizations, start):
         return self._run(n, realizations, "numpy")
 

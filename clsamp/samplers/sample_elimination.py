@@ -633,6 +633,10 @@ class SampleEliminationSampler(Sampler):
             stages += 1
         return np.concatenate([index, *tails[::-1]], axis=1).reshape(sets, -1), stages
 
+    def _work_bytes(self, n):
+        # measured: 697 and 1316 bytes a candidate in 2-D and 4-D (5 candidates a point)
+        return (80 + 310 * self.d) * self.candidates(n)
+
     def _reference(self, n, realizations, start):
         return self._run(n, realizations, "numpy")
 

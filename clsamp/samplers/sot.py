@@ -692,6 +692,10 @@ class SOTSampler(Sampler):
                             self.tol, self.projections, backend,
                             np.arange(realizations.start, realizations.stop))
 
+    def _work_bytes(self, n):
+        # measured: 1318, 1400 and 1480 bytes a point in 2-D, 4-D and 8-D
+        return (1270 + 27 * self.d) * n
+
     def _reference(self, n, realizations, start):
         return self._run(n, realizations, "numpy")
 
