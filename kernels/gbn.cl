@@ -386,7 +386,8 @@ __kernel void gbn_pairs(__global const double *pts,
  * mode 1: the start's pass: its energy (exact_sum of the pass's energies / n, math.fsum's
  *         value) into energy and initial, its force into f;
  * mode 2: iteration it of a live set: ran + 1; the proposal accepted where its energy is
- *         no higher (x = y, f, energy; converged once the drop is at most tol |energy|),
+ *         no higher (x = y, f, energy; converged once the drop is at most tol |energy|,
+ *         never where tol is 0),
  *         else tau halved (converged below tau_min); history[it] = energy.
  * Then, where the set is live and propose is 1, the next proposal y = x + tau f wrapped
  * into [0, 1) and sorted. gbn_pairs built with RESIDENT 1 skips the sets whose live flag
@@ -441,7 +442,7 @@ __kernel void gbn_control(__global double *x, __global double *f, __global doubl
             take = e <= rs[0];
             if (take) {
                 const double drop = rs[0] - e;
-                done = drop <= tol * fabs(e);
+                done = tol > 0.0 && drop <= tol * fabs(e);      /* 0: every iteration */
                 for (size_t i = 0; i < (size_t)n * D; ++i)
                     xs[i] = ys[i];
             } else {

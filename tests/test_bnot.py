@@ -214,3 +214,20 @@ def test_a_large_array_is_warped_by_its_own_pixels():
     narrow = bnot.check_density(a[:, :100])
     assert narrow.shape == (256, 300)
     assert np.allclose(narrow[[0, -1]], (a[:, [0, 99]] / a[:, :100].mean()).T, rtol=1e-12)
+
+
+@pytest.mark.parametrize("cells, n", [("points", 64), ("exact", 2)])
+def test_tol_zero_runs_every_iteration(cells, n):
+    # these sets reach a fixed point (the same cost iteration after iteration) within a
+    # few iterations (64 sites of 32 points: 6; 2 exact cells: 17); tol = 0 still runs
+    # them all, on both backends, the same bits
+    kw = dict(seed=3, tol=0, iterations=24, cells=cells, progress=False,
+              **({"points_per_site": 32} if cells == "points" else {}))
+    runs = [clsamp.make_sampler("bnot", backend=backend, **kw).sample(n, return_info=True)
+            for backend in ("opencl", "numpy")]
+    for _, info in runs:
+        assert info.iterations.tolist() == [24] and not info.converged.any()
+        assert info.energy_history.shape == (1, 24)
+        # (exact cells: never rising beyond their tolerance; here the rounding of 1/12)
+        assert np.all(np.diff(info.energy_history[0]) <= 1e-15)
+    assert np.array_equal(runs[0][0], runs[1][0])

@@ -244,3 +244,19 @@ def test_the_command_line_makes_a_4d_set(tmp_path):
     assert out.returncode == 0, out.stderr
     pts = np.load(tmp_path / "pts.npy")
     assert np.array_equal(pts, clsamp.make_sampler("gbn", d=4, iterations=10).sample(256))
+
+
+def test_tol_zero_runs_every_iteration_and_the_step_is_bounded():
+    # tol = 0 runs every iteration, on both backends and in the resident run, even where an
+    # accepted step leaves the energy exactly as it was (one point; kernels far narrower
+    # than the spacing); a step no halving brings down to a descent is refused by name
+    for n, params in ((1, {}), (16, {"sigma": 0.01})):
+        runs = [clsamp.make_sampler("gbn", seed=1, tol=0, iterations=30, backend=backend,
+                                    **params).sample(n, return_info=True)
+                for backend in ("opencl", "numpy")]
+        for _, info in runs:
+            assert info.iterations.tolist() == [30] and not info.converged.any()
+            assert info.energy_history.shape == (1, 30)
+        assert np.array_equal(runs[0][0], runs[1][0])
+    with pytest.raises(InvalidArgumentError, match="'step' must be <= 1024"):
+        clsamp.make_sampler("gbn", step=1e300)

@@ -237,7 +237,8 @@ def bnot_optimize(sites, points, p, iterations=ITERATIONS, tol=TOL, backend="ope
     iterations : int
         Cap on the iterations.
     tol : float
-        Stop once an iteration lowers the cost by at most this fraction of it.
+        Stop once an iteration lowers the cost by at most this fraction of it (0: run
+        every iteration).
     backend : {"opencl", "numpy"}
         Where the power passes run.
     realizations : array_like of int, optional
@@ -298,7 +299,7 @@ def bnot_optimize(sites, points, p, iterations=ITERATIONS, tol=TOL, backend="ope
             history.append(cost / scale)
             dual_history.append(dual / scale)
             bar.update()
-            if len(history) > 1 and history[-2] - history[-1] <= tol * history[-1]:
+            if tol > 0 and len(history) > 1 and history[-2] - history[-1] <= tol * history[-1]:
                 done = True
                 break
         bar.update(iterations - len(history))      # a converged run has done its work

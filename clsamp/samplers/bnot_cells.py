@@ -653,7 +653,7 @@ def exact_optimize(sites, iterations, tol, backend, newton=NEWTON, progress=Fals
             bar.update()
             if len(history) > 1:
                 drop = (history[-2] - history[-1]) / history[-1]
-                if drop <= tol and loose <= CAPACITY_TOL:
+                if tol > 0 and drop <= tol and loose <= CAPACITY_TOL:
                     done = True
                     break
                 # while the sites move far, the weights need not be exact (the run's last

@@ -28,6 +28,7 @@ from .base import SampleInfo, Sampler, info_field, make_sampler, register, sampl
 
 SIGMA = 0.5          # the kernel's standard deviation, in mean spacings n^(-1/d)
 STEP = math.pi / 2   # the step, relative to the kernel's mass (see GBNSampler)
+STEP_MAX = 1024.0    # the largest step accepted
 CUT = 4.0            # pairs farther than CUT sigma do not interact
 ITERATIONS = 200
 TOL = 1e-4
@@ -548,7 +549,7 @@ def gbn_optimize(start_points, kernel, step=STEP, iterations=ITERATIONS, tol=TOL
         energy[good] = e_new[ok]
         tau[bad] *= 0.5
         done = np.zeros(r, dtype=bool)
-        done[good] = drop <= tol * np.abs(energy[good])
+        done[good] = (drop <= tol * np.abs(energy[good])) & (tol > 0.0)    # 0: every iteration
         done[bad] = tau[bad] < tau0 * 2.0 ** -HALVINGS
         converged |= done
         active &= ~done
@@ -572,13 +573,15 @@ class GBNSampler(Sampler):
     sigma : float
         The Gaussian's standard deviation in mean spacings n^(-1/d) (default 0.5).
     step : float
-        The gradient step relative to the kernel's mass (default pi/2; see Notes).
+        The gradient step relative to the kernel's mass (default pi/2, at most 1024; see
+        Notes).
     iterations : int
         The most iterations (default 200).
     tol : float
         Stop once a step lowers the energy by at most this fraction of it (default 1e-4,
         which n = 1024 sets reach after about 110 iterations in 2-D and 60 in 4-D, at
-        rho near 0.78; 0 runs every iteration).
+        rho near 0.78; 0 runs every iteration, unless the step has been halved 40 times
+        over, where a set stops as converged).
     periodic : bool
         True (default): the unit torus, distances wrapped. False: the unit cube, with the
         boundary treatment of the authors' bounded-domain code (the domain, a uniform
@@ -691,7 +694,9 @@ class GBNSampler(Sampler):
                 f"'init' cannot be combined with 'density' (the start is drawn from the "
                 f"density), got init={init!r}")
         self.sigma = check_real(sigma, "sigma", minimum=0.0, open_minimum=True, maximum=64.0)
-        self.step = check_real(step, "step", minimum=0.0, open_minimum=True)
+        # a step no 40 halvings bring to one that lowers the energy would end the run at
+        # its start, as converged
+        self.step = check_real(step, "step", minimum=0.0, open_minimum=True, maximum=STEP_MAX)
         self.iterations = check_positive_int(iterations, "iterations")
         self.tol = check_real(tol, "tol", minimum=0.0, maximum=1.0)
         self.periodic = check_bool(periodic, "periodic")
