@@ -309,12 +309,19 @@ def check_points(points, name="points", d=None, allow_batch=True, keep_device=Fa
     """
     device = _is_device_array(points)
     if isinstance(points, (list, tuple)):
-        points = np.asarray(points)
+        try:
+            points = np.asarray(points)
+        except (TypeError, ValueError):
+            raise InvalidArgumentError(
+                f"'{name}' must be a NumPy array of shape (n, d) or (r, n, d), got a list "
+                "whose rows differ in length") from None
     if not (device or isinstance(points, np.ndarray)):
         raise InvalidArgumentError(
             f"'{name}' must be a NumPy array of shape (n, d) or (r, n, d), "
             f"got {type(points).__name__}")
-    if points.dtype not in ((np.float64,) if device else (np.float64, np.float32)):
+    # float64 or float32 in either byte order on the host (copied to float64 below)
+    if not (points.dtype == np.float64 if device else
+            points.dtype.kind == "f" and points.dtype.itemsize in (4, 8)):
         allowed = "float64" if device else "float64 (or float32)"
         raise InvalidArgumentError(f"'{name}' must have dtype {allowed}, got {points.dtype}")
     shapes = "(n, d) or (r, n, d)" if allow_batch else "(n, d)"

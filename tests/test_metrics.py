@@ -296,12 +296,43 @@ def test_pcf_bad_input():
         clsamp.nearest_neighbor_distances(x, periodic=None)
     with pytest.raises(InvalidArgumentError, match="half the torus"):
         clsamp.pair_correlation(x, radii=[0.1, 0.49])
+    with pytest.raises(InvalidArgumentError, match="half the cube's side"):
+        clsamp.pair_correlation(x, radii=[0.1, 0.49], periodic=False)
     with pytest.raises(InvalidArgumentError, match="increasing"):
         clsamp.pair_correlation(x, radii=[0.1, 0.05])
     with pytest.raises(InvalidArgumentError, match="sigma"):
         clsamp.pair_correlation(x, sigma=-1.0)
     with pytest.raises(InvalidArgumentError, match="points"):
         clsamp.pair_correlation(np.full((10, 2), 1.5))
+    with pytest.raises(InvalidArgumentError, match="'points' .* rows differ in length"):
+        clsamp.pair_correlation([[0.1, 0.2], [0.3]])
+    with pytest.raises(InvalidArgumentError, match="'sigma' must be a real number"):
+        clsamp.pair_correlation(x, sigma=np.array(0.01))
+
+
+def test_pcf_defaults_and_grids_in_many_dimensions():
+    # the default radii stop where the reach would pass 1/2 (few points in many
+    # dimensions); short radii in many dimensions take no more cells than memory holds;
+    # sigma as a NumPy number; points in the other byte order
+    for d, n in ((3, 64), (4, 1024), (6, 300)):
+        pts = np.random.default_rng(d).random((n, d))
+        radii, g = clsamp.pair_correlation(pts)
+        assert len(radii) == 100 and radii[-1] + 5 * 0.05 * n ** (-1 / d) <= 0.5 + 1e-12
+        _, twin = clsamp.pair_correlation(pts, backend="numpy")
+        np.testing.assert_allclose(g, twin, rtol=1e-12, atol=1e-12)
+    pts = np.random.default_rng(8).random((50, 8))
+    for periodic in (True, False):
+        got = clsamp.pair_correlation(pts, radii=[0.01, 0.02], sigma=0.001, periodic=periodic)
+        assert got[1].tolist() == [0.0, 0.0]
+    x = np.random.default_rng(0).random((300, 2))
+    same = clsamp.pair_correlation(x, sigma=np.float32(0.01))[1]
+    assert np.array_equal(clsamp.pair_correlation(x, sigma=np.float64(np.float32(0.01)))[1], same)
+    with pytest.raises(InvalidArgumentError, match="'sigma' 1 leaves no radius within 1/2"):
+        clsamp.pair_correlation(x, sigma=np.int64(1))     # a number, too wide for any radius
+    assert np.array_equal(clsamp.pair_correlation(x.astype(">f8"))[1],
+                          clsamp.pair_correlation(x)[1])
+    assert clsamp.metrics.min_distance(x.astype(">f4")) == clsamp.metrics.min_distance(
+        x.astype(np.float32))
 
 
 @pytest.mark.parametrize("d", [4, 6])

@@ -18,7 +18,7 @@ from ..errors import InvalidArgumentError
 from ..float_float import U2, argument, check_precision, exp_coefficients, split
 from ..geometry.cells import cells_for, sorted_by_cell
 from ..geometry.torus import distance2
-from ..validation import check_bool, check_choice, check_points, point_sets
+from ..validation import check_bool, check_choice, check_points, check_real, point_sets
 
 BACKENDS = ("opencl", "numpy")
 RADII = 100                  # default radii: 100, up to RADII_SPAN mean spacings
@@ -124,7 +124,10 @@ def _pcf_sums_device(sets, radii, sigma, cut, uniform, periodic=True, precision=
     r, (n, d) = len(sets), sets[0].shape
     batch = np.stack(sets)
     reach = float(radii[-1] + cut * sigma)
-    cells = cells_for(reach)
+    # no more cells than 4 a point (short radii in many dimensions would ask for more
+    # cells than memory holds); wider cells find the same pairs
+    cells = min(cells_for(reach), int((4.0 * n) ** (1.0 / d)))
+    cells = cells if cells >= 3 else 1
     pts, cell, start, _ = sorted_by_cell(batch, cells)
     if precision == "float-float":
         return _pcf_sums_ff(pts, cell, start, r, n, d, cells, radii, sigma, cut, reach, periodic, uniform)
@@ -227,12 +230,15 @@ def _pcf_sums_ff(pts, cell, start, r, n, d, cells, radii, sigma, cut, reach, per
 def _check_radii(radii, sigma, spacing, cut):
     if sigma is None:
         sigma = SIGMA_SPACING * spacing
-    if not (isinstance(sigma, (int, float, np.floating)) and not isinstance(sigma, bool)
-            and math.isfinite(sigma) and sigma > 0):
-        raise InvalidArgumentError(f"'sigma' must be a positive number, got {sigma!r}")
-    sigma = float(sigma)
+    sigma = check_real(sigma, "sigma", minimum=0.0, open_minimum=True)
     if radii is None:
-        radii = RADII_SPAN * spacing * np.arange(1, RADII + 1) / RADII
+        # up to RADII_SPAN spacings, or to where the reach stays within 1/2 (few points in
+        # many dimensions, whose spacing is a large part of the unit)
+        span = min(RADII_SPAN * spacing, 0.5 - cut * sigma)
+        if span <= 0:
+            raise InvalidArgumentError(
+                f"'sigma' {sigma:.4g} leaves no radius within 1/2 at a cut of {cut:g} sigma")
+        radii = span * np.arange(1, RADII + 1) / RADII
     else:
         try:
             radii = np.asarray(radii, dtype=np.float64)
@@ -245,8 +251,8 @@ def _check_radii(radii, sigma, spacing, cut):
     if radii[-1] + cut * sigma > 0.5:
         raise InvalidArgumentError(
             f"'radii' up to {radii[-1]:.4g} plus {cut:g} sigma ({cut * sigma:.4g}) reach past "
-            "half the torus (0.5), where the pair counts stop measuring the PCF; use smaller "
-            "radii or sigma")
+            "1/2 (half the torus, half the cube's side), where the pair sums stop measuring "
+            "the PCF; use smaller radii or sigma")
     if len(radii) > 4096:
         raise InvalidArgumentError(f"'radii' may hold at most 4096 radii, got {len(radii)}")
     return radii, sigma
@@ -262,7 +268,8 @@ def pair_correlation(points, radii=None, sigma=None, backend="opencl", periodic=
         expected PCF: the mean of the sets' PCFs.
     radii : array_like, optional
         Increasing positive radii (distances on the unit torus). Default: 100 radii up to
-        3 mean spacings, the mean spacing being n^(-1/d).
+        3 mean spacings, the mean spacing being n^(-1/d), or up to 1/2 - 5 sigma where that
+        is shorter (few points in many dimensions).
     sigma : float, optional
         The standard deviation of the Gaussian smoothing kernel; default 0.05 mean
         spacings. The kernel is cut at 5 sigma; radii + 5 sigma must stay below 1/2.
@@ -464,7 +471,9 @@ def nearest_neighbor_distances(points, backend="opencl", periodic=True, precisio
     -------
     ndarray (n,) for one set, (r, n) for a batch, a list of (n_k,) arrays for a list:
     the distances in the points' order. Their minimum is the set's minimum distance
-    (:func:`min_distance`), their distribution tells how evenly
+    (:func:`min_distance`) where that is below 1 (on the torus from 5-D on two points
+    can lie farther apart than 1, a point's distance to its own image, at which
+    :func:`min_distance` stops); their distribution tells how evenly
     the points are spread (a delta at the lattice spacing, a Rayleigh law for white
     noise in 2-D: P(NN > r) = exp(-pi n r^2)).
 
