@@ -1,5 +1,5 @@
-"""Statistics of power spectra in 1, 2 and 3 dimensions: the radial mean and the anisotropy
-over annuli (shells) around DC, and the check that an array is a spectrum as
+"""Statistics of power spectra in any dimension: the radial mean and the anisotropy over
+annuli (shells) around DC, and the check that an array is a spectrum as
 :func:`clsamp.power_spectrum` lays them out (DC at index R/2 of every axis).
 """
 
@@ -13,29 +13,37 @@ from .validation import check_real
 __all__ = ["check_spectrum", "radial_mean", "anisotropy", "low_frequency_power"]
 
 
-def check_spectrum(P, name="P"):
+def check_spectrum(P, name="P", dims=(1, 2, 3)):
     """Check that ``P`` is a spectrum as :func:`power_spectrum` returns them.
 
     Parameters
     ----------
     P : ndarray
-        (R,), (R, R) or (R, R, R), R even and at least 2, finite (else InvalidArgumentError).
+        (R,), (R, R), (R, R, R), ... (R,) * d: R even and at least 2, real, finite (else
+        InvalidArgumentError).
     name : str
         The argument's name in the error message.
+    dims : tuple of int or None
+        The dimensions accepted (default 1, 2 and 3, what :func:`power_spectrum` makes);
+        None for any.
 
     Returns
     -------
     ndarray
         ``P`` as float64.
     """
-    if not isinstance(P, np.ndarray) or P.ndim not in (1, 2, 3):
+    if not isinstance(P, np.ndarray) or P.ndim < 1 or (dims is not None and P.ndim not in dims):
         shape = getattr(P, "shape", type(P).__name__)
-        raise InvalidArgumentError(f"'{name}' must be a 1-D, 2-D or 3-D spectrum array, got {shape}")
+        which = "a d-dimensional" if dims is None else "a " + (
+            ", ".join(f"{k}-D" for k in dims[:-1]) + f" or {dims[-1]}-D")
+        raise InvalidArgumentError(f"'{name}' must be {which} spectrum array, got {shape}")
     if len(set(P.shape)) != 1:
         raise InvalidArgumentError(
-            f"'{name}' must have equal sides, square (R, R) or (R, R, R), got {P.shape}")
+            f"'{name}' must have equal sides, square (R, R), cube (R, R, R), ..., got {P.shape}")
     if P.shape[0] < 2 or P.shape[0] % 2:
         raise InvalidArgumentError(f"'{name}' must have an even side >= 2, got {P.shape}")
+    if P.dtype.kind not in "biuf":
+        raise InvalidArgumentError(f"'{name}' must hold real numbers, got dtype {P.dtype}")
     P = np.asarray(P, dtype=np.float64)
     if not np.all(np.isfinite(P)):
         raise InvalidArgumentError(f"'{name}' contains NaN or infinite values")
@@ -46,14 +54,18 @@ def _annuli(P, bin_width):
     """Annulus index of every frequency, and the number of complete annuli."""
     bin_width = check_real(bin_width, "bin_width", minimum=0.0, open_minimum=True)
     R = P.shape[0]
+    count = math.floor((R // 2) / bin_width - 0.5)
+    if count < 1:
+        raise InvalidArgumentError(
+            f"'bin_width' {bin_width:g} leaves no complete annulus in a spectrum of side {R}")
+    if count > P.size:
+        raise InvalidArgumentError(
+            f"'bin_width' {bin_width:g} makes {count:g} annuli, more than the spectrum's "
+            f"{P.size} frequencies; at least {(R // 2) / (P.size + 1.5):.4g}")
     f = np.arange(-(R // 2), R // 2, dtype=np.float64)
     grids = np.meshgrid(*([f] * P.ndim), indexing="ij")
     rho = np.sqrt(sum(g * g for g in grids))
     index = np.floor(rho / bin_width + 0.5).astype(np.int64)
-    count = int(math.floor((R // 2) / bin_width - 0.5))
-    if count < 1:
-        raise InvalidArgumentError(
-            f"'bin_width' {bin_width:g} leaves no complete annulus in a spectrum of side {R}")
     index[rho == 0] = 0                     # DC is never averaged
     index[index > count] = 0                # annuli cut by the square's edge are left out
     return index, count
@@ -64,8 +76,9 @@ def radial_mean(P, bin_width=1.0):
 
     Parameters
     ----------
-    P : ndarray, shape (R,), (R, R) or (R, R, R)
-        A spectrum from :func:`clsamp.power_spectrum` (DC at index R/2).
+    P : ndarray, shape (R,), (R, R), (R, R, R), ... (R,) * d
+        A spectrum as :func:`clsamp.power_spectrum` lays them out (DC at index R/2 of
+        every axis), in any dimension.
     bin_width : float
         Width Δ of the annuli in integer frequencies (default 1).
 
@@ -90,7 +103,7 @@ def radial_mean(P, bin_width=1.0):
     >>> f[:3], bool(abs(m.mean() - 1) < 0.05)
     (array([1., 2., 3.]), True)
     """
-    P = check_spectrum(P)
+    P = check_spectrum(P, dims=None)
     index, count = _annuli(P, bin_width)
     sums = np.bincount(index.ravel(), P.ravel(), minlength=count + 1)
     counts = np.bincount(index.ravel(), minlength=count + 1)
@@ -100,7 +113,8 @@ def radial_mean(P, bin_width=1.0):
 
 
 def anisotropy(P, bin_width=1.0):
-    """Anisotropy of a 2-D or 3-D spectrum per annulus (shell), in dB: 10·log10(s² / m²).
+    """Anisotropy of a spectrum of 2 or more dimensions per annulus (shell), in dB:
+    10·log10(s² / m²).
 
     s² is the variance of P over the annulus (unbiased, divided by count - 1) and m its
     mean (:func:`radial_mean`): 0 dB is as anisotropic as one white-noise periodogram,
@@ -109,7 +123,8 @@ def anisotropy(P, bin_width=1.0):
     Parameters
     ----------
     P, bin_width
-        As :func:`radial_mean`; P must be 2-D or 3-D (else InvalidArgumentError).
+        As :func:`radial_mean`; P must have at least 2 dimensions (else
+        InvalidArgumentError).
 
     Returns
     -------
@@ -129,9 +144,10 @@ def anisotropy(P, bin_width=1.0):
     >>> bool(abs(a[10:].mean() + 10) < 1.5)
     True
     """
-    P = check_spectrum(P)
+    P = check_spectrum(P, dims=None)
     if P.ndim < 2:
-        raise InvalidArgumentError(f"'P' must be a 2-D or 3-D spectrum for anisotropy, got shape {P.shape}")
+        raise InvalidArgumentError(
+            f"'P' must be a spectrum of 2 or more dimensions for anisotropy, got shape {P.shape}")
     index, count = _annuli(P, bin_width)
     flat = index.ravel()
     counts = np.bincount(flat, minlength=count + 1)
@@ -150,8 +166,9 @@ def low_frequency_power(P, n):
 
     Parameters
     ----------
-    P : ndarray, shape (R, R) or (R, R, R)
-        From :func:`clsamp.power_spectrum` (DC at R/2), with R/2 >= sqrt(n) / 2.
+    P : ndarray, shape (R,) * d
+        As :func:`clsamp.power_spectrum` lays them out (DC at R/2), with
+        R/2 >= sqrt(n) / 2.
     n : int
         Points per set.
 
@@ -167,7 +184,7 @@ def low_frequency_power(P, n):
     >>> bool(abs(low_frequency_power(clsamp.power_spectrum(pts, resolution=32), 256) - 1) < 0.2)
     True
     """
-    P = check_spectrum(P)
+    P = check_spectrum(P, dims=None)
     R = P.shape[0]
     if R // 2 < math.sqrt(n) / 2:
         raise InvalidArgumentError(f"'P' of side {R} holds no frequency up to sqrt({n}) / 2")

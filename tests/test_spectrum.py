@@ -351,8 +351,37 @@ def test_3d_spectra_of_known_patterns_and_their_radial_statistics():
     assert E.shape == (8, 8, 8) and E[4, 4, 4] == pytest.approx(512)
     with pytest.raises(InvalidArgumentError, match="equal sides"):
         clsamp.radial_mean(np.ones((8, 8, 4)))
-    with pytest.raises(InvalidArgumentError, match="2-D or 3-D"):
+    with pytest.raises(InvalidArgumentError, match="2 or more dimensions"):
         clsamp.anisotropy(np.ones(8))
+
+
+def test_radial_statistics_of_a_4d_spectrum_and_what_they_refuse():
+    # a 4-D spectrum (the sum over integer frequencies in NumPy): white noise's shells at 1,
+    # as anisotropic as r periodograms; each shell the mean of its frequencies
+    rng = np.random.default_rng(2)
+    pts, R = rng.random((6, 200, 4)), 8
+    f = np.arange(-R // 2, R // 2)
+    k = np.stack(np.meshgrid(*[f] * 4, indexing="ij"), -1).reshape(-1, 4)
+    P = np.mean([np.abs(np.exp(-2j * np.pi * (s @ k.T)).sum(0)) ** 2 / 200 for s in pts],
+                axis=0).reshape((R,) * 4)
+    freqs, m = clsamp.radial_mean(P)
+    rho = np.sqrt((k * k).sum(1)).reshape((R,) * 4)
+    assert freqs.tolist() == [1.0, 2.0, 3.0]
+    for b, value in zip((1, 2, 3), m, strict=True):
+        assert value == pytest.approx(P[(rho >= b - 0.5) & (rho < b + 0.5)].mean(), rel=1e-12)
+    assert abs(m[1:].mean() - 1) < 0.15
+    _, a = clsamp.anisotropy(P)
+    assert abs(a[1:].mean() + 10 * math.log10(6)) < 2.0
+    # complex or text arrays, and annuli narrower than there are frequencies, by name
+    with pytest.raises(InvalidArgumentError, match="'P' must hold real numbers"):
+        clsamp.radial_mean(np.ones((8, 8)) * 1j)
+    with pytest.raises(InvalidArgumentError, match="'P' must hold real numbers"):
+        clsamp.anisotropy(np.full((4, 4), "a"))
+    for width in (1e-13, 1e-300):
+        with pytest.raises(InvalidArgumentError, match="'bin_width'"):
+            clsamp.radial_mean(np.ones((8, 8)), width)
+    with pytest.raises(InvalidArgumentError, match="1-D, 2-D or 3-D"):
+        clsamp.plots.spectrum_image(P)
 
 
 @pytest.mark.parametrize("tol", [1e-3, 1e-6, 1e-10, 1e-12])
@@ -448,7 +477,7 @@ def test_bad_spectra():
         clsamp.radial_mean(np.ones((8, 6)))
     with pytest.raises(InvalidArgumentError, match="even"):
         clsamp.radial_mean(np.ones(7))
-    with pytest.raises(InvalidArgumentError, match="2-D"):
+    with pytest.raises(InvalidArgumentError, match="2 or more dimensions"):
         clsamp.anisotropy(np.ones(8))
     with pytest.raises(InvalidArgumentError, match="bin_width"):
         clsamp.radial_mean(np.ones((8, 8)), bin_width=0)
