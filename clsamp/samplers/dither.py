@@ -12,11 +12,12 @@ import numpy as np
 
 from .. import philox
 from ..errors import InvalidArgumentError
-from ..validation import check_positive_int, check_seed
+from ..validation import check_positive_int, check_real, check_seed
 
 __all__ = ["dither_mask", "mask_spectrum", "SIGMA", "INITIAL_DENSITY"]
 
 SIGMA = 1.9                 # the Gaussian's standard deviation, in pixels (Wolfe et al.)
+SIGMA_RANGE = (0.01, 1e6)   # the standard deviations accepted
 INITIAL_DENSITY = 0.1       # the share of ones in the initial binary pattern (Ulichney)
 ENERGY_LOSS = 0.005         # the Gaussian is cut where it has fallen to this share
 MAX_PIXELS = 1 << 24        # the largest mask built (its steps are sequential)
@@ -106,7 +107,8 @@ def dither_mask(size, d=2, seed=0, temporal=None, sigma=SIGMA):
         size), each rank 0 .. temporal size^d - 1 once, each frame a blue-noise mask and
         each pixel's sequence over the frames blue too.
     sigma : float
-        The standard deviation of the Gaussian energy, in pixels (frames along time).
+        The standard deviation of the Gaussian energy, in pixels (frames along time),
+        0.01 to 10^6 (default 1.9).
 
     Returns
     -------
@@ -160,16 +162,15 @@ def dither_mask(size, d=2, seed=0, temporal=None, sigma=SIGMA):
         temporal = check_positive_int(temporal, "temporal")
         if temporal < 2:
             raise InvalidArgumentError(f"'temporal' must be at least 2 frames, got {temporal}")
-    if isinstance(sigma, bool) or not isinstance(sigma, (int, float, np.floating)) \
-            or not (math.isfinite(sigma) and sigma > 0):
-        raise InvalidArgumentError(f"'sigma' must be a positive number, got {sigma!r}")
+    # beyond these the Gaussian's 2 sigma^2 underflows or its radius overflows
+    sigma = check_real(sigma, "sigma", minimum=SIGMA_RANGE[0], maximum=SIGMA_RANGE[1])
     shape = (size,) * d if temporal is None else (temporal,) + (size,) * d
     total = math.prod(shape)
     if total > MAX_PIXELS:
         names = "'size' and 'd'" if temporal is None else "'size', 'd' and 'temporal'"
         raise InvalidArgumentError(f"{names} give a mask of {total} pixels ({' x '.join(map(str, shape))}); "
                                    f"at most {MAX_PIXELS}")
-    state = _Energy(shape, _mask_stencils(shape, temporal is not None, float(sigma)))
+    state = _Energy(shape, _mask_stencils(shape, temporal is not None, sigma))
     ranks = _void_and_cluster(state, total, seed)
     return ranks.reshape(shape)
 
