@@ -686,6 +686,12 @@ _COMMANDS = (_add_devices, _add_sample, _add_spectrum, _add_metrics, _add_conver
              _add_render, _add_tour)
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser with its errors in one line, as clsamp's own (``-h`` shows usage)."""
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} -h)\n")
+
+
 def build_parser():
     """The ``clsamp`` command line: one subcommand per task, each with ``--device``.
 
@@ -695,10 +701,9 @@ def build_parser():
         Its subcommands are devices, sample, spectrum, metrics, convergence, integrate,
         render and tour; a parsed command's ``run`` attribute is the function that runs it.
     """
-    parser = argparse.ArgumentParser(
-        prog="clsamp",
-        description="Sampling patterns for Monte Carlo rendering, generated and measured in OpenCL.")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    parser = _Parser(prog="clsamp", description="Sampling patterns for Monte Carlo rendering, "
+                     "generated and measured in OpenCL.")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     for add in _COMMANDS:
         add(sub)
     for command in sub.choices.values():
@@ -753,10 +758,9 @@ def main(argv=None):
     before = signal.getsignal(signal.SIGINT)
     _signalled.clear()
     if main_thread:
-        # SIGTERM unwinds like Ctrl-C: every output is written whole (temporary file, then
-        # rename) or not at all, and the temporary file of one cut short is removed. Both
-        # are recorded, so that one whose exception a C extension turned into another
-        # (matplotlib's renderer does) still ends the command as interrupted.
+        # SIGTERM unwinds like Ctrl-C: outputs are written whole (a temporary file renamed,
+        # one cut short removed) or not at all. Both are recorded, so one whose exception a C
+        # extension turned into another (matplotlib's renderer does) still ends as interrupted.
         signal.signal(signal.SIGTERM, _on_sigterm)
         if before is signal.default_int_handler:
             signal.signal(signal.SIGINT, _on_sigint)

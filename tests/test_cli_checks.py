@@ -246,3 +246,19 @@ def test_a_fast_integrate_shows_no_progress_bar(capsys):
     import clsamp
     clsamp.integrate(lambda x: np.exp(-np.sum(x * x, axis=1)), 2, abs_tol=1e-4)
     assert "integrate" not in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv, named", [
+    (["sample", "gbn", "-n", "abc"], "argument -n: invalid int value: 'abc'"),
+    (["sample", "gbn", "--seed", "1.5"], "argument --seed: invalid int value: '1.5'"),
+    (["sample", "gbn", "--bogus"], "unrecognized arguments: --bogus"),
+    (["sampel"], "invalid choice: 'sampel'"),
+])
+def test_argparse_errors_are_one_line(capsys, no_work, argv, named):
+    # a value argparse itself refuses gets one line naming the argument, as clsamp's own
+    # checks give it, not the usage block
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    text = capsys.readouterr().err
+    assert stop.value.code == 2 and text.count("\n") == 1 and named in text
+    assert text.startswith("clsamp") and "usage" not in text
