@@ -286,6 +286,13 @@ def test_the_projective_variants_2d_projections_are_blue():
                                           ({"projections": "triples"}, "projections"),
                                           ({"projections": [(0, 2)]}, "projections"),
                                           ({"projections": [(0, 0)]}, "projections"),
+                                          ({"d": 3, "projections": [(0.0, 1.0)]},
+                                           "'projections' must be None"),
+                                          ({"d": 3, "projections": [(True, 2)]},
+                                           "'projections' must be None"),
+                                          ({"d": 3, "projections": [(0, 1), (1, 0)]},
+                                           r"subspace of axes \(1, 0\) twice"),
+                                          ({"d": 3, "projections": [5]}, "'projections' must be None"),
                                           ({"d": 9}, "d"), ({"d": 1}, "d")])
 def test_bad_parameters_are_refused_by_name(params, name):
     with pytest.raises(InvalidArgumentError, match=name):

@@ -15,6 +15,7 @@ are host code both backends share, drawn for blocks of batches at once
 import dataclasses
 import itertools
 import math
+import numbers
 
 import numpy as np
 
@@ -372,14 +373,22 @@ def subspaces(projections, d):
                 f"'projections' must be None, 'pairs' or a list of tuples of axes, got {projections!r}")
         return tuple(itertools.combinations(range(d), 2))
     try:
-        spaces = tuple(tuple(int(a) for a in axes) for axes in projections)
-    except (TypeError, ValueError):
+        spaces = tuple(tuple(axes) for axes in projections)
+    except TypeError:
+        spaces = None
+    if spaces is None or not all(isinstance(a, numbers.Integral) and not isinstance(a, (bool, np.bool_))
+                                 for axes in spaces for a in axes):
         raise InvalidArgumentError(
-            f"'projections' must be None, 'pairs' or a list of tuples of axes, got {projections!r}") from None
+            f"'projections' must be None, 'pairs' or a list of tuples of axes, got {projections!r}")
+    spaces = tuple(tuple(int(a) for a in axes) for axes in spaces)
+    seen = set()
     for axes in spaces:
         if not axes or len(set(axes)) != len(axes) or min(axes) < 0 or max(axes) >= d:
             raise InvalidArgumentError(
                 f"'projections' must list distinct axes in 0..{d - 1} per projection, got {axes!r}")
+        if frozenset(axes) in seen:
+            raise InvalidArgumentError(f"'projections' lists the subspace of axes {axes!r} twice")
+        seen.add(frozenset(axes))
     return spaces
 
 
