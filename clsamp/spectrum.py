@@ -151,7 +151,8 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
         has fp64, ``"float-float"`` where it has not (:mod:`clsamp.spectrum_ff`). Direct:
         exact integer phases, float-float sums, within :func:`clsamp.spectrum_ff.error_bound`
         (n) ≈ 2^-47·n·(400 + 5n/64) of the exact spectrum; fast: float-float spreading,
-        ``tol`` >= 1e-11 (``spectrum_ff.FAST_MIN_TOL``), the FFT in float64 on the host.
+        ``tol`` >= 1e-11 (``spectrum_ff.FAST_MIN_TOL``), the FFT in float64 on the host, for
+        1-D and 2-D spectra (a 3-D one in float-float is direct).
 
     Returns
     -------
