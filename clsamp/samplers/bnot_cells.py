@@ -506,6 +506,7 @@ class LaplacianSolver:
 
     def _factor(self, L):
         from scipy.sparse.linalg import splu
+        self.lu = None          # the old factors go before the new ones are made
         self.lu = splu(L.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                        options={"SymmetricMode": True})
 
