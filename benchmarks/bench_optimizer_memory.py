@@ -24,8 +24,10 @@ measurements over more):
 
 A row gives the call's seconds and, in its quality column, the peak, the part above the
 resident memory before the call, and the growth of both over the previous n (one
-doubling): the issue's bound is 2.2x on the peak; the part above, what the call itself
-holds at its peak, grows about 2x a doubling where memory is linear in n. There is no
+doubling). The issue's bound, 2.2x a doubling, is judged on the part above, what the call
+itself holds at its peak, which grows about 2x a doubling where memory is linear in n:
+the peak includes the process's own 270 MiB or so (Python, NumPy, PoCL), under which a
+quadratic call would grow by less than 2.2x at these n. There is no
 peer: the rows stay in the full table (docs/benchmarks.md). The memory is the host's: on a
 GPU the device's buffers are not in it.
 """
@@ -49,7 +51,7 @@ OPTIMIZERS = (
 )
 SIZES = (8192, 16384, 32768, 65536)
 QUICK_SIZES = (8192, 16384)
-BOUND = 2.2           # the issue's largest growth of the peak a doubling of n
+BOUND = 2.2           # the issue's largest growth a doubling of n (of the part above)
 WARM_UP = 64          # points of the call before the measured one
 TIMEOUT = 1800        # seconds one child process may take
 MIN_ABOVE = 4.0       # MiB above the call's start from which its growth is given (below
@@ -122,11 +124,15 @@ def run(devices, quick):
                 extra = {"peak_mib": peak, "above_mib": above}
                 if last is not None:
                     growth = peak / last[0]
-                    text += f"; {growth:.2f}x the peak at n/2 (bound {BOUND}x)"
-                    extra.update(growth=growth, within_bound=growth <= BOUND)
+                    text += f"; {growth:.2f}x the peak at n/2"
+                    extra.update(growth=growth)
                     if last[1] >= MIN_ABOVE:
-                        extra["above_growth"] = above / last[1]
-                        text += f", {above / last[1]:.2f}x the part above"
+                        # the bound on what the call holds: the process's own ~270 MiB
+                        # (Python, NumPy, PoCL) would hide any growth in the peak
+                        above_growth = above / last[1]
+                        extra.update(above_growth=above_growth, within_bound=above_growth <= BOUND)
+                        text += (f", {above_growth:.2f}x the part above (bound {BOUND}x: "
+                                 f"{'within' if above_growth <= BOUND else 'over'})")
                 rows.append(Row(f"{case} memory", f"{n}x2D", dev, got["seconds"],
                                 quality=text, extra=extra))
                 last = (peak, above)

@@ -207,16 +207,19 @@ def _sot_rows(binary, sizes, targets, dev):
                 1 if last["seconds"] > LONG else 3)
             mine, theirs = _sot_figures(pts, n, d), _sot_figures(ref, n, d)
             better = "yes" if mine[0] >= theirs[0] and mine[1] <= theirs[1] else "no"
+            # UTK's OpenMP threads spin: other load on the cores slows them several-fold
+            # (docs/performance.md), so the row says what the machine carried
+            load = os.getloadavg()[0]
             clamped = f" ({last['outside']} outside the cube, clamped)" if last["outside"] else ""
             text = (f"{goal}: {_describe(pts, n, d)}{'' if ok_cl else ' (not reached)'} | "
                     f"UTK {iterations} it x {UTK_SOT_BATCH}: {_describe(ref, n, d)}"
                     f"{'' if ok_utk else ' (not reached)'}"
-                    f"{clamped}; equal or better: {better}")
+                    f"{clamped}; equal or better: {better}; load average {load:.2f}")
             rows.append(Row("sot vs UTK SOT", f"{n}x{d}D, {batches} batches x 32", dev, t_cl,
                             "UTK SOT", t_utk, text,
                             {"batches": batches, "utk_iterations": iterations,
                              "reached": ok_cl, "utk_reached": ok_utk,
-                             "equal_or_better": better == "yes"}))
+                             "equal_or_better": better == "yes", "load": load}))
     return rows
 
 
@@ -262,8 +265,11 @@ def _bnot_rows(binaries, sizes, disk, dev):
                     better = _at_least(pts, utk_figures, figures)
                     text = mine + (f"UTK rho {utk_figures[0]:.3f}, power {utk_figures[1]:.4f}; "
                                    f"equal or better: {'yes' if better else 'no'}")
+                # a peer stopped at the limit gives a lower bound, not a ratio: the summary
+                # leaves it out, as it does a row below the peer's quality
                 rows.append(Row(f"{name} vs {peer}", f"{n}x2D, {setting}", dev, seconds, peer,
-                                utk_seconds, text, {"equal_or_better": better}))
+                                utk_seconds, text, {"equal_or_better": better,
+                                                    "peer_unconverged": utk_figures is None}))
     return rows
 
 

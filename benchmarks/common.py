@@ -205,7 +205,8 @@ def to_quality(name, d, n, ladder, quality, device, unit="iterations", title=Non
     t_np, ref = timed(lambda: twin.sample(n), repeats=1, warmup=0, warm_time=WARM)
     same = "bit-identical" if np.array_equal(ref, pts) else "DIFFERS"
     reached = "" if met else f"quality not reached in {iterations} {unit}: "
-    return Row(title or f"{name} to quality", f"{n}x{d}D, {iterations} it", device, t_cl,
+    label = "it" if unit == "iterations" else unit
+    return Row(title or f"{name} to quality", f"{n}x{d}D, {iterations} {label}", device, t_cl,
                "numpy twin", t_np,
                f"{reached}{text}, {same}", {"iterations": iterations, "reached": met})
 
@@ -440,6 +441,9 @@ def markdown_table(rows):
             peers.append(f"{module} {__import__(module).__version__}")
         except Exception:
             continue
+    if os.environ.get("CLSAMP_UTK_BIN"):
+        peers.append(f"UTK's samplers from {os.environ['CLSAMP_UTK_BIN']} (built as "
+                     "docs/performance.md, \"UTK's samplers built from source (issues 37 and 38)\", says)")
     command = " ".join(["python", "benchmarks/" + os.path.basename(sys.argv[0]), *sys.argv[1:]])
     lines = [measured_line(command, cpu, m, versions, peers), ""]
     bandwidth = any(r.gbs is not None for r in rows)
@@ -479,12 +483,13 @@ def summary_table(rows, measured):
     """The README's summary of one run: one line per capability and outside peer, with how
     many cases and the range of the ratios (peer seconds / clsamp seconds), under the
     ``measured`` line of the full table (docs/benchmarks.md). Rows against clsamp itself
-    (:data:`INTERNAL_PEERS`) and rows whose peer stopped without its result
-    (``extra["peer_unconverged"]``) stay in the full table only."""
+    (:data:`INTERNAL_PEERS`), rows whose peer stopped without its result
+    (``extra["peer_unconverged"]``: the ratio a lower bound) and rows below the peer's
+    quality (``extra["equal_or_better"]`` False) stay in the full table only."""
     groups = {}
     for r in rows:
         if (r.ratio is None or r.peer in ("", "-") or r.peer.lower().startswith(INTERNAL_PEERS)
-                or r.extra.get("peer_unconverged")):
+                or r.extra.get("peer_unconverged") or r.extra.get("equal_or_better") is False):
             continue
         groups.setdefault((r.capability or "-", r.peer), []).append(r.ratio)
     lines = [measured, "", "| capability | peer | cases | ratio, peer s / clsamp s (> 1: clsamp faster) |",
