@@ -92,7 +92,9 @@ def section_blue_noise(report, quick):
             rows.append((name, n, realizations, "-", "-", "-", f"failed: {error}"))
             data[name] = {"error": traceback.format_exc()}
     body = (f"<p>The optimizers since Poisson disk, each making {realizations} sets of n = {n} "
-            "points in 2-D (seed 1, their default settings; Poisson disk at &rho; = 0.75): "
+            "points in 2-D (seed 1; Poisson disk at &rho; = 0.75, Lloyd 100 iterations, CCVT "
+            "128 points a site, BNOT exact cells and 32 iterations, the others at their "
+            "defaults): "
             "&rho; the relative radius, N&middot;E the normalized CVT energy (0.1604 for the "
             "hexagonal lattice, 1/&pi; for white noise), and the low-frequency power the mean "
             "periodogram over the integer frequencies 0 &lt; |k| &lt; &radic;N / 2 (white "

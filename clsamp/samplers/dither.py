@@ -1,4 +1,4 @@
-"""Dither masks (threshold arrays): void and cluster, in any dimension, and its
+"""Dither masks (threshold arrays): void and cluster, in 1 to 4 dimensions, and its
 spatiotemporal variant, with the power spectrum of their ranks.
 
 A dither mask of side ``size`` in d dimensions holds each rank 0 .. size^d - 1 once;

@@ -9,7 +9,7 @@ import numpy as np
 from ...errors import SamplingError
 from ...geometry import torus
 
-HEXAGONAL_DENSITY = math.pi / math.sqrt(12.0)   # 0.9069: the largest 'rho' accepted
+HEXAGONAL_DENSITY = math.pi / math.sqrt(12.0)   # 0.906899...: the largest 'rho' accepted
 MAX_RADIUS = 0.5            # beyond, a disk overlaps its own periodic image
 MAX_CELLS = 2**24           # grid cells per realization (memory: ~ 9 + 8 d bytes each,
                             # and about as much again for the active cells)

@@ -153,8 +153,9 @@ class PoissonDiskSampler(Sampler):
     seed : int
         Seed of the darts (``Stream.CANDIDATES``).
     rho : float, optional
-        Relative radius in (0, 0.9069] for a fixed n (default 0.75 when ``radius`` is not
-        given, 0.65 in d >= 5): the points are at least ``rho * d_max(n)`` apart, d_max from
+        Relative radius in (0, pi / sqrt(12) = 0.906899...] for a fixed n (default 0.75
+        when ``radius`` is not given, 0.65 in d >= 5): the points are at least
+        ``rho * d_max(n)`` apart, d_max from
         :func:`clsamp.metrics.max_min_distance` (2-D: sqrt(2 / (sqrt(3) n))).
         Saturated (maximal) dart throwing reaches about 0.77 in 2-D (0.80 in 3-D and 4-D,
         0.75 in 1-D), so values close to that may need redraws and values above it fail:
@@ -289,7 +290,7 @@ class PoissonDiskSampler(Sampler):
                                                            open_minimum=True)
             if self.rho > HEXAGONAL_DENSITY:
                 raise InvalidArgumentError(
-                    f"'rho' must be <= {HEXAGONAL_DENSITY:.4f} (pi / sqrt(12), beyond "
+                    f"'rho' must be <= {HEXAGONAL_DENSITY!r} (pi / sqrt(12), beyond "
                     f"hexagonal packing), got {self.rho}; maximal dart throwing reaches "
                     "about 0.77 in 2-D")
 
