@@ -88,7 +88,7 @@ def sorted_by_cell(batch, cells):
     return pts, flat.ravel()[order].astype(np.uint32), start, order
 
 
-def cells_for(reach):
+def cells_for(reach, points=None, d=None, cells_a_point=1.0):
     """Cells per axis for neighbours within ``reach``: as many cells at least ``reach``
     wide as fit, or 1 (every pair) when fewer than 3 fit, so that the 3^d neighbouring
     cells are always distinct.
@@ -97,12 +97,25 @@ def cells_for(reach):
     ----------
     reach : float
         The longest distance a neighbour may have.
+    points, d : int, optional
+        With both, the grid has at most about ``cells_a_point`` cells a point of a set of
+        ``points`` in d dimensions: narrower cells only add empty ones to the stencil (and
+        short reaches in many dimensions would ask for more cells than memory holds);
+        wider cells find the same pairs.
+    cells_a_point : float
 
     Returns
     -------
     int
+
+    Examples
+    --------
+    >>> cells_for(0.01), cells_for(0.01, points=1000, d=2), cells_for(0.01, 50, 8, 4.0)
+    (100, 31, 1)
     """
     cells = int(np.floor(1.0 / reach)) if reach > 0 else 1
+    if points is not None:
+        cells = min(cells, int((cells_a_point * points) ** (1.0 / d)))
     return cells if cells >= 3 else 1
 
 

@@ -124,10 +124,7 @@ def _pcf_sums_device(sets, radii, sigma, cut, uniform, periodic=True, precision=
     r, (n, d) = len(sets), sets[0].shape
     batch = np.stack(sets)
     reach = float(radii[-1] + cut * sigma)
-    # no more cells than 4 a point (short radii in many dimensions would ask for more
-    # cells than memory holds); wider cells find the same pairs
-    cells = min(cells_for(reach), int((4.0 * n) ** (1.0 / d)))
-    cells = cells if cells >= 3 else 1
+    cells = cells_for(reach, n, d, cells_a_point=4.0)
     pts, cell, start, _ = sorted_by_cell(batch, cells)
     if precision == "float-float":
         return _pcf_sums_ff(pts, cell, start, r, n, d, cells, radii, sigma, cut, reach, periodic, uniform)

@@ -26,7 +26,7 @@ from .ccvt.density import DENSITIES, density_points, density_points_device
 from .ccvt.pairs import MAX_POINTS_PER_SITE, NO_OWNER
 from .ccvt.power import PowerPass, start_grid_size
 from .ccvt.relay import members_matrix, relay
-from .ccvt.sampler import _check_points_per_site
+from .ccvt.sampler import check_points_per_site
 from .ccvt.start import start_weights
 from .optimizer import OptimizerSampler
 
@@ -565,7 +565,7 @@ class BNOTSampler(OptimizerSampler):
     def _check_n(self, n):
         n = super()._check_n(n)
         if self.cells == "points":
-            _check_points_per_site(self.points_per_site, n)
+            check_points_per_site(self.points_per_site, n)
         return n
 
     def _work_bytes(self, n):

@@ -160,8 +160,7 @@ class Kernel:
     def cells(self):
         """Cells per axis of the neighbour grid (:func:`clsamp.geometry.cells.cells_for`), at
         most about 4 cells a point (wider cells find the same pairs)."""
-        cells = min(cells_for(self.reach), int((4.0 * self.n) ** (1.0 / self.d)))
-        return cells if cells >= 3 else 1
+        return cells_for(self.reach, self.n, self.d, cells_a_point=4.0)
 
     @property
     def stencil(self):

@@ -85,8 +85,7 @@ class Weighting:
         int
             At least 3, or 1 (one cell holding every pair).
         """
-        cells = min(cells_for(self.d_max), int(points_per_set ** (1.0 / d)))
-        return cells if cells >= 3 else 1
+        return cells_for(self.d_max, points_per_set, d)
 
 
 def _power(t, alpha):

@@ -82,7 +82,7 @@ def ccvt_optimize(sites, points_per_site=1024, iterations=1000, seed=0, backend=
         Realizations 0..r-1 standing for the given sets.
     """
     batch, _ = check_sites(sites)
-    points_per_site = _check_points_per_site(points_per_site, batch.shape[1])
+    points_per_site = check_points_per_site(points_per_site, batch.shape[1])
     iterations = check_positive_int(iterations, "iterations")
     check_choice(density, "density", DENSITIES)
     relax = check_int(relax, "relax", minimum=0, maximum=MAX_RELAX)
@@ -90,7 +90,24 @@ def ccvt_optimize(sites, points_per_site=1024, iterations=1000, seed=0, backend=
                 backend, callback, density, relax)
 
 
-def _check_points_per_site(points_per_site, n):
+def check_points_per_site(points_per_site, n):
+    """``points_per_site`` checked for n sites: a positive integer, and n times it below
+    2^32 density points (CCVT's and ``bnot``'s counts are 32-bit).
+
+    Parameters
+    ----------
+    points_per_site : int
+    n : int
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    InvalidArgumentError
+        Not a positive integer up to ``MAX_POINTS_PER_SITE``, or too many density points.
+    """
     p = check_positive_int(points_per_site, "points_per_site", maximum=MAX_POINTS_PER_SITE)
     if n * p > 2**32 - 1:
         raise InvalidArgumentError(
@@ -274,7 +291,7 @@ class CCVTSampler(OptimizerSampler):
         return super().convergence_rate(case)
 
     def _optimize(self, sites, realizations, backend):
-        p = _check_points_per_site(self.points_per_site, sites.shape[1])
+        p = check_points_per_site(self.points_per_site, sites.shape[1])
         return _run(sites, np.arange(realizations.start, realizations.stop, dtype=np.int64), p,
                     self.iterations, self.seed, backend, density=self.density, relax=self.relax,
                     progress=self.progress)

@@ -59,7 +59,7 @@ class CoarseGeometry:
 
     def __init__(self, d, radius, r2, n):
         self.d, self.radius, self.r2 = d, radius, r2
-        G = min(cells_for(radius), int(n ** (1.0 / d)))
+        G = cells_for(radius, n, d)
         # the cells pay only where the 3^d around a dart hold far fewer than the n points:
         # a cell visited costs about four distances (docs/performance.md)
         self.G = G if G >= 3 and 3 ** d * (4 + n / G ** d) < n else 1
