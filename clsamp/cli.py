@@ -78,17 +78,20 @@ def _samplers(names):
 
 
 def _wrote(paths, what=""):
-    print("wrote " + ", ".join(str(p) for p in paths) + (f": {what}" if what else ""),
-          file=sys.stderr)
+    print("wrote " + ", ".join(str(p) for p in paths) + (f": {what}" if what else ""), file=sys.stderr)
 
 
 def _parse_params(items):
-    """``--param key=value`` pairs, values parsed as int, float, bool or str."""
+    """``--param key=value`` pairs, values parsed as int, float, bool or str; d, seed and
+    backend are the commands' own options."""
     params = {}
     for item in items or ():
         key, sep, value = item.partition("=")
         if not sep or not key:
             raise InvalidArgumentError(f"'--param' must look like key=value, got {item!r}")
+        if key in ("d", "seed", "backend"):
+            raise InvalidArgumentError(f"'--param {item}': {key} is no sampler parameter here; "
+                                       "the command's own options set it (-d, --seed, --backend)")
         for convert in (int, float):
             try:
                 params[key] = convert(value)
@@ -372,14 +375,12 @@ def _run_metrics(args):
     points, label = _points_from_source(args)
     batch = points if points.ndim == 3 else points[None]
     r, n, d = batch.shape
-    document = {"source": label, "n": n, "d": d, "realizations": r, "backend": args.backend,
-                "metrics": {}}
+    document = {"source": label, "n": n, "d": d, "realizations": r, "backend": args.backend, "metrics": {}}
     for name in wanted:
         key = METRICS[name]
         if key in metrics.METHODS:
             value = metrics.discrepancy(batch, key, backend=args.backend)
-            document["metrics"][key] = {**_summary(value),
-                                        "squared": key in ("CD", "WD", "MD")}
+            document["metrics"][key] = {**_summary(value), "squared": key in ("CD", "WD", "MD")}
         elif key == "star":
             value = metrics.star_discrepancy(batch, bounds=args.bounds, backend=args.backend)
             if args.bounds:
@@ -444,8 +445,7 @@ def _add_convergence(sub):
     p.add_argument("--realizations", type=int, default=None,
                    help="estimates per n (default 1000; 64 for families)")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--no-homogenize", action="store_true",
-                   help="no random toroidal shift per realization")
+    p.add_argument("--no-homogenize", action="store_true", help="no random toroidal shift per realization")
     p.add_argument("--backend", default="opencl", choices=("opencl", "numpy"))
     p.add_argument("--no-progress", action="store_true", help="hide the progress bars")
     p.add_argument("--checkpoint", default=None,

@@ -262,3 +262,16 @@ def test_argparse_errors_are_one_line(capsys, no_work, argv, named):
     text = capsys.readouterr().err
     assert stop.value.code == 2 and text.count("\n") == 1 and named in text
     assert text.startswith("clsamp") and "usage" not in text
+
+
+@pytest.mark.parametrize("argv", [
+    ["sample", "gbn", "-n", "16", "--param", "seed=3"],
+    ["sample", "gbn", "-n", "16", "--param", "d=3"],
+    ["sample", "random", "-n", "16", "--param", "backend=numpy"],
+    ["spectrum", "gbn", "-n", "16", "--param", "seed=3", "-o", "{}/s.png"],
+])
+def test_params_that_are_the_commands_own_options_are_one_line(tmp_path, capsys, no_work, argv):
+    # make_sampler got them twice ("got multiple values for keyword argument 'seed'")
+    code, text = run(capsys, *[a.format(tmp_path) for a in argv])
+    assert code == 2 and "is no sampler parameter here" in text and "Traceback" not in text, text
+    assert listing(tmp_path) == []
