@@ -12,6 +12,7 @@ import numpy as np
 from .errors import InvalidArgumentError
 
 MAX_UINT32 = 2**32 - 1
+MAX_ITERATIONS = 10**6    # an optimizer's cap on its iterations (each set keeps their history)
 
 
 def plain(value):

@@ -97,8 +97,20 @@ def test_optimizers_count_their_working_memory_before_the_work(monkeypatch, name
     output = n * sampler.d * 8
     assert sampler._work_bytes(n) == share * n
     monkeypatch.setattr(memory, "host_memory_available", lambda: output + 2**20)
-    with pytest.raises(InvalidArgumentError, match="its output and one set's working memory"):
+    with pytest.raises(InvalidArgumentError, match="its output.* and one set's working memory"):
         sampler.sample(n)
+
+
+@pytest.mark.parametrize("name", ["gbn", "sot", "bnot", "lloyd", "ccvt"])
+def test_optimizers_cap_their_iterations_and_count_each_sets_history(name):
+    # each set keeps its history, 8 bytes an iteration: 2 * 10^9 iterations were taken and
+    # failed in the device's allocator; 10^6 iterations of 10^6 sets are refused up front
+    with pytest.raises(InvalidArgumentError, match=r"'iterations' must be an integer <= 1000000"):
+        clsamp.make_sampler(name, iterations=2_000_000_000)
+    sampler = clsamp.make_sampler(name, iterations=10**6)
+    assert sampler._history_bytes() == 8 * 10**6
+    with pytest.raises(InvalidArgumentError, match="each set's history"):
+        sampler.sample(64, realizations=10**6)
 
 
 def test_bnot_refuses_more_density_points_than_it_can_count():

@@ -33,6 +33,7 @@ from .. import host_memory, runtime
 from ..errors import InvalidArgumentError
 from ..validation import (
     MAX_UINT32,
+    check_bool,
     check_choice,
     check_image_size,
     check_int,
@@ -610,7 +611,7 @@ class Sampler(abc.ABC):
         if n is None:
             return
         total = sum(len(run) for run in runs)
-        need = total * n * self.d * 8
+        need = total * (n * self.d * 8 + self._history_bytes())
         what = f"{total} x {n} points in {self.d}-D of {self.label!r}"
         if device:
             room = runtime.current_device().global_memory
@@ -620,9 +621,10 @@ class Sampler(abc.ABC):
                     f"has {runtime.gib(room)}. Ask for fewer realizations or points at a time")
         else:
             work = self._work_bytes(n)
-            runtime.check_host_bytes(
-                need + work, f"sample of {what} ("
-                + ("its output and one set's working memory" if work else "its output alone") + ")")
+            parts = ["its output"] + ["each set's history"] * bool(self._history_bytes()) \
+                + ["one set's working memory"] * bool(work)
+            held = ", ".join(parts[:-1]) + " and " + parts[-1] if len(parts) > 1 else "its output alone"
+            runtime.check_host_bytes(need + work, f"sample of {what} ({held})")
         if self.backend == "numpy":
             return
         one = n * self.d * 8
@@ -641,6 +643,11 @@ class Sampler(abc.ABC):
         come from peak RSS measured at 2^16 to 2^20 points (docs/performance.md, "Working
         memory refused before the work")."""
         return 0
+
+    def _history_bytes(self):
+        """The host bytes each set's info keeps besides its points: an optimizer's history,
+        8 bytes an iteration (its cap, ``iterations``); 0 for the other samplers."""
+        return 8 * getattr(self, "iterations", 0) if self.info is not None else 0
 
     def _warn_weaker(self, n, start):
         """Warn (UserWarning) where a legal request gives a weaker set than the sampler
@@ -708,7 +715,7 @@ class Sampler(abc.ABC):
         return None
 
     def _check_call(self, n, realizations, start, return_info=False):
-        if return_info and self.info is None:
+        if check_bool(return_info, "return_info") and self.info is None:
             raise InvalidArgumentError(
                 f"'return_info': sampler {self.name!r} does not iterate or reject, so it has no "
                 "info to return")

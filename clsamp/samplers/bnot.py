@@ -19,7 +19,7 @@ from .. import runtime
 from ..density import as_density
 from ..errors import InvalidArgumentError
 from ..geometry import integer_torus as it
-from ..validation import check_bool, check_choice, check_int, check_positive_int, check_real
+from ..validation import MAX_ITERATIONS, check_bool, check_choice, check_int, check_positive_int, check_real
 from .base import SampleInfo, info_field, register
 from .bnot_cells import exact_optimize
 from .ccvt.density import DENSITIES, density_points, density_points_device
@@ -553,7 +553,7 @@ class BNOTSampler(OptimizerSampler):
         self.progress = check_bool(progress, "progress")
         self.points_per_site = check_positive_int(points_per_site, "points_per_site",
                                                   maximum=MAX_POINTS_PER_SITE)
-        self.iterations = check_positive_int(iterations, "iterations")
+        self.iterations = check_positive_int(iterations, "iterations", maximum=MAX_ITERATIONS)
         self.tol = check_real(tol, "tol", minimum=0.0, maximum=1.0)
         self.cells = check_choice(cells, "cells", CELLS)
         if self.cells == "exact" and density is not None:

@@ -22,7 +22,7 @@ from .. import runtime
 from ..density import Density, as_density
 from ..errors import InvalidArgumentError
 from ..geometry.cells import cells_for, neighbour_cells, sorted_by_cell
-from ..validation import check_bool, check_positive_int, check_real
+from ..validation import MAX_ITERATIONS, check_bool, check_positive_int, check_real
 from . import gbn_device
 from .base import SampleInfo, Sampler, info_field, make_sampler, register, sampler_class
 
@@ -700,7 +700,7 @@ class GBNSampler(Sampler):
         # a step no 40 halvings bring to one that lowers the energy would end the run at
         # its start, as converged
         self.step = check_real(step, "step", minimum=0.0, open_minimum=True, maximum=STEP_MAX)
-        self.iterations = check_positive_int(iterations, "iterations")
+        self.iterations = check_positive_int(iterations, "iterations", maximum=MAX_ITERATIONS)
         self.tol = check_real(tol, "tol", minimum=0.0, maximum=1.0)
         self.periodic = check_bool(periodic, "periodic")
         self.cut = check_real(cut, "cut", minimum=1.0, maximum=8.0)

@@ -14,7 +14,7 @@ from .. import runtime
 from ..errors import InvalidArgumentError
 from ..geometry import integer_torus as it
 from ..geometry import voronoi
-from ..validation import check_positive_int
+from ..validation import MAX_ITERATIONS, check_positive_int
 from .base import SampleInfo, register
 from .optimizer import OptimizerSampler, check_sites
 
@@ -201,7 +201,7 @@ def lloyd_relax(sites, density=256, iterations=50, backend="opencl"):
     batch, _ = check_sites(sites, d=voronoi.DIMENSIONS)
     _, n, d = batch.shape
     density = _check_density(density, n, d)
-    iterations = check_positive_int(iterations, "iterations")
+    iterations = check_positive_int(iterations, "iterations", maximum=MAX_ITERATIONS)
     return _run(batch, np.arange(batch.shape[0]), density, iterations, backend)
 
 
@@ -272,7 +272,7 @@ class LloydSampler(OptimizerSampler):
 
     def __init__(self, d=2, seed=0, iterations=50, density=256, backend="opencl"):
         super().__init__(d=d, seed=seed, backend=backend)
-        self.iterations = check_positive_int(iterations, "iterations")
+        self.iterations = check_positive_int(iterations, "iterations", maximum=MAX_ITERATIONS)
         self.density = check_positive_int(density, "density")
 
     def _optimize(self, sites, realizations, backend):

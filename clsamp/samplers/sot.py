@@ -21,7 +21,7 @@ import numpy as np
 
 from .. import philox, runtime
 from ..errors import InvalidArgumentError
-from ..validation import check_positive_int, check_real
+from ..validation import MAX_ITERATIONS, check_positive_int, check_real
 from . import sot_device
 from .base import SampleInfo, Sampler, info_field, make_sampler, register
 from .sot_device import CHUNK, QMAX, QTOL
@@ -688,7 +688,7 @@ class SOTSampler(Sampler):
                  tol=TOL, projections=None, backend="opencl"):
         super().__init__(d=d, seed=seed, backend=backend)
         self.directions = check_positive_int(directions, "directions", maximum=4096)
-        self.iterations = check_positive_int(iterations, "iterations")
+        self.iterations = check_positive_int(iterations, "iterations", maximum=MAX_ITERATIONS)
         self.step = float(self.d) if step is None else check_real(
             step, "step", minimum=0.0, open_minimum=True, maximum=MAX_STEP * self.d)
         self.tol = check_real(tol, "tol", minimum=0.0, maximum=1.0)

@@ -8,7 +8,7 @@ import numpy as np
 from ... import runtime
 from ...errors import InvalidArgumentError
 from ...geometry import integer_torus as it
-from ...validation import check_choice, check_int, check_positive_int
+from ...validation import MAX_ITERATIONS, check_choice, check_int, check_positive_int
 from ..base import PILLEBOUE, Rate, SampleInfo, info_field, register
 from ..optimizer import OptimizerSampler, check_sites
 from .density import DENSITIES, density_points, density_points_device
@@ -83,7 +83,7 @@ def ccvt_optimize(sites, points_per_site=1024, iterations=1000, seed=0, backend=
     """
     batch, _ = check_sites(sites)
     points_per_site = check_points_per_site(points_per_site, batch.shape[1])
-    iterations = check_positive_int(iterations, "iterations")
+    iterations = check_positive_int(iterations, "iterations", maximum=MAX_ITERATIONS)
     check_choice(density, "density", DENSITIES)
     relax = check_int(relax, "relax", minimum=0, maximum=MAX_RELAX)
     return _run(batch, np.arange(batch.shape[0]), points_per_site, iterations, seed,
@@ -268,7 +268,7 @@ class CCVTSampler(OptimizerSampler):
         self.progress = bool(progress)
         self.points_per_site = check_positive_int(points_per_site, "points_per_site",
                                                   maximum=MAX_POINTS_PER_SITE)
-        self.iterations = check_positive_int(iterations, "iterations")
+        self.iterations = check_positive_int(iterations, "iterations", maximum=MAX_ITERATIONS)
         self.density = check_choice(density, "density", DENSITIES)
         self.relax = check_int(relax, "relax", minimum=0, maximum=MAX_RELAX)
 
