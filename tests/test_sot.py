@@ -279,6 +279,16 @@ def test_the_projective_variants_2d_projections_are_blue():
         assert blue < low_frequency_power(np.ascontiguousarray(plain[:, [i, j]]))
 
 
+def test_projections_as_text_are_the_list_they_spell():
+    # the command line's --param projections=0,1;1,2 reaches the sampler as text
+    from clsamp.samplers.sot import subspaces
+    assert subspaces("0,1;1,2", 3) == subspaces([(0, 1), (1, 2)], 3) == ((0, 1), (1, 2))
+    assert subspaces(" 2 , 0 ", 3) == ((2, 0),)
+    a = clsamp.make_sampler("sot", d=3, seed=1, iterations=3, projections="0,2").sample(32)
+    b = clsamp.make_sampler("sot", d=3, seed=1, iterations=3, projections=[(0, 2)]).sample(32)
+    assert np.array_equal(a, b)
+
+
 @pytest.mark.parametrize("params, name", [({"directions": 0}, "directions"),
                                           ({"iterations": 0}, "iterations"),
                                           ({"step": 0.0}, "step"), ({"step": 4.5}, "step"),
@@ -293,6 +303,8 @@ def test_the_projective_variants_2d_projections_are_blue():
                                           ({"d": 3, "projections": [(0, 1), (1, 0)]},
                                            r"subspace of axes \(1, 0\) twice"),
                                           ({"d": 3, "projections": [5]}, "'projections' must be None"),
+                                          ({"d": 3, "projections": "0,1;"}, r"as text \('0,1;2,3'\)"),
+                                          ({"d": 3, "projections": "0,3"}, "axes in 0..2"),
                                           ({"d": 9}, "d"), ({"d": 1}, "d")])
 def test_bad_parameters_are_refused_by_name(params, name):
     with pytest.raises(InvalidArgumentError, match=name):

@@ -16,6 +16,7 @@ import dataclasses
 import itertools
 import math
 import numbers
+import re
 
 import numpy as np
 
@@ -357,8 +358,10 @@ def subspaces(projections, d):
 
     Parameters
     ----------
-    projections : None, "pairs" or sequence of sequences of int
-        None: none; ``"pairs"``: every 2-D coordinate projection; else the listed axes.
+    projections : None, "pairs", sequence of sequences of int, or str
+        None: none; ``"pairs"``: every 2-D coordinate projection; else the listed axes,
+        also as text (``"0,1;2,3"``: subspaces apart by ";", their axes by ",", as the
+        command line's ``--param projections=0,1;2,3`` gives them).
     d : int
 
     Returns
@@ -368,10 +371,13 @@ def subspaces(projections, d):
     if projections is None:
         return ()
     if isinstance(projections, str):
-        if projections != "pairs":
+        if projections == "pairs":
+            return tuple(itertools.combinations(range(d), 2))
+        if not re.fullmatch(r"\s*\d+(\s*,\s*\d+)*(\s*;\s*\d+(\s*,\s*\d+)*)*\s*", projections):
             raise InvalidArgumentError(
-                f"'projections' must be None, 'pairs' or a list of tuples of axes, got {projections!r}")
-        return tuple(itertools.combinations(range(d), 2))
+                f"'projections' must be None, 'pairs', a list of tuples of axes or that list as "
+                f"text ('0,1;2,3'), got {projections!r}")
+        projections = [[int(a) for a in part.split(",")] for part in projections.split(";")]
     try:
         spaces = tuple(tuple(axes) for axes in projections)
     except TypeError:
@@ -379,7 +385,8 @@ def subspaces(projections, d):
     if spaces is None or not all(isinstance(a, numbers.Integral) and not isinstance(a, (bool, np.bool_))
                                  for axes in spaces for a in axes):
         raise InvalidArgumentError(
-            f"'projections' must be None, 'pairs' or a list of tuples of axes, got {projections!r}")
+            f"'projections' must be None, 'pairs', a list of tuples of axes or that list as "
+            f"text ('0,1;2,3'), got {projections!r}")
     spaces = tuple(tuple(int(a) for a in axes) for axes in spaces)
     seen = set()
     for axes in spaces:
@@ -623,10 +630,10 @@ class SOTSampler(Sampler):
     tol : float
         Stop once the mean transport cost over 16 batches is not below (1 - tol) times that
         of the 16 before (default 0: run every batch).
-    projections : None, "pairs" or list of tuples of int
+    projections : None, "pairs", list of tuples of int, or str
         The projective variant: also optimize these coordinate projections (``"pairs"``:
-        every 2-D one), each with ``directions // 2`` directions a batch drawn in its
-        subspace.
+        every 2-D one; text such as ``"0,1;2,3"`` for [(0, 1), (2, 3)]), each with
+        ``directions // 2`` directions a batch drawn in its subspace.
     backend : {"opencl", "numpy"}
 
     Notes
