@@ -72,6 +72,17 @@ def _words(seed, index, realization, purpose):
     return philox.philox4x32(counter, np.stack(philox.seed_key(seed)))
 
 
+def _shifts(seed, index, realization, d):
+    """A toroidal shift in d dimensions per (index, realization): two components a Philox
+    block, the first two from the ``PURPOSE_SHIFT`` block, any more from the blocks after
+    ``PURPOSE_PASS`` (a pooled set of more than 2 dimensions, ``pad=False``)."""
+    parts = []
+    for k in range(-(-d // 2)):
+        w = _words(seed, index, realization, PURPOSE_SHIFT if k == 0 else PURPOSE_PASS + k)
+        parts += [philox.words_to_unit(w[:, 0], w[:, 1]), philox.words_to_unit(w[:, 2], w[:, 3])]
+    return np.stack(parts, axis=-1)[:, :d]
+
+
 def derived_seed(seed, index, realization, purpose=PURPOSE_SEED):
     """A 64-bit seed drawn from (seed, index, realization): the seed of one sampler of a render.
 
@@ -304,10 +315,7 @@ def pixel_samples(scene, sampler, spp, resolution, seed=0, sampler_params=None, 
             w = _words(seed, np.arange(lo, hi), g, PURPOSE_POOL)
             # Lemire's multiply-shift: bias below pool / 2^32, negligible and deterministic
             choice = ((w[:, 0].astype(np.uint64) * np.uint64(len(s.pool))) >> np.uint64(32)).astype(np.intp)
-            w = _words(seed, np.arange(lo, hi), g, PURPOSE_SHIFT)
-            shift = np.stack([philox.words_to_unit(w[:, 0], w[:, 1]),
-                              philox.words_to_unit(w[:, 2], w[:, 3])], axis=-1)[:, :s.d]
-            points = torus.shift(s.pool[choice], shift[:, None, :])
+            points = torus.shift(s.pool[choice], _shifts(seed, np.arange(lo, hi), g, s.d)[:, None, :])
         elif s.indexed:          # one sampler for the image; its realizations are the pixels
             points = s.factory(s.d, derived_seed(seed, _IMAGE_INDEX, g)).for_image(width, height).sample(
                 spp, realizations=range(lo, hi))

@@ -98,8 +98,8 @@ def section_blue_noise(report, quick):
             "&rho; the relative radius, N&middot;E the normalized CVT energy (0.1604 for the "
             "hexagonal lattice, 1/&pi; for white noise), and the low-frequency power the mean "
             "periodogram over the integer frequencies 0 &lt; |k| &lt; &radic;N / 2 (white "
-            "noise: 1). The figure puts quality against the seconds each took: the lower "
-            "left is better.</p>")
+            "noise: 1). The figure puts each against the seconds it took: the power "
+            "(lower is better) and &rho; (higher is better).</p>")
     body += table(("sampler", "n", "sets", "seconds", "ρ (mean)", "N·E (mean)", "low-freq. power"),
                   rows)
     if scatter:
@@ -126,7 +126,8 @@ def _depth_of_field(quick):
             continue
         try:
             t0 = time.perf_counter()
-            image = rendering.render(scene, name, spp=spp, resolution=resolution, seed=4, progress=False)
+            image = rendering.render(scene, name, spp=spp, resolution=resolution, seed=4, pad=False,
+                                     progress=False)
             seconds = time.perf_counter() - t0
             mse = rendering.compare(image, ref, stderr)["mse"]
             rows.append((name, spp, mse, seconds))

@@ -14,6 +14,7 @@ import clsamp
 from clsamp import files
 from clsamp import render as rendering
 from clsamp.errors import InvalidArgumentError
+from clsamp.pixel_sampling import sample_plan
 from clsamp.scene import Scene, shipped_scenes
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -210,6 +211,32 @@ def test_expensive_samplers_reuse_a_pool_with_per_pixel_toroidal_shifts():
     assert len(shapes) <= 3                  # every pixel's set is one of 3 pool members...
     assert len({s.tobytes() for s in samples}) == len(samples)   # ...shifted its own way
     image = rendering.render(scene, pooled, 16, 6, seed=2, pool=3, progress=False)
+    assert np.isfinite(image).all()
+
+
+def test_pooled_sets_beyond_2d_are_shifted_in_every_dimension():
+    # pad=False asks an expensive sampler for one 4-D set a pixel (depth of field): each is
+    # a pool member shifted on the 4-D torus (a 2-D shift failed to broadcast)
+    scene = Scene.from_file("dof")
+    pooled = clsamp.make_sampler("jittered", d=4, seed=0, strata=(2, 2, 2, 2))
+    pooled.expensive = True
+    sets = sample_plan(scene, pooled, 16, None, False, 2)
+    samples = rendering.pixel_samples(scene, pooled, 16, 6, seed=2, pad=False, pool=2, _sets=sets)
+    assert samples.shape == (36, 4, 16) and [s.d for s in sets] == [4]
+    members = sets[0].pool                          # the 2 sets of 16 points in 4-D drawn once
+
+    def wrapped(v):
+        return (v + 0.5) % 1.0 - 0.5
+
+    shifts = []
+    for pts in samples.transpose(0, 2, 1):          # one pixel's (16, 4) points
+        # a shifted member: every point the same offset from the member's point
+        offsets = [wrapped(pts - m) for m in members]
+        match = [o for o in offsets if np.allclose(o - o[0], 0.0, atol=1e-12)]
+        assert match
+        shifts.append(match[0][0] % 1.0)
+    assert (np.ptp(np.array(shifts), axis=0) > 0.1).all()    # every coordinate moves
+    image = rendering.render(scene, "gbn", 8, 6, seed=2, pad=False, progress=False)
     assert np.isfinite(image).all()
 
 
