@@ -49,13 +49,13 @@ class BNOTInfo(SampleInfo):
     ----------
     realizations : ndarray (r,)
         The realization indices.
-    energy_history : ndarray (r, iterations)
+    energy_history : ndarray (r, T)
         The transport cost after each iteration: the mean squared toroidal distance of the
         density points (``cells="exact"``: of the torus) to the site whose cell holds
         them, after the sites moved to their cells' centroids. Never rising (exact cells:
-        within the capacities' tolerance); a realization that converged before the others
-        repeats its final value.
-    dual_history : ndarray (r, iterations)
+        within the capacities' tolerance); T is the longest run's iterations, and a
+        realization that converged before the others repeats its final value.
+    dual_history : ndarray (r, T)
         The dual F(w) of each iteration's weight solve at its end, per density point
         (same units; :func:`solve_weights`): the transport cost the power cells would
         have if their counts were exact.

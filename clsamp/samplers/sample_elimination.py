@@ -489,8 +489,9 @@ class SampleEliminationInfo(SampleInfo):
     stages : int
         Eliminations run: 1, plus the halvings of progressive ordering.
     max_weight : ndarray (r,)
-        The largest weight left among the n survivors of the first elimination (0: no
-        two closer than d_max).
+        The largest weight left among the n survivors of the first elimination: 0 where
+        no two are closer than d_max, up to the rounding of the subtractions that took
+        the eliminated candidates' terms out (about 1e-19 at n = 1).
     """
 
     candidates: int = info_field("same")
