@@ -651,6 +651,15 @@ def test_bad_n(name):
             s.sample(n)
 
 
+def test_lloyd_refuses_too_many_density_points_before_drawing_its_sites(monkeypatch):
+    # 'density' * n >= 2^32 was refused after the 2^24 starting sites were drawn (8 s,
+    # 3.9 GB); now before (the start would fail the test)
+    from clsamp.samplers import optimizer
+    monkeypatch.setattr(optimizer, "initial_sites", lambda *a, **k: pytest.fail("sites drawn"))
+    with pytest.raises(InvalidArgumentError, match=r"'density' \* n must stay below 2\^32"):
+        clsamp.make_sampler("lloyd", d=3).sample(2**24)
+
+
 @pytest.mark.parametrize("name", ["lloyd", "ccvt"])
 def test_start_other_than_zero_is_refused(name):
     s = clsamp.make_sampler(name, points_per_site=8) if name == "ccvt" else clsamp.make_sampler(name)

@@ -231,6 +231,11 @@ def test_radius_with_n_gives_exactly_n_points_r_apart():
     ({"radius": 1e-5}, "radius"), ({"rho": 0.91}, "rho"), ({"rho": 0.0}, "rho"),
     ({"rho": -1.0}, "rho"), ({"rho": 0.7, "radius": 0.1}, "radius"), ({"d": 9}, "d"),
     ({"d": 0}, "d"),
+    # a subnormal radius once overflowed the grid's size (OverflowError)
+    ({"d": 3, "radius": 1e-310}, "radius"), ({"d": 1, "radius": 5e-324}, "radius"),
+    # in 1-D a disk of radius 1/2 leaves only the antipode, which no dart hits: the run
+    # ended in "did not finish ... (a bug: please report it)"
+    ({"d": 1, "radius": 0.5}, "radius"),
 ])
 def test_bad_parameters_name_the_argument(params, name):
     with pytest.raises(InvalidArgumentError, match=f"'{name}'"):
@@ -248,6 +253,16 @@ def test_bad_calls_name_the_argument():
         sampler.sample(16, start=3)
     with pytest.raises(InvalidArgumentError, match="'realizations'"):
         clsamp.make_sampler("poisson_disk", radius=0.1).sample(realizations=3)
+    # maximal sets by sample_sets: realization 2^32 + k was realization k
+    with pytest.raises(InvalidArgumentError, match=r"'realizations' must lie in \[0, 4294967295\]"):
+        clsamp.make_sampler("poisson_disk", radius=0.1).sample_sets(range(2**32, 2**32 + 1))
+    # a rho too small for the grid names rho (it named n alone, with a 240-digit count)
+    with pytest.raises(InvalidArgumentError, match=r"'rho'=1e-300 is too much .* over 1e301 cells"):
+        clsamp.make_sampler("poisson_disk", d=3, rho=1e-300).sample(10)
+    # from 5-D on the darts are numbered in 26 bits (a plain ValueError before)
+    with pytest.raises(InvalidArgumentError, match=r"'n' must be below 2\^26 for d >= 5"):
+        clsamp.make_sampler("poisson_disk", d=5).sample(2**26)
+    assert clsamp.make_sampler("poisson_disk", d=8, radius=1e-310).sample(20).shape == (20, 8)
 
 
 def test_unplaceable_n_says_so_and_suggests_a_smaller_rho():

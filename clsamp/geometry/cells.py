@@ -113,7 +113,8 @@ def cells_for(reach, points=None, d=None, cells_a_point=1.0):
     >>> cells_for(0.01), cells_for(0.01, points=1000, d=2), cells_for(0.01, 50, 8, 4.0)
     (100, 31, 1)
     """
-    cells = int(np.floor(1.0 / reach)) if reach > 0 else 1
+    # (a subnormal reach makes 1 / reach infinite)
+    cells = int(min(1.0 / reach, 2.0 ** 62)) if reach > 0 else 1
     if points is not None:
         cells = min(cells, int((cells_a_point * points) ** (1.0 / d)))
     return cells if cells >= 3 else 1

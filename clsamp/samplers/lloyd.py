@@ -34,7 +34,9 @@ class LloydInfo(SampleInfo):
     initial_energy : ndarray (r,)
         E of the starting sites.
     counts : ndarray (r, n)
-        Density points in each returned site's Voronoi cell (none is empty).
+        Density points in each returned site's Voronoi cell: none empty where the sites'
+        cells can each hold a point, but with few density points a site (``density`` of
+        1 or 2) some can be empty.
     """
 
     energy_history: np.ndarray
@@ -244,9 +246,11 @@ class LloydSampler(OptimizerSampler):
     by the rounded mean of its cell's offsets does not raise that cell's energy, and
     re-assigning points to their nearest site can only lower it. A site whose cell is
     empty (possible after a degenerate start: duplicate sites, a cluster) is moved onto
-    the density point farthest from its site, which it then captures; that cannot raise
-    E either. N*E of the returned set is :func:`clsamp.metrics.normalized_energy`
-    (0.160375 for the hexagonal lattice, about 1/pi for white noise).
+    the density point farthest from its site, one such point a site, farthest first; that
+    cannot raise E either. With few density points a site (``density`` 1 or 2) there can
+    be fewer such points than empty sites, and some sites stay empty. N*E of the returned
+    set is :func:`clsamp.metrics.normalized_energy` (0.160375 for the hexagonal lattice,
+    about 1/pi for white noise).
 
     References
     ----------
@@ -274,6 +278,11 @@ class LloydSampler(OptimizerSampler):
         super().__init__(d=d, seed=seed, backend=backend)
         self.iterations = check_positive_int(iterations, "iterations", maximum=MAX_ITERATIONS)
         self.density = check_positive_int(density, "density")
+
+    def _check_n(self, n):
+        n = super()._check_n(n)
+        _check_density(self.density, n, self.d)     # before the starting sites are drawn
+        return n
 
     def _optimize(self, sites, realizations, backend):
         density = _check_density(self.density, sites.shape[1], self.d)

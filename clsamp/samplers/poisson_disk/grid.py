@@ -49,6 +49,30 @@ def grid_size(radius, d):
     return int(math.floor(math.sqrt(d) / radius)) + 1
 
 
+def grid_cells(radius, d):
+    """The background grid's cells, :func:`grid_size` ^ d, as a float: infinity where that
+    passes 2^1000 (a radius too small for any grid, refused by its callers in one line).
+
+    Parameters
+    ----------
+    radius : float
+    d : int
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> from clsamp.samplers.poisson_disk.grid import grid_cells
+    >>> grid_cells(0.1, 2), grid_cells(1e-310, 3)
+    (225.0, inf)
+    """
+    if not math.sqrt(d) / radius < 2.0 ** (1000 / d):
+        return math.inf
+    return float(grid_size(radius, d) ** d)
+
+
 def reach(radius, G):
     """K: grid cells at offset above K on some axis are r or more apart (side 1/G).
 

@@ -8,9 +8,17 @@ import numpy as np
 from ... import runtime
 from ...errors import InvalidArgumentError, SamplingError
 from ...geometry import torus
-from ...validation import check_positive_int, check_real
-from ..base import PILLEBOUE, Rate, SampleInfo, Sampler, info_field, register
-from .coarse import COARSE_MIN_D, COARSE_RHO, COARSE_ROUNDS, CoarseGeometry, gather_coarse, throw_coarse
+from ...validation import check_real
+from ..base import PILLEBOUE, Rate, SampleInfo, Sampler, _check_realizations, info_field, register
+from .coarse import (
+    COARSE_MIN_D,
+    COARSE_RHO,
+    COARSE_ROUNDS,
+    DART_BITS,
+    CoarseGeometry,
+    gather_coarse,
+    throw_coarse,
+)
 from .device import DeviceCoarse, DeviceDarts
 from .grid import (
     BATCH_CELLS,
@@ -23,7 +31,7 @@ from .grid import (
     SKIP,
     Geometry,
     acceptance_threshold,
-    grid_size,
+    grid_cells,
     level_of,
 )
 from .reference import NumpyCoarse, NumpyDarts
@@ -276,11 +284,15 @@ class PoissonDiskSampler(Sampler):
                     f"'radius' must be <= {MAX_RADIUS} on the unit torus, got {self.radius}: a "
                     "wider disk around a point overlaps its own periodic image, so it is no "
                     "longer a disk on the torus")
-            G = grid_size(self.radius, self.d)
-            if self.d < COARSE_MIN_D and G ** self.d > MAX_CELLS:
+            if self.d == 1 and self.radius >= MAX_RADIUS:
+                raise InvalidArgumentError(
+                    f"'radius' must be below {MAX_RADIUS} in 1-D, got {self.radius}: a point's "
+                    "disk then leaves only its antipode uncovered, which no dart hits")
+            cells = grid_cells(self.radius, self.d)
+            if self.d < COARSE_MIN_D and cells > MAX_CELLS:
                 raise InvalidArgumentError(
                     f"'radius'={self.radius} is too small for d={self.d}: its background grid "
-                    f"would have {G ** self.d} cells, more than {MAX_CELLS}")
+                    f"would have {cells:.3g} cells, more than {MAX_CELLS}".replace("inf", "over 1e301"))
             self.rho = None
             self.needs_n = self.d >= COARSE_MIN_D    # maximal sets for d <= 4 only
         else:
@@ -331,14 +343,12 @@ class PoissonDiskSampler(Sampler):
         if self.radius is None or n is not None:
             return super().sample_sets(realizations, n=n, return_info=return_info)
         _check_maximal_d(self.d)
-        if isinstance(realizations, range):
-            if len(realizations) == 0 or realizations.step != 1 or realizations.start < 0:
-                raise InvalidArgumentError(
-                    f"'realizations' must be a count or a non-empty range of step 1, got "
-                    f"{realizations!r}")
-            reals = realizations
-        else:
-            reals = range(check_positive_int(realizations, "realizations"))
+        if isinstance(realizations, range) and (len(realizations) == 0 or realizations.step != 1):
+            raise InvalidArgumentError(
+                f"'realizations' must be a count or a non-empty range of step 1, got "
+                f"{realizations!r}")
+        # the bounds sample() takes: 32-bit counters (2^32 + k would be realization k)
+        (reals,), _ = _check_realizations(realizations)
         sets, info = self._run(None, reals, device=self.backend == "opencl", as_list=True)
         return (sets, info) if return_info else sets
 
@@ -379,6 +389,10 @@ class PoissonDiskSampler(Sampler):
 
     # -- the work -------------------------------------------------------------------------
     def _geometry(self, n):
+        if self.d >= COARSE_MIN_D and n >= 1 << DART_BITS:
+            raise InvalidArgumentError(
+                f"'n' must be below 2^{DART_BITS} for d >= {COARSE_MIN_D} (coarse dart "
+                f"throwing numbers its darts in {DART_BITS} bits), got {n}")
         if self.radius is not None:
             r2 = acceptance_threshold(self.radius)
             if self.d >= COARSE_MIN_D:
@@ -389,11 +403,12 @@ class PoissonDiskSampler(Sampler):
         if self.d >= COARSE_MIN_D:
             return CoarseGeometry(self.d, radius,
                                   acceptance_threshold(radius, d_max, self.rho), n)
-        G = grid_size(radius, self.d)
-        if G ** self.d > MAX_CELLS:
+        cells = grid_cells(radius, self.d)
+        if cells > MAX_CELLS:
             raise InvalidArgumentError(
-                f"'n'={n} is too large for d={self.d}: the background grid would have "
-                f"{G ** self.d} cells, more than {MAX_CELLS}")
+                f"'n'={n} with 'rho'={self.rho} is too much for d={self.d}: their radius "
+                f"{radius:.3g} needs a background grid of {cells:.3g} cells, more than "
+                f"{MAX_CELLS}; give fewer points or a larger rho".replace("inf", "over 1e301"))
         return Geometry(self.d, radius, acceptance_threshold(radius, d_max, self.rho))
 
     def _run(self, n, realizations, device, as_list=False):
