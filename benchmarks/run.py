@@ -46,6 +46,7 @@ MODULES = (
     "bench_bnot",
     "bench_sample_elimination",
     "bench_sot",
+    "bench_dither",
     "bench_optimizer_memory",
     "bench_shapes",
     "bench_utk",        # UTK's samplers where built (CLSAMP_UTK_BIN); no rows otherwise

@@ -111,6 +111,16 @@ def test_bnot_exact_cells_give_the_same_bits(device):
 
 
 @pytest.mark.parametrize("device", OTHERS, ids=_label)
+def test_dither_masks_give_the_same_ranks(device):
+    """dither_mask's void and cluster (kernels/dither.cl, one work-item) where a device
+    shares the host's memory and does fp64 and long loops, NumPy elsewhere: the same ranks."""
+    def masks():
+        return clsamp.dither_mask(13, seed=4), clsamp.dither_mask(6, seed=4, temporal=5)
+    for here, there in zip(masks(), on(device, masks), strict=True):
+        assert np.array_equal(here, there)
+
+
+@pytest.mark.parametrize("device", OTHERS, ids=_label)
 @pytest.mark.parametrize("name, params, n", [
     ("sot", {"d": 3, "iterations": 6, "projections": "pairs"}, 513),
     ("gbn", {"d": 4, "iterations": 3}, 300),

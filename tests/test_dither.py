@@ -7,6 +7,7 @@ import pytest
 
 import clsamp
 from clsamp.errors import InvalidArgumentError
+from clsamp.samplers import dither
 from clsamp.samplers.dither import INITIAL_DENSITY, mask_spectrum
 
 
@@ -74,9 +75,11 @@ def test_spatiotemporal_frames_are_blue_and_each_pixel_is_blue_in_time():
 
 
 @pytest.mark.parametrize("kwargs, match", [
-    ({"size": 1}, "'size' must be at least 2"),
+    ({"size": 1}, "'size' must be an integer >= 2"),
+    ({"size": 0}, "'size' must be an integer >= 2"),
     ({"size": 8, "d": 5}, "'d' must be 1 to 4"),
-    ({"size": 8, "temporal": 1}, "'temporal'"),
+    ({"size": 8, "temporal": 1}, "'temporal' must be an integer >= 2"),
+    ({"size": 8, "temporal": 0}, "'temporal' must be an integer >= 2"),
     ({"size": 8, "sigma": 0}, "'sigma'"),
     ({"size": 8, "sigma": 1e-170}, "'sigma' must be >= 0.01"),
     ({"size": 8, "sigma": 1e200}, "'sigma' must be <= 1000000.0"),
@@ -84,7 +87,38 @@ def test_spatiotemporal_frames_are_blue_and_each_pixel_is_blue_in_time():
     ({"size": 8, "seed": -1}, "'seed'"),
     ({"size": 4096, "d": 3}, "'size' and 'd' give a mask of 68719476736 pixels .*; at most"),
     ({"size": 1024, "temporal": 64}, "'size', 'd' and 'temporal' give .*64 x 1024 x 1024"),
+    ({"size": 8, "backend": "cuda"}, "'backend' must be one of"),
 ])
 def test_bad_arguments_are_one_line_before_any_work(kwargs, match):
     with pytest.raises(InvalidArgumentError, match=match):
         clsamp.dither_mask(**kwargs)
+
+
+# shapes with blocks of the device's trees left partly empty (49, 343 pixels), 1-D rings
+# shorter than the window, windows wider than the grid (sigma 40), 4-D, and time
+TWIN_CASES = [dict(size=16), dict(size=7), dict(size=64, d=1), dict(size=2, d=1), dict(size=2),
+              dict(size=8, d=3), dict(size=7, d=3), dict(size=4, d=4), dict(size=5, d=4),
+              dict(size=8, temporal=4), dict(size=16, temporal=8), dict(size=3, temporal=2),
+              dict(size=24, sigma=0.5), dict(size=12, sigma=40.0), dict(size=6, d=3, temporal=3),
+              dict(size=3, d=4, temporal=2), dict(size=48)]
+
+
+@pytest.mark.parametrize("kwargs", TWIN_CASES,
+                         ids=lambda k: "-".join(f"{a}{b}" for a, b in k.items()))
+def test_the_device_gives_the_numpy_twins_ranks(kwargs):
+    """kernels/dither.cl against _void_and_cluster (where the current device runs it)."""
+    shape = ((kwargs["temporal"],) if "temporal" in kwargs else ()) + \
+        (kwargs["size"],) * kwargs.get("d", 2)
+    stencils = dither._mask_stencils(shape, "temporal" in kwargs, kwargs.get("sigma", dither.SIGMA))
+    for seed in (0, 5):
+        ones, initial = dither._initial_ones(int(np.prod(shape)), seed)
+        twin = dither._void_and_cluster(dither._Energy(shape, stencils), int(np.prod(shape)), ones,
+                                        initial)
+        if dither._device_runs_it():
+            device = dither._void_and_cluster_device(shape, stencils, initial[:ones])
+            assert np.array_equal(device, twin)
+        assert np.array_equal(np.sort(twin), np.arange(twin.size))
+        # the public function, on either backend
+        mask = clsamp.dither_mask(**kwargs, seed=seed)
+        assert np.array_equal(mask.ravel(), twin)
+        assert np.array_equal(clsamp.dither_mask(**kwargs, seed=seed, backend="numpy"), mask)

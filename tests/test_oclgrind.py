@@ -297,6 +297,20 @@ def _bnot_exact_cells():
         assert (a[3] != b[3]).nnz == 0
 
 
+@check("dither-mask")
+def _dither_mask():
+    # void and cluster's one work-item and its two tournament trees, which dither_mask runs
+    # only on devices that share the host's memory: a 7 x 7 mask (a leaf block half empty)
+    # and a spatiotemporal 4 x 4 x 3 (two stencils)
+    from clsamp.samplers import dither
+    for shape, temporal in (((7, 7), False), ((3, 4, 4), True)):
+        total = int(np.prod(shape))
+        stencils = dither._mask_stencils(shape, temporal, dither.SIGMA)
+        ones, initial = dither._initial_ones(total, 1)
+        _same_bits(dither._void_and_cluster_device(shape, stencils, initial[:ones]),
+                   dither._void_and_cluster(dither._Energy(shape, stencils), total, ones, initial))
+
+
 @check("spectrum-direct")
 def _spectrum_direct():
     pts = _points()

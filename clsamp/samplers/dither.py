@@ -10,9 +10,9 @@ import math
 
 import numpy as np
 
-from .. import philox
-from ..errors import InvalidArgumentError
-from ..validation import check_positive_int, check_real, check_seed
+from .. import philox, runtime
+from ..errors import InvalidArgumentError, NoDeviceError
+from ..validation import check_choice, check_int, check_positive_int, check_real, check_seed
 
 __all__ = ["dither_mask", "mask_spectrum", "SIGMA", "INITIAL_DENSITY"]
 
@@ -21,6 +21,7 @@ SIGMA_RANGE = (0.01, 1e6)   # the standard deviations accepted
 INITIAL_DENSITY = 0.1       # the share of ones in the initial binary pattern (Ulichney)
 ENERGY_LOSS = 0.005         # the Gaussian is cut where it has fallen to this share
 MAX_PIXELS = 1 << 24        # the largest mask built (its steps are sequential)
+BLOCK = 8                   # pixels a leaf of the device's tournament trees
 
 
 def _offsets(sigma, side):
@@ -90,7 +91,7 @@ class _Energy:
         return other
 
 
-def dither_mask(size, d=2, seed=0, temporal=None, sigma=SIGMA):
+def dither_mask(size, d=2, seed=0, temporal=None, sigma=SIGMA, backend="opencl"):
     """A blue-noise dither mask by void and cluster: each rank 0 .. size^d - 1 once.
 
     Parameters
@@ -109,6 +110,10 @@ def dither_mask(size, d=2, seed=0, temporal=None, sigma=SIGMA):
     sigma : float
         The standard deviation of the Gaussian energy, in pixels (frames along time),
         0.01 to 10^6 (default 1.9).
+    backend : {"opencl", "numpy"}
+        Where the steps run: the current device where it shares the host's memory and
+        does double precision and long loops (a CPU device), else NumPy; "numpy" always
+        NumPy. Both give the same ranks.
 
     Returns
     -------
@@ -132,8 +137,10 @@ def dither_mask(size, d=2, seed=0, temporal=None, sigma=SIGMA):
     and through a 1-D Gaussian of their frame distance when they are the same pixel, not
     at all otherwise, so frames are blue in space and pixels blue in time. The Gaussians
     are cut where they fall to 0.5 % (sigma 1.9: 6 pixels), as the authors' code does.
-    Each step is an argmax over the mask and a local update: O(N) work a step, N steps,
-    on the host (the steps are sequential).
+    The steps are sequential, so one work-item on the device runs them all, each a local
+    update of the energy and of two tournament trees over blocks of 8 pixels (the
+    tightest cluster and the largest void at their roots): O(w log N) a step for a
+    window of w pixels. The NumPy twin takes an argmax over the mask a step, O(N).
 
     References
     ----------
@@ -151,17 +158,13 @@ def dither_mask(size, d=2, seed=0, temporal=None, sigma=SIGMA):
     >>> clsamp.dither_mask(8, seed=1, temporal=4).shape
     (4, 8, 8)
     """
-    size = check_positive_int(size, "size")
-    if size < 2:
-        raise InvalidArgumentError(f"'size' must be at least 2, got {size}")
+    size = check_int(size, "size", minimum=2)
     d = check_positive_int(d, "d")
     if d > 4:
         raise InvalidArgumentError(f"'d' must be 1 to 4, got {d}")
     seed = check_seed(seed)
     if temporal is not None:
-        temporal = check_positive_int(temporal, "temporal")
-        if temporal < 2:
-            raise InvalidArgumentError(f"'temporal' must be at least 2 frames, got {temporal}")
+        temporal = check_int(temporal, "temporal", minimum=2)
     # beyond these the Gaussian's 2 sigma^2 underflows or its radius overflows
     sigma = check_real(sigma, "sigma", minimum=SIGMA_RANGE[0], maximum=SIGMA_RANGE[1])
     shape = (size,) * d if temporal is None else (temporal,) + (size,) * d
@@ -170,9 +173,33 @@ def dither_mask(size, d=2, seed=0, temporal=None, sigma=SIGMA):
         names = "'size' and 'd'" if temporal is None else "'size', 'd' and 'temporal'"
         raise InvalidArgumentError(f"{names} give a mask of {total} pixels ({' x '.join(map(str, shape))}); "
                                    f"at most {MAX_PIXELS}")
-    state = _Energy(shape, _mask_stencils(shape, temporal is not None, sigma))
-    ranks = _void_and_cluster(state, total, seed)
+    backend = check_choice(backend, "backend", ("opencl", "numpy"))
+    stencils = _mask_stencils(shape, temporal is not None, sigma)
+    ones, initial = _initial_ones(total, seed)
+    if backend == "opencl" and _device_runs_it():
+        ranks = _void_and_cluster_device(shape, stencils, initial[:ones])
+    else:
+        ranks = _void_and_cluster(_Energy(shape, stencils), total, ones, initial)
     return ranks.reshape(shape)
+
+
+def _device_runs_it():
+    """Whether the current device runs the steps: one that shares the host's memory (a
+    CPU: one work-item's walk in a GPU's memory is unmeasured), with fp64 and no loop
+    limit; False where there is no device at all."""
+    try:
+        device = runtime.current_device()
+    except NoDeviceError:       # no OpenCL at all: NumPy gives the same ranks
+        return False
+    return device.host_memory and device.fp64 and runtime.loop_limit() is None
+
+
+def _initial_ones(total, seed):
+    """The initial pattern's count of ones (``INITIAL_DENSITY`` of the pixels, 2 to half)
+    and the pixels in the order they are set: the first ``ones`` of it."""
+    ones = min(max(2, int(total * INITIAL_DENSITY)), total // 2)
+    u = philox.uniform(seed, philox.Stream.INIT, 0, np.arange(total, dtype=np.uint32), 0)
+    return ones, np.argsort(u, kind="stable")
 
 
 def _mask_stencils(shape, temporal, sigma):
@@ -189,11 +216,10 @@ def _mask_stencils(shape, temporal, sigma):
     return [gaussian(range(1, len(shape))), gaussian((0,))]
 
 
-def _void_and_cluster(state, total, seed):
-    """The ranks of every pixel (flat), the three phases of Ulichney's method."""
-    ones = min(max(2, int(total * INITIAL_DENSITY)), total // 2)
-    u = philox.uniform(seed, philox.Stream.INIT, 0, np.arange(total, dtype=np.uint32), 0)
-    for flat in np.argsort(u, kind="stable")[:ones]:
+def _void_and_cluster(state, total, ones, initial):
+    """The ranks of every pixel (flat), the three phases of Ulichney's method (the twin of
+    ``void_and_cluster`` in ``kernels/dither.cl``)."""
+    for flat in initial[:ones]:
         state.set(int(flat), True)
     for _ in range(10 * total):            # at most; it ends when cluster and void coincide
         cluster = state.tightest_cluster()
@@ -221,6 +247,39 @@ def _void_and_cluster(state, total, seed):
         ranks[cluster] = count
         inverted.set(cluster, False)
     return ranks
+
+
+def _void_and_cluster_device(shape, stencils, initial):
+    """:func:`_void_and_cluster`'s ranks by ``void_and_cluster`` (``kernels/dither.cl``)."""
+    total = math.prod(shape)
+    blocks = -(-total // BLOCK)
+    P = 1 << max(0, (blocks - 1).bit_length())
+    stride = [math.prod(shape[a + 1:]) for a in range(len(shape))]
+    meta = np.zeros((len(stencils), 16), dtype=np.int32)
+    offsets, weights = [], []
+    for s, (axes, axis_offsets, w) in enumerate(stencils):
+        meta[s, 0] = len(axes)
+        for k, (axis, o) in enumerate(zip(axes, axis_offsets, strict=True)):
+            meta[s, 1 + k], meta[s, 5 + k] = axis, len(o)
+            meta[s, 9 + k] = sum(len(x) for x in offsets)
+            offsets.append(np.asarray(o, dtype=np.int32))
+        meta[s, 13] = sum(x.size for x in weights)
+        meta[s, 14] = w.size
+        weights.append(np.ascontiguousarray(w, dtype=np.float64).ravel())
+    buf = runtime.input_buffer
+    rank = runtime.Output((total,), np.int64, host=np.empty(total, dtype=np.int64))
+    scratch = [runtime.Output((n,), t) for n, t in
+               ((total, np.float64), (total, np.uint8), (total, np.float64), (total, np.uint8),
+                (2 * P, np.uint32), (2 * P, np.uint32), (P, np.uint32),
+                (1 + sum(x.size for x in weights), np.uint32))]
+    runtime.kernel("dither.cl", "void_and_cluster", {"VC_BLOCK": BLOCK})(
+        runtime.queue(), (1,), (1,), np.uint32(total), np.uint32(P), np.uint32(len(shape)),
+        buf(np.asarray(shape, dtype=np.uint32)), buf(np.asarray(stride, dtype=np.uint32)),
+        np.uint32(len(stencils)), buf(meta.ravel()), buf(np.concatenate(offsets)),
+        buf(np.concatenate(weights)), buf(np.asarray(initial, dtype=np.uint32)),
+        np.uint32(len(initial)), *(o.buffer for o in scratch), rank.buffer)
+    runtime.wait()                  # Ctrl-C is taken while it runs
+    return rank.finish()
 
 
 def mask_spectrum(mask, axes=None):
