@@ -292,6 +292,11 @@ class CCVTSampler(OptimizerSampler):
             return None   # i.i.d. density points leave an N^-1 floor (see Notes)
         return super().convergence_rate(case)
 
+    def _check_n(self, n):
+        n = super()._check_n(n)
+        check_points_per_site(self.points_per_site, n)     # before the starting sites are drawn
+        return n
+
     def _optimize(self, sites, realizations, backend):
         p = check_points_per_site(self.points_per_site, sites.shape[1])
         return _run(sites, np.arange(realizations.start, realizations.stop, dtype=np.int64), p,
