@@ -15,8 +15,8 @@ from .experiments_ff import check_target
 from .float_float import check_precision
 from .integrands import Integrand, make_integrand
 from .results import ConvergenceResult, FamilyResult
-from .samplers import Sampler, make_sampler
-from .samplers.base import CASES
+from .samplers import Sampler
+from .samplers.base import CASES, make_quiet_sampler
 from .validation import MAX_UINT32, check_choice, check_int, check_seed
 
 DEFAULT_MEMBERS = 256
@@ -34,7 +34,8 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
     sampler : Sampler or str
         A sampler object (any registered sampler, its own seed and parameters), or a
         name such as ``"jittered"`` or ``"sobol:owen"``, made with
-        ``make_sampler(name, d=integrand.d, seed=seed, backend=backend)``.
+        ``make_sampler(name, d=integrand.d, seed=seed, backend=backend)`` (without its own
+        progress bar where it has one: the sweep shows its own).
     integrand : Integrand, Family or str
         An :mod:`clsamp.integrands` object or a name: ``"gaussian"``, ``"disk"``,
         ``"heaviside"``, ``"pmj_disk"``, ``"pmj_gaussian"``, ``"pmj_bilinear"``,
@@ -142,7 +143,8 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
 def _sampler(sampler, d, seed, backend):
     """(Sampler, label) from a sampler or its name (made in ``d`` dimensions)."""
     if isinstance(sampler, str):
-        return make_sampler(sampler, d=d, seed=seed, backend=backend), sampler
+        # the sweep shows its own bar: one made by name shows none of its own (bnot's)
+        return make_quiet_sampler(sampler, d=d, seed=seed, backend=backend), sampler
     if isinstance(sampler, Sampler):
         return sampler, sampler.label
     raise InvalidArgumentError(

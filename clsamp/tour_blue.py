@@ -6,7 +6,6 @@ Samplers not registered in this build are listed as such, so the section grows w
 registry (``sot``, ``sample_elimination``, ``bnot`` where present).
 """
 
-import inspect
 import time
 import traceback
 
@@ -43,9 +42,8 @@ def quiet_sampler(name, seed, params):
     -------
     Sampler
     """
-    from .samplers import make_sampler, sampler_class
-    takes = "progress" in inspect.signature(sampler_class(name)).parameters
-    return make_sampler(name, d=2, seed=seed, **params, **({"progress": False} if takes else {}))
+    from .samplers.base import make_quiet_sampler
+    return make_quiet_sampler(name, d=2, seed=seed, **params)
 
 
 def section_blue_noise(report, quick):

@@ -367,3 +367,10 @@ def test_a_result_prints_in_two_lines():
     text = repr(res)
     assert text.count("\n") == 1 and len(text) < 300
     assert "jittered" in text and "disk" in text and "N = 16..256" in text and "theory N^-1.5" in text
+
+
+def test_a_sampler_made_by_name_shows_no_bar_of_its_own():
+    # bnot's own progress bar showed inside a sweep run with progress=False
+    from clsamp.sweep import _sampler
+    assert _sampler("bnot", 2, 0, "opencl")[0].progress is False
+    assert clsamp.make_sampler("bnot").progress is True
