@@ -62,9 +62,8 @@ def _integrands(names, option):
             make_family(name, members=1)                # refused with the nearest family
         elif name.strip().lower() not in integrand_names():
             hint = _nearest([name.strip().lower()], integrand_names() + family_names()) or "."
-            raise InvalidArgumentError(
-                f"unknown integrand or family {name!r}{hint} Integrands: "
-                f"{', '.join(integrand_names())}; families: {', '.join(family_names())}")
+            known = f"Integrands: {', '.join(integrand_names())}; families: {', '.join(family_names())}"
+            raise InvalidArgumentError(f"unknown integrand or family {name!r}{hint} {known}")
     if len({is_family(name) for name in names}) > 1:
         raise InvalidArgumentError(
             "'--integrand' mixes integrand families and single integrands; run them apart")
@@ -241,8 +240,7 @@ def _run_tour(args):
 
 def _add_source(p, dimensions="dimension (sampler only; default 2)"):
     """The arguments of a command that reads points from a sampler or a point file."""
-    p.add_argument("source", help="sampler name (e.g. jittered, sobol:owen) or a point file "
-                   "(.npy, or text)")
+    p.add_argument("source", help="sampler name (e.g. jittered, sobol:owen) or a point file (.npy, or text)")
     p.add_argument("-n", type=int, help="points per set (sampler only)")
     p.add_argument("-d", type=int, default=None, help=dimensions)
     p.add_argument("--realizations", type=int, default=None,
@@ -284,7 +282,7 @@ def _add_spectrum(sub):
     p = sub.add_parser("spectrum", help="power spectrum of a sampler's points or of a point file",
                        description="Expected power spectrum (mean periodogram) of a sampler's "
                        "realizations or of points read from a file (text or .npy).")
-    _add_source(p, "dimension, 1 or 2 (sampler only; default 2)")
+    _add_source(p, "dimension, 1 to 3 (sampler only; default 2; 3: -o .npy only)")
     p.add_argument("--resolution", type=int, default=256, help="R: frequencies [-R/2, R/2) (even)")
     p.add_argument("--method", default="auto", choices=("auto", "direct", "fast"))
     p.add_argument("--tol", type=float, default=None, help="error bound of the fast method (x N)")
@@ -307,6 +305,8 @@ def _run_spectrum(args):
         outputs.append(("--plots", _output(args.plots, FIGURES, "spectrum", "--plots")))
     _distinct(outputs)
     points, label = _points_from_source(args)
+    if points.shape[-1] == 3 and (output.suffix.lower() != ".npy" or args.plots):
+        raise InvalidArgumentError("a 3-D spectrum is written to -o .npy alone: pictures are 1-D or 2-D")
     P = spectrum.power_spectrum(points, resolution=args.resolution, method=args.method, tol=args.tol,
                                 backend=args.backend)
     if output.suffix.lower() == ".exr":

@@ -10,6 +10,7 @@ import sys
 import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import clsamp
@@ -275,3 +276,13 @@ def test_params_that_are_the_commands_own_options_are_one_line(tmp_path, capsys,
     code, text = run(capsys, *[a.format(tmp_path) for a in argv])
     assert code == 2 and "is no sampler parameter here" in text and "Traceback" not in text, text
     assert listing(tmp_path) == []
+
+
+def test_a_3d_spectrum_goes_to_npy_only(tmp_path, capsys):
+    # it was computed (256^3), then refused as a picture ('P' must be a 2-D spectrum)
+    code, text = run(capsys, "spectrum", "random", "-n", "16", "-d", "3", "-o", str(tmp_path / "s.png"))
+    assert code == 2 and "a 3-D spectrum is written to -o .npy alone" in text, text
+    assert listing(tmp_path) == []
+    code, _ = run(capsys, "spectrum", "random", "-n", "16", "-d", "3", "--resolution", "8",
+                  "-o", str(tmp_path / "s.npy"))
+    assert code == 0 and np.load(tmp_path / "s.npy").shape == (8, 8, 8)
