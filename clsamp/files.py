@@ -16,6 +16,7 @@ before any work whether a path can be written at all.
 import contextlib
 import io as _io
 import os
+import re
 import stat
 import tempfile
 import threading
@@ -215,7 +216,9 @@ def write_text(path, text):
 
 def format_points(points):
     r"""Points as text: one point a line, coordinates separated by spaces in ``%.17g`` (which
-    round-trips float64 exactly), realizations separated by a line ``#``.
+    round-trips float64 exactly), realizations separated by a line ``#``; a batch (r, n, d)
+    starts with a line ``# r sets`` (``# 1 set``), so that one set of a batch reads back as
+    (1, n, d).
 
     Parameters
     ----------
@@ -237,20 +240,22 @@ def format_points(points):
     >>> format_points([[0.5, 0.25], [0.0, 0.75]])
     '0.5 0.25\n0 0.75\n'
     """
-    batch, _ = check_points(points)
+    batch, single = check_points(points)
     blocks = []
     for block in batch:
         buffer = _io.StringIO()
         np.savetxt(buffer, block, fmt="%.17g", delimiter=" ")
         blocks.append(buffer.getvalue())
-    return "#\n".join(blocks)
+    header = "" if single else f"# {len(blocks)} set{'s' * (len(blocks) > 1)}\n"
+    return header + "#\n".join(blocks)
 
 
 def parse_points(text, name="text"):
     r"""Points from text, the inverse of :func:`format_points`.
 
-    Lines starting with ``#`` separate realizations; commas count as spaces; blank lines
-    are skipped.
+    Lines starting with ``#`` separate realizations; a line ``# r sets`` (as
+    :func:`format_points` writes before a batch) makes the result (r, n, d) even for one
+    set, and r must match; commas count as spaces; blank lines are skipped.
 
     Parameters
     ----------
@@ -261,7 +266,7 @@ def parse_points(text, name="text"):
     Returns
     -------
     ndarray
-        float64 of shape (n, d) for one set, (r, n, d) for several.
+        float64 of shape (n, d) for one set, (r, n, d) for several or after ``# r sets``.
 
     Raises
     ------
@@ -275,9 +280,12 @@ def parse_points(text, name="text"):
     >>> parse_points("0.5 0.25\n0 0.75\n#\n0.1 0.2\n0.3 0.4\n").shape
     (2, 2, 2)
     """
-    blocks, current = [], []
+    blocks, current, declared = [], [], None
     for number, line in enumerate(text.splitlines(), 1):
         stripped = line.strip()
+        sets = re.fullmatch(r"#\s*(\d+)\s+sets?", stripped)
+        if sets and declared is None:
+            declared = int(sets.group(1))
         if stripped.startswith("#"):
             if current:
                 blocks.append(current)
@@ -300,9 +308,11 @@ def parse_points(text, name="text"):
     sizes = {len(block) for block in blocks}
     if len(sizes) != 1:
         raise InvalidArgumentError(f"{name}: realizations have different sizes {sorted(sizes)}")
+    if declared is not None and declared != len(blocks):
+        raise InvalidArgumentError(f"{name}: declares {declared} sets and holds {len(blocks)}")
     array = np.array(blocks, dtype=np.float64)
     batch, _ = check_points(array, name=name)
-    return batch[0] if len(blocks) == 1 else batch
+    return batch[0] if len(blocks) == 1 and declared is None else batch
 
 
 def save_points(path, points):

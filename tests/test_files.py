@@ -10,7 +10,7 @@ from clsamp.errors import InvalidArgumentError
 
 
 @pytest.mark.parametrize("suffix", [".txt", ".dat", ".npy"])
-@pytest.mark.parametrize("shape", [(7, 2), (3, 5, 3), (4, 1)])
+@pytest.mark.parametrize("shape", [(7, 2), (3, 5, 3), (4, 1), (1, 6, 2)])
 def test_points_round_trip_exactly(tmp_path, suffix, shape):
     points = np.random.default_rng(1).random(shape)
     path = files.save_points(tmp_path / f"p{suffix}", points)
@@ -20,6 +20,16 @@ def test_points_round_trip_exactly(tmp_path, suffix, shape):
 def test_text_format_is_one_point_a_line(tmp_path):
     path = files.save_points(tmp_path / "p.txt", np.array([[0.25, 0.5], [0.125, 0.75]]))
     assert path.read_text().splitlines() == ["0.25 0.5", "0.125 0.75"]
+
+
+def test_a_batch_of_one_set_keeps_its_axis_in_text():
+    # (1, n, d) was written like (n, d) and read back without its first axis; a batch now
+    # starts with "# r sets", which must match the sets that follow
+    text = files.format_points(np.full((1, 2, 2), 0.5))
+    assert text.splitlines()[0] == "# 1 set" and files.parse_points(text).shape == (1, 2, 2)
+    assert files.parse_points("# a comment\n0.1 0.2\n").shape == (1, 2)
+    with pytest.raises(InvalidArgumentError, match="declares 2 sets and holds 1"):
+        files.parse_points("# 2 sets\n0.1 0.2\n")
 
 
 def test_reads_utk_style_text(tmp_path):
