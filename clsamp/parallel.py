@@ -168,8 +168,9 @@ def _fingerprint(fn, tasks):
 
 
 class _Checkpoint:
-    """A folder of finished blocks: block-<i>.npy and block-<i>.sha256 (written after the
-    block, so a block without its hash is unfinished and computed again)."""
+    """A folder of finished blocks: block-<i>.npy, block-<i>.seconds (what it took) and
+    block-<i>.sha256 (written after both, so a block without its hash is unfinished and
+    computed again)."""
 
     def __init__(self, folder, fn, tasks):
         self.folder = Path(folder)
@@ -199,11 +200,13 @@ class _Checkpoint:
                                                 "what": what, "format": 1}))
 
     def _paths(self, index):
-        return self.folder / f"block-{index:06d}.npy", self.folder / f"block-{index:06d}.sha256"
+        stem = self.folder / f"block-{index:06d}"
+        return stem.with_suffix(".npy"), stem.with_suffix(".sha256"), stem.with_suffix(".seconds")
 
     def load(self, index):
-        """The stored result of task ``index``, or None if it is not finished."""
-        data, digest = self._paths(index)
+        """The stored result of task ``index`` and the seconds it took (0 where a checkpoint
+        written before those were kept has none), or None if it is not finished."""
+        data, digest, took = self._paths(index)
         if not digest.exists():
             return None
         try:
@@ -215,14 +218,19 @@ class _Checkpoint:
             raise InvalidArgumentError(
                 f"'checkpoint' {str(self.folder)!r}: {data.name} does not match its SHA-256 (corrupt); "
                 "remove the folder to start afresh")
-        return np.load(_io.BytesIO(raw), allow_pickle=False)
+        try:
+            spent = float(took.read_text()) if took.exists() else 0.0
+        except (OSError, ValueError):
+            spent = 0.0             # only a timing: the block itself is checked above
+        return np.load(_io.BytesIO(raw), allow_pickle=False), spent
 
-    def store(self, index, value):
-        data, digest = self._paths(index)
+    def store(self, index, value, spent):
+        data, digest, took = self._paths(index)
         buffer = _io.BytesIO()
         np.save(buffer, np.asarray(value), allow_pickle=False)
         raw = buffer.getvalue()
         files.write_bytes(data, raw)
+        files.write_text(took, repr(float(spent)))
         files.write_text(digest, hashlib.sha256(raw).hexdigest())
 
 
@@ -264,7 +272,8 @@ def run(fn, tasks, client=None, checkpoint=None, progress=True, desc="sweep"):
     -------
     results : list of ndarray
     seconds : ndarray
-        Per task, the seconds it computed for (0 for one taken from the checkpoint).
+        Per task, the seconds it computed for (for one taken from the checkpoint, the
+        seconds stored with it; 0 where the checkpoint kept none).
     """
     from tqdm import tqdm
     client = check_client(client)
@@ -277,14 +286,14 @@ def run(fn, tasks, client=None, checkpoint=None, progress=True, desc="sweep"):
         if found is None:
             todo.append(index)
         else:
-            results[index] = found
+            results[index], seconds[index] = found
     bar = tqdm(total=len(tasks), initial=len(tasks) - len(todo), desc=desc, unit="task",
                disable=not progress, delay=2)
 
     def finish(index, value, spent):
         value = np.asarray(value)
         if store is not None:
-            store.store(index, value)
+            store.store(index, value, spent)
         results[index] = value
         seconds[index] = spent
         bar.update(1)
