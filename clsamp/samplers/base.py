@@ -225,32 +225,6 @@ def make_sampler(name, d=2, seed=0, **params):
     return cls(d=d, seed=seed, **params)
 
 
-def make_quiet_sampler(name, d=2, seed=0, **params):
-    """:func:`make_sampler` with the sampler's own progress bar off where it has one
-    (``bnot``'s), for callers that show their own: a sweep, the tour.
-
-    Parameters
-    ----------
-    name : str
-    d : int
-    seed : int
-    **params
-        As :func:`make_sampler` takes them.
-
-    Returns
-    -------
-    Sampler
-
-    Examples
-    --------
-    >>> make_quiet_sampler("bnot", seed=1).progress, make_quiet_sampler("random").d
-    (False, 2)
-    """
-    accepted = _parameters(sampler_class(name))
-    quiet = {"progress": False} if accepted is not None and "progress" in accepted else {}
-    return make_sampler(name, d=d, seed=seed, **params, **quiet)
-
-
 @functools.cache
 def _parameters(cls):
     """The keyword parameters ``cls(...)`` accepts, or None if it takes any (**kwargs);
