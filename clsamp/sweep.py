@@ -249,12 +249,6 @@ def _check_ns(ns, sampler, label):
             raise InvalidArgumentError(
                 f"sampler {label!r} with d={sampler.d} cannot make n={n} points (in 'ns'); "
                 f"the nearest valid n is {valid}")
-        try:        # the sampler's own limits (bnot's, ccvt's and lloyd's density points)
-            sampler._check_n(n)
-        except InvalidArgumentError as error:
-            raise InvalidArgumentError(
-                f"sampler {label!r} with d={sampler.d} cannot make n={n} points (in 'ns'): "
-                f"{error}") from None
     return values
 
 

@@ -240,11 +240,15 @@ def test_bad_input_names_the_problem():
         run("random", "gaussian", [], 10)
     with pytest.raises(InvalidArgumentError, match=r"'jittered'.*n=50.*nearest valid n is 49"):
         run("jittered", "gaussian", [16, 50], 10)
-    # a sampler's own limit on n (its density points) before any n runs, not after the
-    # smaller ones (it was found 10-24 s into the sweep)
-    for name in ("bnot", "ccvt", "lloyd"):
-        with pytest.raises(InvalidArgumentError, match=rf"'{name}'.*n=33554432 points \(in 'ns'\): "):
+    # a sampler's own limit on n (its density points, 32-bit counts) before any n runs, not
+    # after the smaller ones (it was found 10-24 s into the sweep): valid_n knows it
+    for name, largest in (("bnot", 2**24 - 1), ("ccvt", 2**22 - 1), ("lloyd", 2**24 - 1)):
+        with pytest.raises(InvalidArgumentError,
+                           match=rf"'{name}'.*n=33554432 points \(in 'ns'\); the nearest valid n is {largest}"):
             run(name, "gaussian", [16, 2**25], 10)
+    lloyd = clsamp.make_sampler("lloyd", d=3)
+    largest = lloyd.valid_n(2**25)
+    assert lloyd.valid_n(largest) == largest and lloyd.valid_n(largest + 1) == largest
     with pytest.raises(InvalidArgumentError, match="'realizations'"):
         run("random", "gaussian", [16], 1)
     with pytest.raises(InvalidArgumentError, match="Known integrands: gaussian, disk, heaviside"):

@@ -562,11 +562,24 @@ class BNOTSampler(OptimizerSampler):
         self.density = check_density("jittered" if density is None else density)
         self.newton = check_int(newton, "newton", minimum=0, maximum=64)
 
+    def valid_n(self, n):
+        """``n``, or with ``cells="points"`` the most sites whose density points (n x
+        ``points_per_site``) stay below 2^32, where n's do not.
+
+        Parameters
+        ----------
+        n : int
+
+        Returns
+        -------
+        int
+        """
+        return n if self.cells == "exact" else min(n, (2**32 - 1) // self.points_per_site)
+
     def _check_n(self, n):
-        n = super()._check_n(n)
-        if self.cells == "points":
+        if self.cells == "points":      # its own message first, then the base's
             check_points_per_site(self.points_per_site, n)
-        return n
+        return super()._check_n(n)
 
     def _work_bytes(self, n):
         # measured: 151 bytes a density point (38745 a site at 256 a site); 3325 bytes a

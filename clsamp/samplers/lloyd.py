@@ -161,9 +161,14 @@ def _run(sites, realizations, density, iterations, backend):
     return it.to_unit(final), info
 
 
+def _fits(density, n, d):
+    """Whether n sites' density grid, g^d >= n * density points, has 32-bit counts."""
+    return n * density <= 2**32 - 1 and voronoi.density_side(n, density, d) ** d <= 2**32
+
+
 def _check_density(density, n, d=2):
     density = check_positive_int(density, "density")
-    if n * density > 2**32 - 1 or voronoi.density_side(n, density, d) ** d > 2**32:
+    if not _fits(density, n, d):
         raise InvalidArgumentError(
             f"'density' * n must stay below 2^32 density points (the grid g^{d} with g^{d} >= "
             f"n * density), got {density} * {n}")
@@ -279,10 +284,29 @@ class LloydSampler(OptimizerSampler):
         self.iterations = check_positive_int(iterations, "iterations", maximum=MAX_ITERATIONS)
         self.density = check_positive_int(density, "density")
 
+    def valid_n(self, n):
+        """``n``, or the most sites whose density grid (g^d >= n x ``density`` points) has
+        32-bit counts, where n's does not.
+
+        Parameters
+        ----------
+        n : int
+
+        Returns
+        -------
+        int
+        """
+        if _fits(self.density, n, self.d):
+            return n
+        lo, hi = 1, n
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            lo, hi = (mid, hi) if _fits(self.density, mid, self.d) else (lo, mid)
+        return lo
+
     def _check_n(self, n):
-        n = super()._check_n(n)
-        _check_density(self.density, n, self.d)     # before the starting sites are drawn
-        return n
+        _check_density(self.density, n, self.d)     # its message, before the sites
+        return super()._check_n(n)
 
     def _optimize(self, sites, realizations, backend):
         density = _check_density(self.density, sites.shape[1], self.d)

@@ -292,10 +292,23 @@ class CCVTSampler(OptimizerSampler):
             return None   # i.i.d. density points leave an N^-1 floor (see Notes)
         return super().convergence_rate(case)
 
+    def valid_n(self, n):
+        """``n``, or the most sites whose density points (n x ``points_per_site``) stay
+        below 2^32, where n's do not.
+
+        Parameters
+        ----------
+        n : int
+
+        Returns
+        -------
+        int
+        """
+        return min(n, (2**32 - 1) // self.points_per_site)
+
     def _check_n(self, n):
-        n = super()._check_n(n)
-        check_points_per_site(self.points_per_site, n)     # before the starting sites are drawn
-        return n
+        check_points_per_site(self.points_per_site, n)     # its message, before the sites
+        return super()._check_n(n)
 
     def _optimize(self, sites, realizations, backend):
         p = check_points_per_site(self.points_per_site, sites.shape[1])
