@@ -243,8 +243,8 @@ def test_bad_input_names_the_problem():
     # a sampler's own limit on n (its density points, 32-bit counts) before any n runs, not
     # after the smaller ones (it was found 10-24 s into the sweep): valid_n knows it
     for name, largest in (("bnot", 2**24 - 1), ("ccvt", 2**22 - 1), ("lloyd", 2**24 - 1)):
-        with pytest.raises(InvalidArgumentError,
-                           match=rf"'{name}'.*n=33554432 points \(in 'ns'\); the nearest valid n is {largest}"):
+        with pytest.raises(InvalidArgumentError, match=rf"'{name}'.*n=33554432 points \(in 'ns'\); "
+                                                       rf"the nearest valid n is {largest}"):
             run(name, "gaussian", [16, 2**25], 10)
     lloyd = clsamp.make_sampler("lloyd", d=3)
     largest = lloyd.valid_n(2**25)
