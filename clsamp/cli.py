@@ -80,17 +80,16 @@ def _wrote(paths, what=""):
     print("wrote " + ", ".join(str(p) for p in paths) + (f": {what}" if what else ""), file=sys.stderr)
 
 
-def _parse_params(items):
-    """``--param key=value`` pairs, values parsed as int, float, bool or str; d, seed and
-    backend are the commands' own options."""
+def _parse_params(items, own=(("d", "-d"), ("seed", "--seed"), ("backend", "--backend"))):
+    """``--param key=value`` pairs, values parsed as int, float, bool or str; ``own``: the
+    keys the command sets itself, each with what sets it."""
     params = {}
     for item in items or ():
         key, sep, value = item.partition("=")
         if not sep or not key:
             raise InvalidArgumentError(f"'--param' must look like key=value, got {item!r}")
-        if key in ("d", "seed", "backend"):
-            raise InvalidArgumentError(f"'--param {item}': {key} is no sampler parameter here; "
-                                       "the command's own options set it (-d, --seed, --backend)")
+        if key in dict(own):
+            raise InvalidArgumentError(f"'--param {item}': {key} is set by {dict(own)[key]}, not by --param")
         for convert in (int, float):
             try:
                 params[key] = convert(value)
@@ -663,7 +662,7 @@ def _run_render(args):
     _samplers([args.sampler])
     scene = Scene.from_file(args.scene)
     spp = scene.default_spp if args.spp is None else args.spp
-    params = _parse_params(args.param)
+    params = _parse_params(args.param, (("d", "the scene's dimensions"), ("seed", "--seed")))
     t0 = time.perf_counter()
     image = rendering.render(scene, args.sampler, spp, args.resolution, seed=args.seed,
                              sampler_params=params or None, pad=not args.no_pad,

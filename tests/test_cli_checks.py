@@ -274,7 +274,7 @@ def test_argparse_errors_are_one_line(capsys, no_work, argv, named):
 def test_params_that_are_the_commands_own_options_are_one_line(tmp_path, capsys, no_work, argv):
     # make_sampler got them twice ("got multiple values for keyword argument 'seed'")
     code, text = run(capsys, *[a.format(tmp_path) for a in argv])
-    assert code == 2 and "is no sampler parameter here" in text and "Traceback" not in text, text
+    assert code == 2 and ", not by --param" in text and "Traceback" not in text, text
     assert listing(tmp_path) == []
 
 
