@@ -49,7 +49,8 @@ import numpy as np
 from . import permutation, philox
 from .errors import InvalidArgumentError
 from .geometry import torus
-from .samplers import Sampler, make_sampler, sampler_class
+from .samplers import Sampler, make_quiet_sampler, sampler_class
+from .scene import as_scene
 from .validation import check_image_size, check_positive_int, check_seed
 
 DEFAULT_POOL = 8                    # realizations per set of an expensive sampler
@@ -175,11 +176,13 @@ def _sampler_factory(sampler, sampler_params):
         return base.label, make, lambda d: d == base.d, base.expensive
     if not isinstance(sampler, str):
         raise InvalidArgumentError(f"'sampler' must be a sampler name or a Sampler, got {sampler!r}")
+    if sampler_params is not None and not isinstance(sampler_params, dict):
+        raise InvalidArgumentError(f"'sampler_params' must be a dict, got {sampler_params!r}")
     params = dict(sampler_params or {})
     cls = sampler_class(sampler)        # raises, naming the unknown sampler and the known ones
 
-    def make(d, seed):
-        return make_sampler(sampler, d=d, seed=seed, **dict(params))
+    def make(d, seed):      # without a progress bar of its own (bnot's): the render has one
+        return make_quiet_sampler(sampler, d=d, seed=seed, **dict(params))
 
     def supports(d):
         try:
@@ -290,7 +293,15 @@ def pixel_samples(scene, sampler, spp, resolution, seed=0, sampler_params=None, 
     spp = check_positive_int(spp, "spp", maximum=2**31)
     seed = check_seed(seed)
     total = width * height
+    if _sets is None:           # (render checked these, and passes its plan)
+        scene = as_scene(scene)
+        pool = check_positive_int(pool, "pool")
+        if not isinstance(pad, bool):
+            raise InvalidArgumentError(f"'pad' must be True or False, got {pad!r}")
     pixels = range(total) if pixels is None else pixels
+    if not isinstance(pixels, range) or pixels.step != 1 or pixels.start < 0 or pixels.stop > total:
+        raise InvalidArgumentError(
+            f"'pixels' must be a range of step 1 within the image's {total} pixels, got {pixels!r}")
     sets = _sets if _sets is not None else sample_plan(scene, sampler, spp, sampler_params, pad, pool)
     dims = scene.sample_dimensions
     # _into: the kernel's float32 buffer (pixels, >= dims, >= spp), filled set by set

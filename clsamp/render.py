@@ -36,7 +36,7 @@ from .pixel_sampling import (  # noqa: F401  (block_size, float32_samples: publi
     sample_plan,
 )
 from .render_numpy import camera_frame, render_reference, screen_window
-from .scene import Scene
+from .scene import Scene, as_scene  # noqa: F401  (Scene: README imports it from here)
 from .validation import check_int, check_positive_int, check_seed
 
 TILE_BYTES = 128 * 2**20            # float32 sample bytes of one tile at most (host memory)
@@ -154,16 +154,6 @@ def _launch(scene, host, pixel0, npix, size, spp, width=None, keys=None, block=1
 
 
 # -- the public entry points ----------------------------------------------------------------
-def _as_scene(scene):
-    if isinstance(scene, Scene):
-        return scene
-    if isinstance(scene, dict):
-        return Scene.from_dict(scene)
-    if isinstance(scene, (str, os.PathLike)):
-        return Scene.from_file(scene)
-    raise InvalidArgumentError(f"'scene' must be a Scene, a dict or a scene file, got {scene!r}")
-
-
 def render(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=True, progress=True,
            pool=DEFAULT_POOL):
     """Render ``scene`` with ``spp`` samples per pixel from ``sampler``.
@@ -176,7 +166,8 @@ def render(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=Tru
         A registered name (``"random"``, ``"jittered"``, ``"sobol:owen"``, ``"ccvt"``, ...)
         made with :func:`clsamp.make_sampler`, or a Sampler object (``d=2`` with
         ``pad=True``, ``d=scene.sample_dimensions`` with ``pad=False``), re-seeded per
-        seed block by copying it.
+        seed block by copying it (an expensive one, as poisson_disk, lloyd or ccvt, once a
+        set, for its pool).
     spp : int
         Samples per pixel (>= 1); the sampler must be able to make spp points
         (jittered in 2-D needs k^2 or its ``strata`` product).
@@ -213,7 +204,7 @@ def render(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=Tru
     >>> img.shape, img.dtype
     ((8, 8), dtype('float32'))
     """
-    scene = _as_scene(scene)
+    scene = as_scene(scene)
     spp = check_int(spp, "spp", minimum=1, maximum=2**31)
     size = image_size(resolution)
     seed = check_seed(seed)
@@ -295,7 +286,7 @@ def render_sweep(scene, samplers, spps, resolution, seed=0, sampler_params=None,
     mse : dict
         ``{(sampler, spp): float}`` against ``reference`` (empty without one).
     """
-    scene = _as_scene(scene)
+    scene = as_scene(scene)
     params = dict(sampler_params or {})
     keys = [(str(name), check_int(spp, "spps", minimum=1, maximum=2**31))
             for name in samplers for spp in spps]
@@ -436,7 +427,7 @@ def reference(scene, resolution, spp=None, progress=True, seed=REFERENCE_SEED, c
     >>> ref.shape, bool((stderr >= 0).all())
     ((8, 8), True)
     """
-    scene = _as_scene(scene)
+    scene = as_scene(scene)
     width, height = image_size(resolution)
     if spp is None:
         spp = REFERENCE_PASSES * (1 << (4 * scene.default_spp - 1).bit_length())

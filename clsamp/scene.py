@@ -47,6 +47,7 @@ parameters are ignored when the effect is not listed.
 import hashlib
 import json
 import math
+import os
 from pathlib import Path
 
 from .errors import InvalidArgumentError
@@ -451,3 +452,35 @@ class Scene:
     def __repr__(self):
         return (f"Scene(name={self.name!r}, effects={self.effects}, "
                 f"sample_dimensions={self.sample_dimensions})")
+
+
+def as_scene(scene):
+    """A :class:`Scene` from what :func:`clsamp.render.render` takes as one.
+
+    Parameters
+    ----------
+    scene : Scene, dict or path
+        A scene, its dict (:meth:`Scene.from_dict`), or a path or a shipped scene's bare
+        name (:meth:`Scene.from_file`).
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    InvalidArgumentError
+        Anything else, or what those refuse.
+
+    Examples
+    --------
+    >>> as_scene("ao").name
+    'ao'
+    """
+    if isinstance(scene, Scene):
+        return scene
+    if isinstance(scene, dict):
+        return Scene.from_dict(scene)
+    if isinstance(scene, (str, os.PathLike)):
+        return Scene.from_file(scene)
+    raise InvalidArgumentError(f"'scene' must be a Scene, a dict or a scene file, got {scene!r}")

@@ -15,7 +15,7 @@ from .experiments_ff import check_target
 from .float_float import check_precision
 from .integrands import Integrand, make_integrand
 from .results import ConvergenceResult, FamilyResult
-from .samplers import Sampler, make_sampler, sampler_class
+from .samplers import Sampler, make_quiet_sampler
 from .samplers.base import CASES
 from .validation import MAX_UINT32, check_choice, check_int, check_seed
 
@@ -138,32 +138,6 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
             seconds.append(time.perf_counter() - t0)
         bar.close()
     return _result(estimator, label, values, errors, seconds, r)
-
-
-def make_quiet_sampler(name, d=2, seed=0, **params):
-    """:func:`~clsamp.make_sampler` with the sampler's own progress bar off where it has one
-    (``bnot``'s), for callers that show their own: a sweep, the tour.
-
-    Parameters
-    ----------
-    name : str
-    d : int
-    seed : int
-    **params
-        As :func:`~clsamp.make_sampler` takes them.
-
-    Returns
-    -------
-    Sampler
-
-    Examples
-    --------
-    >>> make_quiet_sampler("bnot", seed=1).progress, make_quiet_sampler("random").d
-    (False, 2)
-    """
-    import inspect
-    takes = "progress" in inspect.signature(sampler_class(name)).parameters
-    return make_sampler(name, d=d, seed=seed, **params, **({"progress": False} if takes else {}))
 
 
 def _sampler(sampler, d, seed, backend):

@@ -42,7 +42,7 @@ def quiet_sampler(name, seed, params):
     -------
     Sampler
     """
-    from .sweep import make_quiet_sampler
+    from .samplers import make_quiet_sampler
     return make_quiet_sampler(name, d=2, seed=seed, **params)
 
 

@@ -350,3 +350,28 @@ def test_bad_input_is_a_clear_error():
                          progress=False)
     with pytest.raises(InvalidArgumentError, match="effects"):
         rendering.render({**scene.to_dict(), "effects": ["glow"]}, "random", 16, 8, progress=False)
+    # sampler_params not a dict: a TypeError from dict() before
+    with pytest.raises(InvalidArgumentError, match="'sampler_params' must be a dict"):
+        rendering.render(scene, "gbn", 16, 4, sampler_params="iterations=2", progress=False)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"pad": "no"}, "'pad' must be True or False"),         # was taken as pad=True
+    ({"pool": "a"}, "'pool' must be an integer"),            # a TypeError in a comparison
+    ({"pool": 0}, "'pool' must be an integer >= 1"),         # it named 'realizations'
+    ({"pixels": range(0, 10, 2)}, "'pixels' must be a range of step 1"),   # a broadcast error
+    ({"pixels": [0, 1, 2]}, "'pixels' must be a range"),
+    ({"pixels": range(32, 80)}, "within the image's 64 pixels"),   # made pixels past the image
+    ({"sampler_params": [1]}, "'sampler_params' must be a dict"),
+])
+def test_pixel_samples_refuses_what_render_refuses(kwargs, match):
+    with pytest.raises(InvalidArgumentError, match=match):
+        rendering.pixel_samples("ao", "gbn", 4, 8, **kwargs)
+
+
+def test_the_renderer_makes_a_named_sampler_without_its_own_progress_bar():
+    # bnot's bar showed under render(progress=False), render_task and --no-progress
+    from clsamp.pixel_sampling import sample_plan
+    sets = sample_plan(Scene.from_file("ao"), "bnot", 16, None, True, 2)
+    assert all(s.factory(2, 0).progress is False for s in sets)
+    assert rendering.pixel_samples("ao", "gbn", 4, 2).shape == (4, 2, 4)   # a scene by name

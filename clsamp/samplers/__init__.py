@@ -29,5 +29,32 @@ from .base import (
 from .dither import dither_mask
 from .engine import as_qmc_engine
 
-__all__ = ["Rate", "SampleInfo", "Sampler", "as_qmc_engine", "dither_mask", "make_sampler",
-           "register", "sampler_class", "sampler_names"]
+__all__ = ["Rate", "SampleInfo", "Sampler", "as_qmc_engine", "dither_mask", "make_quiet_sampler",
+           "make_sampler", "register", "sampler_class", "sampler_names"]
+
+
+def make_quiet_sampler(name, d=2, seed=0, **params):
+    """:func:`~clsamp.make_sampler` with the sampler's own progress bar off where it has one
+    (``bnot``'s), for callers that show their own: a sweep, the renderer, the tour.
+
+    Parameters
+    ----------
+    name : str
+    d : int
+    seed : int
+    **params
+        As :func:`~clsamp.make_sampler` takes them.
+
+    Returns
+    -------
+    Sampler
+
+    Examples
+    --------
+    >>> make_quiet_sampler("bnot", seed=1).progress, make_quiet_sampler("random").d
+    (False, 2)
+    """
+    import inspect
+    takes = "progress" in inspect.signature(sampler_class(name)).parameters and "progress" not in params
+    return make_sampler(name, d=d, seed=seed, **params, **({"progress": False} if takes else {}))
+
