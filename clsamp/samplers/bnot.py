@@ -562,19 +562,8 @@ class BNOTSampler(OptimizerSampler):
         self.density = check_density("jittered" if density is None else density)
         self.newton = check_int(newton, "newton", minimum=0, maximum=64)
 
-    def valid_n(self, n):
-        """``n``, or with ``cells="points"`` the most sites whose density points (n x
-        ``points_per_site``) stay below 2^32, where n's do not.
-
-        Parameters
-        ----------
-        n : int
-
-        Returns
-        -------
-        int
-        """
-        return n if self.cells == "exact" else min(n, (2**32 - 1) // self.points_per_site)
+    def _most_sites(self):
+        return self.max_n if self.cells == "exact" else (2**32 - 1) // self.points_per_site
 
     def _check_n(self, n):
         if self.cells == "points":      # its own message first, then the base's

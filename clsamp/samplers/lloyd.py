@@ -284,21 +284,9 @@ class LloydSampler(OptimizerSampler):
         self.iterations = check_positive_int(iterations, "iterations", maximum=MAX_ITERATIONS)
         self.density = check_positive_int(density, "density")
 
-    def valid_n(self, n):
-        """``n``, or the most sites whose density grid (g^d >= n x ``density`` points) has
-        32-bit counts, where n's does not.
-
-        Parameters
-        ----------
-        n : int
-
-        Returns
-        -------
-        int
-        """
-        if _fits(self.density, n, self.d):
-            return n
-        lo, hi = 1, n
+    def _most_sites(self):
+        # the largest n whose density grid (g^d >= n * density points) has 32-bit counts
+        lo, hi = 1, self.max_n
         while hi - lo > 1:
             mid = (lo + hi) // 2
             lo, hi = (mid, hi) if _fits(self.density, mid, self.d) else (lo, mid)

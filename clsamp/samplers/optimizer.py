@@ -90,5 +90,22 @@ class OptimizerSampler(Sampler):
     def _device(self, n, realizations, start):
         return self._optimize(self._sites(n, realizations), realizations, "opencl")
 
+    def valid_n(self, n):
+        """``n``, or the most sites whose density points the sampler counts in 32 bits,
+        where n's are too many (``points_per_site`` or ``density`` times n).
+
+        Parameters
+        ----------
+        n : int
+
+        Returns
+        -------
+        int
+        """
+        return min(n, self._most_sites())
+
+    def _most_sites(self):
+        return self.max_n
+
     def _optimize(self, sites, realizations, backend):
         raise NotImplementedError

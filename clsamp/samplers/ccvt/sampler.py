@@ -292,19 +292,8 @@ class CCVTSampler(OptimizerSampler):
             return None   # i.i.d. density points leave an N^-1 floor (see Notes)
         return super().convergence_rate(case)
 
-    def valid_n(self, n):
-        """``n``, or the most sites whose density points (n x ``points_per_site``) stay
-        below 2^32, where n's do not.
-
-        Parameters
-        ----------
-        n : int
-
-        Returns
-        -------
-        int
-        """
-        return min(n, (2**32 - 1) // self.points_per_site)
+    def _most_sites(self):
+        return (2**32 - 1) // self.points_per_site
 
     def _check_n(self, n):
         check_points_per_site(self.points_per_site, n)     # its message, before the sites
