@@ -286,6 +286,8 @@ class LloydSampler(OptimizerSampler):
 
     def _most_sites(self):
         # the largest n whose density grid (g^d >= n * density points) has 32-bit counts
+        if _fits(self.density, self.max_n, self.d):
+            return self.max_n
         lo, hi = 1, self.max_n
         while hi - lo > 1:
             mid = (lo + hi) // 2
