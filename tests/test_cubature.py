@@ -234,3 +234,10 @@ def test_bad_integrand_values_are_named():
     with pytest.raises(ValueError, match="NaN or infinite"):
         clsamp.integrate(lambda x: np.where(x[:, 0] < 0.5, np.nan, 1.0), 2, abs_tol=1e-3, method="lattice",
                          progress=False)
+    # a complex value lost its imaginary part (a ComplexWarning, a 'converged' result), text
+    # failed inside NumPy's float conversion
+    for f in (lambda x: x[:, 0] + 1j, lambda x: np.array(["a"] * len(x))):
+        for method in ("replications", "digital"):
+            with pytest.raises(clsamp.InvalidArgumentError, match="'f' must return real numbers"):
+                clsamp.integrate(f, 2, abs_tol=1e-3, method=method, progress=False)
+    assert clsamp.integrate(lambda x: x[:, 0] < 2.0, 2, abs_tol=1e-3, progress=False).estimate == 1.0
