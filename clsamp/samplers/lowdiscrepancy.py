@@ -426,10 +426,9 @@ class SobolSampler(DigitalNetB2):
     -----
     Points are integers times 2^-32 (32 bits of resolution after scrambling too; with
     ``bits=64`` past index 2^32, times 2^-53).
-    ``sample(n, start=k)`` continues ``sample(k)``. Asking for a prefix whose length
-    (start + n) is not a power of two warns (``UserWarning``): such a prefix is not a net,
-    and the balance properties are lost. scipy warns only on a first draw that is not a
-    power of two; clsamp also warns when a later draw leaves a prefix that is not.
+    ``sample(n, start=k)`` continues ``sample(k)``. A prefix whose length (start + n) is not
+    a power of two warns (``UserWarning``: not a net, its balance lost), on any draw, where
+    scipy warns on a first draw only.
 
     References
     ----------
