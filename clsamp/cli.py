@@ -355,7 +355,6 @@ def _summary(values):
 
 
 def _run_metrics(args):
-    import json
 
     import numpy as np
 
@@ -399,7 +398,7 @@ def _run_metrics(args):
                                          "quantiles": dict(zip(("5%", "50%", "95%"),
                                                                np.quantile(nn, [0.05, 0.5, 0.95]).tolist(),
                                                                strict=True))}
-    files.write_text(output, json.dumps(document, indent=1))
+    files.write_json(output, document)
     if "pcf" in wanted:
         entry = document["metrics"]["pcf"]
         plots.pcf_figure(outputs[1][1], entry["radii"], entry["pcf"], n=n, d=d,
@@ -488,7 +487,6 @@ def _checkpoint(args, *labels):
 
 
 def _convergence_runs(args, samplers, integrands, paths, client):
-    import json
 
     from . import files, plots, theory
     from .results import pareto_front
@@ -515,12 +513,11 @@ def _convergence_runs(args, samplers, integrands, paths, client):
     document = {"ns": ns, "realizations": realizations, "seed": args.seed,
                 "homogenize": not args.no_homogenize, "backend": args.backend,
                 "results": records, "pareto_front": fronts}
-    files.write_text(json_path, json.dumps(document, indent=1, default=str))
+    files.write_json(json_path, document)
     _wrote([output, time_path, json_path])
 
 
 def _run_family_convergence(args, samplers, names, paths, client):
-    import json
 
     from . import families, files, plots, theory
     from .sweep import convergence, parse_ns
@@ -546,7 +543,7 @@ def _run_family_convergence(args, samplers, names, paths, client):
     plots.family_convergence(results, output)
     document = {"ns": ns, "realizations": realizations, "members": args.members, "seed": args.seed,
                 "homogenize": not args.no_homogenize, "backend": args.backend, "results": records}
-    files.write_text(json_path, json.dumps(document, indent=1, default=str))
+    files.write_json(json_path, document)
     _wrote([output, json_path])
 
 
@@ -590,7 +587,6 @@ def _load_function(text):
 
 def _run_integrate(args):
     import dataclasses
-    import json
     import warnings
 
     from . import files
@@ -609,7 +605,7 @@ def _run_integrate(args):
           f"{res.replications} x {res.n} points of {res.sampler}, {res.evaluations} evaluations, "
           f"{res.seconds:.3f} s; {'converged' if res.converged else 'NOT converged'})")
     if output is not None:
-        files.write_text(output, json.dumps(dataclasses.asdict(res), indent=1))
+        files.write_json(output, dataclasses.asdict(res))
         _wrote([output])
     return 0 if res.converged else 1
 # -- render --------------------------------------------------------------------

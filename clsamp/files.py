@@ -30,6 +30,9 @@ from .validation import check_points
 _UMASK_LOCK = threading.Lock()
 
 
+NAME_MAX = 255          # bytes in one name of a path (Linux, macOS, Windows' NTFS)
+
+
 def umask():
     """The process's umask (read from /proc where it can be, else set and restored)."""
     with contextlib.suppress(OSError, ValueError):
@@ -99,6 +102,10 @@ def check_output(path, name="'path'"):
     clsamp.errors.InvalidArgumentError: 'path' '.../afile/p.npy': '.../afile' is a file, not a folder
     """
     path = Path(path)
+    longest = max((len(os.fsencode(part)) for part in path.parts), default=0)
+    if longest > NAME_MAX:
+        raise InvalidArgumentError(f"{name} {str(path)!r}: a name of {longest} bytes in it, "
+                                   f"longer than the {NAME_MAX} a file system takes")
     if path.is_dir():
         raise InvalidArgumentError(f"{name} {str(path)!r} is a folder, not a file")
     folder = path.parent
@@ -142,10 +149,14 @@ def atomic_path(path):
         ``OSError`` in the block), naming ``path`` and the reason.
     """
     path = Path(path)
+    if path.is_symlink():       # write where the link points, as open() would, and keep it
+        path = Path(os.path.realpath(path))
     folder = path.parent if str(path.parent) else Path(".")
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp" + path.suffix, dir=folder)
+        # the temporary name stays within NAME_MAX whatever the target's length
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name[:NAME_MAX // 2]}.",
+                                   suffix=".tmp" + path.suffix[:16], dir=folder)
     except OSError as error:
         raise WriteError(f"cannot write {str(path)!r}: {_reason(error)}") from error
     os.close(fd)
@@ -212,6 +223,34 @@ def write_text(path, text):
     text : str
     """
     write_bytes(path, text.encode("utf-8"))
+
+
+def write_json(path, document):
+    """Write ``document`` as standard JSON, atomically (:func:`write_text`): NaN and the
+    infinities, which JSON cannot hold as numbers, as the strings "nan", "inf" and "-inf"
+    (:func:`clsamp.report.json_safe`), any other object as its ``str``.
+
+    Parameters
+    ----------
+    path : str or Path
+    document : dict or list
+
+    Returns
+    -------
+    Path
+
+    Examples
+    --------
+    >>> import json, tempfile, pathlib
+    >>> path = write_json(pathlib.Path(tempfile.mkdtemp()) / "d.json", {"mse": float("nan")})
+    >>> json.loads(path.read_text())
+    {'mse': 'nan'}
+    """
+    import json
+
+    from .report import json_safe
+    write_text(path, json.dumps(json_safe(document), indent=1, default=str))
+    return Path(path)
 
 
 def format_points(points):
@@ -387,6 +426,10 @@ def load_points(path):
 
 
 # -- images ----------------------------------------------------------------------
+EXR_OWN = ("channels", "compression", "dataWindow", "displayWindow", "lineOrder",
+           "pixelAspectRatio", "screenWindowCenter", "screenWindowWidth", "type")
+
+
 def _check_image(image, name="image", channels=None):
     image = np.asarray(image)
     if image.ndim == 2:
@@ -401,6 +444,8 @@ def _check_image(image, name="image", channels=None):
             f"'{name}' must have shape (h, w), (h, w, 1), (h, w, 3) or (h, w, 4), got {image.shape}")
     if not np.issubdtype(image.dtype, np.floating):
         raise InvalidArgumentError(f"'{name}' must be a float array, got {image.dtype}")
+    if not image.size:
+        raise InvalidArgumentError(f"'{name}' must hold pixels, got shape {image.shape}")
     return image
 
 
@@ -437,10 +482,15 @@ def write_exr(path, image, header=None, channel_names=None):
         if len(set(channel_names)) != len(channel_names) or not channel_names:
             raise InvalidArgumentError(f"'channel_names' must be distinct names, got {channel_names!r}")
     image = _check_image(image, channels=channel_names)
+    if np.any(np.abs(image[np.isfinite(image)]) > np.finfo(np.float32).max):
+        raise InvalidArgumentError("'image' holds finite values beyond float32's range, which the "
+                                   "file would hold as infinities")
     names = channel_names or {1: ("Y",), 3: ("R", "G", "B"), 4: ("R", "G", "B", "A")}[image.shape[2]]
     channels = {n: np.ascontiguousarray(image[:, :, i], dtype=np.float32) for i, n in enumerate(names)}
     attributes = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     for key, value in (header or {}).items():
+        if str(key) in EXR_OWN:
+            raise InvalidArgumentError(f"'header' key {str(key)!r} is the file's own ({', '.join(EXR_OWN)})")
         attributes[str(key)] = str(value)
     with atomic_path(path) as tmp:
         with OpenEXR.File(attributes, channels) as exr:
@@ -541,17 +591,21 @@ def write_png(path, image, tone=True, **tone_args):
     Raises
     ------
     InvalidArgumentError
-        With ``tone``, an image that is not float or not of a shape above.
+        With ``tone``, an image that is not float or not of a shape above; without, one
+        that is not uint8.
     """
     import matplotlib.image as mpimg
     image = np.asarray(image)
     if tone:
         image = tone_map(_check_image(image), **tone_args)
+    elif image.dtype != np.uint8:
+        raise InvalidArgumentError(f"'image' must be uint8 with tone=False, got {image.dtype}")
     if image.ndim == 3 and image.shape[2] == 1:
         image = image[:, :, 0]
+    if image.ndim == 2:     # grey as three equal channels: a grey colormap moves some levels
+        image = np.repeat(image[:, :, None], 3, axis=2)
     buffer = _io.BytesIO()
-    cmap = "gray" if image.ndim == 2 else None
-    mpimg.imsave(buffer, image, format="png", cmap=cmap, vmin=0, vmax=255)
+    mpimg.imsave(buffer, image, format="png")
     write_bytes(path, buffer.getvalue())
     return Path(path)
 

@@ -84,3 +84,43 @@ def test_png_preview(tmp_path):
     path = files.write_png(tmp_path / "i.png", np.linspace(0, 2, 30, dtype=np.float32).reshape(5, 6))
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert files.tone_map(np.array([[2.0, 0.0]]))[0, 0] == 255
+
+
+def test_names_up_to_the_file_systems_limit_are_written_and_longer_ones_refused(tmp_path):
+    # the temporary name was the target's plus 15 characters: 240-255 failed after the work,
+    # and past 255 check_output itself raised OSError (ENAMETOOLONG)
+    path = files.save_points(tmp_path / ("a" * 244 + ".txt"), np.full((2, 2), 0.5))
+    assert files.load_points(path).shape == (2, 2)
+    with pytest.raises(InvalidArgumentError, match="a name of 304 bytes in it, longer than the 255"):
+        files.check_output(tmp_path / ("a" * 300 + ".txt"), "'-o'")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a" * 244 + ".txt"]
+
+
+def test_writing_through_a_link_writes_its_target_and_keeps_the_link(tmp_path):
+    (tmp_path / "target.txt").write_text("old")
+    (tmp_path / "link.txt").symlink_to("target.txt")
+    files.write_text(tmp_path / "link.txt", "new")
+    assert (tmp_path / "link.txt").is_symlink() and (tmp_path / "target.txt").read_text() == "new"
+
+
+def test_grey_png_levels_and_exr_refusals(tmp_path):
+    import matplotlib.image as mpimg
+    grey = np.arange(256, dtype=np.uint8).reshape(16, 16)
+    back = mpimg.imread(files.write_png(tmp_path / "g.png", grey, tone=False))
+    assert np.array_equal(np.round(back[:, :, 0] * 255).astype(np.uint8), grey)   # 24 levels moved by one
+    with pytest.raises(InvalidArgumentError, match="'image' must be uint8 with tone=False"):
+        files.write_png(tmp_path / "f.png", np.full((2, 2), 0.8), tone=False)   # written black before
+    for image, header, match in ((np.zeros((0, 5)), None, "must hold pixels"),
+                                 (np.full((2, 2), 1e39), None, "beyond float32's range"),
+                                 (np.ones((2, 2)), {"channels": "x"}, "'header' key 'channels'")):
+        with pytest.raises(InvalidArgumentError, match=match):
+            files.write_exr(tmp_path / "e.exr", image, header=header)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["g.png"]
+
+
+def test_json_documents_are_standard_json(tmp_path):
+    import json
+    document = {"rate": [float("nan"), np.float64(-np.inf)], "n": np.int64(3)}
+    path = files.write_json(tmp_path / "d.json", document)
+    text = path.read_text()
+    assert json.loads(text, parse_constant=pytest.fail) == {"rate": ["nan", "-inf"], "n": 3}
