@@ -304,10 +304,15 @@ def _run_spectrum(args):
         outputs.append(("--plots", _output(args.plots, FIGURES, "spectrum", "--plots")))
     _distinct(outputs)
     points, label = _points_from_source(args)
-    if points.shape[-1] == 3 and (output.suffix.lower() != ".npy" or args.plots):
-        raise InvalidArgumentError("a 3-D spectrum is written to -o .npy alone: pictures are 1-D or 2-D")
+    d = points.shape[-1]
+    ok = {1: (".npy", ".exr"), 2: (".npy", ".exr", ".png")}.get(d, (".npy",))
+    if output.suffix.lower() not in ok or (args.plots and d > 2):
+        raise InvalidArgumentError(f"a {d}-D spectrum goes to -o {' or '.join(ok)} (--plots: 1-D, 2-D)")
     P = spectrum.power_spectrum(points, resolution=args.resolution, method=args.method, tol=args.tol,
                                 backend=args.backend)
+    n, r = points.shape[-2], (points.shape[0] if points.ndim == 3 else 1)
+    if args.plots:      # first: what it refuses (a spectrum too small for its annuli) leaves no -o
+        plots.spectrum_figure(outputs[1][1], P, n=n, realizations=r, label=label, scale=args.scale)
     if output.suffix.lower() == ".exr":
         plots.save_spectrum_exr(output, P, header={"source": label})
     elif output.suffix.lower() == ".npy":
@@ -317,10 +322,6 @@ def _run_spectrum(args):
         files.write_bytes(output, buffer.getvalue())
     else:
         plots.save_spectrum_png(output, P, scale=args.scale)
-    n = points.shape[-2]
-    r = points.shape[0] if points.ndim == 3 else 1
-    if args.plots:
-        plots.spectrum_figure(outputs[1][1], P, n=n, realizations=r, label=label, scale=args.scale)
     _wrote([path for _, path in outputs],
            f"the {'x'.join(map(str, P.shape))} spectrum of {r} x {n} points of {label}")
     return 0

@@ -5,12 +5,58 @@ clumps across the border show), a figure of sets, each with its 1-D projections 
 matplotlib is imported when a picture is made.
 """
 
+import functools
+import inspect
+import os
+from pathlib import Path
+
 import numpy as np
 
 from . import files
+from .errors import InvalidArgumentError
 from .validation import check_points, check_positive_int, check_real, point_sets
 
-__all__ = ["points", "points_figure", "pyplot"]
+__all__ = ["points", "points_figure", "pyplot", "writes"]
+
+FIGURES = (".png", ".pdf", ".svg")       # the formats a figure is saved in
+
+
+def writes(suffixes=FIGURES):
+    """Decorate a function that writes its argument ``path``: the path is checked before any
+    work (:func:`clsamp.files.check_output`, and its suffix one of ``suffixes``), and the
+    figures the function opened are closed if it raises.
+
+    Parameters
+    ----------
+    suffixes : tuple of str
+        The suffixes taken, lower case, with the dot.
+
+    Returns
+    -------
+    callable
+        The decorator.
+    """
+    def decorate(fn):
+        signature = inspect.signature(fn)
+
+        @functools.wraps(fn)
+        def checked(*args, **kwargs):
+            path = signature.bind(*args, **kwargs).arguments["path"]
+            if not isinstance(path, (str, os.PathLike)):
+                raise InvalidArgumentError(f"'path' must be a file path, got {path!r}")
+            if Path(path).suffix.lower() not in suffixes:
+                raise InvalidArgumentError(
+                    f"'path' {str(path)!r} must end in {', '.join(suffixes)}")
+            files.check_output(path)
+            opened = set(pyplot().get_fignums())
+            try:
+                return fn(*args, **kwargs)
+            except BaseException:
+                for number in set(pyplot().get_fignums()) - opened:
+                    pyplot().close(number)
+                raise
+        return checked
+    return decorate
 
 
 def pyplot():
@@ -126,6 +172,7 @@ def points(ax, points, title=None, size=None, color="black", tiled=False, projec
     return dots
 
 
+@writes()
 def points_figure(path, points, title=None, columns=4, tiled=False, projections=False):
     """Point sets saved as a figure, one panel a set, titled with its n.
 

@@ -13,7 +13,7 @@ from . import files, theory
 from . import spectrum as spectra
 from .errors import InvalidArgumentError
 from .plot_axes import clip_far_below, legend_below, readable_log_ticks
-from .plot_points import point_sets_2d, points, points_figure, pyplot, scatter  # noqa: F401 (public here)
+from .plot_points import point_sets_2d, points, points_figure, pyplot, scatter, writes  # noqa: F401 (public here)
 from .results import pareto_front
 from .validation import check_choice, check_real
 
@@ -68,6 +68,7 @@ def spectrum_image(P, scale="linear", vmin=None, vmax=None):
     return np.clip(image.T[::-1], 0.0, 1.0)
 
 
+@writes((".png",))
 def save_spectrum_png(path, P, scale="linear", vmin=None, vmax=None):
     """Write a 2-D spectrum as a grey PNG (gamma 2.2 for ``"linear"``).
 
@@ -85,6 +86,7 @@ def save_spectrum_png(path, P, scale="linear", vmin=None, vmax=None):
     return files.write_png(path, image, gamma=2.2 if scale == "linear" else 1.0)
 
 
+@writes((".exr",))
 def save_spectrum_exr(path, P, header=None):
     """Write a spectrum's values as a float32 OpenEXR oriented as :func:`spectrum_image`.
 
@@ -99,7 +101,7 @@ def save_spectrum_exr(path, P, header=None):
     -------
     Path
     """
-    P = spectra.check_spectrum(P)
+    P = spectra.check_spectrum(P, dims=(1, 2))     # an image: a 3-D spectrum goes to .npy
     image = P[None, :] if P.ndim == 1 else P.T[::-1]
     info = {"clsamp": "power spectrum",
             "layout": "row j: fy = R/2 - 1 - j (+y up); column i: fx = i - R/2"}
@@ -195,6 +197,7 @@ def anisotropy(ax, freqs, values, label=None, n=None, convention="psa", realizat
     return line
 
 
+@writes()
 def spectrum_figure(path, P, n=None, realizations=None, label=None, bin_width=1.0,
                     convention="psa", scale="linear"):
     """A spectrum, its radial mean and (2-D) its anisotropy, saved as one figure.
@@ -232,6 +235,7 @@ def spectrum_figure(path, P, n=None, realizations=None, label=None, bin_width=1.
     return _save(figure, path)
 
 
+@writes()
 def sampler_figure(path, points, P, pcf, n=None, label=None):
     """A sampler at a glance: its first point set, spectrum, radial mean and PCF.
 
@@ -277,6 +281,7 @@ def sampler_figure(path, points, P, pcf, n=None, label=None):
     return _save(fig, path)
 
 
+@writes()
 def radial_mean_families(path, curves, families, n=None, reference="random", note=None):
     """Radial means of many samplers, one panel per family, a reference curve in grey in each.
 
@@ -349,6 +354,7 @@ def pair_correlation(ax, radii, pcf, n=None, d=2, label=None, **line_args):
     return line
 
 
+@writes()
 def pcf_figure(path, radii, pcf, n=None, d=2, label=None):
     """One pair correlation function, saved as a figure.
 
@@ -401,6 +407,7 @@ def discrepancy(ax, sweep, expected=None, **line_args):
     return line
 
 
+@writes()
 def discrepancy_figure(path, sweeps):
     """Discrepancies of many samplers against N, a log-log panel per method, each with its fitted
     slope and a dashed line of the rate :func:`clsamp.theory.discrepancy_rate` knows.
@@ -465,6 +472,7 @@ def _label(ax, xlabel, title):
     legend_below(ax, columns=1)
 
 
+@writes()
 def convergence(results, path):
     """MSE against N (log-log) of one or more results, one panel per integrand.
 
@@ -533,6 +541,7 @@ def family_spread(ax, res, color=None, label=None):
     return line
 
 
+@writes()
 def family_convergence(results, path):
     """MSE against N over integrand families, a panel per family, :func:`family_spread` each.
 
@@ -557,6 +566,7 @@ def family_convergence(results, path):
     return _save(fig, path)
 
 
+@writes()
 def accuracy_time(results, path):
     """MSE against seconds per estimate (generation included) per integrand, with its
     :func:`clsamp.results.pareto_front` in black.
@@ -615,6 +625,7 @@ def error_time(ax, curves, xlabel="seconds", ylabel="MSE", title=None, exact=Non
     return lines
 
 
+@writes()
 def error_time_figure(path, panels):
     """Panels of error against time (:func:`error_time`) side by side.
 
@@ -647,6 +658,7 @@ def error_time_figure(path, panels):
 
 
 # -- renders ---------------------------------------------------------------------------
+@writes()
 def quality_time(path, rows, title=None):
     """Samplers' quality against the seconds they took: low-frequency power (down is better)
     and ρ (up is better), one labelled dot a sampler, seconds on a log axis.
@@ -675,6 +687,7 @@ def quality_time(path, rows, title=None):
     return _save(fig, path)
 
 
+@writes()
 def render_comparison(path, reference, images, columns=4):
     """Rendered images beside their reference, each titled with its MSE against it.
 
@@ -715,6 +728,7 @@ def render_comparison(path, reference, images, columns=4):
     return _save(fig, path)
 
 
+@writes()
 def error_spectra(path, curves, title=None):
     """Radially averaged error spectra of renders (:func:`clsamp.render.error_spectrum`).
 

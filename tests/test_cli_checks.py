@@ -281,8 +281,18 @@ def test_params_that_are_the_commands_own_options_are_one_line(tmp_path, capsys,
 def test_a_3d_spectrum_goes_to_npy_only(tmp_path, capsys):
     # it was computed (256^3), then refused as a picture ('P' must be a 2-D spectrum)
     code, text = run(capsys, "spectrum", "random", "-n", "16", "-d", "3", "-o", str(tmp_path / "s.png"))
-    assert code == 2 and "a 3-D spectrum is written to -o .npy alone" in text, text
+    assert code == 2 and "a 3-D spectrum goes to -o .npy (--plots: 1-D, 2-D)" in text, text
     assert listing(tmp_path) == []
     code, _ = run(capsys, "spectrum", "random", "-n", "16", "-d", "3", "--resolution", "8",
                   "-o", str(tmp_path / "s.npy"))
     assert code == 0 and np.load(tmp_path / "s.npy").shape == (8, 8, 8)
+
+
+def test_a_spectrum_that_cannot_go_to_its_outputs_leaves_none(tmp_path, capsys):
+    # a 1-D spectrum was refused as a PNG after the work; --plots' refusal (a spectrum too
+    # small for its annuli) came after -o was written
+    code, text = run(capsys, "spectrum", "random", "-n", "16", "-d", "1", "-o", str(tmp_path / "s.png"))
+    assert code == 2 and "a 1-D spectrum goes to -o .npy or .exr" in text, text
+    code, text = run(capsys, "spectrum", "random", "-n", "64", "--resolution", "2", "--backend", "numpy",
+                     "-o", str(tmp_path / "r.png"), "--plots", str(tmp_path / "p.png"))
+    assert code == 2 and "annulus" in text and listing(tmp_path) == [], text

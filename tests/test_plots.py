@@ -124,3 +124,27 @@ def test_spectrum_titles_say_n_and_sets_and_family_legends_say_what_band_and_lin
     plots.family_convergence([fam], tmp_path / "f.png")
     assert {"shaded: 10-90 % of the members", "dotted: the worst member",
             "dashed: the published rate"} <= set(legends), legends
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda d: plots.points_figure(d / "p.xyz", np.full((4, 2), 0.5)), r"must end in .png, .pdf, .svg"),
+    (lambda d: plots.points_figure(None, np.full((4, 2), 0.5)), "'path' must be a file path"),
+    (lambda d: plots.points_figure(d / "afile" / "p.png", np.full((4, 2), 0.5)), "is a file, not a folder"),
+    (lambda d: plots.save_spectrum_png(d / "s.jpg", np.ones((4, 4))), "must end in .png"),
+    (lambda d: plots.save_spectrum_exr(d / "s.png", np.ones((4, 4))), "must end in .exr"),
+    (lambda d: plots.save_spectrum_exr(d / "s.exr", np.ones((4, 4, 4))), "'P' must be a 1-D or 2-D"),
+])
+def test_a_figures_path_is_checked_before_drawing(tmp_path, call, match):
+    # an unknown suffix was matplotlib's ValueError after drawing, /proc or a file in the way
+    # a WriteError after it; a spectrum's writers took any suffix (PNG bytes in s.jpg)
+    (tmp_path / "afile").write_text("")
+    with pytest.raises(clsamp.InvalidArgumentError, match=match):
+        call(tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]
+
+
+def test_a_figure_that_fails_is_closed():
+    before = set(plots.pyplot().get_fignums())
+    with pytest.raises(ValueError):
+        plots.quality_time("/tmp/unused.png", [("a", 1, 2)])       # rows of 4, one of 3
+    assert set(plots.pyplot().get_fignums()) == before
