@@ -225,10 +225,46 @@ def write_text(path, text):
     write_bytes(path, text.encode("utf-8"))
 
 
+def json_safe(value):
+    """A copy of ``value`` that ``json.dumps`` writes as standard JSON.
+
+    Dictionaries (keys made strings), lists, tuples and arrays are converted all the way
+    down; NumPy scalars become Python numbers; NaN and infinities, which JSON cannot hold,
+    become the strings ``"nan"``, ``"inf"`` and ``"-inf"``.
+
+    Parameters
+    ----------
+    value : object
+
+    Returns
+    -------
+    object
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from clsamp.files import json_safe
+    >>> json_safe({1: np.array([0.5, np.inf]), "n": np.int64(3)})
+    {'1': [0.5, 'inf'], 'n': 3}
+    """
+    if isinstance(value, dict):
+        return {str(k): json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_safe(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return json_safe(value.tolist())
+    if isinstance(value, (np.floating, float)):
+        value = float(value)
+        return value if np.isfinite(value) else str(value)
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
 def write_json(path, document):
     """Write ``document`` as standard JSON, atomically (:func:`write_text`): NaN and the
     infinities, which JSON cannot hold as numbers, as the strings "nan", "inf" and "-inf"
-    (:func:`clsamp.report.json_safe`), any other object as its ``str``.
+    (:func:`json_safe`), any other object as its ``str``.
 
     Parameters
     ----------
@@ -247,8 +283,6 @@ def write_json(path, document):
     {'mse': 'nan'}
     """
     import json
-
-    from .report import json_safe
     write_text(path, json.dumps(json_safe(document), indent=1, default=str))
     return Path(path)
 

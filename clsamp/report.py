@@ -2,7 +2,7 @@
 
 :class:`Report` owns the output folder (``img/`` for pictures, ``data/`` for raw data, every
 file written whole through :mod:`clsamp.files`); :func:`write_html` turns its sections into
-``index.html``; :func:`json_safe` makes numbers JSON can hold (non-finite ones as strings);
+``index.html``; :func:`json_safe` (from :mod:`clsamp.files`) makes numbers JSON can hold;
 :func:`slope_text`, :func:`human_bytes` and :func:`device_rows` put fits and devices in words;
 :func:`one_line_warnings` prints clsamp's warnings as one line while a report is made.
 """
@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from . import files
+from .files import json_safe  # noqa: F401 (the tour's JSON, as this module's before)
 
 
 @dataclasses.dataclass
@@ -278,42 +279,6 @@ def img(src, alt, width=None):
     """
     w = f' width="{width}"' if width else ""
     return f'<img src="{html.escape(src)}" alt="{html.escape(alt)}"{w}>'
-
-
-def json_safe(value):
-    """A copy of ``value`` that ``json.dumps`` writes as standard JSON.
-
-    Dictionaries (keys made strings), lists, tuples and arrays are converted all the way
-    down; NumPy scalars become Python numbers; NaN and infinities, which JSON cannot hold,
-    become the strings ``"nan"``, ``"inf"`` and ``"-inf"``.
-
-    Parameters
-    ----------
-    value : object
-
-    Returns
-    -------
-    object
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from clsamp.report import json_safe
-    >>> json_safe({1: np.array([0.5, np.inf]), "n": np.int64(3)})
-    {'1': [0.5, 'inf'], 'n': 3}
-    """
-    if isinstance(value, dict):
-        return {str(k): json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [json_safe(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return json_safe(value.tolist())
-    if isinstance(value, (np.floating, float)):
-        value = float(value)
-        return value if np.isfinite(value) else str(value)
-    if isinstance(value, np.integer):
-        return int(value)
-    return value
 
 
 CSS = """
