@@ -1,5 +1,8 @@
 """Samplers: one module (or package) per family, all reachable through :func:`make_sampler`."""
 
+import functools
+import inspect
+
 # Importing a module registers its samplers.
 from . import (  # noqa: F401
     bnot,  # bnot (blue noise through optimal transport)
@@ -54,7 +57,12 @@ def make_quiet_sampler(name, d=2, seed=0, **params):
     >>> make_quiet_sampler("bnot", seed=1).progress, make_quiet_sampler("random").d
     (False, 2)
     """
-    import inspect
-    takes = "progress" in inspect.signature(sampler_class(name)).parameters and "progress" not in params
+    takes = _takes_progress(sampler_class(name)) and "progress" not in params
     return make_sampler(name, d=d, seed=seed, **params, **({"progress": False} if takes else {}))
+
+
+@functools.cache
+def _takes_progress(cls):
+    # once per class: the renderer makes a sampler a seed block
+    return "progress" in inspect.signature(cls).parameters
 
