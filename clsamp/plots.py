@@ -672,7 +672,22 @@ def quality_time(path, rows, title=None):
     Returns
     -------
     Path
+
+    Raises
+    ------
+    InvalidArgumentError
+        No rows, a row not of four, seconds not positive (a log axis), or a power or rho
+        negative or not finite.
     """
+    rows = list(rows)
+    try:
+        values = np.array([row[1:] for row in rows], dtype=np.float64)
+    except (TypeError, ValueError):
+        values = None
+    if not rows or values is None or values.shape != (len(rows), 3) or not (
+            np.all(values[:, 0] > 0) and np.all(values >= 0) and np.all(np.isfinite(values))):
+        raise InvalidArgumentError("'rows' must be (label, seconds, low-frequency power, rho) rows: "
+                                   "seconds positive, power and rho not negative, all finite")
     fig, (low, rho) = pyplot().subplots(1, 2, figsize=(10, 3.8))
     for label, seconds, power, radius in rows:
         for ax, value in ((low, power), (rho, radius)):

@@ -148,3 +148,11 @@ def test_a_figure_that_fails_is_closed():
     with pytest.raises(ValueError):
         plots.quality_time("/tmp/unused.png", [("a", 1, 2)])       # rows of 4, one of 3
     assert set(plots.pyplot().get_fignums()) == before
+
+
+@pytest.mark.parametrize("rows", [[("a", 1, 2)], [], [("a", float("nan"), 0.1, 0.7)], [("a", 1.0, "x", 0.7)]])
+def test_quality_time_refuses_rows_it_cannot_draw(tmp_path, rows):
+    # a row of 3 failed to unpack, NaN seconds inside matplotlib's log scale, [] drew nothing
+    with pytest.raises(clsamp.InvalidArgumentError, match="'rows' must be"):
+        plots.quality_time(tmp_path / "q.png", rows)
+    assert list(tmp_path.iterdir()) == []
