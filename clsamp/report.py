@@ -2,8 +2,8 @@
 
 :class:`Report` owns the output folder (``img/`` for pictures, ``data/`` for raw data, every
 file written whole through :mod:`clsamp.files`); :func:`write_html` turns its sections into
-``index.html``; :func:`json_safe` (from :mod:`clsamp.files`) makes numbers JSON can hold;
-:func:`slope_text`, :func:`human_bytes` and :func:`device_rows` put fits and devices in words;
+``index.html``; :func:`slope_text`, :func:`human_bytes` and :func:`device_rows` put fits and
+devices in words;
 :func:`one_line_warnings` prints clsamp's warnings as one line while a report is made.
 """
 
@@ -20,7 +20,6 @@ from pathlib import Path
 import numpy as np
 
 from . import files
-from .files import json_safe  # noqa: F401 (the tour's JSON, as this module's before)
 
 
 @dataclasses.dataclass

@@ -9,7 +9,6 @@ page, and the others still run and keep their results.
 
 import dataclasses
 import html
-import json
 import platform
 import time
 import traceback
@@ -23,7 +22,6 @@ from .report import (
     device_rows,
     fmt,
     img,
-    json_safe,
     one_line_warnings,
     slope_text,
     table,
@@ -679,5 +677,5 @@ def _run_section(report, quick, key, title, fn, timings, results, meta):
     results[key] = {"title": title, "seconds": section.seconds, "error": section.error,
                     "data": section.data}
     document = {"meta": meta, "sections": results}
-    files.write_text(report.out / "tour.json", json.dumps(json_safe(document), indent=1))
+    files.write_json(report.out / "tour.json", document)
     write_html(report, meta)

@@ -15,6 +15,7 @@ maximal one is in :func:`.sampler._draw`. Maximal sets are made for d <= 4 only.
 
 import numpy as np
 
+from ...errors import InvalidArgumentError
 from ...geometry.cells import cells_for, sorted_by_cell, stable_order
 from .grid import IN
 
@@ -58,6 +59,10 @@ class CoarseGeometry:
     """
 
     def __init__(self, d, radius, r2, n):
+        if n >= 1 << DART_BITS:
+            raise InvalidArgumentError(
+                f"'n' must be below 2^{DART_BITS} for d >= {COARSE_MIN_D} (coarse dart "
+                f"throwing numbers its darts in {DART_BITS} bits), got {n}")
         self.d, self.radius, self.r2 = d, radius, r2
         G = cells_for(radius, n, d)
         # the cells pay only where the 3^d around a dart hold far fewer than the n points:
@@ -68,8 +73,6 @@ class CoarseGeometry:
         self.darts = int(n)
         self.footprint = self.cells + 2 * self.darts
         self.nblocks = d // 2 + 1
-        if self.darts >= 1 << DART_BITS:
-            raise ValueError(f"coarse dart throwing numbers at most 2^{DART_BITS} darts")
 
 
 def ragged_by_cell(points, sets, count, G):

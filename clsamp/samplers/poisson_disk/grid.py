@@ -73,6 +73,20 @@ def grid_cells(radius, d):
     return float(grid_size(radius, d) ** d)
 
 
+def cells_text(cells):
+    """:func:`grid_cells`'s count for a message: three digits, or "over 1e301" for infinity.
+
+    Parameters
+    ----------
+    cells : float
+
+    Returns
+    -------
+    str
+    """
+    return "over 1e301" if math.isinf(cells) else f"{cells:.3g}"
+
+
 def reach(radius, G):
     """K: grid cells at offset above K on some axis are r or more apart (side 1/G).
 

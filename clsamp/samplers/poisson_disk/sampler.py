@@ -14,7 +14,6 @@ from .coarse import (
     COARSE_MIN_D,
     COARSE_RHO,
     COARSE_ROUNDS,
-    DART_BITS,
     CoarseGeometry,
     gather_coarse,
     throw_coarse,
@@ -31,6 +30,7 @@ from .grid import (
     SKIP,
     Geometry,
     acceptance_threshold,
+    cells_text,
     grid_cells,
     level_of,
 )
@@ -292,7 +292,7 @@ class PoissonDiskSampler(Sampler):
             if self.d < COARSE_MIN_D and cells > MAX_CELLS:
                 raise InvalidArgumentError(
                     f"'radius'={self.radius} is too small for d={self.d}: its background grid "
-                    f"would have {cells:.3g} cells, more than {MAX_CELLS}".replace("inf", "over 1e301"))
+                    f"would have {cells_text(cells)} cells, more than {MAX_CELLS}")
             self.rho = None
             self.needs_n = self.d >= COARSE_MIN_D    # maximal sets for d <= 4 only
         else:
@@ -389,10 +389,6 @@ class PoissonDiskSampler(Sampler):
 
     # -- the work -------------------------------------------------------------------------
     def _geometry(self, n):
-        if self.d >= COARSE_MIN_D and n >= 1 << DART_BITS:
-            raise InvalidArgumentError(
-                f"'n' must be below 2^{DART_BITS} for d >= {COARSE_MIN_D} (coarse dart "
-                f"throwing numbers its darts in {DART_BITS} bits), got {n}")
         if self.radius is not None:
             r2 = acceptance_threshold(self.radius)
             if self.d >= COARSE_MIN_D:
@@ -407,8 +403,8 @@ class PoissonDiskSampler(Sampler):
         if cells > MAX_CELLS:
             raise InvalidArgumentError(
                 f"'n'={n} with 'rho'={self.rho} is too much for d={self.d}: their radius "
-                f"{radius:.3g} needs a background grid of {cells:.3g} cells, more than "
-                f"{MAX_CELLS}; give fewer points or a larger rho".replace("inf", "over 1e301"))
+                f"{radius:.3g} needs a background grid of {cells_text(cells)} cells, more than "
+                f"{MAX_CELLS}; give fewer points or a larger rho")
         return Geometry(self.d, radius, acceptance_threshold(radius, d_max, self.rho))
 
     def _run(self, n, realizations, device, as_list=False):
