@@ -15,7 +15,7 @@ from .errors import InvalidArgumentError
 from .plot_axes import clip_far_below, legend_below, readable_log_ticks
 from .plot_points import point_sets_2d, points, points_figure, pyplot, scatter, writes  # noqa: F401 (public here)
 from .results import pareto_front
-from .validation import check_choice, check_real
+from .validation import check_choice, check_curve, check_curves, check_positive_int, check_real
 
 __all__ = ["points", "points_figure", "spectrum", "radial_mean", "anisotropy", "spectrum_figure",
            "sampler_figure", "radial_mean_families", "pair_correlation", "pcf_figure",
@@ -136,6 +136,7 @@ def spectrum(ax, P, scale="linear", vmin=None, vmax=None, title=None):
 
 
 def _frequency_axis(ax, freqs, n, convention):
+    check_choice(convention, "convention", ("psa", "utk"))
     if n is None:
         ax.set_xlabel("frequency |ω|")
         return np.asarray(freqs, dtype=np.float64)
@@ -163,6 +164,7 @@ def radial_mean(ax, freqs, values, label=None, n=None, convention="psa", **line_
     -------
     matplotlib Line2D
     """
+    freqs, values = check_curve(freqs, values, ("'freqs'", "'values'"))
     x = _frequency_axis(ax, freqs, n, convention)
     (line,) = ax.plot(x, values, label=label, **line_args)
     ax.axhline(1.0, color="0.6", linewidth=0.8, linestyle=":")
@@ -187,9 +189,11 @@ def anisotropy(ax, freqs, values, label=None, n=None, convention="psa", realizat
     -------
     matplotlib Line2D
     """
+    freqs, values = check_curve(freqs, values, ("'freqs'", "'values'"))
     x = _frequency_axis(ax, freqs, n, convention)
     (line,) = ax.plot(x, values, label=label, **line_args)
-    if realizations:
+    if realizations is not None:
+        realizations = check_positive_int(realizations, "realizations")
         ax.axhline(-10.0 * math.log10(realizations), color="0.6", linewidth=0.8, linestyle=":")
     ax.set_ylabel("anisotropy (dB)")
     if label:
@@ -217,6 +221,8 @@ def spectrum_figure(path, P, n=None, realizations=None, label=None, bin_width=1.
     """
     plt = pyplot()
     P = spectra.check_spectrum(P)
+    if realizations is not None:
+        realizations = check_positive_int(realizations, "realizations")
     sets = realizations and f"{realizations} set{'s' if realizations > 1 else ''}"
     label = ", ".join(str(part) for part in (label, n and f"n = {n}", sets) if part) or None
     panels = 3 if P.ndim == 2 else 1
@@ -267,7 +273,9 @@ def sampler_figure(path, points, P, pcf, n=None, label=None):
     sets = point_sets_2d(points)
     size = float(np.mean([len(s) for s in sets]))
     P = spectra.check_spectrum(P)
-    radii, g = pcf
+    if not isinstance(pcf, (tuple, list)) or len(pcf) != 2:
+        raise InvalidArgumentError("'pcf' must be (radii, g), as clsamp.pair_correlation returns it")
+    radii, g = check_curve(*pcf, names=("'pcf' radii", "'pcf' g"))
     several = f", {len(sets)} sets" if len(sets) > 1 else ""
     fig, axes = pyplot().subplots(1, 4, figsize=(14, 3.3))
     first = f"n = {len(sets[0])}"
@@ -310,7 +318,11 @@ def radial_mean_families(path, curves, families, n=None, reference="random", not
     >>> out = plots.radial_mean_families(pathlib.Path(tempfile.mkdtemp()) / "r.png", curves,
     ...     [("stratified", ["jittered"]), ("low discrepancy", ["halton"])], n=256)
     """
+    curves = check_curves(curves, "curves", ("frequencies", "radial mean"))
     families = list(families)
+    if not families or not all(isinstance(f, (tuple, list)) and len(f) == 2
+                               and not isinstance(f[1], str) for f in families):
+        raise InvalidArgumentError("'families' must be one or more (name, [samplers]) pairs")
     fig, axes = pyplot().subplots(1, len(families), figsize=(5.2 * len(families), 5.0), sharey=True,
                                   squeeze=False)
     for ax, (family, members) in zip(axes[0], families, strict=True):
@@ -343,8 +355,10 @@ def pair_correlation(ax, radii, pcf, n=None, d=2, label=None, **line_args):
     -------
     matplotlib Line2D
     """
-    radii = np.asarray(radii, dtype=np.float64)
-    x = radii * float(n) ** (1.0 / d) if n else radii
+    radii, pcf = check_curve(radii, pcf, ("'radii'", "'pcf'"))
+    if n is not None:
+        n = check_real(n, "n", minimum=0.0, open_minimum=True)
+    x = radii * n ** (1.0 / check_positive_int(d, "d")) if n else radii
     (line,) = ax.plot(x, pcf, label=label, **line_args)
     ax.axhline(1.0, color="0.6", linewidth=0.8, linestyle=":")
     ax.set_xlabel("r (mean spacings)" if n else "r")
@@ -434,7 +448,10 @@ def discrepancy_figure(path, sweeps):
     sweeps = list(sweeps)
     if not sweeps:
         raise InvalidArgumentError("'sweeps' must hold at least one sampler's sweeps")
-    methods = list(sweeps[0])
+    methods = list(sweeps[0]) if isinstance(sweeps[0], dict) else []
+    if not methods or not all(isinstance(s, dict) and set(methods) <= set(s) for s in sweeps):
+        raise InvalidArgumentError("'sweeps' must be discrepancy_sweep results ({method: "
+                                   "DiscrepancySweep}), each with the methods of the first")
     plt = pyplot()
     fig, axes = plt.subplots(1, len(methods), figsize=(6.5 * len(methods), 5.2), squeeze=False)
     colours = plt.get_cmap("tab20").colors      # up to twenty samplers, no colour twice
@@ -612,6 +629,7 @@ def error_time(ax, curves, xlabel="seconds", ylabel="MSE", title=None, exact=Non
     -------
     list of Line2D
     """
+    curves = check_curves(curves, "curves", ("seconds", "error"))
     lines = [ax.loglog(x, y, "o-", label=label, markersize=markersize)[0]
              for label, (x, y) in curves.items()]
     if exact:
@@ -648,8 +666,9 @@ def error_time_figure(path, panels):
     ...     [{"curves": {"a": ([1, 2], [1e-2, 1e-3])}, "title": "a"}, None])
     """
     panels = list(panels)
-    if not panels:
-        raise InvalidArgumentError("'panels' must hold at least one panel")
+    if not panels or not all(panel is None or isinstance(panel, dict) for panel in panels):
+        raise InvalidArgumentError("'panels' must hold at least one panel: dicts of error_time's "
+                                   "arguments, or None")
     fig, axes = pyplot().subplots(1, len(panels), figsize=(5.0 * len(panels), 4.2), squeeze=False)
     for ax, panel in zip(axes[0], panels, strict=True):
         if panel is not None:
@@ -730,9 +749,13 @@ def render_comparison(path, reference, images, columns=4):
     """
     from . import render
     items = list(images.items()) if isinstance(images, dict) else list(images)
+    for label, image in items:
+        if np.shape(image) != np.shape(reference):
+            raise InvalidArgumentError(f"'images' {label!r} has shape {np.shape(image)}, the "
+                                       f"reference {np.shape(reference)}")
     panels = [("reference", reference, None)] + [(label, image, render.mse(image, reference))
                                                  for label, image in items]
-    columns = max(1, min(int(columns), len(panels)))
+    columns = min(check_positive_int(columns, "columns"), len(panels))
     rows = -(-len(panels) // columns)
     fig, axes = pyplot().subplots(rows, columns, figsize=(3.0 * columns, 3.2 * rows), squeeze=False)
     for ax in axes.ravel():
@@ -759,6 +782,7 @@ def error_spectra(path, curves, title=None):
     -------
     Path
     """
+    curves = check_curves(curves, "curves", ("frequencies", "power"))
     fig, ax = pyplot().subplots(figsize=(6.0, 4.0))
     for label, (f, p) in curves.items():
         ax.semilogy(f, p, label=label, lw=1.4)

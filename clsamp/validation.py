@@ -243,6 +243,78 @@ def check_bool(value, name):
     return bool(value)
 
 
+def check_curve(x, y, names=("x", "y")):
+    """Two 1-D arrays of real numbers of one length, at least one value: a curve to draw.
+
+    Parameters
+    ----------
+    x, y : array_like
+    names : (str, str)
+        Their names in an error.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        float64 copies (NaN and infinities stay: matplotlib leaves a gap).
+
+    Raises
+    ------
+    InvalidArgumentError
+        Not 1-D, empty, not real numbers, or of different lengths.
+    """
+    arrays = []
+    for value, name in zip((x, y), names, strict=True):
+        try:
+            array = np.asarray(value)
+        except ValueError:    # ragged
+            array = np.empty((0, 0))
+        if array.ndim != 1 or array.size == 0 or array.dtype.kind not in "buif":
+            raise InvalidArgumentError(
+                f"{name} must be a non-empty 1-D array of real numbers, got shape "
+                f"{array.shape} of {array.dtype}")
+        arrays.append(array.astype(np.float64))
+    if len(arrays[0]) != len(arrays[1]):
+        raise InvalidArgumentError(
+            f"{names[0]} and {names[1]} must have the same length, got {len(arrays[0])} and "
+            f"{len(arrays[1])}")
+    return tuple(arrays)
+
+
+def check_curves(curves, name, what=("x", "y")):
+    """``{label: (x, y)}`` with each pair a :func:`check_curve` curve.
+
+    Parameters
+    ----------
+    curves : dict
+    name : str
+        The argument's name in an error.
+    what : (str, str)
+        What x and y are, for the error.
+
+    Returns
+    -------
+    dict
+        ``{label: (x, y)}``, float64 arrays.
+
+    Raises
+    ------
+    InvalidArgumentError
+        Not a dict, or a value not a pair of one length.
+    """
+    if not isinstance(curves, dict):
+        raise InvalidArgumentError(
+            f"'{name}' must be a dict {{label: ({what[0]}, {what[1]})}}, got {type(curves).__name__}")
+    checked = {}
+    for label, pair in curves.items():
+        if not isinstance(pair, (tuple, list)) or len(pair) != 2:
+            raise InvalidArgumentError(
+                f"'{name}'[{label!r}] must be a pair ({what[0]}, {what[1]}), got "
+                f"{type(pair).__name__}")
+        checked[label] = check_curve(*pair, names=(f"'{name}'[{label!r}]'s {what[0]}",
+                                                   f"'{name}'[{label!r}]'s {what[1]}"))
+    return checked
+
+
 def point_sets(points, name="points", d=None):
     """The sets of a list of point arrays of different sizes, or None for anything else.
 

@@ -156,3 +156,41 @@ def test_quality_time_refuses_rows_it_cannot_draw(tmp_path, rows):
     with pytest.raises(clsamp.InvalidArgumentError, match="'rows' must be"):
         plots.quality_time(tmp_path / "q.png", rows)
     assert list(tmp_path.iterdir()) == []
+
+
+_R = np.linspace(0.0, 0.1, 20)
+_P = np.ones((8, 8))
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda d, s: plots.pcf_figure(d / "g.png", _R, np.ones(19)), "'radii' and 'pcf' must have the same"),
+    (lambda d, s: plots.pcf_figure(d / "g.png", _R, _R, n=64, d=0), "'d' must be an integer >= 1"),
+    (lambda d, s: plots.pcf_figure(d / "g.png", _R, _R, n=-1), "'n' must be > 0"),
+    (lambda d, s: plots.pcf_figure(d / "g.png", _R, ["a"] * 20), "'pcf' must be a non-empty 1-D array"),
+    (lambda d, s: plots.pcf_figure(d / "g.png", _R, np.ones((2, 20))), "'pcf' must be a non-empty 1-D"),
+    (lambda d, s: plots.sampler_figure(d / "s.png", s, _P, _R), "'pcf' must be .radii, g."),
+    (lambda d, s: plots.sampler_figure(d / "s.png", s, _P, (_R, np.ones(3))), "'pcf' radii and"),
+    (lambda d, s: plots.spectrum_figure(d / "s.png", _P, realizations="x"), "'realizations' must be"),
+    (lambda d, s: plots.spectrum_figure(d / "s.png", _P, realizations=-2), "'realizations' must be"),
+    (lambda d, s: plots.spectrum_figure(d / "s.png", _P, convention="x"), "'convention' must be one"),
+    (lambda d, s: plots.radial_mean_families(d / "r.png", {"a": (_R, _R[:-1])}, [("f", ["a"])]),
+     r"'curves'\['a'\]'s frequencies and"),
+    (lambda d, s: plots.radial_mean_families(d / "r.png", {"a": (_R, _R)}, []), "'families' must be one"),
+    (lambda d, s: plots.radial_mean_families(d / "r.png", {"a": (_R, _R)}, [("f", "a")]), "'families' must"),
+    (lambda d, s: plots.discrepancy_figure(d / "d.png", [1, 2]), "'sweeps' must be discrepancy_sweep"),
+    (lambda d, s: plots.error_time_figure(d / "t.png", [{"curves": 1}]), "'curves' must be a dict"),
+    (lambda d, s: plots.error_time_figure(d / "t.png", [3]), "'panels' must hold"),
+    (lambda d, s: plots.error_spectra(d / "e.png", {"a": (_R, _R[:3])}), r"'curves'\['a'\]'s frequencies"),
+    (lambda d, s: plots.render_comparison(d / "c.png", np.zeros((4, 4)), {"a": np.zeros((5, 4))}),
+     "'images' 'a' has shape"),
+    (lambda d, s: plots.render_comparison(d / "c.png", np.zeros((4, 4)), {"a": np.zeros((4, 4))}, columns=0),
+     "'columns' must be an integer >= 1"),
+])
+def test_a_figures_curves_and_counts_are_checked_by_name(tmp_path, sets, call, match):
+    # each failed inside matplotlib or numpy (shapes, unpacking, d=0 a ZeroDivisionError),
+    # took strings as categories, or took columns=0 and a bad convention silently
+    before = set(plots.pyplot().get_fignums())
+    with pytest.raises(clsamp.InvalidArgumentError, match=match):
+        call(tmp_path, sets)
+    assert list(tmp_path.iterdir()) == []
+    assert set(plots.pyplot().get_fignums()) == before
