@@ -572,8 +572,10 @@ def _ccvt_loop():
 
 @check("poisson-disk-coarse")
 def _poisson_disk_coarse():
-    # a fixed n in 5-D: the coarse dart kernels (coarse_throw, coarse_resolve)
+    # a fixed n in 5-D: the coarse dart kernels (coarse_throw, coarse_resolve); in 3-D at a
+    # radius far below the spacing (COARSE_SPARSE), the same kernels built for DIM 3
     _sampler_bits("poisson_disk", 24, d=5)
+    _sampler_bits("poisson_disk", 12, d=3, radius=0.01)
 
 
 @check("poisson-disk-clear")

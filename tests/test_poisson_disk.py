@@ -228,11 +228,9 @@ def test_radius_with_n_gives_exactly_n_points_r_apart():
 
 @pytest.mark.parametrize("params, name", [
     ({"radius": 0.0}, "radius"), ({"radius": -0.1}, "radius"), ({"radius": 0.51}, "radius"),
-    ({"radius": 1e-5}, "radius"), ({"rho": 0.91}, "rho"), ({"rho": 0.0}, "rho"),
+    ({"rho": 0.91}, "rho"), ({"rho": 0.0}, "rho"),
     ({"rho": -1.0}, "rho"), ({"rho": 0.7, "radius": 0.1}, "radius"), ({"d": 9}, "d"),
     ({"d": 0}, "d"),
-    # a subnormal radius once overflowed the grid's size (OverflowError)
-    ({"d": 3, "radius": 1e-310}, "radius"), ({"d": 1, "radius": 5e-324}, "radius"),
     # in 1-D a disk of radius 1/2 leaves only the antipode, which no dart hits: the run
     # ended in "did not finish ... (a bug: please report it)"
     ({"d": 1, "radius": 0.5}, "radius"),
@@ -256,13 +254,44 @@ def test_bad_calls_name_the_argument():
     # maximal sets by sample_sets: realization 2^32 + k was realization k
     with pytest.raises(InvalidArgumentError, match=r"'realizations' must lie in \[0, 4294967295\]"):
         clsamp.make_sampler("poisson_disk", radius=0.1).sample_sets(range(2**32, 2**32 + 1))
-    # a rho too small for the grid names rho (it named n alone, with a 240-digit count)
-    with pytest.raises(InvalidArgumentError, match=r"'rho'=1e-300 is too much .* over 1e301 cells"):
-        clsamp.make_sampler("poisson_disk", d=3, rho=1e-300).sample(10)
+    # an n too large for the grid names n and rho (it named n alone)
+    with pytest.raises(InvalidArgumentError,
+                       match=r"'n'=4194304 with 'rho'=0.75 is too much .* 3.6\de\+07 cells"):
+        clsamp.make_sampler("poisson_disk", d=3).sample(2**22)
     # from 5-D on the darts are numbered in 26 bits (a plain ValueError before)
     with pytest.raises(InvalidArgumentError, match=r"'n' must be below 2\^26 for d >= 5"):
         clsamp.make_sampler("poisson_disk", d=5).sample(2**26)
     assert clsamp.make_sampler("poisson_disk", d=8, radius=1e-310).sample(20).shape == (20, 8)
+
+
+@pytest.mark.parametrize("d, radius", [(2, 1e-5), (3, 0.001), (4, 0.02), (3, 1e-310), (1, 5e-324)])
+def test_a_radius_too_small_for_a_maximal_set_still_gives_n_points(d, radius):
+    # such a radius was refused when the sampler was made, even for a fixed n (4-D below
+    # 0.031); a maximal set is refused when asked for, naming the radius
+    sampler = clsamp.make_sampler("poisson_disk", d=d, radius=radius, seed=4)
+    for call in (sampler.sample, lambda: sampler.sample_sets(2)):
+        with pytest.raises(InvalidArgumentError, match=f"'radius'={radius} is too small for a "
+                           f"maximal set in d={d}: .* give n"):
+            call()
+    pts = sampler.sample(20, realizations=3)
+    assert pts.shape == (3, 20, d) and np.all(min_distance(pts) >= radius)
+
+
+@pytest.mark.parametrize("d, radius, n", [(2, 0.01, 16), (3, 0.01, 16), (4, 0.05, 40), (1, 1e-4, 30)])
+def test_a_sparse_fixed_n_is_thrown_into_the_whole_torus(d, radius, n):
+    # 16 points at 0.01 in 3-D searched a fine grid of 5.2 M cells: 50 s for 8 sets; more
+    # than COARSE_SPARSE cells a point now take the coarse kernels, the same bits everywhere
+    kw = dict(d=d, radius=radius, seed=6)
+    sampler = clsamp.make_sampler("poisson_disk", **kw)
+    assert type(sampler._geometry(n)).__name__ == "CoarseGeometry"
+    a, info = sampler.sample(n, realizations=8, return_info=True)
+    b, ref_info = clsamp.make_sampler("poisson_disk", backend="numpy", **kw).sample(
+        n, realizations=8, return_info=True)
+    np.testing.assert_array_equal(a, b)
+    assert (info.rounds, info.darts) == (ref_info.rounds, ref_info.darts)
+    assert np.all(min_distance(a) >= radius)
+    # the default rho keeps the fine grid
+    assert type(clsamp.make_sampler("poisson_disk", d=d)._geometry(n)).__name__ == "Geometry"
 
 
 def test_unplaceable_n_says_so_and_suggests_a_smaller_rho():

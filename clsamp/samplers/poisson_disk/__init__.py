@@ -13,8 +13,9 @@ Both run the same process (Ebeida et al. 2011, 2012), by stage:
 * :mod:`.grid` -- the background grid, the windows and the threshold both backends share;
 * :mod:`.device` -- the steps in OpenCL (``kernels/dart_throwing.cl``);
 * :mod:`.reference` -- their NumPy twin (``backend="numpy"``), the same sets bit for bit;
-* :mod:`.coarse` -- d = 5..8 (fixed n): darts into the whole torus, neighbours through
-  cells at least r wide, its round loop (kernels ``coarse_*`` in the same file);
+* :mod:`.coarse` -- d = 5..8 (fixed n; a sparse n below): darts into the whole torus,
+  neighbours through cells at least r wide, its round loop (kernels ``coarse_*`` in the
+  same file);
 * :mod:`.sampler` -- the round loop, the batches and :class:`PoissonDiskSampler`.
 """
 

@@ -1,5 +1,5 @@
-"""Dart throwing for a fixed n in d = 5..8: darts into the whole torus, neighbours through
-cells at least r wide, the round loop both backends share.
+"""Dart throwing for a fixed n in d = 5..8 (and a sparse one below): darts into the whole
+torus, neighbours through cells at least r wide, the round loop both backends share.
 
 The background grid of side r / sqrt(d) that tracks the voids (:mod:`.grid`) has
 (sqrt(d) / r)^d cells, about 100 a point in 5-D and 5600 in 8-D at rho = 0.75, and its
@@ -10,7 +10,9 @@ dart through a grid of cells of side 1/G >= r (:mod:`clsamp.geometry.cells`, at 
 one cell a point, so memory stays linear in n), whose 3^d cells around a dart hold every
 point closer than r. Without voids no set is known to be maximal: a realization still
 short of n after ``COARSE_ROUNDS`` rounds counts as stuck and is drawn again, as a
-maximal one is in :func:`.sampler._draw`. Maximal sets are made for d <= 4 only.
+maximal one is in :func:`.sampler._draw`. Maximal sets are made for d <= 4 only. In d <= 4
+a fixed n is thrown this way too where the fine grid would hold more than ``COARSE_SPARSE``
+cells a point: a radius far below the spacing, whose darts nearly all land.
 """
 
 import numpy as np
@@ -20,6 +22,7 @@ from ...geometry.cells import cells_for, sorted_by_cell, stable_order
 from .grid import IN
 
 COARSE_MIN_D = 5        # the first dimension thrown this way
+COARSE_SPARSE = 256     # d <= 4: a fixed n with more fine-grid cells a point is thrown so
 COARSE_STEPS = 4        # greedy steps per round (the fine grid's level-0 count)
 COARSE_ROUNDS = 64      # rounds before a realization short of n counts as stuck
 COARSE_RHO = 0.65       # the default relative radius in d >= 5 (0.75 below): reached in
@@ -34,7 +37,7 @@ class CoarseGeometry:
     Parameters
     ----------
     d : int
-        5 to 8.
+        5 to 8, or 1 to 4 for a sparse n (``COARSE_SPARSE``).
     radius : float
     r2 : float
         The acceptance threshold of squared distances (:func:`.grid.acceptance_threshold`).

@@ -14,6 +14,7 @@ from .coarse import (
     COARSE_MIN_D,
     COARSE_RHO,
     COARSE_ROUNDS,
+    COARSE_SPARSE,
     CoarseGeometry,
     gather_coarse,
     throw_coarse,
@@ -217,7 +218,11 @@ class PoissonDiskSampler(Sampler):
     approach to saturation (the uncovered space shrinks as a power of the darts thrown,
     Torquato et al. 2006) makes 0.75 out of reach in 64 rounds; 0.7 takes 11-36 rounds and the
     default 0.65 takes 4-6 (docs/performance.md). The points of a set come in the order
-    they were accepted (each round's in cell order).
+    they were accepted (each round's in cell order). A fixed n in d <= 4 is thrown the same
+    way where the fine grid would hold more than 256 cells a point (``COARSE_SPARSE``: a
+    radius far below the points' spacing, rho below about 0.08 in 2-D, 0.24 in 3-D and 0.42
+    in 4-D), so a radius too small for a grid still gives n points; only maximal sets need
+    the grid.
 
     The kernels hold every double as its IEEE-754 bit pattern and compute each operation
     (the darts' coordinates, the cells' corners, differences, squares and sums of the
@@ -288,13 +293,9 @@ class PoissonDiskSampler(Sampler):
                 raise InvalidArgumentError(
                     f"'radius' must be below {MAX_RADIUS} in 1-D, got {self.radius}: a point's "
                     "disk then leaves only its antipode uncovered, which no dart hits")
-            cells = grid_cells(self.radius, self.d)
-            if self.d < COARSE_MIN_D and cells > MAX_CELLS:
-                raise InvalidArgumentError(
-                    f"'radius'={self.radius} is too small for d={self.d}: its background grid "
-                    f"would have {cells_text(cells)} cells, more than {MAX_CELLS}")
             self.rho = None
-            self.needs_n = self.d >= COARSE_MIN_D    # maximal sets for d <= 4 only
+            # maximal sets for d <= 4 only, and where their grid fits
+            self.needs_n = self.d >= COARSE_MIN_D or grid_cells(self.radius, self.d) > MAX_CELLS
         else:
             self.radius = None
             default = 0.75 if self.d < COARSE_MIN_D else COARSE_RHO
@@ -342,7 +343,7 @@ class PoissonDiskSampler(Sampler):
         """
         if self.radius is None or n is not None:
             return super().sample_sets(realizations, n=n, return_info=return_info)
-        _check_maximal_d(self.d)
+        self._check_maximal()
         if isinstance(realizations, range) and (len(realizations) == 0 or realizations.step != 1):
             raise InvalidArgumentError(
                 f"'realizations' must be a count or a non-empty range of step 1, got "
@@ -371,7 +372,7 @@ class PoissonDiskSampler(Sampler):
     # -- what the base calls ------------------------------------------------------------
     def _check_call(self, n, realizations, start, return_info=False):
         if n is None and self.radius is not None:
-            _check_maximal_d(self.d)
+            self._check_maximal()
         checked = super()._check_call(n, realizations, start, return_info)
         runs = checked[1]
         if checked[0] is None and sum(len(run) for run in runs) != 1:
@@ -387,16 +388,38 @@ class PoissonDiskSampler(Sampler):
     def _device(self, n, realizations, start):
         return self._run(n, realizations, device=True)
 
+    def _check_maximal(self):
+        """Refuse a maximal set beyond d = 4 (naming 'd') or whose grid does not fit (naming
+        'radius')."""
+        if self.d >= COARSE_MIN_D:
+            raise InvalidArgumentError(
+                f"'d'={self.d}: maximal sets (radius mode, n left out) are made for d <= "
+                f"{COARSE_MIN_D - 1} (their grid of side r / sqrt(d) grows as (sqrt(d) / r)^d); "
+                "give n for exactly n points at least 'radius' apart")
+        cells = grid_cells(self.radius, self.d)
+        if cells > MAX_CELLS:
+            raise InvalidArgumentError(
+                f"'radius'={self.radius} is too small for a maximal set in d={self.d}: its "
+                f"background grid would have {cells_text(cells)} cells, more than {MAX_CELLS}; "
+                "give n for exactly n points at least 'radius' apart")
+
     # -- the work -------------------------------------------------------------------------
+    def _coarse(self, radius, n):
+        """Whether n points at ``radius`` are thrown into the whole torus (:mod:`.coarse`):
+        from 5-D on, and in any d where the fine grid would hold more than ``COARSE_SPARSE``
+        cells a point."""
+        return n is not None and (self.d >= COARSE_MIN_D
+                                  or grid_cells(radius, self.d) > COARSE_SPARSE * n)
+
     def _geometry(self, n):
         if self.radius is not None:
             r2 = acceptance_threshold(self.radius)
-            if self.d >= COARSE_MIN_D:
+            if self._coarse(self.radius, n):
                 return CoarseGeometry(self.d, self.radius, r2, n)
             return Geometry(self.d, self.radius, r2)
         d_max = torus.max_min_distance(n, self.d)
         radius = self.rho * d_max
-        if self.d >= COARSE_MIN_D:
+        if self._coarse(radius, n):
             return CoarseGeometry(self.d, radius,
                                   acceptance_threshold(radius, d_max, self.rho), n)
         cells = grid_cells(radius, self.d)
@@ -433,15 +456,6 @@ class PoissonDiskSampler(Sampler):
         if m * len(ids) < out.shape[0]:  # a maximal set's buffer is one row long when empty
             out = out[:m * len(ids)]
         return out.reshape(shape), info
-
-
-def _check_maximal_d(d):
-    """Refuse a maximal set beyond d = 4, naming 'd'."""
-    if d >= COARSE_MIN_D:
-        raise InvalidArgumentError(
-            f"'d'={d}: maximal sets (radius mode, n left out) are made for d <= "
-            f"{COARSE_MIN_D - 1} (their grid of side r / sqrt(d) grows as (sqrt(d) / r)^d); "
-            "give n for exactly n points at least 'radius' apart")
 
 
 def _draw(geo, ids, n, seed, device, what):
