@@ -88,10 +88,37 @@ def test_spatiotemporal_frames_are_blue_and_each_pixel_is_blue_in_time():
     ({"size": 4096, "d": 3}, "'size' and 'd' give a mask of 68719476736 pixels .*; at most"),
     ({"size": 1024, "temporal": 64}, "'size', 'd' and 'temporal' give .*64 x 1024 x 1024"),
     ({"size": 8, "backend": "cuda"}, "'backend' must be one of"),
+    ({"size": 8, "d": 0}, "'d' must be 1 to 4, got 0"),
+    # accepted before and ran for hours to months: the pixels times the window bound the work
+    ({"size": 4096, "sigma": 1e6}, "'size'=4096, 'd'=2, 'sigma'=1e\\+06: 16777216 pixels, each step "
+     "updating a window of 16777216, make 2.81e\\+14 energy updates, more than 2\\^35"),
+    ({"size": 64, "d": 4}, "window of 28561, make 4.79e\\+11 energy updates"),
+    ({"size": 256, "d": 3}, "more than 2\\^35"),
+    ({"size": 2048, "backend": "numpy"}, "'size'=2048: NumPy makes the mask here .backend='numpy'., "
+     "an argmax over all 4194304 pixels a step, and takes at most 2\\^20 pixels"),
 ])
 def test_bad_arguments_are_one_line_before_any_work(kwargs, match):
     with pytest.raises(InvalidArgumentError, match=match):
         clsamp.dither_mask(**kwargs)
+
+
+def test_a_mask_too_large_for_numpy_is_refused_where_the_device_does_not_run_the_steps(monkeypatch):
+    # a GPU, Oclgrind or llvmpipe left the default backend on NumPy's O(N^2) twin, which
+    # took dither_mask(4096) (123 hours) without a word
+    monkeypatch.setattr(dither, "_device_runs_it", lambda: False)
+    with pytest.raises(InvalidArgumentError, match="this device does not run the steps"):
+        clsamp.dither_mask(2048)
+
+
+def test_an_integrated_gpu_does_not_run_the_steps(monkeypatch):
+    # it shares the host's memory and may have fp64; one work-item for minutes on it was
+    # unmeasured, and its watchdog may end the kernel
+    import dataclasses
+
+    from clsamp import runtime
+    gpu = dataclasses.replace(runtime.current_device(), type="gpu", host_memory=True, fp64=True)
+    monkeypatch.setattr(runtime, "current_device", lambda: gpu)
+    assert not dither._device_runs_it()
 
 
 # shapes with blocks of the device's trees left partly empty (49, 343 pixels), 1-D rings

@@ -12,7 +12,7 @@ import numpy as np
 
 from .. import philox, runtime
 from ..errors import InvalidArgumentError, NoDeviceError
-from ..validation import check_choice, check_int, check_positive_int, check_real, check_seed
+from ..validation import check_choice, check_int, check_real, check_seed
 
 __all__ = ["dither_mask", "mask_spectrum", "SIGMA", "INITIAL_DENSITY"]
 
@@ -21,6 +21,8 @@ SIGMA_RANGE = (0.01, 1e6)   # the standard deviations accepted
 INITIAL_DENSITY = 0.1       # the share of ones in the initial binary pattern (Ulichney)
 ENERGY_LOSS = 0.005         # the Gaussian is cut where it has fallen to this share
 MAX_PIXELS = 1 << 24        # the largest mask built (its steps are sequential)
+MAX_WORK = 1 << 35          # pixels x window: the energies its steps update, at most
+MAX_TWIN_PIXELS = 1 << 20   # the largest mask of the NumPy twin (an argmax over it a step)
 BLOCK = 8                   # pixels a leaf of the device's tournament trees
 
 
@@ -111,14 +113,24 @@ def dither_mask(size, d=2, seed=0, temporal=None, sigma=SIGMA, backend="opencl")
         The standard deviation of the Gaussian energy, in pixels (frames along time),
         0.01 to 10^6 (default 1.9).
     backend : {"opencl", "numpy"}
-        Where the steps run: the current device where it shares the host's memory and
-        does double precision and long loops (a CPU device), else NumPy; "numpy" always
-        NumPy. Both give the same ranks.
+        Where the steps run: the current device where it is a CPU device with double
+        precision and no loop limit, else NumPy; "numpy" always NumPy. Both give the same
+        ranks.
 
     Returns
     -------
     ndarray of int64
         Shape (size,) * d, or (temporal,) + (size,) * d.
+
+    Raises
+    ------
+    InvalidArgumentError
+        A bad argument, or a mask too large for the time its steps take: more than 2^24
+        pixels; more than 2^35 energy updates, the pixels times the Gaussian's window
+        (tens of minutes on a CPU device: 256^3 at the default sigma, or 64^4); on NumPy
+        (``backend="numpy"``, or a device that does not run the steps) more than 2^20
+        pixels: an argmax a step makes it O(N^2) (512 x 512 takes about a minute, each
+        doubling of the side 16 times that).
 
     Notes
     -----
@@ -159,8 +171,8 @@ def dither_mask(size, d=2, seed=0, temporal=None, sigma=SIGMA, backend="opencl")
     (4, 8, 8)
     """
     size = check_int(size, "size", minimum=2)
-    d = check_positive_int(d, "d")
-    if d > 4:
+    d = check_int(d, "d")
+    if not 1 <= d <= 4:
         raise InvalidArgumentError(f"'d' must be 1 to 4, got {d}")
     seed = check_seed(seed)
     if temporal is not None:
@@ -174,9 +186,24 @@ def dither_mask(size, d=2, seed=0, temporal=None, sigma=SIGMA, backend="opencl")
         raise InvalidArgumentError(f"{names} give a mask of {total} pixels ({' x '.join(map(str, shape))}); "
                                    f"at most {MAX_PIXELS}")
     backend = check_choice(backend, "backend", ("opencl", "numpy"))
+    window = sum(math.prod(len(_offsets(sigma, shape[a])[0]) for a in axes)
+                 for axes in _stencil_axes(shape, temporal is not None))
+    if total * window > MAX_WORK:
+        raise InvalidArgumentError(
+            f"'size'={size}, 'd'={d}, 'sigma'={sigma:g}"
+            f"{'' if temporal is None else f', temporal={temporal}'}: {total} pixels, each step "
+            f"updating a window of {window}, make {total * window:.3g} energy updates, more than "
+            f"2^35 (tens of minutes); give a smaller size or sigma")
+    device = backend == "opencl" and _device_runs_it()
+    if not device and total > MAX_TWIN_PIXELS:
+        why = "backend='numpy'" if backend == "numpy" else "this device does not run the steps"
+        raise InvalidArgumentError(
+            f"'size'={size}: NumPy makes the mask here ({why}), an argmax over all {total} "
+            f"pixels a step, and takes at most 2^20 pixels (512 x 512 takes about a minute, "
+            "each doubling of the side 16 times that); give a smaller size, or a CPU OpenCL device")
     stencils = _mask_stencils(shape, temporal is not None, sigma)
     ones, initial = _initial_ones(total, seed)
-    if backend == "opencl" and _device_runs_it():
+    if device:
         ranks = _void_and_cluster_device(shape, stencils, initial[:ones])
     else:
         ranks = _void_and_cluster(_Energy(shape, stencils), total, ones, initial)
@@ -184,14 +211,15 @@ def dither_mask(size, d=2, seed=0, temporal=None, sigma=SIGMA, backend="opencl")
 
 
 def _device_runs_it():
-    """Whether the current device runs the steps: one that shares the host's memory (a
-    CPU: one work-item's walk in a GPU's memory is unmeasured), with fp64 and no loop
-    limit; False where there is no device at all."""
+    """Whether the current device runs the steps: a CPU that shares the host's memory (one
+    work-item's walk on a GPU is unmeasured, and an integrated GPU's watchdog may end it),
+    with fp64 and no loop limit; False where there is no device at all."""
     try:
         device = runtime.current_device()
     except NoDeviceError:       # no OpenCL at all: NumPy gives the same ranks
         return False
-    return device.host_memory and device.fp64 and runtime.loop_limit() is None
+    return (device.type == "cpu" and device.host_memory and device.fp64
+            and runtime.loop_limit() is None)
 
 
 def _initial_ones(total, seed):
@@ -200,6 +228,11 @@ def _initial_ones(total, seed):
     ones = min(max(2, int(total * INITIAL_DENSITY)), total // 2)
     u = philox.uniform(seed, philox.Stream.INIT, 0, np.arange(total, dtype=np.uint32), 0)
     return ones, np.argsort(u, kind="stable")
+
+
+def _stencil_axes(shape, temporal):
+    """The axes of each stencil: all of them, or space and then time."""
+    return [tuple(range(len(shape)))] if not temporal else [tuple(range(1, len(shape))), (0,)]
 
 
 def _mask_stencils(shape, temporal, sigma):
@@ -211,9 +244,7 @@ def _mask_stencils(shape, temporal, sigma):
             view[k] = -1
             weights = weights * w.reshape(view)
         return tuple(axes), [o for o, _ in parts], weights
-    if not temporal:
-        return [gaussian(range(len(shape)))]
-    return [gaussian(range(1, len(shape))), gaussian((0,))]
+    return [gaussian(axes) for axes in _stencil_axes(shape, temporal)]
 
 
 def _void_and_cluster(state, total, ones, initial):
