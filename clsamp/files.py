@@ -17,6 +17,7 @@ import contextlib
 import io as _io
 import os
 import re
+import shutil
 import stat
 import tempfile
 import threading
@@ -106,9 +107,25 @@ def check_output(path, name="'path'"):
     if longest > NAME_MAX:
         raise InvalidArgumentError(f"{name} {str(path)!r}: a name of {longest} bytes in it, "
                                    f"longer than the {NAME_MAX} a file system takes")
-    if path.is_dir():
+    target = path
+    if path.is_symlink():       # the writers write where the link points: check there
+        try:
+            os.stat(path)
+        except FileNotFoundError:
+            pass                # a dangling link: its target is made
+        except OSError as error:
+            raise InvalidArgumentError(f"{name} {str(path)!r}: {_reason(error)}") from None
+        target = Path(os.path.realpath(path))
+    if target.is_dir():
         raise InvalidArgumentError(f"{name} {str(path)!r} is a folder, not a file")
-    folder = path.parent
+    if _streamed(target):
+        if not os.access(target, os.W_OK):
+            raise InvalidArgumentError(f"{name} {str(path)!r}: no permission to write it")
+        return path
+    if target.exists() and not target.is_file():
+        raise InvalidArgumentError(f"{name} {str(path)!r} is not a file, a character device or "
+                                   "a pipe")
+    folder = target.parent
     while not folder.exists():
         if folder.is_symlink():
             raise InvalidArgumentError(f"{name} {str(path)!r}: {str(folder)!r} is a broken link")
@@ -125,12 +142,28 @@ def check_output(path, name="'path'"):
     return path
 
 
+def _streamed(path):
+    """Whether ``path`` is a character device or a pipe (written into, not replaced)."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return False
+    return stat.S_ISCHR(mode) or stat.S_ISFIFO(mode)
+
+
+def _first_bytes(name, count):
+    """The longest start of ``name`` of at most ``count`` bytes, whole characters only."""
+    return os.fsencode(name)[:count].decode("utf-8", errors="ignore")
+
+
 @contextlib.contextmanager
 def atomic_path(path):
     """A temporary path beside ``path``, renamed to ``path`` when the block succeeds.
 
     On any exception the temporary file is removed and ``path`` is untouched. The file that
-    lands has the mode ``open`` would have given it (not mkstemp's 0600).
+    lands has the mode ``open`` would have given it (not mkstemp's 0600). A link is written
+    through, and a character device or a pipe (``/dev/null``) is written into once the
+    temporary file is whole, as ``open`` would.
 
     Parameters
     ----------
@@ -152,16 +185,23 @@ def atomic_path(path):
     if path.is_symlink():       # write where the link points, as open() would, and keep it
         path = Path(os.path.realpath(path))
     folder = path.parent if str(path.parent) else Path(".")
+    if _streamed(path):         # the temporary file goes where temporary files go
+        folder = Path(tempfile.gettempdir())
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        # the temporary name stays within NAME_MAX whatever the target's length
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name[:NAME_MAX // 2]}.",
-                                   suffix=".tmp" + path.suffix[:16], dir=folder)
+        # the temporary name stays within NAME_MAX bytes whatever the target's length
+        fd, tmp = tempfile.mkstemp(prefix=f".{_first_bytes(path.name, NAME_MAX // 2)}.",
+                                   suffix=".tmp" + _first_bytes(path.suffix, 16), dir=folder)
     except OSError as error:
         raise WriteError(f"cannot write {str(path)!r}: {_reason(error)}") from error
     os.close(fd)
     try:
         yield Path(tmp)
+        if _streamed(path):     # a device or a pipe: its bytes, once whole, as open() would
+            with open(tmp, "rb") as source, open(path, "wb") as sink:
+                shutil.copyfileobj(source, sink)
+            os.unlink(tmp)
+            return
         os.chmod(tmp, _mode_for(path))
         os.replace(tmp, path)
     except BaseException as error:
@@ -229,7 +269,7 @@ def json_safe(value):
     """A copy of ``value`` that ``json.dumps`` writes as standard JSON.
 
     Dictionaries (keys made strings), lists, tuples and arrays are converted all the way
-    down; NumPy scalars become Python numbers; NaN and infinities, which JSON cannot hold,
+    down; NumPy scalars become Python numbers and booleans; NaN and infinities, which JSON cannot hold,
     become the strings ``"nan"``, ``"inf"`` and ``"-inf"``.
 
     Parameters
@@ -248,7 +288,11 @@ def json_safe(value):
     {'1': [0.5, 'inf'], 'n': 3}
     """
     if isinstance(value, dict):
-        return {str(k): json_safe(v) for k, v in value.items()}
+        safe = {str(k): json_safe(v) for k, v in value.items()}
+        if len(safe) != len(value):
+            raise InvalidArgumentError(f"keys {sorted(map(repr, value))} of a dict write two as one "
+                                       "JSON key (keys are written as text)")
+        return safe
     if isinstance(value, (list, tuple)):
         return [json_safe(v) for v in value]
     if isinstance(value, np.ndarray):
@@ -258,6 +302,8 @@ def json_safe(value):
         return value if np.isfinite(value) else str(value)
     if isinstance(value, np.integer):
         return int(value)
+    if isinstance(value, np.bool_):
+        return bool(value)
     return value
 
 
@@ -460,11 +506,11 @@ def load_points(path):
 
 
 # -- images ----------------------------------------------------------------------
-EXR_OWN = ("channels", "compression", "dataWindow", "displayWindow", "lineOrder",
-           "pixelAspectRatio", "screenWindowCenter", "screenWindowWidth", "type")
+EXR_OWN = ("channels", "chunkCount", "compression", "dataWindow", "displayWindow", "lineOrder",
+           "pixelAspectRatio", "screenWindowCenter", "screenWindowWidth", "tiles", "type", "version")
 
 
-def _check_image(image, name="image", channels=None):
+def _check_image(image, name="image", channels=None, dtype=None):
     image = np.asarray(image)
     if image.ndim == 2:
         image = image[:, :, None]
@@ -476,7 +522,9 @@ def _check_image(image, name="image", channels=None):
     elif image.ndim != 3 or image.shape[2] not in (1, 3, 4):
         raise InvalidArgumentError(
             f"'{name}' must have shape (h, w), (h, w, 1), (h, w, 3) or (h, w, 4), got {image.shape}")
-    if not np.issubdtype(image.dtype, np.floating):
+    if dtype is not None and image.dtype != dtype:
+        raise InvalidArgumentError(f"'{name}' must be {np.dtype(dtype)}, got {image.dtype}")
+    if dtype is None and not np.issubdtype(image.dtype, np.floating):
         raise InvalidArgumentError(f"'{name}' must be a float array, got {image.dtype}")
     if not image.size:
         raise InvalidArgumentError(f"'{name}' must hold pixels, got shape {image.shape}")
@@ -522,13 +570,18 @@ def write_exr(path, image, header=None, channel_names=None):
     names = channel_names or {1: ("Y",), 3: ("R", "G", "B"), 4: ("R", "G", "B", "A")}[image.shape[2]]
     channels = {n: np.ascontiguousarray(image[:, :, i], dtype=np.float32) for i, n in enumerate(names)}
     attributes = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    if header is not None and not isinstance(header, dict):
+        raise InvalidArgumentError(f"'header' must be a dict, got {type(header).__name__}")
     for key, value in (header or {}).items():
-        if str(key) in EXR_OWN:
-            raise InvalidArgumentError(f"'header' key {str(key)!r} is the file's own ({', '.join(EXR_OWN)})")
+        if str(key) in EXR_OWN or not str(key):
+            raise InvalidArgumentError(f"'header' key {str(key)!r} is empty or the file's own "
+                                       f"({', '.join(EXR_OWN)})")
         attributes[str(key)] = str(value)
-    with atomic_path(path) as tmp:
-        with OpenEXR.File(attributes, channels) as exr:
+    try:        # a standard attribute of another type (chromaticities) does not take text
+        with OpenEXR.File(attributes, channels) as exr, atomic_path(path) as tmp:
             exr.write(str(tmp))
+    except ValueError as error:
+        raise InvalidArgumentError(f"'header' does not fit an OpenEXR header: {error}") from None
     return Path(path)
 
 
@@ -625,19 +678,15 @@ def write_png(path, image, tone=True, **tone_args):
     Raises
     ------
     InvalidArgumentError
-        With ``tone``, an image that is not float or not of a shape above; without, one
-        that is not uint8.
+        An image not of a shape above or without pixels, or with ``tone`` not float,
+        without it not uint8.
     """
     import matplotlib.image as mpimg
-    image = np.asarray(image)
+    image = _check_image(image, dtype=None if tone else np.uint8)
     if tone:
-        image = tone_map(_check_image(image), **tone_args)
-    elif image.dtype != np.uint8:
-        raise InvalidArgumentError(f"'image' must be uint8 with tone=False, got {image.dtype}")
-    if image.ndim == 3 and image.shape[2] == 1:
-        image = image[:, :, 0]
-    if image.ndim == 2:     # grey as three equal channels: a grey colormap moves some levels
-        image = np.repeat(image[:, :, None], 3, axis=2)
+        image = tone_map(image, **tone_args)
+    if image.shape[2] == 1:     # grey as three equal channels: a grey colormap moves some levels
+        image = np.repeat(image, 3, axis=2)
     buffer = _io.BytesIO()
     mpimg.imsave(buffer, image, format="png")
     write_bytes(path, buffer.getvalue())

@@ -108,7 +108,7 @@ def test_grey_png_levels_and_exr_refusals(tmp_path):
     grey = np.arange(256, dtype=np.uint8).reshape(16, 16)
     back = mpimg.imread(files.write_png(tmp_path / "g.png", grey, tone=False))
     assert np.array_equal(np.round(back[:, :, 0] * 255).astype(np.uint8), grey)   # 24 levels moved by one
-    with pytest.raises(InvalidArgumentError, match="'image' must be uint8 with tone=False"):
+    with pytest.raises(InvalidArgumentError, match="'image' must be uint8, got float64"):
         files.write_png(tmp_path / "f.png", np.full((2, 2), 0.8), tone=False)   # written black before
     for image, header, match in ((np.zeros((0, 5)), None, "must hold pixels"),
                                  (np.full((2, 2), 1e39), None, "beyond float32's range"),
@@ -124,3 +124,68 @@ def test_json_documents_are_standard_json(tmp_path):
     path = files.write_json(tmp_path / "d.json", document)
     text = path.read_text()
     assert json.loads(text, parse_constant=pytest.fail) == {"rate": ["nan", "-inf"], "n": 3}
+
+
+
+def test_a_name_of_multibyte_characters_within_the_limit_is_written(tmp_path):
+    # the temporary name was cut in characters, 127 of 3 bytes each: past 255 bytes after the work
+    name = "\u70b9" * 80 + ".txt"                     # 244 bytes
+    files.save_points(tmp_path / name, np.full((2, 2), 0.5))
+    assert sorted(p.name for p in tmp_path.iterdir()) == [name]
+
+
+def test_a_pipe_or_a_device_is_written_into_not_replaced(tmp_path):
+    # os.replace swapped a regular file in for them: as root, '-o /dev/null' replaced /dev/null
+    import threading
+    fifo = tmp_path / "pipe.txt"
+    os.mkfifo(fifo)
+    got = []
+    reader = threading.Thread(target=lambda: got.append(fifo.read_bytes()), daemon=True)
+    reader.start()
+    files.write_text(fifo, "through the pipe")
+    reader.join(10)
+    assert got == [b"through the pipe"] and fifo.is_fifo()
+    if os.geteuid() == 0:
+        null = tmp_path / "null.txt"
+        os.mknod(null, 0o666 | 0o020000, os.makedev(1, 3))     # a character device: /dev/null
+        files.write_text(null, "gone")
+        assert null.is_char_device()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]    # no temporary left
+
+
+def test_links_that_lead_nowhere_writable_are_refused_before_any_work(tmp_path):
+    (tmp_path / "afile").write_text("")
+    (tmp_path / "dangling.txt").symlink_to("afile/f.txt")       # its target's folder is a file
+    (tmp_path / "loop.txt").symlink_to("loop2")
+    (tmp_path / "loop2").symlink_to("loop.txt")
+    with pytest.raises(InvalidArgumentError, match="dangling.txt'"):
+        files.check_output(tmp_path / "dangling.txt")
+    with pytest.raises(InvalidArgumentError, match="symbolic links"):
+        files.check_output(tmp_path / "loop.txt")
+
+
+@pytest.mark.parametrize("image", [np.zeros((2, 2, 2, 3), np.uint8), np.zeros((4, 4, 2), np.uint8),
+                                   np.zeros(5, np.uint8), np.zeros((0, 3), np.uint8)])
+def test_a_png_of_uint8_values_checks_its_shape(tmp_path, image):
+    # (2, 2, 2, 3) was written as a 2 x 2 image, half the values lost; the others failed in matplotlib
+    with pytest.raises(InvalidArgumentError, match="'image' must"):
+        files.write_png(tmp_path / "p.png", image, tone=False)
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("header, match", [
+    ({"tiles": "x"}, "'tiles' is empty or the file's own"),      # dropped from the file
+    ({"version": 2}, "'version'"), ({"chunkCount": 1}, "'chunkCount'"), ({"": 1}, "'' is empty"),
+    ({"chromaticities": "x"}, "does not fit an OpenEXR header: .*'chromaticities'"),
+    ([("a", 1)], "'header' must be a dict"),
+])
+def test_exr_header_keys_the_file_cannot_hold_as_text_are_refused(tmp_path, header, match):
+    with pytest.raises(InvalidArgumentError, match=match):
+        files.write_exr(tmp_path / "e.exr", np.ones((2, 2)), header=header)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_json_safe_writes_booleans_and_refuses_keys_that_collide():
+    assert files.json_safe({"x": np.bool_(False)}) == {"x": False}      # was the text "False"
+    with pytest.raises(InvalidArgumentError, match="write two as one JSON key"):
+        files.json_safe({1: "a", "1": "b"})
