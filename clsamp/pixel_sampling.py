@@ -179,6 +179,11 @@ def _sampler_factory(sampler, sampler_params):
     if sampler_params is not None and not isinstance(sampler_params, dict):
         raise InvalidArgumentError(f"'sampler_params' must be a dict, got {sampler_params!r}")
     params = dict(sampler_params or {})
+    for key in params:
+        if not isinstance(key, str) or key in ("d", "seed"):
+            raise InvalidArgumentError(
+                f"'sampler_params' key {key!r}: the keys are the sampler's parameters by name, "
+                "other than 'd' (the scene's dimensions) and 'seed' (the render's)")
     cls = sampler_class(sampler)        # raises, naming the unknown sampler and the known ones
 
     def make(d, seed):      # without a progress bar of its own (bnot's): the render has one

@@ -37,7 +37,7 @@ from .pixel_sampling import (  # noqa: F401  (block_size, float32_samples: publi
 )
 from .render_numpy import camera_frame, render_reference, screen_window
 from .scene import Scene, as_scene  # noqa: F401  (Scene: README imports it from here)
-from .validation import check_int, check_positive_int, check_seed
+from .validation import check_choice, check_int, check_positive_int, check_seed
 
 TILE_BYTES = 128 * 2**20            # float32 sample bytes of one tile at most (host memory)
 REFERENCE_SAMPLER = "sobol:owen"    # what a reference render is made with...
@@ -84,7 +84,8 @@ def render_samples(scene, samples, resolution, pixel0=0, backend="opencl", width
 
     Parameters
     ----------
-    scene : Scene
+    scene : Scene, dict or path
+        As :func:`render` takes it.
     samples : ndarray, shape (pixels, scene.sample_dimensions, spp)
         In [0, 1), as from :func:`pixel_samples`.
     resolution : int or (int, int)
@@ -103,14 +104,26 @@ def render_samples(scene, samples, resolution, pixel0=0, backend="opencl", width
     Raises
     ------
     InvalidArgumentError
-        ``samples`` of another number of dimensions than the scene's.
+        ``samples`` not of shape (pixels, the scene's dimensions, spp), pixels past the
+        image, or another argument out of its range.
     """
+    scene = as_scene(scene)
     size = image_size(resolution)
     samples = np.asarray(samples)
+    if samples.ndim != 3 or samples.dtype.kind != "f":
+        raise InvalidArgumentError(f"'samples' must be floats of shape (pixels, "
+                                   f"{scene.sample_dimensions}, spp), got {samples.shape} of {samples.dtype}")
     npix, dims, spp = samples.shape
     if dims != scene.sample_dimensions:
         raise InvalidArgumentError(f"'samples' must have {scene.sample_dimensions} dimensions "
                                    f"(axis 1), got {dims}")
+    pixel0 = check_int(pixel0, "pixel0", minimum=0)
+    if pixel0 + npix > size[0] * size[1]:
+        raise InvalidArgumentError(f"'pixel0'={pixel0} and {npix} pixels of 'samples' pass the "
+                                   f"image's {size[0] * size[1]} pixels")
+    backend = check_choice(backend, "backend", ("opencl", "numpy"))
+    if width is not None:
+        width = check_choice(check_int(width, "width"), "width", (1, 4, 8))
     f32 = samples if samples.dtype == np.float32 else float32_samples(samples)
     if backend == "numpy":
         return render_reference(scene, f32.astype(np.float64), size, pixel0)

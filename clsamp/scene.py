@@ -482,5 +482,11 @@ def as_scene(scene):
     if isinstance(scene, dict):
         return Scene.from_dict(scene)
     if isinstance(scene, (str, os.PathLike)):
-        return Scene.from_file(scene)
+        try:
+            return Scene.from_file(scene)
+        except InvalidArgumentError as error:      # it names its own argument, 'path'
+            text = str(error)
+            if text.startswith("'path' "):
+                raise InvalidArgumentError("'scene' " + text[len("'path' "):]) from None
+            raise
     raise InvalidArgumentError(f"'scene' must be a Scene, a dict or a scene file, got {scene!r}")

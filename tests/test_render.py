@@ -363,10 +363,31 @@ def test_bad_input_is_a_clear_error():
     ({"pixels": [0, 1, 2]}, "'pixels' must be a range"),
     ({"pixels": range(32, 80)}, "within the image's 64 pixels"),   # made pixels past the image
     ({"sampler_params": [1]}, "'sampler_params' must be a dict"),
+    # a TypeError from make_quiet_sampler (got multiple values for 'd'), or keywords not strings
+    ({"sampler_params": {"d": 3}}, "'sampler_params' key 'd'"),
+    ({"sampler_params": {"seed": 3}}, "'sampler_params' key 'seed'"),
+    ({"sampler_params": {1: 2}}, "'sampler_params' key 1"),
+    ({"scene": "nope"}, "'scene' 'nope' is neither a scene file"),      # it named 'path'
 ])
 def test_pixel_samples_refuses_what_render_refuses(kwargs, match):
+    args = {"scene": "ao", "sampler": "gbn", "spp": 4, "resolution": 8, **kwargs}
     with pytest.raises(InvalidArgumentError, match=match):
-        rendering.pixel_samples("ao", "gbn", 4, 8, **kwargs)
+        rendering.pixel_samples(**args)
+    if "pixels" not in kwargs:                          # render draws every pixel
+        with pytest.raises(InvalidArgumentError, match=match):
+            rendering.render(**args, progress=False)
+
+
+def test_render_samples_takes_a_scene_name_and_checks_its_arguments():
+    samples = rendering.pixel_samples("ao", "random", 4, 8, seed=1)
+    image = rendering.render("ao", "random", 4, 8, seed=1, progress=False)
+    assert np.array_equal(rendering.render_samples("ao", samples, 8), image.ravel())   # was an AttributeError
+    for kwargs, match in (({"samples": samples[0]}, "'samples' must be floats of shape"),
+                          ({"pixel0": 1}, "'pixel0'=1 and 64 pixels of 'samples' pass the image's 64"),
+                          ({"backend": "x"}, "'backend' must be one of"),
+                          ({"width": 3}, "'width' must be one of 1, 4, 8")):
+        with pytest.raises(InvalidArgumentError, match=match):
+            rendering.render_samples(**{"scene": "ao", "samples": samples, "resolution": 8, **kwargs})
 
 
 def test_the_renderer_makes_a_named_sampler_without_its_own_progress_bar():
