@@ -10,6 +10,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from .cli_source import add_source, parse_params, points_from_source
 from .errors import ClsampError, InvalidArgumentError
 
 TEXT_POINTS = (".txt", ".dat", ".pts")      # one point a line, as UTK and PSA read them
@@ -80,25 +81,6 @@ def _wrote(paths, what=""):
     print("wrote " + ", ".join(str(p) for p in paths) + (f": {what}" if what else ""), file=sys.stderr)
 
 
-def _parse_params(items, own=(("d", "-d"), ("seed", "--seed"), ("backend", "--backend"))):
-    """``--param key=value`` pairs, values parsed as int, float, bool or str; ``own``: the
-    keys the command sets itself, each with what sets it."""
-    params = {}
-    for item in items or ():
-        key, sep, value = item.partition("=")
-        if not sep or not key:
-            raise InvalidArgumentError(f"'--param' must look like key=value, got {item!r}")
-        if key in dict(own):
-            raise InvalidArgumentError(f"'--param {item}': {key} is set by {dict(own)[key]}, not by --param")
-        for convert in (int, float):
-            try:
-                params[key] = convert(value)
-                break
-            except ValueError:
-                continue
-        else:
-            params[key] = {"true": True, "false": False, "none": None}.get(value.lower(), value)
-    return params
 
 
 # -- devices -------------------------------------------------------------------
@@ -171,7 +153,7 @@ def _run_sample(args):
     elif args.tiled or args.projections:
         raise InvalidArgumentError("'--tiled' and '--projections' shape the '--plot' figure; give '--plot'")
     sampler = make_sampler(args.name, d=args.d, seed=args.seed, backend=args.backend,
-                           **_parse_params(args.param))
+                           **parse_params(args.param))
     points = sampler.sample(args.n, realizations=args.realizations, start=args.start)
     shape = "x".join(str(s) for s in points.shape)
     if args.output:
@@ -237,43 +219,6 @@ def _run_tour(args):
     return 0
 
 
-def _add_source(p, dimensions="dimension (sampler only; default 2)"):
-    """The arguments of a command that reads points from a sampler or a point file."""
-    p.add_argument("source", help="sampler name (e.g. jittered, sobol:owen) or a point file (.npy, or text)")
-    p.add_argument("-n", type=int, help="points per set (sampler only)")
-    p.add_argument("-d", type=int, default=None, help=dimensions)
-    p.add_argument("--realizations", type=int, default=None,
-                   help="independent sets (sampler only; default one)")
-    p.add_argument("--seed", type=int, default=None, help="sampler seed (sampler only; default 0)")
-    p.add_argument("--param", action="append", metavar="KEY=VALUE",
-                   help="sampler parameter, e.g. --param randomize=owen (repeatable)")
-
-
-def _points_from_source(args):
-    """(points, label) from a sampler name (with -n, -d, ...) or a point file (without)."""
-    from . import files
-    from .samplers import make_sampler, sampler_names
-    source = Path(args.source)
-    is_sampler = args.source.split(":")[0] in sampler_names(aliases=True)
-    looks_like_path = bool(source.suffix) or "/" in args.source or "\\" in args.source
-    if not is_sampler and (source.is_file() or looks_like_path):
-        if not source.is_file():
-            raise InvalidArgumentError(f"'source' {args.source!r}: no such file (and no sampler "
-                                       "of that name)")
-        given = [flag for flag, value in (("-n", args.n), ("-d", args.d),
-                                          ("--realizations", args.realizations),
-                                          ("--seed", args.seed), ("--param", args.param))
-                 if value is not None]
-        if given:
-            raise InvalidArgumentError(
-                f"{', '.join(repr(g) for g in given)} applies to a sampler source, not to the "
-                f"point file {args.source!r}")
-        return files.load_points(source), source.name
-    if args.n is None:
-        raise InvalidArgumentError("'-n' is required when the source is a sampler name")
-    sampler = make_sampler(args.source, d=2 if args.d is None else args.d,
-                           seed=0 if args.seed is None else args.seed, **_parse_params(args.param))
-    return sampler.sample(args.n, realizations=args.realizations), args.source
 
 
 # -- spectrum ------------------------------------------------------------------
@@ -281,7 +226,7 @@ def _add_spectrum(sub):
     p = sub.add_parser("spectrum", help="power spectrum of a sampler's points or of a point file",
                        description="Expected power spectrum (mean periodogram) of a sampler's "
                        "realizations or of points read from a file (text or .npy).")
-    _add_source(p, "dimension, 1 to 3 (sampler only; default 2; 3: -o .npy only)")
+    add_source(p, "dimension, 1 to 3 (sampler only; default 2; 3: -o .npy only)")
     p.add_argument("--resolution", type=int, default=256, help="R: frequencies [-R/2, R/2) (even)")
     p.add_argument("--method", default="auto", choices=("auto", "direct", "fast"))
     p.add_argument("--tol", type=float, default=None, help="error bound of the fast method (x N)")
@@ -303,11 +248,17 @@ def _run_spectrum(args):
     if args.plots:
         outputs.append(("--plots", _output(args.plots, FIGURES, "spectrum", "--plots")))
     _distinct(outputs)
-    points, label = _points_from_source(args)
-    d = points.shape[-1]
-    ok = {1: (".npy", ".exr"), 2: (".npy", ".exr", ".png")}.get(d, (".npy",))
-    if output.suffix.lower() not in ok or (args.plots and d > 2):
-        raise InvalidArgumentError(f"a {d}-D spectrum goes to -o {' or '.join(ok)} (--plots: 1-D, 2-D)")
+
+    def check(d):       # before the sampler's work
+        if d > 3:
+            raise InvalidArgumentError(f"a spectrum is made in 1-D to 3-D; the points have d={d}")
+        ok = {1: (".npy", ".exr"), 2: (".npy", ".exr", ".png")}.get(d, (".npy",))
+        if output.suffix.lower() not in ok or (args.plots and d > 2):
+            raise InvalidArgumentError(f"a {d}-D spectrum goes to -o {' or '.join(ok)} (--plots: 1-D, 2-D)")
+        if args.resolution < 2 or args.resolution % 2:
+            raise InvalidArgumentError(f"'--resolution' must be even and at least 2, got {args.resolution}")
+
+    points, label = points_from_source(args, check)
     P = spectrum.power_spectrum(points, resolution=args.resolution, method=args.method, tol=args.tol,
                                 backend=args.backend)
     n, r = points.shape[-2], (points.shape[0] if points.ndim == 3 else 1)
@@ -338,7 +289,7 @@ def _add_metrics(sub):
                        description="Point-set metrics per set (mean and spread over the sets) "
                        "as JSON (-o); with pcf also the expected PCF as a figure "
                        "(<stem>_pcf.png).")
-    _add_source(p)
+    add_source(p)
     p.add_argument("--metric", default="cd,l2-star,star,pcf",
                    help=f"comma-separated, of {', '.join(METRICS)} (default cd,l2-star,star,pcf)")
     p.add_argument("--bounds", action="store_true",
@@ -371,7 +322,7 @@ def _run_metrics(args):
     if "pcf" in wanted:
         outputs.append(("-o (pcf figure)", output.with_name(output.stem + "_pcf.png")))
     _distinct(outputs)
-    points, label = _points_from_source(args)
+    points, label = points_from_source(args)
     batch = points if points.ndim == 3 else points[None]
     r, n, d = batch.shape
     document = {"source": label, "n": n, "d": d, "realizations": r, "backend": args.backend, "metrics": {}}
@@ -659,7 +610,7 @@ def _run_render(args):
     _samplers([args.sampler])
     scene = Scene.from_file(args.scene)
     spp = scene.default_spp if args.spp is None else args.spp
-    params = _parse_params(args.param, (("d", "the scene's dimensions"), ("seed", "--seed")))
+    params = parse_params(args.param, (("d", "the scene's dimensions"), ("seed", "--seed")))
     t0 = time.perf_counter()
     image = rendering.render(scene, args.sampler, spp, args.resolution, seed=args.seed,
                              sampler_params=params or None, pad=not args.no_pad,

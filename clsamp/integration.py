@@ -32,7 +32,7 @@ from .fused import FusedRule, fused_randomization
 from .integrand_kernel import IntegrandKernel, combine_sums, offset
 from .integrands import Integrand, make_integrand
 from .samplers import Sampler, make_sampler
-from .validation import check_choice, check_int, check_real, check_seed
+from .validation import check_bool, check_choice, check_int, check_real, check_seed
 
 BLOCK = 2**20           # points one call of a Python integrand gets at most
 METHODS = ("replications", "digital", "lattice")
@@ -263,6 +263,7 @@ def integrate(f, d, sampler="sobol:owen", abs_tol=None, rel_tol=None, max_n=2**2
     >>> bool(abs(net.estimate - 2.168309102165) < 1e-4), net.method, net.n
     (True, 'digital', 131072)
     """
+    check_bool(progress, "progress")
     t0 = time.perf_counter()
     method = check_choice(method, "method", METHODS)
     periodization = check_periodization(periodization, method)

@@ -33,6 +33,7 @@ import numpy as np
 
 from . import files
 from .errors import InvalidArgumentError
+from .validation import check_bool
 
 TASK_WORK = 2**25       # points a task aims at: long beside the scheduler's cost per task
                         # (docs/scale-out.md sizes it)
@@ -275,6 +276,7 @@ def run(fn, tasks, client=None, checkpoint=None, progress=True, desc="sweep"):
         Per task, the seconds it computed for (for one taken from the checkpoint, the
         seconds stored with it; 0 where the checkpoint kept none).
     """
+    check_bool(progress, "progress")
     from tqdm import tqdm
     client = check_client(client)
     store = _Checkpoint(checkpoint, fn, tasks) if checkpoint is not None else None

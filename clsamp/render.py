@@ -37,7 +37,7 @@ from .pixel_sampling import (  # noqa: F401  (block_size, float32_samples: publi
 )
 from .render_numpy import camera_frame, render_reference, screen_window
 from .scene import Scene, as_scene  # noqa: F401  (Scene: README imports it from here)
-from .validation import check_choice, check_int, check_positive_int, check_seed
+from .validation import check_bool, check_choice, check_int, check_positive_int, check_seed
 
 TILE_BYTES = 128 * 2**20            # float32 sample bytes of one tile at most (host memory)
 REFERENCE_SAMPLER = "sobol:owen"    # what a reference render is made with...
@@ -217,6 +217,7 @@ def render(scene, sampler, spp, resolution, seed=0, sampler_params=None, pad=Tru
     >>> img.shape, img.dtype
     ((8, 8), dtype('float32'))
     """
+    check_bool(progress, "progress")
     scene = as_scene(scene)
     spp = check_int(spp, "spp", minimum=1, maximum=2**31)
     size = image_size(resolution)
@@ -440,6 +441,7 @@ def reference(scene, resolution, spp=None, progress=True, seed=REFERENCE_SEED, c
     >>> ref.shape, bool((stderr >= 0).all())
     ((8, 8), True)
     """
+    check_bool(progress, "progress")
     scene = as_scene(scene)
     width, height = image_size(resolution)
     if spp is None:

@@ -42,7 +42,7 @@ from .errors import InvalidArgumentError
 from .float_float import check_precision
 from .nufft import MIN_TOL, grid_size, kernel_transform, nufft_parameters, spread_reference
 from .spectral_stats import anisotropy, check_spectrum, radial_mean  # noqa: F401  (public here)
-from .validation import check_choice, check_int, check_points, check_real, point_sets
+from .validation import check_bool, check_choice, check_int, check_points, check_real, point_sets
 
 __all__ = [
     "power_spectrum", "expected_spectrum", "radial_mean", "anisotropy", "normalized_frequency", "frequencies",
@@ -205,6 +205,7 @@ def power_spectrum(points, resolution=256, method="auto", tol=None, backend="ope
     >>> P.shape, float(P[16, 16])
     ((32, 32), 256.0)
     """
+    check_bool(progress, "progress")
     check_choice(backend, "backend", BACKENDS)
     asked, precision = precision, check_precision(precision, backend)
     sets = point_sets(points, "points", d=(1, 2, 3))

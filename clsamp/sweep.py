@@ -17,7 +17,7 @@ from .integrands import Integrand, make_integrand
 from .results import ConvergenceResult, FamilyResult
 from .samplers import Sampler, make_quiet_sampler
 from .samplers.base import CASES
-from .validation import MAX_UINT32, check_choice, check_int, check_seed
+from .validation import MAX_UINT32, check_bool, check_choice, check_int, check_seed
 
 DEFAULT_MEMBERS = 256
 
@@ -106,6 +106,7 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
     >>> bool(res.mse[-1] < res.mse[0])
     True
     """
+    check_bool(progress, "progress")
     from tqdm import tqdm
     backend = check_choice(backend, "backend", ("opencl", "numpy"))
     seed = check_seed(seed)

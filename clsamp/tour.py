@@ -31,6 +31,7 @@ from .report import (
 from .tour_blue import quiet_sampler, section_blue_noise
 from .tour_cost import section_cost
 from .tour_qmc import section_qmc
+from .validation import check_bool
 
 # Samplers shown in section 1, with the parameters that make each one its textbook self.
 TOUR_SAMPLERS = (
@@ -646,6 +647,7 @@ def run_tour(out, quick=False, progress=True, client=None):
     Path
         The report's ``index.html``.
     """
+    check_bool(progress, "progress")
     from tqdm import tqdm
 
     report = Report(out)

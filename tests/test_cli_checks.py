@@ -296,3 +296,31 @@ def test_a_spectrum_that_cannot_go_to_its_outputs_leaves_none(tmp_path, capsys):
     code, text = run(capsys, "spectrum", "random", "-n", "64", "--resolution", "2", "--backend", "numpy",
                      "-o", str(tmp_path / "r.png"), "--plots", str(tmp_path / "p.png"))
     assert code == 2 and "annulus" in text and listing(tmp_path) == [], text
+
+
+@pytest.mark.parametrize("argv, expected", [
+    # each was refused only after the sampler's work (163 s for a 200-iteration lloyd set)
+    (["spectrum", "random", "-n", "16", "-d", "3", "-o", "{}/s.png"], "a 3-D spectrum goes to -o .npy"),
+    (["spectrum", "random", "-n", "16", "-d", "3", "-o", "{}/s.npy", "--plots", "{}/p.png"],
+     "(--plots: 1-D, 2-D)"),
+    (["spectrum", "random", "-n", "16", "-d", "4", "-o", "{}/s.npy"], "a spectrum is made in 1-D to 3-D"),
+    (["spectrum", "random", "-n", "16", "--resolution", "7", "-o", "{}/s.npy"],
+     "'--resolution' must be even and at least 2, got 7"),
+    # the last of two values won without a word
+    (["sample", "jittered", "-n", "4", "--param", "strata=2x2", "--param", "strata=4x1"],
+     "'--param strata=4x1': strata is given twice"),
+])
+def test_a_spectrum_request_and_its_params_are_checked_before_the_sampler_runs(tmp_path, capsys, no_work,
+                                                                                argv, expected):
+    code, text = run(capsys, *[a.format(tmp_path) for a in argv])
+    assert code == 2 and expected in text and "Traceback" not in text, text
+    assert listing(tmp_path) == []
+
+
+def test_the_analysed_samplers_backend_is_a_param(tmp_path, capsys):
+    # spectrum and metrics refused it as "set by --backend", which sets where they compute
+    code, text = run(capsys, "spectrum", "random", "-n", "16", "--resolution", "8", "--param",
+                     "backend=numpy", "-o", str(tmp_path / "s.npy"))
+    assert code == 0, text
+    made = clsamp.make_sampler("random", backend="numpy").sample(16)
+    assert np.allclose(np.load(tmp_path / "s.npy"), clsamp.power_spectrum(made, resolution=8, progress=False))

@@ -249,6 +249,12 @@ def test_bad_input_names_the_problem():
     lloyd = clsamp.make_sampler("lloyd", d=3)
     largest = lloyd.valid_n(2**25)
     assert lloyd.valid_n(largest) == largest and lloyd.valid_n(largest + 1) == largest
+    # one density point a site counts 2^32 - 1 sites, past max_n: valid_n gave what sample() refused
+    for name in ("ccvt", "bnot"):
+        one = clsamp.make_sampler(name, points_per_site=1)
+        assert one.valid_n(2**32) == one.max_n
+        with pytest.raises(InvalidArgumentError, match="'n' must be an integer >= 1"):
+            one.valid_n(-5)
     with pytest.raises(InvalidArgumentError, match="'realizations'"):
         run("random", "gaussian", [16], 1)
     with pytest.raises(InvalidArgumentError, match="Known integrands: gaussian, disk, heaviside"):

@@ -25,7 +25,7 @@ LAYERS = [
                      "results", "theory", "integration", "cubature", "cubature_device", "fused"}),
     ("render", {"scene", "pixel_sampling", "render_numpy", "render"}),
     ("report", {"plot_axes", "plot_points", "plots", "report", "tour_blue", "tour_cost", "tour_qmc",
-                "tour", "cli", "__main__", "__init__"}),
+                "tour", "cli", "cli_source", "__main__", "__init__"}),
 ]
 
 

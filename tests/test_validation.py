@@ -3,6 +3,9 @@
 import numpy as np
 import pytest
 
+import clsamp
+import clsamp.parallel
+import clsamp.render
 from clsamp.errors import ClsampError, InvalidArgumentError
 from clsamp.validation import check_int, check_points, check_real
 
@@ -59,3 +62,18 @@ def test_scalar_checks():
         check_real(float("nan"), "x")
     with pytest.raises(InvalidArgumentError, match="'x' must be > 0"):
         check_real(0.0, "x", minimum=0.0, open_minimum=True)
+
+
+@pytest.mark.parametrize("call", [
+    lambda: clsamp.make_sampler("ccvt", progress="no"),            # bool('no'): the bar shown
+    lambda: clsamp.make_sampler("multijittered", progress="no"),
+    lambda: clsamp.render.render("ao", "random", 4, 8, progress="no"),
+    lambda: clsamp.render.reference("ao", 8, spp=4, progress="no", cache=False),
+    lambda: clsamp.power_spectrum(np.full((4, 2), 0.5), resolution=8, progress="no"),
+    lambda: clsamp.integrate(lambda x: x[:, 0], 2, progress="no"),
+    lambda: clsamp.convergence("random", "gaussian", [16], 10, progress="no"),
+    lambda: clsamp.parallel.run(len, [[1]], progress="no"),
+])
+def test_progress_is_true_or_false(call):
+    with pytest.raises(InvalidArgumentError, match="'progress' must be True or False, got 'no'"):
+        call()

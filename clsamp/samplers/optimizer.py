@@ -10,7 +10,7 @@ import numpy as np
 
 from .. import philox
 from ..geometry import integer_torus as it
-from ..validation import check_points
+from ..validation import check_points, check_positive_int
 from .base import Sampler
 
 
@@ -101,8 +101,9 @@ class OptimizerSampler(Sampler):
         Returns
         -------
         int
+            At most ``max_n``.
         """
-        return min(n, self._most_sites())
+        return min(check_positive_int(n, "n"), self._most_sites(), self.max_n)
 
     def _most_sites(self):
         return self.max_n

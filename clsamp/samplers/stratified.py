@@ -24,7 +24,7 @@ import numpy as np
 
 from .. import permutation, philox, runtime
 from ..errors import InvalidArgumentError
-from ..validation import check_int, check_real
+from ..validation import check_bool, check_int, check_real
 from .base import PILLEBOUE, Rate, Sampler, register
 
 # -- small pure functions, shared by the references and the parameter checks ----------
@@ -435,7 +435,7 @@ class UncorrelatedJitterSampler(_Stratified):
 
     def __init__(self, d=2, seed=0, groups=None, backend="opencl", progress=True):
         super().__init__(d=d, seed=seed, backend=backend)
-        self.progress = bool(progress)
+        self.progress = check_bool(progress, "progress")
         groups = _default_groups(self.d) if groups is None else _int_tuple(groups, "groups")
         if not isinstance(groups, (tuple, list)) or not groups:
             raise InvalidArgumentError(
@@ -541,7 +541,7 @@ class LatinHypercubeSampler(_Stratified):
 
     def __init__(self, d=2, seed=0, backend="opencl", progress=True):
         super().__init__(d=d, seed=seed, backend=backend)
-        self.progress = bool(progress)
+        self.progress = check_bool(progress, "progress")
 
     def _layout(self, n):
         return (n,) * self.d, tuple(range(self.d)), self.d
@@ -594,7 +594,7 @@ class MultiJitteredSampler(Sampler):
 
     def __init__(self, d=2, seed=0, strata=None, max_aspect=None, backend="opencl", progress=True):
         super().__init__(d=d, seed=seed, backend=backend)
-        self.progress = bool(progress)
+        self.progress = check_bool(progress, "progress")
         self.strata = None if strata is None else _check_strata(strata, 2)
         self.max_aspect = (None if max_aspect is None
                            else check_real(max_aspect, "max_aspect", minimum=1.0))

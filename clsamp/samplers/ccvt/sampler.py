@@ -8,7 +8,7 @@ import numpy as np
 from ... import runtime
 from ...errors import InvalidArgumentError
 from ...geometry import integer_torus as it
-from ...validation import MAX_ITERATIONS, check_choice, check_int, check_positive_int
+from ...validation import MAX_ITERATIONS, check_bool, check_choice, check_int, check_positive_int
 from ..base import PILLEBOUE, Rate, SampleInfo, info_field, register
 from ..optimizer import OptimizerSampler, check_sites
 from .density import DENSITIES, density_points, density_points_device
@@ -267,7 +267,7 @@ class CCVTSampler(OptimizerSampler):
     def __init__(self, d=2, seed=0, points_per_site=1024, iterations=1000, backend="opencl",
                  density="jittered", relax=0, progress=True):
         super().__init__(d=d, seed=seed, backend=backend)
-        self.progress = bool(progress)
+        self.progress = check_bool(progress, "progress")
         self.points_per_site = check_positive_int(points_per_site, "points_per_site",
                                                   maximum=MAX_POINTS_PER_SITE)
         self.iterations = check_positive_int(iterations, "iterations", maximum=MAX_ITERATIONS)
