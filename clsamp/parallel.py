@@ -22,6 +22,7 @@ here imports it unless a client or a scheduler address is given.
 import hashlib
 import io as _io
 import json
+import math
 import os
 import pickle
 import threading
@@ -170,8 +171,8 @@ def _fingerprint(fn, tasks):
 
 class _Checkpoint:
     """A folder of finished blocks: block-<i>.npy, block-<i>.seconds (what it took) and
-    block-<i>.sha256 (written after both, so a block without its hash is unfinished and
-    computed again)."""
+    block-<i>.sha256 (of both, written after them, so a block without its hash is
+    unfinished and computed again)."""
 
     def __init__(self, folder, fn, tasks):
         self.folder = Path(folder)
@@ -213,16 +214,23 @@ class _Checkpoint:
         try:
             raw = data.read_bytes()
             want = digest.read_text().strip()
+            text = took.read_text() if took.exists() else None
         except OSError as error:
             raise InvalidArgumentError(f"'checkpoint' block {data.name} cannot be read: {error}") from None
-        if hashlib.sha256(raw).hexdigest() != want:
+        # the hash covers the block and its seconds (the block alone where written before)
+        if want not in (hashlib.sha256(raw).hexdigest(),
+                        text is not None and hashlib.sha256(raw + text.encode()).hexdigest()):
             raise InvalidArgumentError(
                 f"'checkpoint' {str(self.folder)!r}: {data.name} does not match its SHA-256 (corrupt); "
                 "remove the folder to start afresh")
         try:
-            spent = float(took.read_text()) if took.exists() else 0.0
-        except (OSError, ValueError):
-            spent = 0.0             # only a timing: the block itself is checked above
+            spent = 0.0 if text is None else float(text)
+        except ValueError:
+            spent = math.nan
+        if not 0.0 <= spent < math.inf:
+            raise InvalidArgumentError(
+                f"'checkpoint' {str(self.folder)!r}: {took.name} is not a duration (corrupt); "
+                "remove the folder to start afresh")
         return np.load(_io.BytesIO(raw), allow_pickle=False), spent
 
     def store(self, index, value, spent):
@@ -230,9 +238,10 @@ class _Checkpoint:
         buffer = _io.BytesIO()
         np.save(buffer, np.asarray(value), allow_pickle=False)
         raw = buffer.getvalue()
+        text = repr(float(spent))
         files.write_bytes(data, raw)
-        files.write_text(took, repr(float(spent)))
-        files.write_text(digest, hashlib.sha256(raw).hexdigest())
+        files.write_text(took, text)
+        files.write_text(digest, hashlib.sha256(raw + text.encode()).hexdigest())
 
 
 # -- running -------------------------------------------------------------------------

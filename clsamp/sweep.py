@@ -96,7 +96,8 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
     -----
     ``seconds[k]`` is the wall time of the k-th n: generating every realization,
     shifting, evaluating, summing, and reading back the r errors. The kernels are
-    built before the clock starts (a one-realization warm-up at the smallest n).
+    built before the clock starts (a one-realization warm-up at the smallest n), except
+    on Dask workers (``client``), where a worker's first block includes its builds.
 
     Examples
     --------
@@ -123,6 +124,8 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
     what = f"{r} realizations x {estimator.width} members" if estimator.width > 1 else f"{r} realizations"
     runtime.check_host_bytes(8 * r * estimator.width * len(values), f"the errors of {what} x {len(values)} n")
     desc = f"convergence {label} / {estimator.name}"
+    if client is None:
+        estimator.warm_up(values[0])
     if client is not None or checkpoint is not None:
         tasks, owners = sweep_tasks(estimator, values, r)
         blocks, spent = parallel.run(errors_block, tasks, client=client, checkpoint=checkpoint,
@@ -130,7 +133,6 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
         errors = [np.concatenate([blocks[i] for i in mine]) for mine in owners]
         seconds = [float(np.sum(spent[mine])) for mine in owners]
     else:
-        estimator.warm_up(values[0])
         errors, seconds = [], []
         bar = tqdm(values, desc=desc, unit="n", disable=not progress, delay=2)
         for n in bar:

@@ -1,6 +1,7 @@
 """Sweeps in tasks: on a Dask LocalCluster the same bits as in-process; a dying worker
 loses nothing; checkpoints resume and refuse what is not theirs; clear errors."""
 
+import hashlib
 import os
 import signal
 import threading
@@ -128,9 +129,31 @@ def test_checkpoint_resumes_a_stopped_sweep(tmp_path, monkeypatch):
     # the seconds come back with the blocks (they read 0 from a checkpoint, which made
     # time_to_mse free); a checkpoint without them (written before they were kept) gives 0
     assert np.array_equal(again.seconds, resumed.seconds) and (again.seconds > 0).all()
+    # the hash covers each block's seconds: one changed is refused ('nan', 1e308 came back)
+    took = sorted(folder.glob("block-*.seconds"))[0]
+    kept = took.read_text()
+    for text in ("nan", "1e308", "-5.0"):
+        took.write_text(text)
+        with pytest.raises(InvalidArgumentError, match="corrupt"):
+            clsamp.convergence("random", "disk", [16, 32], checkpoint=folder, **kw)
+    took.write_text(kept)
+    # a checkpoint written before the seconds were kept (its hash of the block alone) gives 0
     for took in folder.glob("block-*.seconds"):
+        block = took.with_suffix(".npy").read_bytes()
+        took.with_suffix(".sha256").write_text(hashlib.sha256(block).hexdigest())
         took.unlink()
     assert (clsamp.convergence("random", "disk", [16, 32], checkpoint=folder, **kw).seconds == 0).all()
+
+
+def test_a_checkpointed_sweep_builds_its_kernels_before_the_clock(tmp_path, monkeypatch):
+    # without a warm-up the first n's seconds held the builds, stored and replayed on resume
+    from clsamp import estimates
+    warmed = []
+    original = estimates._Estimator.warm_up
+    monkeypatch.setattr(estimates._Estimator, "warm_up",
+                        lambda self, n: warmed.append(n) or original(self, n))
+    clsamp.convergence("random", "disk", [16, 32], realizations=8, checkpoint=tmp_path / "ck", progress=False)
+    assert warmed == [16]
 
 
 def test_a_foreign_or_corrupt_checkpoint_is_refused(tmp_path, monkeypatch):
