@@ -207,9 +207,8 @@ def _close(client):
 
 
 def _run_tour(args):
-    from .files import check_output
-    from .tour import run_tour
-    check_output(Path(args.out) / "index.html", "'--out'")
+    from .tour import check_out, run_tour
+    check_out(args.out, "'--out'")
     client = _client(args)
     try:
         index = run_tour(args.out, quick=args.quick, progress=not args.no_progress, client=client)
@@ -318,11 +317,22 @@ def _run_metrics(args):
         raise InvalidArgumentError(f"'--metric' must name some of {', '.join(METRICS)}; got "
                                    f"{', '.join(map(repr, unknown)) or 'none'}"
                                    + _nearest(unknown[:1], METRICS))
+    if len(set(wanted)) < len(wanted):
+        raise InvalidArgumentError(f"'--metric' names one twice: {args.metric}")
+    if args.bounds and "star" not in wanted:
+        raise InvalidArgumentError("'--bounds' is the star discrepancy's; '--metric' has no star")
+    if args.n is not None and args.n < 2 and {"pcf", "nn"} & set(wanted):
+        raise InvalidArgumentError(f"'-n' must be at least 2 for pcf and nn (pairs), got {args.n}")
+
+    def check(d):       # before the sampler's work
+        if "star" in wanted and not args.bounds and d > 3:
+            raise InvalidArgumentError(f"'--metric' star is exact for d = 1 to 3, got d = {d}; "
+                                       "'--bounds' gives certified bounds in any d")
     outputs = [("-o", output)]
     if "pcf" in wanted:
         outputs.append(("-o (pcf figure)", output.with_name(output.stem + "_pcf.png")))
     _distinct(outputs)
-    points, label = points_from_source(args)
+    points, label = points_from_source(args, check)
     batch = points if points.ndim == 3 else points[None]
     r, n, d = batch.shape
     document = {"source": label, "n": n, "d": d, "realizations": r, "backend": args.backend, "metrics": {}}
@@ -376,19 +386,21 @@ def _add_convergence(sub):
         "convergence", help="MSE against N of samplers on an integrand, rates against theory",
         description="MSE, bias and variance of integral estimates against the number of samples, "
         "for each sampler and integrand; writes the MSE-against-N plot (-o), the accuracy-"
-        "against-time plot beside it (<stem>_time.<suffix>) and every number as JSON "
-        "(<stem>.json).")
+        "against-time plot beside it (<stem>_time.<suffix>; not for families) and every number "
+        "as JSON (<stem>.json).")
     p.add_argument("--samplers", default="random,jittered,sobol:owen",
                    help="comma-separated sampler names (default random,jittered,sobol:owen)")
-    p.add_argument("--integrand", default="gaussian",
+    p.add_argument("--integrand", default=None,
                    help="comma-separated integrands: gaussian, disk, heaviside, pmj_disk, "
-                   "pmj_gaussian, pmj_bilinear, pmj_step, pmj_triangle (default gaussian)")
+                   "pmj_gaussian, pmj_bilinear, pmj_step, pmj_triangle, genz_oscillatory, "
+                   "genz_product_peak, genz_corner_peak, genz_gaussian, genz_continuous, "
+                   "genz_discontinuous, keister (default gaussian)")
     p.add_argument("--family", default=None,
                    help="comma-separated integrand families instead of --integrand: "
                    "random_gaussians, random_heavisides, random_disks, random_boxes, "
                    "random_clipped_gaussians (or gaussians, heavisides, disks, boxes); the plot "
                    "shows the spread of the MSE across members")
-    p.add_argument("--members", type=int, default=256, help="members per family (default 256)")
+    p.add_argument("--members", type=int, default=None, help="members per family (default 256)")
     p.add_argument("--ns", default="16..16384",
                    help="sample counts: 'a..b' is a, 4a, 16a, ... <= b (powers of 4 from a, squares "
                    "for jittered); 'a..b:2' uses ratio 2; or a list '16,64,256' (default 16..16384)")
@@ -408,20 +420,35 @@ def _add_convergence(sub):
 
 def _run_convergence(args):
     from .files import check_output
-    from .sweep import parse_ns
+    from .sweep import parse_ns, prepare
     output = _output(args.output, FIGURES, "convergence")
     samplers = _samplers([s.strip() for s in args.samplers.split(",") if s.strip()])
     option = "--integrand" if args.family is None else "--family"
-    names = [s.strip() for s in (args.family or args.integrand).split(",") if s.strip()]
+    if args.family is not None and args.integrand is not None:
+        raise InvalidArgumentError("give '--family' or '--integrand', not both")
+    names = [s.strip() for s in (args.family if args.family is not None else args.integrand or "gaussian")
+             .split(",") if s.strip()]
     if not samplers or not names:
         raise InvalidArgumentError(f"'--samplers' and '{option}' must each name at least one")
+    for listed, given in (("--samplers", samplers), (option, names)):
+        if len(set(given)) < len(given):
+            raise InvalidArgumentError(f"'{listed}' names one twice: {', '.join(given)}")
     family = _integrands(names, option) == "family"          # families work in --integrand too
+    if args.members is not None and not family:
+        raise InvalidArgumentError("'--members' is the families' ('--family'); these are integrands")
     paths = [("-o", output), ("-o (JSON)", output.with_suffix(".json"))]
     paths += [] if family else [("-o (time plot)", output.with_name(f"{output.stem}_time{output.suffix}"))]
     _distinct(paths)
     if args.checkpoint is not None:
+        if not args.checkpoint.strip():
+            raise InvalidArgumentError("'--checkpoint' must name a folder, got ''")
         check_output(Path(args.checkpoint) / "checkpoint", "'--checkpoint'")
-    parse_ns(args.ns)
+    ns = parse_ns(args.ns)
+    for integrand in names:       # every sweep's samplers, n and d, before the first runs
+        for name in samplers:
+            prepare(name, integrand, ns, members=(args.members or 256) if family else None,
+                    realizations=(64 if family else 1000) if args.realizations is None
+                    else args.realizations, seed=args.seed, backend=args.backend)
     client = _client(args)
     try:
         if family:
@@ -462,7 +489,7 @@ def _convergence_runs(args, samplers, integrands, paths, client):
     plots.convergence(results, output)
     plots.accuracy_time(results, time_path)
     fronts = {f: pareto_front([r for r in results if r.integrand == f]) for f in integrands}
-    document = {"ns": ns, "realizations": realizations, "seed": args.seed,
+    document = {"ns": sorted(ns), "realizations": realizations, "seed": args.seed,
                 "homogenize": not args.no_homogenize, "backend": args.backend,
                 "results": records, "pareto_front": fronts}
     files.write_json(json_path, document)
@@ -480,7 +507,7 @@ def _run_family_convergence(args, samplers, names, paths, client):
     results, records = [], []
     for family in names:
         for name in samplers:
-            res = convergence(name, family, ns, realizations=realizations, members=args.members,
+            res = convergence(name, family, ns, realizations=realizations, members=args.members or 256,
                               homogenize=not args.no_homogenize, seed=args.seed,
                               progress=not args.no_progress, backend=args.backend, client=client,
                               checkpoint=_checkpoint(args, name, family))
@@ -493,7 +520,8 @@ def _run_family_convergence(args, samplers, names, paths, client):
                   f"  theory {expected:<8} {verdict['verdict']}  mean MSE(N={res.ns[-1]}) "
                   f"{res.mean[-1]:.3g}, worst {res.max[-1]:.3g}  {res.seconds.sum():.2f} s")
     plots.family_convergence(results, output)
-    document = {"ns": ns, "realizations": realizations, "members": args.members, "seed": args.seed,
+    document = {"ns": sorted(ns), "realizations": realizations, "members": args.members or 256,
+                "seed": args.seed,
                 "homogenize": not args.no_homogenize, "backend": args.backend, "results": records}
     files.write_json(json_path, document)
     _wrote([output, json_path])
@@ -503,7 +531,8 @@ def _run_family_convergence(args, samplers, names, paths, client):
 def _add_integrate(sub):
     p = sub.add_parser(
         "integrate", help="an integral to a tolerance, with its confidence interval",
-        description="Replicated randomized QMC: doubles the points per replication until the "
+        description="Replicated randomized QMC: doubles the points per replication (to the "
+        "sampler's nearest valid count) until the "
         "Student-t interval over the replications is as narrow as asked.")
     p.add_argument("function", help="a clsamp integrand name (gaussian, disk, heaviside, pmj_...) "
                    "or module:function, a vectorised Python function of an (m, d) array")
@@ -528,13 +557,20 @@ def _load_function(text):
     sys.path.insert(0, os.getcwd())
     try:
         found = getattr(importlib.import_module(module), name)
-    except (ImportError, AttributeError) as error:
+    except (ImportError, AttributeError, ValueError) as error:     # ValueError: ':f', no module
         raise InvalidArgumentError(f"'function' {text!r} cannot be loaded: {error}") from None
     finally:
         sys.path.pop(0)
     if not callable(found):
         raise InvalidArgumentError(f"'function' {text!r} is not callable")
-    return found
+
+    def function(x):        # its own failure in one line, as a bad name's
+        try:
+            return found(x)
+        except Exception as error:
+            raise InvalidArgumentError(
+                f"'function' {text!r} raised {type(error).__name__}: {error}") from None
+    return function
 
 
 def _run_integrate(args):
@@ -604,11 +640,18 @@ def _run_render(args):
     import time
 
     from . import render as rendering
-    from .scene import Scene
+    from .scene import as_scene
     output = _output(args.output, (".exr", ".png"), "render")
     _distinct([("-o", output.with_suffix(".exr")), ("-o (preview)", output.with_suffix(".png"))])
     _samplers([args.sampler])
-    scene = Scene.from_file(args.scene)
+    if args.reference_spp is not None:          # checked here, not after the render
+        if not args.reference:
+            raise InvalidArgumentError("'--reference-spp' is the reference's; give '--reference'")
+        try:
+            rendering.reference_spp(args.reference_spp)
+        except InvalidArgumentError as error:
+            raise InvalidArgumentError(f"'--reference-spp': {error}") from None
+    scene = as_scene(args.scene)
     spp = scene.default_spp if args.spp is None else args.spp
     params = parse_params(args.param, (("d", "the scene's dimensions"), ("seed", "--seed")))
     t0 = time.perf_counter()
@@ -687,8 +730,9 @@ def main(argv=None):
     Returns
     -------
     int
-        The exit status: 0 on success, 2 for a usage or clsamp error (printed, not
-        raised), 130 when interrupted (Ctrl-C) and 143 when terminated (SIGTERM). Every file
+        The exit status: 0 on success, 1 when ``integrate`` did not converge, 2 for a usage
+        or clsamp error (printed, not raised), 130 when interrupted (Ctrl-C) and 143 when
+        terminated (SIGTERM). Every file
         written before an interruption is whole: outputs are written to a temporary name
         and renamed.
     """

@@ -127,7 +127,7 @@ def connect(address, timeout=CONNECT_TIMEOUT):
         text = "tcp://" + text
     try:
         return distributed.Client(text, timeout=timeout)
-    except (OSError, TimeoutError) as error:
+    except (OSError, TimeoutError, ValueError) as error:    # ValueError: no port, no host
         raise InvalidArgumentError(
             f"cannot reach a Dask scheduler at 'scheduler'={address!r} within {timeout:g} s "
             f"({type(error).__name__}: {error})") from None

@@ -21,7 +21,7 @@ from .validation import MAX_UINT32, check_bool, check_choice, check_int, check_s
 
 DEFAULT_MEMBERS = 256
 
-__all__ = ["convergence", "parse_ns", "sampler_rates"]
+__all__ = ["convergence", "prepare", "parse_ns", "sampler_rates"]
 
 
 def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed=0, progress=True,
@@ -109,18 +109,8 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
     """
     check_bool(progress, "progress")
     from tqdm import tqdm
-    backend = check_choice(backend, "backend", ("opencl", "numpy"))
-    seed = check_seed(seed)
-    r = check_int(realizations, "realizations", minimum=2, maximum=MAX_UINT32)
-    if not isinstance(homogenize, (bool, np.bool_)):
-        raise InvalidArgumentError(f"'homogenize' must be True or False, got {homogenize!r}")
-    precision = check_precision(precision, backend)
-    estimator, label = _estimator(sampler, integrand, seed, backend, members, homogenize)
-    estimator.precision = precision
-    if precision == "float-float" and backend == "opencl":
-        check_target(estimator.target)
-    s = estimator.sampler
-    values = _check_ns(ns, s, label)
+    estimator, label, values, r = prepare(sampler, integrand, ns, realizations, homogenize, seed,
+                                          backend, members, precision)
     what = f"{r} realizations x {estimator.width} members" if estimator.width > 1 else f"{r} realizations"
     runtime.check_host_bytes(8 * r * estimator.width * len(values), f"the errors of {what} x {len(values)} n")
     desc = f"convergence {label} / {estimator.name}"
@@ -141,6 +131,39 @@ def convergence(sampler, integrand, ns, realizations=1000, homogenize=True, seed
             seconds.append(time.perf_counter() - t0)
         bar.close()
     return _result(estimator, label, values, errors, seconds, r)
+
+
+def prepare(sampler, integrand, ns, realizations=1000, homogenize=True, seed=0, backend="opencl",
+            members=None, precision=None):
+    """Check a :func:`convergence` request, without its work (a command line checks every
+    sweep it will run before the first).
+
+    Parameters
+    ----------
+    sampler, integrand, ns, realizations, homogenize, seed, backend, members, precision
+        As :func:`convergence` takes them.
+
+    Returns
+    -------
+    (estimator, str, list of int, int)
+        The estimator, the sampler's label, the checked ns and realizations.
+
+    Raises
+    ------
+    InvalidArgumentError
+        What :func:`convergence` refuses before its work.
+    """
+    backend = check_choice(backend, "backend", ("opencl", "numpy"))
+    seed = check_seed(seed)
+    r = check_int(realizations, "realizations", minimum=2, maximum=MAX_UINT32)
+    if not isinstance(homogenize, (bool, np.bool_)):
+        raise InvalidArgumentError(f"'homogenize' must be True or False, got {homogenize!r}")
+    precision = check_precision(precision, backend)
+    estimator, label = _estimator(sampler, integrand, seed, backend, members, homogenize)
+    estimator.precision = precision
+    if precision == "float-float" and backend == "opencl":
+        check_target(estimator.target)
+    return estimator, label, _check_ns(ns, estimator.sampler, label), r
 
 
 def _sampler(sampler, d, seed, backend):

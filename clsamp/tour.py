@@ -12,10 +12,12 @@ import html
 import platform
 import time
 import traceback
+from pathlib import Path
 
 import numpy as np
 
 from . import files, plots, runtime
+from .errors import InvalidArgumentError
 from .report import (
     Report,
     Section,
@@ -628,6 +630,28 @@ SECTIONS = (
 )
 
 
+def check_out(out, name="'out'"):
+    """Refuse, before any work, a tour folder whose outputs cannot be written: an empty name,
+    or ``index.html``, ``tour.json``, ``img/`` or ``data/`` blocked
+    (:func:`clsamp.files.check_output`).
+
+    Parameters
+    ----------
+    out : str or Path
+    name : str
+        The argument that named it, for the message.
+
+    Raises
+    ------
+    InvalidArgumentError
+        What blocks it.
+    """
+    if not str(out).strip():
+        raise InvalidArgumentError(f"{name} must name a folder, got {str(out)!r}")
+    for inside in ("index.html", "tour.json", "img/x.png", "data/x.npy"):
+        files.check_output(Path(out) / inside, name)
+
+
 def run_tour(out, quick=False, progress=True, client=None):
     """Run every section into the folder ``out``.
 
@@ -646,8 +670,14 @@ def run_tour(out, quick=False, progress=True, client=None):
     -------
     Path
         The report's ``index.html``.
+
+    Raises
+    ------
+    InvalidArgumentError
+        ``out`` cannot hold the report (:func:`check_out`).
     """
     check_bool(progress, "progress")
+    check_out(out)
     from tqdm import tqdm
 
     report = Report(out)

@@ -324,3 +324,55 @@ def test_the_analysed_samplers_backend_is_a_param(tmp_path, capsys):
     assert code == 0, text
     made = clsamp.make_sampler("random", backend="numpy").sample(16)
     assert np.allclose(np.load(tmp_path / "s.npy"), clsamp.power_spectrum(made, resolution=8, progress=False))
+
+
+@pytest.mark.parametrize("argv, expected", [
+    # a traceback (FileExistsError from the report), or a refusal after section 1 had written 70 files
+    (["tour", "--out", "{}/t2", "--quick"], "/t2/img' is a file, not a folder"),
+    (["tour", "--out", "{}/t4", "--quick"], "'{}/t4/tour.json' is a folder, not a file"),
+    (["tour", "--out", ""], "'--out' must name a folder, got ''"),       # ran into the current folder
+    # checked after the render was written, naming 'spp'; ignored without --reference
+    (["render", "ao", "--reference", "--reference-spp", "100", "-o", "{}/r.exr"],
+     "'--reference-spp': 'spp'=100"),
+    (["render", "ao", "--reference-spp", "0", "-o", "{}/r.exr"], "give '--reference'"),
+    (["render", "nosuch", "-o", "{}/r.exr"], "'scene' 'nosuch' is neither"),            # named 'path'
+    # found when its sweep came up, after the earlier ones had run
+    (["convergence", "--samplers", "random,jittered", "--ns", "20,50", "-o", "{}/c.png"],
+     "sampler 'jittered' with d=2 cannot make n=20"),
+    (["convergence", "--samplers", "random,van_der_corput", "--ns", "16,64", "-o", "{}/c.png"],
+     "supports 'd' in (1), got 2"),
+    (["metrics", "random", "-n", "250", "-d", "4", "--metric", "cd,star", "-o", "{}/m.json"],
+     "'--metric' star is exact for d = 1 to 3, got d = 4"),                            # after CD
+    (["metrics", "random", "-n", "1", "-o", "{}/m.json"], "'-n' must be at least 2 for pcf and nn"),
+    # accepted, and silently ignored or run twice
+    (["convergence", "--checkpoint", "", "-o", "{}/c.png"], "'--checkpoint' must name a folder"),
+    (["convergence", "--family", "", "-o", "{}/c.png"], "'--family' must each name at least one"),
+    (["convergence", "--members", "0", "-o", "{}/c.png"], "'--members' is the families'"),
+    (["convergence", "--family", "gaussians", "--integrand", "disk", "-o", "{}/c.png"],
+     "give '--family' or '--integrand', not both"),
+    (["convergence", "--samplers", "jittered,jittered", "-o", "{}/c.png"], "'--samplers' names one twice"),
+    (["metrics", "jittered", "-n", "64", "--metric", "cd", "--bounds", "-o", "{}/m.json"], "has no star"),
+    (["metrics", "jittered", "-n", "64", "--metric", "cd,,cd", "-o", "{}/m.json"], "names one twice"),
+    (["integrate", ":sq", "--abs-tol", "1e-4"], "'function' ':sq' cannot be loaded"),   # ValueError
+])
+def test_every_commands_requests_are_checked_before_any_work(tmp_path, capsys, no_work, argv, expected):
+    (tmp_path / "t2").mkdir()
+    (tmp_path / "t2" / "img").write_text("")
+    (tmp_path / "t4" / "tour.json").mkdir(parents=True)
+    before = listing(tmp_path)
+    code, text = run(capsys, *[a.format(tmp_path) for a in argv])
+    assert code == 2 and expected.format(tmp_path) in text and text.count("\n") == 1, text
+    assert listing(tmp_path) == before
+
+
+def test_a_user_function_that_raises_is_one_line(tmp_path, capsys, monkeypatch):
+    (tmp_path / "myf.py").write_text("def boom(x):\n    raise RuntimeError('boom')\n")
+    monkeypatch.chdir(tmp_path)
+    code, text = run(capsys, "integrate", "myf:boom", "--abs-tol", "1e-4")
+    assert code == 2 and "'function' 'myf:boom' raised RuntimeError: boom" in text and "Traceback" not in text
+
+
+def test_a_malformed_scheduler_address_is_one_line(capsys, no_work):
+    pytest.importorskip("distributed")
+    code, text = run(capsys, "convergence", "--scheduler", "nosuch", "-o", "/tmp/unused.png")
+    assert code == 2 and "'scheduler'='nosuch'" in text and "Traceback" not in text, text
