@@ -303,14 +303,19 @@ def write_html(report, meta):
     ----------
     report : Report
     meta : dict
-        ``device`` (str), ``date`` (str) and ``quick`` (bool), shown at the top.
+        ``device`` (str), ``date`` (str) and ``quick`` (bool), shown at the top; ``sections``
+        (int, optional): the sections the run will have, so that a page written while it
+        runs (or after it was stopped) says how many are still missing.
     """
+    missing = meta.get("sections", len(report.sections)) - len(report.sections)
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>clsamp tour</title>"
              f"<style>{CSS}</style></head><body>",
              "<h1>clsamp tour</h1>",
              f"<p class='note'>Measured in this run on {html.escape(meta['device'])}, "
              f"{html.escape(meta['date'])}; mode {'quick' if meta['quick'] else 'full'}. "
-             "Raw numbers: <a href='tour.json'>tour.json</a>; point sets and images in "
+             + (f"<b>Incomplete: {missing} of {meta['sections']} sections not run (still running, "
+                "or stopped).</b> " if missing > 0 else "")
+             + "Raw numbers: <a href='tour.json'>tour.json</a>; point sets and images in "
              "<a href='data/'>data/</a>.</p><ol>"]
     parts += [f"<li><a href='#{s.key}'>{html.escape(s.title)}</a></li>" for s in report.sections]
     parts.append("</ol>")

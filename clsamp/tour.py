@@ -684,7 +684,7 @@ def run_tour(out, quick=False, progress=True, client=None):
     report.client = client
     timings = {}
     meta = {"device": str(runtime.current_device()), "quick": bool(quick),
-            "date": time.strftime("%Y-%m-%d %H:%M:%S %Z")}
+            "date": time.strftime("%Y-%m-%d %H:%M:%S %Z"), "sections": len(SECTIONS)}
     results = {}
     with one_line_warnings():
         for key, title, fn in tqdm(SECTIONS, desc="clsamp tour", disable=not progress, unit="section"):
@@ -708,6 +708,6 @@ def _run_section(report, quick, key, title, fn, timings, results, meta):
     report.sections.append(section)
     results[key] = {"title": title, "seconds": section.seconds, "error": section.error,
                     "data": section.data}
-    document = {"meta": meta, "sections": results}
+    document = {"meta": {**meta, "complete": len(results) == meta["sections"]}, "sections": results}
     files.write_json(report.out / "tour.json", document)
     write_html(report, meta)

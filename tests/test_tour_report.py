@@ -145,3 +145,25 @@ def test_local_slopes_that_approach_the_rate_read_pre_asymptotic():
     assert theory.approaching([16, 64, 256, 1024], [1e-2, 1e-3, 1e-4, 1e-5], -3) == ()
     assert theory.approaching([16, 64, 256, 1024], [1, 4.0**-2, 4.0**-4.5, 4.0**-8], -3) == ()
     assert theory.approaching([16, 64, 256], [1, 4.0**-2, 4.0**-4.5], -3) == ()
+
+
+def test_a_tour_page_written_before_its_last_section_says_it_is_incomplete(tmp_path, monkeypatch):
+    # a stopped tour's index.html and tour.json read like a whole one ("mode full", no word)
+    import json
+
+    from clsamp import tour
+    calls = []
+
+    def fake(key):
+        def section(rep, quick, *rest):
+            calls.append(key)
+            if key == "b":
+                raise KeyboardInterrupt          # stopped in the second of three sections
+            return "<p>ok</p>", {"key": key}
+        return section
+    monkeypatch.setattr(tour, "SECTIONS", [(k, k.upper(), fake(k)) for k in "abc"])
+    with pytest.raises(KeyboardInterrupt):
+        tour.run_tour(tmp_path / "t", progress=False)
+    page = (tmp_path / "t" / "index.html").read_text()
+    assert "Incomplete: 2 of 3 sections not run" in page
+    assert json.loads((tmp_path / "t" / "tour.json").read_text())["meta"]["complete"] is False
