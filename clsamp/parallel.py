@@ -288,6 +288,8 @@ def run(fn, tasks, client=None, checkpoint=None, progress=True, desc="sweep"):
     check_bool(progress, "progress")
     from tqdm import tqdm
     client = check_client(client)
+    if checkpoint is not None and not isinstance(checkpoint, (str, os.PathLike)):
+        raise InvalidArgumentError(f"'checkpoint' must be a folder's path, got {checkpoint!r}")
     store = _Checkpoint(checkpoint, fn, tasks) if checkpoint is not None else None
     results = [None] * len(tasks)
     seconds = np.zeros(len(tasks))

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import clsamp
+from clsamp import metrics
 from clsamp.errors import InvalidArgumentError
 from clsamp.metrics import l2, min_distance, neighbors, star
 
@@ -444,3 +445,48 @@ def test_discrepancy_sweep_slopes_match_the_known_rates():
             assert known - 0.08 < slope < known + (0.15 if known == -1.0 else 0.08), (name, method, slope)
     regular = discrepancy_sweep(clsamp.make_sampler("regular", d=2), [60, 250], realizations=1)
     assert regular["CD"].ns.tolist() == [64, 256]      # moved to valid counts (squares)
+
+
+_X = np.random.default_rng(0).random((64, 2))
+
+
+@pytest.mark.parametrize("call, match", [
+    # sums past a double's range: '-inf + inf in fsum', an OverflowError or a NaN conversion
+    (lambda: clsamp.discrepancy(np.full((3, 600), 0.5), "MD"), r"terms reach 5\^d, past a double's range"),
+    (lambda: clsamp.discrepancy(np.full((1, 20000), 0.5), "CD"), r"at most d = 1748 for n = 1"),
+    (lambda: clsamp.discrepancy(np.full((3, 2000), 0.5), "symmetric", backend="numpy"), "past a double"),
+    # public twins that answered for another method, or for the first two coordinates
+    (lambda: metrics.discrepancy_reference(_X, "cd"), "'method' must be one of"),
+    (lambda: metrics.star_discrepancy_reference(np.full((10, 3), 0.5)), "'points' must have 2 dimensions"),
+    (lambda: metrics.mean_spacing(-4, 2), "'n' must be an integer >= 1"),        # a complex number
+    (lambda: metrics.mean_spacing(4, 0), "'d' must be an integer >= 1"),         # ZeroDivisionError
+    (lambda: clsamp.star_discrepancy(_X, delta="abc"), "'delta' is the bounds' gap"),   # ignored
+    (lambda: clsamp.star_discrepancy(np.full((200, 3), 0.5), backend="numpy"), "takes n <= 128"),  # days
+    (lambda: metrics.normalized_energy(_X, backend="x"), "'backend' must be one of"),    # ran OpenCL
+    (lambda: metrics.normalized_energy(_X, density=10**9), "'density' must be an integer <="),
+    (lambda: clsamp.pair_correlation(_X, sigma=1e-300), "'sigma' 1e-300 is too small"),  # ZeroDivision
+    (lambda: clsamp.pair_correlation(_X, sigma=1e-20), "too small for the radii"),       # all NaN
+    (lambda: metrics.discrepancy_sweep(None, [16]), "'sampler' must be a Sampler"),
+    (lambda: metrics.discrepancy_sweep("random", [16], methods=[]), "'methods' must name"),
+    (lambda: metrics.discrepancy_sweep("random", [16], realizations=0), "'realizations' must be"),
+    (lambda: metrics.discrepancy_sweep("random", 16), "'ns' must be a sequence"),
+    (lambda: metrics.discrepancy_sweep("random", [16.7]), "'ns' must be an integer"),    # was 16
+    (lambda: metrics.discrepancy_sweep("random", [16, 2**33]), r"'ns' must be an integer <="),
+    (lambda: metrics.discrepancy_sweep("random", [16], checkpoint=5), "'checkpoint' must be a folder"),
+])
+def test_metric_arguments_are_one_line_before_any_work(call, match):
+    with pytest.raises(InvalidArgumentError, match=match):
+        call()
+
+
+def test_bounds_take_a_numpy_bool_and_a_sweep_a_name_and_one_method():
+    assert clsamp.star_discrepancy(_X, bounds=np.True_).lower <= clsamp.star_discrepancy(_X)
+    sweep = metrics.discrepancy_sweep("random", [16, 64], methods="CD")     # 'C' and 'D' before
+    assert list(sweep) == ["CD"] and list(sweep["CD"].ns) == [16, 64]
+
+
+@pytest.mark.parametrize("n, d", [(3, 1), (9, 2), (21, 2), (14, 3), (52, 3), (78, 4), (37, 5), (22, 6)])
+def test_pair_correlation_takes_its_own_default_radii(n, d):
+    # the last default radius rounded one ulp up, past 1/2 - 5 sigma: its own check refused it
+    radii, g = clsamp.pair_correlation(np.random.default_rng(n).random((n, d)))
+    assert len(radii) == len(g) and np.all(np.isfinite(g))

@@ -19,7 +19,7 @@ import numpy as np
 from .. import runtime
 from ..errors import InvalidArgumentError
 from ..float_float import U2, check_precision, split
-from ..validation import check_choice, check_points, point_sets
+from ..validation import check_choice, check_int, check_points, check_positive_int, point_sets
 
 METHODS = ("CD", "WD", "MD", "L2-star", "symmetric", "L2")
 BACKENDS = ("opencl", "numpy")
@@ -102,7 +102,7 @@ def discrepancy_reference(points, method="CD"):
     Parameters
     ----------
     points : ndarray (n, d)
-        One checked set.
+        One set.
     method : str
         One of :data:`METHODS`.
 
@@ -111,6 +111,9 @@ def discrepancy_reference(points, method="CD"):
     float
         As :func:`discrepancy` gives it for one set.
     """
+    check_choice(method, "method", METHODS)
+    (points,), _ = check_points(points, "points", allow_batch=False)
+    _check_range(method, *points.shape)
     n, d = points.shape
     single = np.prod(_terms(method, points), axis=1)
     pairs = []
@@ -305,6 +308,7 @@ def discrepancy(points, method="CD", backend="opencl", precision=None):
         return np.array([discrepancy(s, method, backend, precision) for s in sets])
     batch, single = check_points(points, "points")
     r, n, d = batch.shape
+    _check_range(method, n, d)
     if backend == "numpy":
         values = np.array([discrepancy_reference(batch[k], method) for k in range(r)])
     else:
@@ -315,6 +319,20 @@ def discrepancy(points, method="CD", backend="opencl", precision=None):
             f, pairs = sums(batch[lo:hi], method)
             values[lo:hi] = [_combine(method, d, n, f[k], pairs[k]) for k in range(hi - lo)]
     return float(values[0]) if single else values
+
+
+_F_MAX = {"CD": 1.125, "WD": 1.0, "MD": 5.0, "L2-star": 1.0, "symmetric": 1.5, "L2": 0.25}
+
+
+def _check_range(method, n, d):
+    """Refuse a d whose largest products (a term's bound to the d) summed n^2 times pass a
+    double's range: the sums would be infinite."""
+    biggest = max(_F_MAX[method], _G_MAX[method])
+    if biggest > 1.0 and d * math.log(biggest) + 2.0 * math.log(n) > 709.0:
+        most = int((709.0 - 2.0 * math.log(n)) / math.log(biggest))
+        raise InvalidArgumentError(
+            f"'points' in d = {d}: the {method} discrepancy's terms reach {biggest:g}^d, past a "
+            f"double's range; at most d = {most} for n = {n}")
 
 
 def check_method(method):
@@ -401,9 +419,9 @@ def discrepancy_sweep(sampler, ns, realizations=8, methods=("CD", "L2-star"), cl
 
     Parameters
     ----------
-    sampler : Sampler
-        Any sampler (:func:`clsamp.make_sampler`); each n is moved to its nearest valid
-        count (``sampler.valid_n``), so a grid takes squares.
+    sampler : Sampler or str
+        Any sampler (:func:`clsamp.make_sampler`), or a name made with its defaults; each n
+        is moved to its nearest valid count (``sampler.valid_n``), so a grid takes squares.
     ns : sequence of int
     realizations : int
         Sets per n (randomized samplers differ between them, deterministic ones repeat).
@@ -435,11 +453,23 @@ def discrepancy_sweep(sampler, ns, realizations=8, methods=("CD", "L2-star"), cl
     >>> bool(-0.7 < slope < -0.3)
     True
     """
+    from .. import parallel
+    from ..samplers import Sampler, make_sampler
+    if isinstance(sampler, str):
+        sampler = make_sampler(sampler)
+    if not isinstance(sampler, Sampler):
+        raise InvalidArgumentError(f"'sampler' must be a Sampler or a sampler's name, got {sampler!r}")
+    methods = (methods,) if isinstance(methods, str) else tuple(methods)
+    if not methods:
+        raise InvalidArgumentError("'methods' must name at least one discrepancy")
     for method in methods:
         check_method(method)
-    from .. import parallel
-    methods = tuple(methods)
-    counts = sorted({int(sampler.valid_n(int(n))) for n in ns})
+    realizations = check_int(realizations, "realizations", minimum=1, maximum=2**32 - 1)
+    ns = list(ns) if hasattr(ns, "__iter__") and not isinstance(ns, (str, bytes)) else []
+    if not ns:
+        raise InvalidArgumentError("'ns' must be a sequence of point counts, at least one")
+    ns = [check_positive_int(n, "ns", maximum=sampler.max_n) for n in ns]
+    counts = sorted({int(sampler.valid_n(n)) for n in ns})
     values = {m: [] for m in methods}
     errors = {m: [] for m in methods}
     tasks, owners = [], []

@@ -18,7 +18,7 @@ from ..errors import InvalidArgumentError
 from ..float_float import U2, argument, check_precision, exp_coefficients, split
 from ..geometry.cells import cells_for, sorted_by_cell
 from ..geometry.torus import distance2
-from ..validation import check_bool, check_choice, check_points, check_real, point_sets
+from ..validation import check_bool, check_choice, check_points, check_positive_int, check_real, point_sets
 
 BACKENDS = ("opencl", "numpy")
 RADII = 100                  # default radii: 100, up to RADII_SPAN mean spacings
@@ -41,7 +41,7 @@ def mean_spacing(n, d):
     -------
     float
     """
-    return float(n) ** (-1.0 / d)
+    return float(check_positive_int(n, "n")) ** (-1.0 / check_positive_int(d, "d"))
 
 
 def _check_sets(points, name="points"):
@@ -232,10 +232,12 @@ def _check_radii(radii, sigma, spacing, cut):
         # up to RADII_SPAN spacings, or to where the reach stays within 1/2 (few points in
         # many dimensions, whose spacing is a large part of the unit)
         span = min(RADII_SPAN * spacing, 0.5 - cut * sigma)
+        while span > 0 and span + cut * sigma > 0.5:      # 0.5 - c + c may round above 1/2
+            span = np.nextafter(span, 0.0)
         if span <= 0:
             raise InvalidArgumentError(
                 f"'sigma' {sigma:.4g} leaves no radius within 1/2 at a cut of {cut:g} sigma")
-        radii = span * np.arange(1, RADII + 1) / RADII
+        radii = np.minimum(span * np.arange(1, RADII + 1) / RADII, span)  # the last may round up
     else:
         try:
             radii = np.asarray(radii, dtype=np.float64)
@@ -252,6 +254,9 @@ def _check_radii(radii, sigma, spacing, cut):
             "the PCF; use smaller radii or sigma")
     if len(radii) > 4096:
         raise InvalidArgumentError(f"'radii' may hold at most 4096 radii, got {len(radii)}")
+    if np.any(radii + cut * sigma == np.maximum(radii - cut * sigma, 0.0)):
+        raise InvalidArgumentError(f"'sigma' {sigma:.4g} is too small for the radii: their kernel "
+                                   "windows round to nothing")
     return radii, sigma
 
 

@@ -19,12 +19,13 @@ the Poisson-disk kernels test acceptance with, so a sampler that promises "min d
 
 import numpy as np
 
+from .. import runtime
 from ..errors import InvalidArgumentError
 from ..geometry import integer_torus, voronoi
 from ..geometry.cells import sorted_by_cell
 from ..geometry.torus import PACKING_DENSITY, max_min_distance
 from ..geometry.torus import distance2 as toroidal_distance2
-from ..validation import check_bool, check_points, check_positive_int, point_sets
+from ..validation import check_bool, check_choice, check_points, check_positive_int, point_sets
 
 __all__ = ["min_distance", "relative_radius", "max_min_distance", "normalized_energy",
            "HEXAGONAL_NE", "WHITE_NOISE_NE"]
@@ -228,11 +229,16 @@ def normalized_energy(points, density=4096, backend="opencl"):
     sets = point_sets(points)
     if sets is not None:
         return np.array([normalized_energy(p, density, backend) for p in sets])
+    check_choice(backend, "backend", ("opencl", "numpy"))
     batch, single = check_points(points, "points", keep_device=backend == "opencl")
     if batch.shape[-1] != 2:
         raise InvalidArgumentError(
             f"'points' must be 2-D for normalized_energy, got d = {batch.shape[-1]}")
-    density = check_positive_int(density, "density")
+    backend = check_choice(backend, "backend", ("opencl", "numpy"))
+    n = batch.shape[1]
+    density = check_positive_int(density, "density", maximum=max(1, 2**31 // n))  # 32-bit counts
+    if backend == "numpy":      # the twin's arrays: 96 B a density point (tracemalloc, 2^20 points)
+        runtime.check_host_bytes(96 * n * density, f"a density grid of {n} x {density} points")
     energy = voronoi.cvt_energy(integer_torus.to_torus(batch), density, backend)
     out = batch.shape[1] * energy
     return float(out[0]) if single else out

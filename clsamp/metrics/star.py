@@ -14,10 +14,12 @@ import numpy as np
 
 from .. import runtime
 from ..errors import InvalidArgumentError
-from ..validation import check_points, point_sets
+from ..validation import check_bool, check_points, point_sets
 
 EXACT_DIMENSIONS = (1, 2, 3)
 MAX_EXACT_3D = 2048             # n beyond which 3-D exact (O(n^3)) asks for bounds=True
+MAX_TWIN = {1: 2**32, 2: 8192, 3: 128}   # the exact NumPy twin's n: 2-D 48 (n + 1)^2 bytes
+                                         # (3.2 GB at 8192), 3-D O(n^4) (4.2 s at 64, x9 a doubling)
 MAX_LEAVES = 1 << 22            # boxes of a bounds partition at most (memory)
 STAR_WORK = 1 << 33             # corner-point tests of a bounds call at most (seconds)
 ESTIMATE_ERROR = 2.0**-19      # bound of a box's float estimate (kernels/star_discrepancy.cl)
@@ -71,13 +73,14 @@ def star_discrepancy_reference(points):
     Parameters
     ----------
     points : ndarray (n, 2)
-        One checked set.
+        One set.
 
     Returns
     -------
     float
         D*.
     """
+    (points,), _ = check_points(points, "points", d=2, allow_batch=False)
     n, d = points.shape
     xs, ys = _critical_grids(points)[:2]
     ix = np.searchsorted(xs, points[:, 0])
@@ -443,8 +446,9 @@ def star_discrepancy(points, bounds=False, backend="opencl", delta=None):
         raise InvalidArgumentError(f"'backend' must be 'opencl' or 'numpy', got {backend!r}")
     batch, single = check_points(points, "points")
     r, n, d = batch.shape
-    if not isinstance(bounds, bool):
-        raise InvalidArgumentError(f"'bounds' must be True or False, got {bounds!r}")
+    bounds = check_bool(bounds, "bounds")
+    if delta is not None and not bounds:
+        raise InvalidArgumentError("'delta' is the bounds' gap; give bounds=True with it")
     if not bounds:
         if d not in EXACT_DIMENSIONS:
             raise InvalidArgumentError(
@@ -455,6 +459,10 @@ def star_discrepancy(points, bounds=False, backend="opencl", delta=None):
             raise InvalidArgumentError(
                 f"the exact 3-D star discrepancy costs O(n^3): n = {n} is more than "
                 f"{MAX_EXACT_3D}; use bounds=True")
+        if backend == "numpy" and n > MAX_TWIN[d]:     # O(n^4) in 3-D, 48 (n + 1)^2 B in 2-D
+            raise InvalidArgumentError(
+                f"the NumPy twin's exact {d}-D star discrepancy takes n <= {MAX_TWIN[d]}, got "
+                f"n = {n}; use backend='opencl' or bounds=True")
         values = []
         for k in range(r):
             p = batch[k]
