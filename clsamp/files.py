@@ -269,8 +269,9 @@ def json_safe(value):
     """A copy of ``value`` that ``json.dumps`` writes as standard JSON.
 
     Dictionaries (keys made strings), lists, tuples and arrays are converted all the way
-    down; NumPy scalars become Python numbers and booleans; NaN and infinities, which JSON cannot hold,
-    become the strings ``"nan"``, ``"inf"`` and ``"-inf"``.
+    down; NumPy scalars become Python numbers and booleans; NaN and infinities, which JSON
+    cannot hold, become the strings ``"nan"``, ``"inf"`` and ``"-inf"``. Two keys with one
+    text (1 and "1") are refused.
 
     Parameters
     ----------
@@ -288,10 +289,13 @@ def json_safe(value):
     {'1': [0.5, 'inf'], 'n': 3}
     """
     if isinstance(value, dict):
-        safe = {str(k): json_safe(v) for k, v in value.items()}
-        if len(safe) != len(value):
-            raise InvalidArgumentError(f"keys {sorted(map(repr, value))} of a dict write two as one "
-                                       "JSON key (keys are written as text)")
+        safe, keys = {}, {}
+        for k, v in value.items():
+            if str(k) in keys:
+                raise InvalidArgumentError(f"keys {keys[str(k)]!r} and {k!r} of a dict write as one "
+                                           "JSON key (keys are written as text)")
+            keys[str(k)] = k
+            safe[str(k)] = json_safe(v)
         return safe
     if isinstance(value, (list, tuple)):
         return [json_safe(v) for v in value]
