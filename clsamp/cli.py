@@ -436,6 +436,8 @@ def _run_convergence(args):
     family = _integrands(names, option) == "family"          # families work in --integrand too
     if args.members is not None and not family:
         raise InvalidArgumentError("'--members' is the families' ('--family'); these are integrands")
+    if family and args.members is None:
+        args.members = 256
     paths = [("-o", output), ("-o (JSON)", output.with_suffix(".json"))]
     paths += [] if family else [("-o (time plot)", output.with_name(f"{output.stem}_time{output.suffix}"))]
     _distinct(paths)
@@ -446,7 +448,7 @@ def _run_convergence(args):
     ns = parse_ns(args.ns)
     for integrand in names:       # every sweep's samplers, n and d, before the first runs
         for name in samplers:
-            prepare(name, integrand, ns, members=(args.members or 256) if family else None,
+            prepare(name, integrand, ns, members=args.members,
                     realizations=(64 if family else 1000) if args.realizations is None
                     else args.realizations, seed=args.seed, backend=args.backend)
     client = _client(args)
@@ -507,7 +509,7 @@ def _run_family_convergence(args, samplers, names, paths, client):
     results, records = [], []
     for family in names:
         for name in samplers:
-            res = convergence(name, family, ns, realizations=realizations, members=args.members or 256,
+            res = convergence(name, family, ns, realizations=realizations, members=args.members,
                               homogenize=not args.no_homogenize, seed=args.seed,
                               progress=not args.no_progress, backend=args.backend, client=client,
                               checkpoint=_checkpoint(args, name, family))
@@ -520,7 +522,7 @@ def _run_family_convergence(args, samplers, names, paths, client):
                   f"  theory {expected:<8} {verdict['verdict']}  mean MSE(N={res.ns[-1]}) "
                   f"{res.mean[-1]:.3g}, worst {res.max[-1]:.3g}  {res.seconds.sum():.2f} s")
     plots.family_convergence(results, output)
-    document = {"ns": sorted(ns), "realizations": realizations, "members": args.members or 256,
+    document = {"ns": sorted(ns), "realizations": realizations, "members": args.members,
                 "seed": args.seed,
                 "homogenize": not args.no_homogenize, "backend": args.backend, "results": records}
     files.write_json(json_path, document)

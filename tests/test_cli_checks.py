@@ -348,6 +348,7 @@ def test_the_analysed_samplers_backend_is_a_param(tmp_path, capsys):
     (["convergence", "--checkpoint", "", "-o", "{}/c.png"], "'--checkpoint' must name a folder"),
     (["convergence", "--family", "", "-o", "{}/c.png"], "'--family' must each name at least one"),
     (["convergence", "--members", "0", "-o", "{}/c.png"], "'--members' is the families'"),
+    (["convergence", "--family", "gaussians", "--members", "0", "-o", "{}/c.png"], "'members' must be"),
     (["convergence", "--family", "gaussians", "--integrand", "disk", "-o", "{}/c.png"],
      "give '--family' or '--integrand', not both"),
     (["convergence", "--samplers", "jittered,jittered", "-o", "{}/c.png"], "'--samplers' names one twice"),
