@@ -7,8 +7,8 @@ and spatiotemporal 64 x 64 x 16 and 32 x 32 x 32 masks (sigma 1.9, seed 1). Each
 on the device (``kernels/dither.cl``: one work-item walks the N sequential steps with two
 tournament trees; median of 3) against the NumPy twin (``backend="numpy"``: an argmax over
 the mask a step; median of 3, once from 2^15 pixels on), which gives the same ranks
-(checked). A device that does not run the kernel (no fp64, a loop limit, or memory of its
-own) runs the twin and has no rows. The quality column gives the mean power of the
+(checked). A device that does not run the kernel (not a CPU, no fp64, a loop limit, or
+memory of its own) runs the twin and has no rows. The quality column gives the mean power of the
 thresholds at integer frequencies 0 < |k| < size / 8 (white noise 1), over the mask's
 space axes (each frame of a spatiotemporal mask) and, for a spatiotemporal mask, each
 pixel's sequence over time at 1 and 2 cycles.

@@ -248,7 +248,7 @@ def _run_spectrum(args):
         outputs.append(("--plots", _output(args.plots, FIGURES, "spectrum", "--plots")))
     _distinct(outputs)
 
-    def check(d):       # before the sampler's work
+    def check(d, n):    # before the sampler's work
         if d > 3:
             raise InvalidArgumentError(f"a spectrum is made in 1-D to 3-D; the points have d={d}")
         ok = {1: (".npy", ".exr"), 2: (".npy", ".exr", ".png")}.get(d, (".npy",))
@@ -306,7 +306,6 @@ def _summary(values):
 
 
 def _run_metrics(args):
-
     import numpy as np
 
     from . import files, metrics, plots
@@ -324,10 +323,15 @@ def _run_metrics(args):
     if args.n is not None and args.n < 2 and {"pcf", "nn"} & set(wanted):
         raise InvalidArgumentError(f"'-n' must be at least 2 for pcf and nn (pairs), got {args.n}")
 
-    def check(d):       # before the sampler's work
+    def check(d, n):    # before the sampler's work
         if "star" in wanted and not args.bounds and d > 3:
             raise InvalidArgumentError(f"'--metric' star is exact for d = 1 to 3, got d = {d}; "
                                        "'--bounds' gives certified bounds in any d")
+        most = min(metrics.star.MAX_EXACT_3D if d == 3 else n,
+                   metrics.star.MAX_TWIN.get(d, n) if args.backend == "numpy" else n)
+        if "star" in wanted and not args.bounds and n > most:
+            raise InvalidArgumentError(f"'--metric' star: the exact value takes n <= {most} in {d}-D "
+                                       f"here, got {n}; '--bounds' gives certified bounds")
     outputs = [("-o", output)]
     if "pcf" in wanted:
         outputs.append(("-o (pcf figure)", output.with_name(output.stem + "_pcf.png")))
@@ -426,8 +430,8 @@ def _run_convergence(args):
     option = "--integrand" if args.family is None else "--family"
     if args.family is not None and args.integrand is not None:
         raise InvalidArgumentError("give '--family' or '--integrand', not both")
-    names = [s.strip() for s in (args.family if args.family is not None else args.integrand or "gaussian")
-             .split(",") if s.strip()]
+    given = args.family if args.family is not None else args.integrand
+    names = [s.strip() for s in ("gaussian" if given is None else given).split(",") if s.strip()]
     if not samplers or not names:
         raise InvalidArgumentError(f"'--samplers' and '{option}' must each name at least one")
     for listed, given in (("--samplers", samplers), (option, names)):
@@ -468,7 +472,6 @@ def _checkpoint(args, *labels):
 
 
 def _convergence_runs(args, samplers, integrands, paths, client):
-
     from . import files, plots, theory
     from .results import pareto_front
     from .sweep import convergence, parse_ns
@@ -499,7 +502,6 @@ def _convergence_runs(args, samplers, integrands, paths, client):
 
 
 def _run_family_convergence(args, samplers, names, paths, client):
-
     from . import families, files, plots, theory
     from .sweep import convergence, parse_ns
     (_, output), (_, json_path) = paths
@@ -565,6 +567,9 @@ def _load_function(text):
         sys.path.pop(0)
     if not callable(found):
         raise InvalidArgumentError(f"'function' {text!r} is not callable")
+    from .integrands import Integrand
+    if isinstance(found, Integrand):            # its kernel and its own checks
+        return found
 
     def function(x):        # its own failure in one line, as a bad name's
         try:

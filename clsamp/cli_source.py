@@ -75,7 +75,7 @@ def points_from_source(args, check=None):
     args : argparse.Namespace
         With the arguments of :func:`add_source`.
     check : callable, optional
-        ``check(d)``, run with the points' dimension before the sampler's work.
+        ``check(d, n)``, run with the points' dimension and count before the sampler's work.
 
     Returns
     -------
@@ -107,7 +107,7 @@ def points_from_source(args, check=None):
                 f"point file {args.source!r}")
         points = files.load_points(source)
         if check:
-            check(points.shape[-1])
+            check(points.shape[-1], points.shape[-2])
         return points, source.name
     if args.n is None:
         raise InvalidArgumentError("'-n' is required when the source is a sampler name")
@@ -116,5 +116,5 @@ def points_from_source(args, check=None):
                            seed=0 if args.seed is None else args.seed,
                            **parse_params(args.param, (("d", "-d"), ("seed", "--seed"))))
     if check:
-        check(sampler.d)
+        check(sampler.d, args.n)
     return sampler.sample(args.n, realizations=args.realizations), args.source

@@ -355,6 +355,9 @@ def test_the_analysed_samplers_backend_is_a_param(tmp_path, capsys):
     (["metrics", "jittered", "-n", "64", "--metric", "cd", "--bounds", "-o", "{}/m.json"], "has no star"),
     (["metrics", "jittered", "-n", "64", "--metric", "cd,,cd", "-o", "{}/m.json"], "names one twice"),
     (["integrate", ":sq", "--abs-tol", "1e-4"], "'function' ':sq' cannot be loaded"),   # ValueError
+    (["convergence", "--integrand", "", "-o", "{}/c.png"], "'--integrand' must each name at least one"),
+    (["metrics", "random", "-d", "3", "-n", "3000", "--metric", "cd,star", "-o", "{}/m.json"],
+     "star: the exact value takes n <= 2048 in 3-D"),
 ])
 def test_every_commands_requests_are_checked_before_any_work(tmp_path, capsys, no_work, argv, expected):
     (tmp_path / "t2").mkdir()
@@ -364,6 +367,14 @@ def test_every_commands_requests_are_checked_before_any_work(tmp_path, capsys, n
     code, text = run(capsys, *[a.format(tmp_path) for a in argv])
     assert code == 2 and expected.format(tmp_path) in text and text.count("\n") == 1, text
     assert listing(tmp_path) == before
+
+
+def test_an_integrand_object_loaded_by_name_keeps_its_kernel_and_checks(tmp_path, capsys, monkeypatch):
+    # wrapped as a plain function it took the host path (14.6 s -> 31.9 s) and lost its d check
+    (tmp_path / "myk.py").write_text("from clsamp.integrands import keister\nk = keister(3)\n")
+    monkeypatch.chdir(tmp_path)
+    code, text = run(capsys, "integrate", "myk:k", "--d", "2", "--abs-tol", "1e-3")
+    assert code == 2 and "integrand 'keister' is 3-dimensional, 'd' is 2" in text, text
 
 
 def test_a_user_function_that_raises_is_one_line(tmp_path, capsys, monkeypatch):

@@ -337,3 +337,11 @@ def test_a_maximal_set_that_ends_on_a_gap_of_no_measure():
     assert tree.query(pts, k=2)[0][:, 1].min() >= r
     probe = clsamp.make_sampler("random", seed=5).sample(200_000)
     assert tree.query(probe, k=1)[0].max() < r
+
+
+def test_a_fixed_n_at_a_radius_whose_grid_is_too_large_names_both():
+    # radius mode with n on the fine grid had no limit once the constructor's check moved to
+    # maximal sets: 70 000 points at 3.45e-4 built 16.8 M cells (2.25 GB)
+    with pytest.raises(InvalidArgumentError,
+                       match=r"'n'=70000 with 'radius'=0.000345 is too much .* 1.68e\+07"):
+        clsamp.make_sampler("poisson_disk", radius=3.45e-4).sample(70000)

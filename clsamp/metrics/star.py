@@ -382,15 +382,16 @@ def star_discrepancy(points, bounds=False, backend="opencl", delta=None):
     points : ndarray (n, d) or (r, n, d), or a list of (n_k, d) arrays
         Points in [0, 1)^d.
     bounds : bool
-        False: the exact value, d = 1, 2 or 3 (3-D up to n = 2048). True:
+        False: the exact value, d = 1, 2 or 3 (3-D up to n = 2048; on NumPy 2-D up to
+        8192 and 3-D up to 128). True:
         ``StarBounds(lower, upper)``, certified bounds for any d (:func:`star_bounds`),
         for when d > 3 or n is too large for the exact value.
     backend : {"opencl", "numpy"}
         Where the exact sweep and the bounds' counts run (the NumPy twins: 2-D prefix
         counts, 3-D the brute force).
     delta : float, optional
-        With ``bounds=True``: the largest gap between the bounds the partition may leave;
-        None picks the smallest that fits the work budget.
+        With ``bounds=True`` only: the largest gap between the bounds the partition may
+        leave; None picks the smallest that fits the work budget.
 
     Returns
     -------
@@ -399,7 +400,7 @@ def star_discrepancy(points, bounds=False, backend="opencl", delta=None):
     Raises
     ------
     InvalidArgumentError
-        d > 3, or 3-D with n > 2048, without ``bounds=True``.
+        d > 3, or n past the limits above, without ``bounds=True``; ``delta`` without it.
 
     Notes
     -----

@@ -51,7 +51,8 @@ def grid_size(radius, d):
 
 def grid_cells(radius, d):
     """The background grid's cells, :func:`grid_size` ^ d, as a float: infinity where that
-    passes 2^1000 (a radius too small for any grid, refused by its callers in one line).
+    passes 2^1000 (a radius too small for any grid: its callers refuse a maximal set, or
+    throw a fixed n into the whole torus).
 
     Parameters
     ----------

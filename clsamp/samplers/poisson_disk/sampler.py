@@ -237,8 +237,8 @@ class PoissonDiskSampler(Sampler):
     :meth:`sample_sets` returns a list of k maximal sets (made in one batch). ``start``
     must be 0 (a set, not a sequence).
 
-    Points are returned in grid-cell order (row-major), not in the order of acceptance
-    (d <= 4).
+    Points are returned in grid-cell order (row-major), not in the order of acceptance,
+    where the fine grid makes them (d <= 4, but a sparse fixed n).
 
     References
     ----------
@@ -416,6 +416,12 @@ class PoissonDiskSampler(Sampler):
             r2 = acceptance_threshold(self.radius)
             if self._coarse(self.radius, n):
                 return CoarseGeometry(self.d, self.radius, r2, n)
+            cells = grid_cells(self.radius, self.d)
+            if n is not None and cells > MAX_CELLS:
+                raise InvalidArgumentError(
+                    f"'n'={n} with 'radius'={self.radius} is too much for d={self.d}: their "
+                    f"background grid would have {cells_text(cells)} cells, more than {MAX_CELLS}; "
+                    "give fewer points or a larger radius")
             return Geometry(self.d, self.radius, r2)
         d_max = torus.max_min_distance(n, self.d)
         radius = self.rho * d_max
