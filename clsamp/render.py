@@ -37,7 +37,7 @@ from .pixel_sampling import (  # noqa: F401  (block_size, float32_samples: publi
 )
 from .render_numpy import camera_frame, render_reference, screen_window
 from .scene import Scene, as_scene  # noqa: F401  (Scene: README imports it from here)
-from .validation import check_bool, check_choice, check_int, check_positive_int, check_seed
+from .validation import check_bool, check_choice, check_int, check_positive_int, check_real, check_seed
 
 TILE_BYTES = 128 * 2**20            # float32 sample bytes of one tile at most (host memory)
 REFERENCE_SAMPLER = "sobol:owen"    # what a reference render is made with...
@@ -114,6 +114,9 @@ def render_samples(scene, samples, resolution, pixel0=0, backend="opencl", width
         raise InvalidArgumentError(f"'samples' must be floats of shape (pixels, "
                                    f"{scene.sample_dimensions}, spp), got {samples.shape} of {samples.dtype}")
     npix, dims, spp = samples.shape
+    if not samples.size or not (samples.min() >= 0 and samples.max() < 1):   # NaN fails too
+        raise InvalidArgumentError("'samples' must hold at least one sample a pixel, each "
+                                   "coordinate in [0, 1)")
     if dims != scene.sample_dimensions:
         raise InvalidArgumentError(f"'samples' must have {scene.sample_dimensions} dimensions "
                                    f"(axis 1), got {dims}")
@@ -301,7 +304,18 @@ def render_sweep(scene, samplers, spps, resolution, seed=0, sampler_params=None,
         ``{(sampler, spp): float}`` against ``reference`` (empty without one).
     """
     scene = as_scene(scene)
+    for name, given in (("samplers", samplers), ("spps", spps)):
+        if isinstance(given, (str, bytes)) or not hasattr(given, "__iter__"):
+            raise InvalidArgumentError(f"'{name}' must be a list, got {given!r}")
+    samplers, spps = list(samplers), list(spps)
+    if sampler_params is not None and not isinstance(sampler_params, dict):
+        raise InvalidArgumentError(
+            f"'sampler_params' must be a dict {{sampler: params}}, got {sampler_params!r}")
     params = dict(sampler_params or {})
+    if set(params) - set(samplers) or len(set(samplers)) < len(samplers) or len(set(spps)) < len(spps):
+        raise InvalidArgumentError(
+            "'samplers' and 'spps' must not repeat a value, and 'sampler_params' must name only "
+            f"samplers of 'samplers'; got {samplers}, {spps}, {sorted(map(str, params))}")
     keys = [(str(name), check_int(spp, "spps", minimum=1, maximum=2**31))
             for name in samplers for spp in spps]
     if not keys:
@@ -442,6 +456,8 @@ def reference(scene, resolution, spp=None, progress=True, seed=REFERENCE_SEED, c
     ((8, 8), True)
     """
     check_bool(progress, "progress")
+    check_bool(cache, "cache")
+    check_bool(return_noise, "return_noise")
     scene = as_scene(scene)
     width, height = image_size(resolution)
     if spp is None:
@@ -508,7 +524,10 @@ def noise_floor(stderr):
     InvalidArgumentError
         An empty ``stderr``, or one with values that are negative or not finite.
     """
-    stderr = np.asarray(stderr, dtype=np.float64)
+    try:
+        stderr = np.asarray(stderr, dtype=np.float64)
+    except (TypeError, ValueError):
+        stderr = np.empty(0)
     if stderr.size == 0 or not np.all(np.isfinite(stderr)) or np.any(stderr < 0):
         raise InvalidArgumentError("'stderr' must be a non-empty array of finite values >= 0")
     return float(np.mean(stderr * stderr))
@@ -527,8 +546,8 @@ def _check_pair(image, ref):
         raise InvalidArgumentError(f"'image' and 'ref' must have the same shape, got {image.shape} "
                                    f"and {ref.shape}")
     for name, a in (("image", image), ("ref", ref)):
-        if not np.issubdtype(a.dtype, np.floating) or not np.all(np.isfinite(a)):
-            raise InvalidArgumentError(f"'{name}' must be a finite float image")
+        if not np.issubdtype(a.dtype, np.floating) or not np.all(np.isfinite(a)) or not a.size:
+            raise InvalidArgumentError(f"'{name}' must be a finite float image with pixels")
     return image.astype(np.float64), ref.astype(np.float64)
 
 
@@ -684,12 +703,14 @@ def low_frequency_power(image, reference, cutoff=0.125):
     image, reference = _check_pair(image, reference)
     if image.ndim != 2 or min(image.shape) < 4:
         raise InvalidArgumentError(f"'image' must be a gray image of at least 4 x 4, got {image.shape}")
-    if not 0 < cutoff <= 0.5:
-        raise InvalidArgumentError(f"'cutoff' must be in (0, 0.5] cycles per pixel, got {cutoff!r}")
+    cutoff = check_real(cutoff, "cutoff", minimum=0.0, maximum=0.5, open_minimum=True)
     height, width = image.shape
     power = np.abs(np.fft.fft2(image - reference)) ** 2
     radius = np.hypot(np.fft.fftfreq(height)[:, None], np.fft.fftfreq(width)[None, :])
     low = (radius < cutoff) & (radius > 0)       # the DC term is the bias, not noise
+    if not low.any():
+        raise InvalidArgumentError(f"'cutoff'={cutoff:g} holds no frequency of a {height} x {width} "
+                                   f"image (the lowest is 1/{max(height, width)} cycles per pixel)")
     total = power.mean()
     return float(power[low].mean() / total) if total > 0 else math.nan
 
@@ -732,7 +753,7 @@ def save(path, image, sampler, spp, seed, scene=None, preview=True):
     header = {"sampler": sampler if isinstance(sampler, str) else repr(sampler), "spp": spp,
               "seed": seed}
     if scene is not None:
-        header["scene"] = scene.name
+        header["scene"] = as_scene(scene).name
     written = [path.with_suffix(".exr")] + ([path.with_suffix(".png")] if preview else [])
     # the pair lands together: an interruption while the preview is drawn leaves neither
     with files.atomic_paths(*written) as temporary:

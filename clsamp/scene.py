@@ -65,10 +65,19 @@ def _fail(field, expected, got):
     raise InvalidArgumentError(f"scene field '{field}' must be {expected}, got {got!r}")
 
 
+FLOAT32_MAX = 3.4028234663852886e38     # the renderer's rays are float32
+
+
 def _number(value, field, minimum=None, open_minimum=False, maximum=None):
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    try:
+        finite = not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
+    except OverflowError:           # an int past a double
+        finite = False
+    if not finite:
         _fail(field, "a finite number", value)
     value = float(value)
+    if abs(value) > FLOAT32_MAX:
+        _fail(field, "a number within float32's range (the renderer's), |x| <= 3.4e38", value)
     if minimum is not None and (value <= minimum if open_minimum else value < minimum):
         _fail(field, f"a number {'>' if open_minimum else '>='} {minimum}", value)
     if maximum is not None and value > maximum:
@@ -224,12 +233,18 @@ class Scene:
             known = ", ".join(shipped_scenes())
             raise InvalidArgumentError(
                 f"'path' {text!r} is neither a scene file nor a shipped scene ({known})")
-        return cls._from_text(candidate.read_text(), candidate.stem, str(candidate))
+        try:
+            text = candidate.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as error:
+            raise InvalidArgumentError(f"{str(candidate)}: cannot be read as UTF-8 JSON ({error})") from None
+        return cls._from_text(text, candidate.stem, str(candidate))
 
     @classmethod
     def _from_text(cls, text, stem, where):
         try:
             data = json.loads(text)
+        except RecursionError:
+            raise InvalidArgumentError(f"{where}: nested too deeply to read") from None
         except json.JSONDecodeError as error:
             raise InvalidArgumentError(
                 f"{where}: not valid JSON (line {error.lineno}, column {error.colno}: {error.msg})"
@@ -257,16 +272,16 @@ class Scene:
         _mapping(data, "scene", _TOP)
         out = {}
         name = data.get("name", "scene")
-        if not isinstance(name, str) or not name:
-            _fail("name", "a non-empty string", name)
+        if not isinstance(name, str) or not name or name in (".", "..") or set(name) & set("/\\\0"):
+            _fail("name", "a non-empty string without '/', '\\' or NUL (it names cache files)", name)
         out["name"] = name
         description = data.get("description", "")
         if not isinstance(description, str):
             _fail("description", "a string", description)
         out["description"] = description
         spp = data.get("default_spp", 64)
-        if isinstance(spp, bool) or not isinstance(spp, int) or spp < 1:
-            _fail("default_spp", "a positive integer", spp)
+        if isinstance(spp, bool) or not isinstance(spp, int) or not 1 <= spp <= 2**31:
+            _fail("default_spp", "an integer from 1 to 2^31", spp)
         out["default_spp"] = spp
 
         cam = _mapping(_required(data, "camera", "scene"), "camera",
@@ -349,7 +364,7 @@ class Scene:
         if not isinstance(shape, dict):
             _fail(field, "an object with a 'type'", shape)
         kind = shape.get("type")
-        if kind not in _SHAPE_FIELDS:
+        if not isinstance(kind, str) or kind not in _SHAPE_FIELDS:
             _fail(f"{field}.type", "one of 'sphere', 'plane', 'box'", kind)
         _mapping(shape, field, _SHAPE_FIELDS[kind])
         out = {"type": kind, "albedo": _number(shape.get("albedo", 1.0), f"{field}.albedo", 0, False, 1)}
@@ -361,9 +376,15 @@ class Scene:
             out["point"] = _vector(_required(shape, "point", field), f"{field}.point")
             normal = _vector(_required(shape, "normal", field), f"{field}.normal")
             length = _norm(normal)
-            if length == 0:
-                _fail(f"{field}.normal", "a non-zero vector", normal)
-            out["normal"] = [v / length for v in normal]
+            if abs(length - 1.0) > 1e-15:       # a unit normal stays as it is: to_dict round trips
+                largest = max(abs(v) for v in normal)
+                if length < 1e-150 and largest > 0:         # its squares underflow: scale first
+                    normal = [v / largest for v in normal]
+                    length = _norm(normal)
+                if length == 0:
+                    _fail(f"{field}.normal", "a non-zero vector", normal)
+                normal = [v / length for v in normal]
+            out["normal"] = normal
         else:
             out["min"] = _vector(_required(shape, "min", field), f"{field}.min")
             out["max"] = _vector(_required(shape, "max", field), f"{field}.max")

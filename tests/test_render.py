@@ -396,3 +396,23 @@ def test_the_renderer_makes_a_named_sampler_without_its_own_progress_bar():
     sets = sample_plan(Scene.from_file("ao"), "bnot", 16, None, True, 2)
     assert all(s.factory(2, 0).progress is False for s in sets)
     assert rendering.pixel_samples("ao", "gbn", 4, 2).shape == (4, 2, 4)   # a scene by name
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda s: rendering.render_samples("ao", s[:, :, :0], 8), "at least one sample a pixel"),   # NaN image
+    (lambda s: rendering.render_samples("ao", s + 1, 8), r"coordinate in \[0, 1\)"),
+    (lambda s: rendering.render_sweep("ao", "random", [4], 8, progress=False), "'samplers' must be a list"),
+    (lambda s: rendering.render_sweep("ao", ["random"], 4, 8, progress=False), "'spps' must be a list"),
+    (lambda s: rendering.render_sweep("ao", ["random"], [4], 8, sampler_params={"jitered": {}}),
+     "must name only samplers of 'samplers'"),                                     # ignored
+    (lambda s: rendering.render_sweep("ao", ["random"], [4, 4], 8), "must not repeat"),   # one dropped
+    (lambda s: rendering.reference("ao", 8, spp=16, return_noise="no"), "'return_noise' must be True"),
+    (lambda s: rendering.compare(np.zeros((0, 0)), np.zeros((0, 0))), "with pixels"),
+    (lambda s: rendering.low_frequency_power(np.ones((8, 12)), np.zeros((8, 12)), cutoff=0.01),
+     "holds no frequency"),                                                        # NaN
+    (lambda s: rendering.noise_floor("a"), "'stderr' must be"),
+])
+def test_render_helpers_check_their_arguments(call, match):
+    samples = rendering.pixel_samples("ao", "random", 4, 8, seed=1)
+    with pytest.raises(InvalidArgumentError, match=match):
+        call(samples)

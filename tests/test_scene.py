@@ -2,8 +2,10 @@
 
 import copy
 import json
+import re
 import warnings
 
+import numpy as np
 import pytest
 
 from clsamp.errors import InvalidArgumentError
@@ -127,3 +129,46 @@ def test_the_tour_scene_at_its_default_spp_warns_for_no_sampler_it_is_shown_with
         image = render(scene, name, spp=scene.default_spp, resolution=8, seed=4,
                        sampler_params=params or None, progress=False)
     assert image.shape == (8, 8) and 0 < image.mean() <= 1
+
+
+def _edited(scene, path, value):
+    data = Scene.from_file(scene).to_dict()
+    place = data
+    for key in path[:-1]:
+        place = place[key]
+    place[path[-1]] = value
+    return data
+
+
+@pytest.mark.parametrize("path, value, field", [
+    (["name"], "../../../ESCAPED", "name"),               # its reference was written outside the cache
+    (["name"], "a/b", "name"),
+    (["light", "emission"], 1e39, "light.emission"),    # inf in the float32 kernel, finite in NumPy
+    (["shapes", 0, "normal"], [0, 1e200, 0], "shapes[0].normal[1]"),     # normalized to [0, 0, 0]
+    (["shapes", 1, "type"], ["sphere"], "shapes[1].type"),                 # TypeError: unhashable
+    (["camera", "eye"], [10**400, 1, 2], "camera.eye[0]"),                # OverflowError
+    (["camera", "eye"], [0, 1e300, 1e300], "camera.eye[1]"),              # blamed camera.up
+    (["default_spp"], 10**30, "default_spp"),                              # refused later as 'spp'
+])
+def test_values_the_renderer_cannot_hold_name_their_field_when_loaded(path, value, field):
+    with pytest.raises(InvalidArgumentError, match=f"scene field '{re.escape(field)}'"):
+        Scene.from_dict(_edited("soft_shadows", path, value))
+
+
+def test_a_plane_normal_round_trips_and_a_tiny_one_is_normalized():
+    # renormalizing a unit normal moved its last bit (658 of 2000): another content hash
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        scene = Scene.from_dict(_edited("ao", ["shapes", 0, "normal"], (5 * rng.normal(size=3)).tolist()))
+        assert Scene.from_dict(scene.to_dict()).content_hash() == scene.content_hash()
+    tiny = Scene.from_dict(_edited("soft_shadows", ["shapes", 0, "normal"], [0, 1e-170, 0]))
+    assert tiny.to_dict()["shapes"][0]["normal"] == [0.0, 1.0, 0.0]      # 'a non-zero vector' before
+
+
+def test_unreadable_scene_files_are_one_line(tmp_path):
+    (tmp_path / "latin1.json").write_bytes(b'{"name": "\xe9"}')
+    (tmp_path / "deep.json").write_text("[" * 100000)
+    with pytest.raises(InvalidArgumentError, match="cannot be read as UTF-8"):
+        Scene.from_file(tmp_path / "latin1.json")
+    with pytest.raises(InvalidArgumentError, match="nested too deeply"):
+        Scene.from_file(tmp_path / "deep.json")
