@@ -327,8 +327,7 @@ def _run_metrics(args):
         if "star" in wanted and not args.bounds and d > 3:
             raise InvalidArgumentError(f"'--metric' star is exact for d = 1 to 3, got d = {d}; "
                                        "'--bounds' gives certified bounds in any d")
-        most = min(metrics.star.MAX_EXACT_3D if d == 3 else n,
-                   metrics.star.MAX_TWIN.get(d, n) if args.backend == "numpy" else n)
+        most = metrics.star.exact_limit(d, args.backend)
         if "star" in wanted and not args.bounds and n > most:
             raise InvalidArgumentError(f"'--metric' star: the exact value takes n <= {most} in {d}-D "
                                        f"here, got {n}; '--bounds' gives certified bounds")

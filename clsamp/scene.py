@@ -222,6 +222,11 @@ class Scene:
             No such file or shipped scene; or a malformed file, naming the field and what
             was expected (or the JSON syntax error's line and column).
         """
+        return cls._from_path(path, "'path'")
+
+    @classmethod
+    def _from_path(cls, path, name):
+        """:meth:`from_file`, its refusal naming the argument ``name``."""
         candidate = Path(path)
         if not candidate.is_file():
             text = str(path)
@@ -232,7 +237,7 @@ class Scene:
                     return cls._from_text(shipped.read_text(), stem, f"shipped scene {stem!r}")
             known = ", ".join(shipped_scenes())
             raise InvalidArgumentError(
-                f"'path' {text!r} is neither a scene file nor a shipped scene ({known})")
+                f"{name} {text!r} is neither a scene file nor a shipped scene ({known})")
         try:
             text = candidate.read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError) as error:
@@ -503,11 +508,5 @@ def as_scene(scene):
     if isinstance(scene, dict):
         return Scene.from_dict(scene)
     if isinstance(scene, (str, os.PathLike)):
-        try:
-            return Scene.from_file(scene)
-        except InvalidArgumentError as error:      # it names its own argument, 'path'
-            text = str(error)
-            if text.startswith("'path' "):
-                raise InvalidArgumentError("'scene' " + text[len("'path' "):]) from None
-            raise
+        return Scene._from_path(scene, "'scene'")
     raise InvalidArgumentError(f"'scene' must be a Scene, a dict or a scene file, got {scene!r}")

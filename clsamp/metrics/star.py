@@ -66,6 +66,26 @@ def _star_1d(x):
     return float(max(np.max(closed / n - t), np.max(t - open_ / n)))
 
 
+def exact_limit(d, backend):
+    """The most points a set may have for the exact star discrepancy in ``d`` dimensions on
+    ``backend`` (:func:`star_discrepancy` refuses more without ``bounds=True``).
+
+    Parameters
+    ----------
+    d : int
+    backend : {"opencl", "numpy"}
+
+    Returns
+    -------
+    int
+        0 where d has no exact method (d > 3).
+    """
+    if d not in EXACT_DIMENSIONS:
+        return 0
+    most = MAX_EXACT_3D if d == 3 else MAX_TWIN[1]
+    return min(most, MAX_TWIN[d]) if backend == "numpy" else most
+
+
 def star_discrepancy_reference(points):
     """NumPy twin of the 2-D kernel, with the same arithmetic: the counts of all critical boxes
     at once from a 2-D prefix sum, in (n + 1)^2 memory.
@@ -460,7 +480,7 @@ def star_discrepancy(points, bounds=False, backend="opencl", delta=None):
             raise InvalidArgumentError(
                 f"the exact 3-D star discrepancy costs O(n^3): n = {n} is more than "
                 f"{MAX_EXACT_3D}; use bounds=True")
-        if backend == "numpy" and n > MAX_TWIN[d]:     # O(n^4) in 3-D, 48 (n + 1)^2 B in 2-D
+        if n > exact_limit(d, backend):                # the NumPy twin's own limits
             raise InvalidArgumentError(
                 f"the NumPy twin's exact {d}-D star discrepancy takes n <= {MAX_TWIN[d]}, got "
                 f"n = {n}; use backend='opencl' or bounds=True")

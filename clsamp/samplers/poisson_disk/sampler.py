@@ -396,12 +396,16 @@ class PoissonDiskSampler(Sampler):
                 f"'d'={self.d}: maximal sets (radius mode, n left out) are made for d <= "
                 f"{COARSE_MIN_D - 1} (their grid of side r / sqrt(d) grows as (sqrt(d) / r)^d); "
                 "give n for exactly n points at least 'radius' apart")
-        cells = grid_cells(self.radius, self.d)
+        self._check_grid(self.radius, f"'radius'={self.radius} is too small for a maximal set "
+                         f"in d={self.d}", "give n for exactly n points at least 'radius' apart")
+
+    def _check_grid(self, radius, what, advice):
+        """Refuse a fine grid of more than MAX_CELLS cells at ``radius``, saying ``what``."""
+        cells = grid_cells(radius, self.d)
         if cells > MAX_CELLS:
             raise InvalidArgumentError(
-                f"'radius'={self.radius} is too small for a maximal set in d={self.d}: its "
-                f"background grid would have {cells_text(cells)} cells, more than {MAX_CELLS}; "
-                "give n for exactly n points at least 'radius' apart")
+                f"{what}: the background grid of radius {radius:.3g} would have "
+                f"{cells_text(cells)} cells, more than {MAX_CELLS}; {advice}")
 
     # -- the work -------------------------------------------------------------------------
     def _coarse(self, radius, n):
@@ -413,28 +417,17 @@ class PoissonDiskSampler(Sampler):
 
     def _geometry(self, n):
         if self.radius is not None:
-            r2 = acceptance_threshold(self.radius)
-            if self._coarse(self.radius, n):
-                return CoarseGeometry(self.d, self.radius, r2, n)
-            cells = grid_cells(self.radius, self.d)
-            if n is not None and cells > MAX_CELLS:
-                raise InvalidArgumentError(
-                    f"'n'={n} with 'radius'={self.radius} is too much for d={self.d}: their "
-                    f"background grid would have {cells_text(cells)} cells, more than {MAX_CELLS}; "
-                    "give fewer points or a larger radius")
-            return Geometry(self.d, self.radius, r2)
-        d_max = torus.max_min_distance(n, self.d)
-        radius = self.rho * d_max
+            radius, r2, given = self.radius, acceptance_threshold(self.radius), "radius"
+        else:
+            d_max = torus.max_min_distance(n, self.d)
+            radius, given = self.rho * d_max, "rho"
+            r2 = acceptance_threshold(radius, d_max, self.rho)
         if self._coarse(radius, n):
-            return CoarseGeometry(self.d, radius,
-                                  acceptance_threshold(radius, d_max, self.rho), n)
-        cells = grid_cells(radius, self.d)
-        if cells > MAX_CELLS:
-            raise InvalidArgumentError(
-                f"'n'={n} with 'rho'={self.rho} is too much for d={self.d}: their radius "
-                f"{radius:.3g} needs a background grid of {cells_text(cells)} cells, more than "
-                f"{MAX_CELLS}; give fewer points or a larger rho")
-        return Geometry(self.d, radius, acceptance_threshold(radius, d_max, self.rho))
+            return CoarseGeometry(self.d, radius, r2, n)
+        if n is not None:           # a maximal set's grid was checked with its call
+            self._check_grid(radius, f"'n'={n} with '{given}'={getattr(self, given)} is too much "
+                             f"for d={self.d}", f"give fewer points or a larger {given}")
+        return Geometry(self.d, radius, r2)
 
     def _run(self, n, realizations, device, as_list=False):
         geo = self._geometry(n)
